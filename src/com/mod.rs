@@ -1,0 +1,15 @@
+//! The COM core every interface of the library reuses: base types, IUnknown, the object framework
+//! (reference counting, identity, aggregation), the panic boundary and the task allocator.
+
+pub mod alloc;
+pub mod boundary;
+pub mod hresult;
+pub mod iids;
+pub mod object;
+pub mod types;
+pub mod unknown;
+pub mod wstr;
+
+pub use hresult::*;
+pub use types::*;
+pub use unknown::{IUnknown, IUnknownVtbl};

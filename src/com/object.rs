@@ -1,0 +1,439 @@
+//! The COM object framework every interface of the library is built on.
+//!
+//! A `ComObject<T>` is one heap block laid out as
+//!
+//! ```text
+//! ComHeader { inner: Slot (the non-delegating IUnknown), refs, outer, query, destroy } | T
+//! ```
+//!
+//! `T` holds one [`Slot`] per interface it implements. A slot is what C sees as the interface pointer:
+//! its first word is the vtable pointer, its second points back at the header, so every method shim
+//! finds its object without offset arithmetic. The non-delegating IUnknown (`header.inner`) is the
+//! object's identity when it stands alone; when it is aggregated, the outer object's IUnknown is.
+//!
+//! Reference counting follows COM aggregation rules: the IUnknown methods of every interface slot
+//! delegate to the controlling unknown (the outer object if there is one, else `header.inner`), and
+//! only `header.inner` counts references of this object itself.
+
+use core::ffi::c_void;
+use core::ptr::{self, NonNull};
+use core::sync::atomic::{fence, AtomicU32, AtomicUsize, Ordering};
+use std::mem::MaybeUninit;
+
+use super::boundary::catch;
+use super::hresult::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, E_UNEXPECTED, S_OK};
+use super::iids::IID_IUNKNOWN;
+use super::types::{GUID, HRESULT, REFIID, ULONG};
+use super::unknown::{add_ref, IUnknown, IUnknownVtbl};
+
+/// Number of library objects alive, for `DllCanUnloadNow` and leak checks.
+static LIVE_OBJECTS: AtomicUsize = AtomicUsize::new(0);
+
+/// How many COM objects created by the library are still alive.
+pub fn live_objects() -> usize {
+    LIVE_OBJECTS.load(Ordering::Acquire)
+}
+
+/// A class implemented in Rust: its state plus the interface slots it hands out.
+pub trait ComClass: Sized + Send + Sync + 'static {
+    /// The slot for `iid`, or `None` when the object does not implement it. Never asked for
+    /// `IID_IUnknown` (the framework answers that); the result is not AddRef'd.
+    fn interface(&self, iid: &GUID) -> Option<&Slot>;
+}
+
+/// One interface pointer of an object, exactly as C sees it: the vtable pointer comes first.
+#[repr(C)]
+pub struct Slot {
+    vtbl: *const c_void,
+    header: *const ComHeader,
+}
+
+// SAFETY: a slot is immutable after construction; the vtable is static and the header outlives it.
+unsafe impl Send for Slot {}
+// SAFETY: as above; shared access only reads the two pointers.
+unsafe impl Sync for Slot {}
+
+impl Slot {
+    /// The interface pointer to hand to C.
+    pub fn as_ptr(&self) -> *mut c_void {
+        self as *const Slot as *mut c_void
+    }
+
+    /// The vtable this slot was created with.
+    pub fn vtbl(&self) -> *const c_void {
+        self.vtbl
+    }
+}
+
+/// Hands out slots bound to an object under construction.
+pub struct Binder {
+    header: *const ComHeader,
+}
+
+impl Binder {
+    /// A slot presenting `vtbl` for the object being built.
+    pub fn slot<V: 'static>(&self, vtbl: &'static V) -> Slot {
+        Slot { vtbl: vtbl as *const V as *const c_void, header: self.header }
+    }
+}
+
+/// Bookkeeping shared by all library objects; always at offset 0 of a `ComObject<T>`.
+#[repr(C)]
+pub struct ComHeader {
+    inner: Slot,
+    refs: AtomicU32,
+    outer: *mut IUnknown,
+    query: unsafe fn(*const ComHeader, &GUID) -> *mut c_void,
+    destroy: unsafe fn(*const ComHeader),
+}
+
+impl ComHeader {
+    /// The non-delegating IUnknown of this object.
+    pub fn inner_unknown(&self) -> *mut IUnknown {
+        self.inner.as_ptr().cast()
+    }
+
+    /// The controlling unknown: the outer object when aggregated, else this object's own IUnknown.
+    /// This is the object's COM identity.
+    pub fn controlling_unknown(&self) -> *mut IUnknown {
+        if self.outer.is_null() {
+            self.inner_unknown()
+        } else {
+            self.outer
+        }
+    }
+
+    /// True when the object was created as part of an outer (aggregating) object.
+    pub fn is_aggregated(&self) -> bool {
+        !self.outer.is_null()
+    }
+
+    /// Non-delegating QueryInterface.
+    ///
+    /// # Safety
+    /// `riid` must be NULL or readable; `ppv` must be NULL or writable.
+    unsafe fn inner_query_interface(&self, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+        if ppv.is_null() {
+            return E_POINTER;
+        }
+        // SAFETY: checked non-NULL; the caller vouches it is writable.
+        unsafe { *ppv = ptr::null_mut() };
+        if riid.is_null() {
+            return E_POINTER;
+        }
+        // SAFETY: checked non-NULL; the caller vouches it is readable.
+        let iid = unsafe { &*riid };
+        let found = if *iid == IID_IUNKNOWN {
+            self.inner.as_ptr()
+        } else {
+            // SAFETY: `query` was set for the object type this header belongs to.
+            unsafe { (self.query)(self, iid) }
+        };
+        if found.is_null() {
+            return E_NOINTERFACE;
+        }
+        // SAFETY: `found` is one of this object's interface pointers. AddRef through it, so that an
+        // aggregated object's interfaces count on the outer object, as COM requires.
+        unsafe {
+            add_ref(found.cast());
+            *ppv = found;
+        }
+        S_OK
+    }
+
+    fn inner_add_ref(&self) -> ULONG {
+        self.refs.fetch_add(1, Ordering::Relaxed).wrapping_add(1)
+    }
+
+    /// # Safety
+    /// The caller must own a reference; the header may be freed before this returns.
+    unsafe fn inner_release(&self) -> ULONG {
+        // Never go below zero: a Release too many on a still-live object is refused, not a double free.
+        let mut cur = self.refs.load(Ordering::Relaxed);
+        loop {
+            if cur == 0 {
+                return 0;
+            }
+            match self.refs.compare_exchange_weak(cur, cur - 1, Ordering::Release, Ordering::Relaxed) {
+                Ok(_) => break,
+                Err(now) => cur = now,
+            }
+        }
+        if cur == 1 {
+            fence(Ordering::Acquire);
+            // SAFETY: the last reference is gone; `destroy` frees the object this header heads.
+            unsafe { (self.destroy)(self) };
+            return 0;
+        }
+        cur - 1
+    }
+}
+
+/// A library object: the header, then the class's own state.
+#[repr(C)]
+pub struct ComObject<T> {
+    header: ComHeader,
+    value: T,
+}
+
+impl<T> core::ops::Deref for ComObject<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.value
+    }
+}
+
+impl<T: ComClass> ComObject<T> {
+    /// Allocates an object with one reference (owned by the caller through its inner IUnknown).
+    /// `build` receives a [`Binder`] for making the object's interface slots.
+    pub fn new(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> T) -> ComRef<T> {
+        match Self::try_new(outer, |b| Ok::<T, core::convert::Infallible>(build(b))) {
+            Ok(obj) => obj,
+            Err(never) => match never {},
+        }
+    }
+
+    /// As [`ComObject::new`], for construction that can fail; nothing is allocated on failure.
+    pub fn try_new<E>(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> Result<T, E>) -> Result<ComRef<T>, E> {
+        let mut block: Box<MaybeUninit<ComObject<T>>> = Box::new_uninit();
+        // The header sits at offset 0, so slots can point at it before the object is written.
+        let binder = Binder { header: block.as_mut_ptr() as *const ComHeader };
+        let value = build(&binder)?;
+        block.write(ComObject {
+            header: ComHeader {
+                inner: binder.slot(&INNER_VTBL),
+                refs: AtomicU32::new(1),
+                outer,
+                query: query_thunk::<T>,
+                destroy: destroy_thunk::<T>,
+            },
+            value,
+        });
+        LIVE_OBJECTS.fetch_add(1, Ordering::AcqRel);
+        // SAFETY: fully initialised above.
+        let raw = Box::into_raw(unsafe { block.assume_init() });
+        // SAFETY: Box::into_raw never returns NULL.
+        Ok(ComRef { obj: unsafe { NonNull::new_unchecked(raw) } })
+    }
+
+    /// The standard creation protocol of the library's `...Create` functions (and of
+    /// `IClassFactory::CreateInstance`): checks the arguments, refuses aggregation unless `riid` is
+    /// IID_IUnknown (CLASS_E_NOAGGREGATION), builds the object and returns the requested interface.
+    /// `*ppv` is NULL on every failure.
+    ///
+    /// # Safety
+    /// `outer` must be NULL or a valid IUnknown; `riid` NULL or readable; `ppv` NULL or writable.
+    pub unsafe fn create(
+        outer: *mut IUnknown,
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+        build: impl FnOnce(&Binder) -> Result<T, HRESULT>,
+    ) -> HRESULT {
+        if ppv.is_null() {
+            return E_POINTER;
+        }
+        // SAFETY: checked non-NULL; the caller vouches it is writable.
+        unsafe { *ppv = ptr::null_mut() };
+        if riid.is_null() {
+            return E_POINTER;
+        }
+        // SAFETY: checked non-NULL; the caller vouches it is readable.
+        if !outer.is_null() && unsafe { *riid } != IID_IUNKNOWN {
+            return CLASS_E_NOAGGREGATION;
+        }
+        let obj = match catch(Err(E_UNEXPECTED), || Self::try_new(outer, build)) {
+            Ok(obj) => obj,
+            Err(hr) => return hr,
+        };
+        // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
+        unsafe { obj.header.inner_query_interface(riid, ppv) }
+        // `obj` drops here, releasing the construction reference.
+    }
+
+    /// The object behind one of its interface pointers.
+    ///
+    /// # Safety
+    /// `this` must be an interface pointer handed out by a live `ComObject<T>` (one of its slots).
+    pub unsafe fn from_interface<'a, I>(this: *mut I) -> &'a ComObject<T> {
+        // SAFETY: the caller vouches `this` is a slot of a live ComObject<T>; the header is at offset 0.
+        unsafe { &*((*(this as *const Slot)).header as *const ComObject<T>) }
+    }
+
+    /// The object behind `this` if it is one of ours presenting `vtbl`, else `None`. Reading the first
+    /// word of any COM interface pointer is valid, so foreign objects are told apart safely.
+    ///
+    /// # Safety
+    /// `this` must be NULL or a valid COM interface pointer.
+    pub unsafe fn from_foreign<'a, I, V>(this: *mut I, vtbl: &'static V) -> Option<&'a ComObject<T>> {
+        if this.is_null() {
+            return None;
+        }
+        // SAFETY: every COM interface pointer points at its vtable pointer.
+        let found = unsafe { *(this as *const *const c_void) };
+        if found != vtbl as *const V as *const c_void {
+            return None;
+        }
+        // SAFETY: the vtable is one that only ComObject<T> slots present.
+        Some(unsafe { Self::from_interface(this) })
+    }
+
+    /// The bookkeeping header (identity, aggregation).
+    pub fn header(&self) -> &ComHeader {
+        &self.header
+    }
+
+    /// A new counted reference to this object (non-delegating; keeps this object itself alive).
+    pub fn to_ref(&self) -> ComRef<T> {
+        self.header.inner_add_ref();
+        ComRef { obj: NonNull::from(self) }
+    }
+}
+
+/// An owned reference to a library object (counted on its non-delegating IUnknown).
+pub struct ComRef<T: ComClass> {
+    obj: NonNull<ComObject<T>>,
+}
+
+// SAFETY: library objects are free-threaded: their state is Send + Sync and the count is atomic.
+unsafe impl<T: ComClass> Send for ComRef<T> {}
+// SAFETY: as above.
+unsafe impl<T: ComClass> Sync for ComRef<T> {}
+
+impl<T: ComClass> ComRef<T> {
+    /// Gives up this reference as the object's non-delegating IUnknown pointer.
+    pub fn into_inner_unknown(self) -> *mut IUnknown {
+        let p = self.header().inner_unknown();
+        core::mem::forget(self);
+        p
+    }
+}
+
+impl<T: ComClass> core::ops::Deref for ComRef<T> {
+    type Target = ComObject<T>;
+    fn deref(&self) -> &ComObject<T> {
+        // SAFETY: the reference keeps the object alive.
+        unsafe { self.obj.as_ref() }
+    }
+}
+
+impl<T: ComClass> Clone for ComRef<T> {
+    fn clone(&self) -> Self {
+        self.to_ref()
+    }
+}
+
+impl<T: ComClass> Drop for ComRef<T> {
+    fn drop(&mut self) {
+        // SAFETY: this reference was counted; after the call it is not used again.
+        unsafe { self.header.inner_release() };
+    }
+}
+
+unsafe fn query_thunk<T: ComClass>(header: *const ComHeader, iid: &GUID) -> *mut c_void {
+    // SAFETY: installed only in headers of ComObject<T>, which starts with the header.
+    let obj = unsafe { &*(header as *const ComObject<T>) };
+    obj.value.interface(iid).map_or(ptr::null_mut(), Slot::as_ptr)
+}
+
+unsafe fn destroy_thunk<T: ComClass>(header: *const ComHeader) {
+    // SAFETY: installed only in headers of ComObject<T>, allocated by `ComObject::new` as a Box.
+    drop(unsafe { Box::from_raw(header as *mut ComObject<T>) });
+    LIVE_OBJECTS.fetch_sub(1, Ordering::AcqRel);
+}
+
+/// The header behind any slot pointer.
+///
+/// # Safety
+/// `this` must be a slot of a live library object.
+unsafe fn header_of<'a, I>(this: *mut I) -> &'a ComHeader {
+    // SAFETY: the caller vouches for the slot; slots point back at their header.
+    unsafe { &*(*(this as *const Slot)).header }
+}
+
+static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
+    QueryInterface: inner_query_interface,
+    AddRef: inner_add_ref,
+    Release: inner_release,
+};
+
+unsafe extern "system" fn inner_query_interface(
+    this: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
+    catch(E_UNEXPECTED, || unsafe { header_of(this).inner_query_interface(riid, ppv) })
+}
+
+unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> ULONG {
+    // SAFETY: as above.
+    catch(0, || unsafe { header_of(this).inner_add_ref() })
+}
+
+unsafe extern "system" fn inner_release(this: *mut IUnknown) -> ULONG {
+    // SAFETY: as above; the caller gives up its reference.
+    catch(0, || unsafe { header_of(this).inner_release() })
+}
+
+/// `QueryInterface` for the vtable of any interface slot: delegates to the controlling unknown.
+///
+/// # Safety
+/// Only for vtables installed in library object slots; COM callers pass such slots as `this`.
+pub unsafe extern "system" fn delegating_query_interface<I>(
+    this: *mut I,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: `this` is a slot of a live object; the controlling unknown is valid while it lives.
+        unsafe {
+            let header = header_of(this);
+            if header.outer.is_null() {
+                header.inner_query_interface(riid, ppv)
+            } else if ppv.is_null() {
+                E_POINTER
+            } else if riid.is_null() {
+                *ppv = ptr::null_mut();
+                E_POINTER
+            } else {
+                super::unknown::query_interface(header.outer, &*riid, ppv)
+            }
+        }
+    })
+}
+
+/// `AddRef` for the vtable of any interface slot: delegates to the controlling unknown.
+///
+/// # Safety
+/// As for [`delegating_query_interface`].
+pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> ULONG {
+    catch(0, || {
+        // SAFETY: as for delegating_query_interface.
+        unsafe {
+            let header = header_of(this);
+            if header.outer.is_null() {
+                header.inner_add_ref()
+            } else {
+                add_ref(header.outer)
+            }
+        }
+    })
+}
+
+/// `Release` for the vtable of any interface slot: delegates to the controlling unknown.
+///
+/// # Safety
+/// As for [`delegating_query_interface`]; the caller gives up a reference.
+pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> ULONG {
+    catch(0, || {
+        // SAFETY: as for delegating_query_interface.
+        unsafe {
+            let header = header_of(this);
+            if header.outer.is_null() {
+                header.inner_release()
+            } else {
+                super::unknown::release(header.outer)
+            }
+        }
+    })
+}

@@ -1,0 +1,386 @@
+//! IOPCCommon (specification chapter 5) as a reusable, aggregatable object.
+//!
+//! Each object is one client session: it keeps its own locale and client name, and two objects never
+//! share them. A server creates one per client connection with `OpcCommonCreate`, usually aggregated
+//! into its server object.
+
+pub mod locale;
+
+use core::ffi::c_void;
+use core::ptr;
+use std::sync::{Mutex, MutexGuard};
+
+use crate::com::alloc::{alloc_array, alloc_wstr};
+use crate::com::boundary::catch;
+use crate::com::iids::IID_IOPCCommon;
+use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot};
+use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
+use crate::com::{
+    E_INVALIDARG, E_UNEXPECTED, DWORD, GUID, HRESULT, IUnknown, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR,
+};
+use crate::errors::{error_string, OpcServerKind, OpcVendorErrorStringFn, VendorTexts};
+use locale::{DEFAULT_LOCALES, LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
+
+/// The methods of IOPCCommon, in the order of the specification's IDL.
+#[repr(C)]
+#[allow(non_snake_case)]
+pub struct IOPCCommonVtbl {
+    pub QueryInterface:
+        unsafe extern "system" fn(This: *mut IOPCCommon, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCCommon) -> ULONG,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCCommon) -> ULONG,
+    pub SetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, dwLcid: LCID) -> HRESULT,
+    pub GetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> HRESULT,
+    pub QueryAvailableLocaleIDs:
+        unsafe extern "system" fn(This: *mut IOPCCommon, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> HRESULT,
+    pub GetErrorString: unsafe extern "system" fn(This: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT,
+    pub SetClientName: unsafe extern "system" fn(This: *mut IOPCCommon, szName: LPCWSTR) -> HRESULT,
+}
+
+/// The IOPCCommon interface: per-client locale, client name and error texts.
+#[repr(C)]
+#[allow(non_snake_case)]
+pub struct IOPCCommon {
+    pub lpVtbl: *const IOPCCommonVtbl,
+}
+
+/// Called after a client set its name; `name` is valid only during the call. May be called from any
+/// thread; never called while the library holds a lock.
+pub type OpcClientNameFn = Option<unsafe extern "C" fn(context: *mut c_void, name: LPCWSTR)>;
+
+/// How a server configures an IOPCCommon object. Zero-initialise it, set `struct_size` to
+/// `sizeof(OpcCommonOptions)`, then set what you need: fields added in later versions go at the end,
+/// and the library reads only the first `struct_size` bytes, so code built against an older header
+/// keeps working.
+#[repr(C)]
+pub struct OpcCommonOptions {
+    /// `sizeof(OpcCommonOptions)` as the caller's header declares it.
+    pub struct_size: u32,
+    /// Which kind of server this session belongs to (`OpcServerKind`); 0 is Data Access.
+    pub server_kind: u32,
+    /// The concrete locales the server supports (e.g. 0x0409, 0x0407); NULL with a count of 0 means
+    /// the languages the library's catalog ships. LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT,
+    /// LOCALE_NEUTRAL and LOCALE_INVARIANT are always available in addition.
+    pub locales: *const LCID,
+    /// Number of entries in `locales` (at most 4096).
+    pub locale_count: u32,
+    /// Texts for the server's own error codes, asked before the catalog (optional).
+    pub vendor_error_string: OpcVendorErrorStringFn,
+    /// Passed to `vendor_error_string`.
+    pub vendor_error_context: *mut c_void,
+    /// Told of every client name set through SetClientName (optional).
+    pub client_name_changed: OpcClientNameFn,
+    /// Passed to `client_name_changed`.
+    pub client_name_context: *mut c_void,
+}
+
+/// The most locales a server may declare.
+const MAX_LOCALES: u32 = 4096;
+
+/// The options as the object keeps them.
+struct Settings {
+    kind: OpcServerKind,
+    available: Vec<LCID>,
+    vendor: Option<VendorTexts>,
+    observer: Option<NameObserver>,
+}
+
+#[derive(Clone, Copy)]
+struct NameObserver {
+    callback: unsafe extern "C" fn(context: *mut c_void, name: LPCWSTR),
+    context: *mut c_void,
+}
+
+// SAFETY: the options contract says the observer may be called from any thread with its context.
+unsafe impl Send for NameObserver {}
+// SAFETY: as above.
+unsafe impl Sync for NameObserver {}
+
+impl Settings {
+    /// Reads the caller's options, honouring `struct_size`.
+    ///
+    /// # Safety
+    /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcCommonOptions,
+    /// with `locales` pointing at `locale_count` readable LCIDs.
+    unsafe fn read(options: *const OpcCommonOptions) -> Result<Settings, HRESULT> {
+        let mut o = OpcCommonOptions {
+            struct_size: 0,
+            server_kind: 0,
+            locales: ptr::null(),
+            locale_count: 0,
+            vendor_error_string: None,
+            vendor_error_context: ptr::null_mut(),
+            client_name_changed: None,
+            client_name_context: ptr::null_mut(),
+        };
+        if !options.is_null() {
+            // SAFETY: the first field is always present.
+            let size = unsafe { ptr::addr_of!((*options).struct_size).read_unaligned() } as usize;
+            if size < core::mem::size_of::<u32>() || size > core::mem::size_of::<OpcCommonOptions>() {
+                return Err(E_INVALIDARG);
+            }
+            // SAFETY: the caller vouches `size` bytes are readable; `o` has room for them.
+            unsafe { ptr::copy_nonoverlapping(options.cast::<u8>(), ptr::addr_of_mut!(o).cast::<u8>(), size) };
+        }
+        let kind = OpcServerKind::from_raw(o.server_kind).ok_or(E_INVALIDARG)?;
+        if o.locale_count > MAX_LOCALES || (o.locale_count > 0 && o.locales.is_null()) {
+            return Err(E_INVALIDARG);
+        }
+        let declared: &[LCID] = if o.locale_count == 0 {
+            &DEFAULT_LOCALES
+        } else {
+            // SAFETY: checked non-NULL; the caller vouches for `locale_count` readable entries.
+            unsafe { core::slice::from_raw_parts(o.locales, o.locale_count as usize) }
+        };
+        let mut available: Vec<LCID> = Vec::with_capacity(declared.len() + SPECIAL_LOCALES.len());
+        for &lcid in declared.iter().chain(SPECIAL_LOCALES.iter()) {
+            if !available.contains(&lcid) {
+                available.push(lcid);
+            }
+        }
+        Ok(Settings {
+            kind,
+            available,
+            vendor: o.vendor_error_string.map(|callback| VendorTexts { callback, context: o.vendor_error_context }),
+            observer: o.client_name_changed.map(|callback| NameObserver { callback, context: o.client_name_context }),
+        })
+    }
+}
+
+/// What one client session has set.
+struct Session {
+    locale: LCID,
+    /// The client name as given (invalid UTF-16 kept), without a NUL; `None` until set.
+    client_name: Option<Vec<WCHAR>>,
+}
+
+/// The IOPCCommon object.
+pub struct OpcCommon {
+    common: Slot,
+    settings: Settings,
+    session: Mutex<Session>,
+}
+
+impl ComClass for OpcCommon {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        (*iid == IID_IOPCCommon).then_some(&self.common)
+    }
+}
+
+impl OpcCommon {
+    fn session(&self) -> MutexGuard<'_, Session> {
+        // A panic while holding the lock cannot leave a Session half-written; keep going.
+        self.session.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn set_locale(&self, lcid: LCID) -> HRESULT {
+        if !self.settings.available.contains(&lcid) {
+            return E_INVALIDARG;
+        }
+        self.session().locale = lcid;
+        S_OK
+    }
+
+    fn error_string(&self, code: HRESULT) -> Result<LPWSTR, HRESULT> {
+        let locale = self.session().locale;
+        error_string(code, locale, self.settings.kind, self.settings.vendor.as_ref())
+    }
+
+    fn set_client_name(&self, name: &[WCHAR]) {
+        self.session().client_name = Some(name.to_vec());
+        if let Some(observer) = self.settings.observer {
+            let mut terminated = Vec::with_capacity(name.len() + 1);
+            terminated.extend_from_slice(name);
+            terminated.push(0);
+            // SAFETY: the server registered the observer for this; the lock is not held.
+            unsafe { (observer.callback)(observer.context, terminated.as_ptr()) };
+        }
+    }
+
+    fn client_name(&self) -> Vec<WCHAR> {
+        self.session().client_name.clone().unwrap_or_default()
+    }
+}
+
+static IOPCCOMMON_VTBL: IOPCCommonVtbl = IOPCCommonVtbl {
+    QueryInterface: delegating_query_interface::<IOPCCommon>,
+    AddRef: delegating_add_ref::<IOPCCommon>,
+    Release: delegating_release::<IOPCCommon>,
+    SetLocaleID: set_locale_id,
+    GetLocaleID: get_locale_id,
+    QueryAvailableLocaleIDs: query_available_locale_ids,
+    GetErrorString: get_error_string,
+    SetClientName: set_client_name,
+};
+
+/// # Safety
+/// `this` is an IOPCCommon pointer of a live OpcCommon object (COM calls only reach us that way).
+unsafe fn object<'a>(this: *mut IOPCCommon) -> &'a OpcCommon {
+    // SAFETY: IOPCCOMMON_VTBL is only installed in OpcCommon objects.
+    unsafe { ComObject::<OpcCommon>::from_interface(this) }
+}
+
+unsafe extern "system" fn set_locale_id(this: *mut IOPCCommon, lcid: LCID) -> HRESULT {
+    // SAFETY: COM calls this only through our vtable.
+    catch(E_UNEXPECTED, || unsafe { object(this) }.set_locale(lcid))
+}
+
+unsafe extern "system" fn get_locale_id(this: *mut IOPCCommon, pdwLcid: *mut LCID) -> HRESULT {
+    if pdwLcid.is_null() {
+        return E_INVALIDARG;
+    }
+    // SAFETY: non-NULL out-parameter; written with a defined value before anything can fail.
+    unsafe { *pdwLcid = 0 };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: as above.
+        unsafe { *pdwLcid = object(this).session().locale };
+        S_OK
+    })
+}
+
+unsafe extern "system" fn query_available_locale_ids(
+    this: *mut IOPCCommon,
+    pdwCount: *mut DWORD,
+    pdwLcid: *mut *mut LCID,
+) -> HRESULT {
+    // SAFETY: each out-parameter is written only when non-NULL.
+    unsafe {
+        if !pdwCount.is_null() {
+            *pdwCount = 0;
+        }
+        if !pdwLcid.is_null() {
+            *pdwLcid = ptr::null_mut();
+        }
+    }
+    if pdwCount.is_null() || pdwLcid.is_null() {
+        return E_INVALIDARG;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        let available = &unsafe { object(this) }.settings.available;
+        match alloc_array(available) {
+            Ok(array) => {
+                // SAFETY: both out-parameters are non-NULL.
+                unsafe {
+                    *pdwLcid = array;
+                    *pdwCount = available.len() as DWORD;
+                }
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+unsafe extern "system" fn get_error_string(this: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT {
+    if ppString.is_null() {
+        return E_INVALIDARG;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppString = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        match unsafe { object(this) }.error_string(dwError) {
+            Ok(text) => {
+                // SAFETY: as above.
+                unsafe { *ppString = text };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+unsafe extern "system" fn set_client_name(this: *mut IOPCCommon, szName: LPCWSTR) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: the caller passes a NUL-terminated string (or NULL, refused below).
+        let Some(name) = (unsafe { wstr_units(szName, MAX_STRING_UNITS) }) else {
+            return E_INVALIDARG;
+        };
+        // SAFETY: COM calls this only through our vtable.
+        unsafe { object(this) }.set_client_name(name);
+        S_OK
+    })
+}
+
+/// Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
+/// first) and client name.
+///
+/// `options` may be NULL for the defaults (a Data Access server supporting the catalog's languages).
+/// With `outer` NULL, `riid` may be IID_IOPCCommon or IID_IUnknown. To aggregate the object into a
+/// server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown as `riid`: the
+/// result is the inner, non-delegating IUnknown, which the server keeps, releases when it is
+/// destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
+///
+/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
+/// `riid` other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown
+/// `server_kind`, more than 4096 locales, or a count without an array); E_NOINTERFACE. `*ppv` is NULL
+/// on failure.
+///
+/// # Safety
+/// `options` must be NULL or valid as documented on OpcCommonOptions; `outer` NULL or a valid
+/// IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcCommonCreate(
+    options: *const OpcCommonOptions,
+    outer: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: forwarded from the caller's contract.
+        unsafe {
+            ComObject::<OpcCommon>::create(outer, riid, ppv, |binder| {
+                let settings = Settings::read(options)?;
+                Ok(OpcCommon {
+                    common: binder.slot(&IOPCCOMMON_VTBL),
+                    settings,
+                    session: Mutex::new(Session { locale: LOCALE_SYSTEM_DEFAULT, client_name: None }),
+                })
+            })
+        }
+    })
+}
+
+/// Gives a server the client name of one of its IOPCCommon sessions.
+///
+/// `common` is any interface of the session: the IOPCCommon pointer, the inner IUnknown from
+/// `OpcCommonCreate`, or the server object that aggregates it. `*ppName` receives a new string (an
+/// empty one while the client has set no name; free it with `OpcTaskMemFree`), or NULL on failure.
+/// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+///
+/// # Safety
+/// `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *mut LPWSTR) -> HRESULT {
+    if ppName.is_null() {
+        return E_INVALIDARG;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppName = ptr::null_mut() };
+    if common.is_null() {
+        return E_INVALIDARG;
+    }
+    catch(E_UNEXPECTED, || {
+        let mut iface: *mut c_void = ptr::null_mut();
+        // SAFETY: `common` is a valid COM pointer per the contract.
+        if unsafe { crate::com::unknown::query_interface(common, &IID_IOPCCommon, &mut iface) } != S_OK {
+            return E_INVALIDARG;
+        }
+        // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not.
+        let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.cast::<IOPCCommon>(), &IOPCCOMMON_VTBL) } {
+            Some(obj) => alloc_wstr(&obj.client_name()),
+            None => Err(E_INVALIDARG),
+        };
+        // SAFETY: we own the reference QueryInterface returned.
+        unsafe { crate::com::unknown::release(iface.cast()) };
+        match result {
+            Ok(p) => {
+                // SAFETY: non-NULL out-parameter.
+                unsafe { *ppName = p };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}

@@ -1,0 +1,23 @@
+//! opccomn: the OPC Common Definitions and Interfaces (OPC Common 1.0 and 1.10) as a library with a
+//! C ABI, so OPC servers and clients written in C or C++ can link one tested implementation of
+//! IOPCCommon and the error texts instead of writing their own.
+//!
+//! Layout, by specification chapter:
+//! - [`com`]: the COM core (types, IUnknown, reference counting, aggregation, allocator, panic boundary)
+//! - [`common`]: IOPCCommon (chapter 5)
+//! - [`errors`]: the error text catalog behind GetErrorString (chapter 5.1.4)
+//!
+//! The C API is declared in `include/opccomn.h`, generated from these sources by cbindgen.
+
+#![allow(non_snake_case)] // COM and OPC names are kept as the specification spells them
+
+pub mod com;
+pub mod common;
+pub mod errors;
+
+/// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
+/// connection points, enumerators, ...). Meant for leak checks in tests.
+#[no_mangle]
+pub extern "C" fn OpcObjectCount() -> u32 {
+    com::boundary::catch(0, || com::object::live_objects() as u32)
+}
