@@ -73,7 +73,10 @@ pub struct Binder {
 impl Binder {
     /// A slot presenting `vtbl` for the object being built.
     pub fn slot<V: 'static>(&self, vtbl: &'static V) -> Slot {
-        Slot { vtbl: vtbl as *const V as *const c_void, header: self.header }
+        Slot {
+            vtbl: vtbl as *const V as *const c_void,
+            header: self.header,
+        }
     }
 }
 
@@ -154,7 +157,10 @@ impl ComHeader {
             if cur == 0 {
                 return 0;
             }
-            match self.refs.compare_exchange_weak(cur, cur - 1, Ordering::Release, Ordering::Relaxed) {
+            match self
+                .refs
+                .compare_exchange_weak(cur, cur - 1, Ordering::Release, Ordering::Relaxed)
+            {
                 Ok(_) => break,
                 Err(now) => cur = now,
             }
@@ -197,7 +203,9 @@ impl<T: ComClass> ComObject<T> {
     pub fn try_new<E>(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> Result<T, E>) -> Result<ComRef<T>, E> {
         let mut block: Box<MaybeUninit<ComObject<T>>> = Box::new_uninit();
         // The header sits at offset 0, so slots can point at it before the object is written.
-        let binder = Binder { header: block.as_mut_ptr() as *const ComHeader };
+        let binder = Binder {
+            header: block.as_mut_ptr() as *const ComHeader,
+        };
         let value = build(&binder)?;
         block.write(ComObject {
             header: ComHeader {
@@ -213,7 +221,9 @@ impl<T: ComClass> ComObject<T> {
         // SAFETY: fully initialised above.
         let raw = Box::into_raw(unsafe { block.assume_init() });
         // SAFETY: Box::into_raw never returns NULL.
-        Ok(ComRef { obj: unsafe { NonNull::new_unchecked(raw) } })
+        Ok(ComRef {
+            obj: unsafe { NonNull::new_unchecked(raw) },
+        })
     }
 
     /// The standard creation protocol of the library's `...Create` functions (and of
@@ -285,7 +295,9 @@ impl<T: ComClass> ComObject<T> {
     /// A new counted reference to this object (non-delegating; keeps this object itself alive).
     pub fn to_ref(&self) -> ComRef<T> {
         self.header.inner_add_ref();
-        ComRef { obj: NonNull::from(self) }
+        ComRef {
+            obj: NonNull::from(self),
+        }
     }
 }
 
@@ -356,13 +368,11 @@ static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
     Release: inner_release,
 };
 
-unsafe extern "system" fn inner_query_interface(
-    this: *mut IUnknown,
-    riid: REFIID,
-    ppv: *mut *mut c_void,
-) -> HRESULT {
+unsafe extern "system" fn inner_query_interface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
     // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
-    catch(E_UNEXPECTED, || unsafe { header_of(this).inner_query_interface(riid, ppv) })
+    catch(E_UNEXPECTED, || unsafe {
+        header_of(this).inner_query_interface(riid, ppv)
+    })
 }
 
 unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> ULONG {

@@ -24,7 +24,12 @@ pub const LOCALE_INVARIANT: LCID = 0x007F;
 pub(crate) const LOCALE_EN_US: LCID = 0x0409;
 
 /// The special locale IDs every session accepts, in the order QueryAvailableLocaleIDs reports them.
-pub(crate) const SPECIAL_LOCALES: [LCID; 4] = [LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL, LOCALE_INVARIANT];
+pub(crate) const SPECIAL_LOCALES: [LCID; 4] = [
+    LOCALE_SYSTEM_DEFAULT,
+    LOCALE_USER_DEFAULT,
+    LOCALE_NEUTRAL,
+    LOCALE_INVARIANT,
+];
 
 /// The locales a server supports when it declares none: the languages the catalog ships.
 pub(crate) const DEFAULT_LOCALES: [LCID; 1] = [LOCALE_EN_US];
@@ -60,7 +65,10 @@ pub(crate) fn resolve_locale(lcid: LCID) -> Resolved {
     let language = Language::of(concrete);
     // Neutral primary languages (0) resolve to English too.
     let language = if language.0 == 0 { Language::ENGLISH } else { language };
-    Resolved { lcid: concrete, language }
+    Resolved {
+        lcid: concrete,
+        language,
+    }
 }
 
 #[cfg(windows)]

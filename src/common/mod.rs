@@ -13,10 +13,12 @@ use std::sync::{Mutex, MutexGuard};
 use crate::com::alloc::{alloc_array, alloc_wstr};
 use crate::com::boundary::catch;
 use crate::com::iids::IID_IOPCCommon;
-use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot};
+use crate::com::object::{
+    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
+};
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{
-    E_INVALIDARG, E_UNEXPECTED, DWORD, GUID, HRESULT, IUnknown, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR,
+    IUnknown, DWORD, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR,
 };
 use crate::errors::{error_string, OpcServerKind, OpcVendorErrorStringFn, VendorTexts};
 use locale::{DEFAULT_LOCALES, LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
@@ -33,7 +35,8 @@ pub struct IOPCCommonVtbl {
     pub GetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> HRESULT,
     pub QueryAvailableLocaleIDs:
         unsafe extern "system" fn(This: *mut IOPCCommon, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> HRESULT,
-    pub GetErrorString: unsafe extern "system" fn(This: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT,
+    pub GetErrorString:
+        unsafe extern "system" fn(This: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT,
     pub SetClientName: unsafe extern "system" fn(This: *mut IOPCCommon, szName: LPCWSTR) -> HRESULT,
 }
 
@@ -141,8 +144,14 @@ impl Settings {
         Ok(Settings {
             kind,
             available,
-            vendor: o.vendor_error_string.map(|callback| VendorTexts { callback, context: o.vendor_error_context }),
-            observer: o.client_name_changed.map(|callback| NameObserver { callback, context: o.client_name_context }),
+            vendor: o.vendor_error_string.map(|callback| VendorTexts {
+                callback,
+                context: o.vendor_error_context,
+            }),
+            observer: o.client_name_changed.map(|callback| NameObserver {
+                callback,
+                context: o.client_name_context,
+            }),
         })
     }
 }
@@ -335,7 +344,10 @@ pub unsafe extern "C" fn OpcCommonCreate(
                 Ok(OpcCommon {
                     common: binder.slot(&IOPCCOMMON_VTBL),
                     settings,
-                    session: Mutex::new(Session { locale: LOCALE_SYSTEM_DEFAULT, client_name: None }),
+                    session: Mutex::new(Session {
+                        locale: LOCALE_SYSTEM_DEFAULT,
+                        client_name: None,
+                    }),
                 })
             })
         }
@@ -368,7 +380,8 @@ pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *
             return E_INVALIDARG;
         }
         // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not.
-        let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.cast::<IOPCCommon>(), &IOPCCOMMON_VTBL) } {
+        let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.cast::<IOPCCommon>(), &IOPCCOMMON_VTBL) }
+        {
             Some(obj) => alloc_wstr(&obj.client_name()),
             None => Err(E_INVALIDARG),
         };

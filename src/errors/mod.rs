@@ -54,7 +54,8 @@ pub type OpcVendorErrorStringFn =
 /// A vendor callback with its context pointer.
 #[derive(Clone, Copy)]
 pub(crate) struct VendorTexts {
-    pub callback: unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT,
+    pub callback:
+        unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT,
     pub context: *mut c_void,
 }
 
@@ -117,12 +118,14 @@ pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString
     }
     // SAFETY: checked non-NULL; the caller vouches it is writable.
     unsafe { *ppString = ptr::null_mut() };
-    catch(E_UNEXPECTED, || match error_string(code, locale, OpcServerKind::DataAccess, None) {
-        Ok(p) => {
-            // SAFETY: as above.
-            unsafe { *ppString = p };
-            S_OK
+    catch(E_UNEXPECTED, || {
+        match error_string(code, locale, OpcServerKind::DataAccess, None) {
+            Ok(p) => {
+                // SAFETY: as above.
+                unsafe { *ppString = p };
+                S_OK
+            }
+            Err(hr) => hr,
         }
-        Err(hr) => hr,
     })
 }

@@ -36,7 +36,9 @@ fn main() -> ExitCode {
         return ExitCode::SUCCESS;
     }
     if check {
-        eprintln!("include/opccomn.h differs from what the sources generate: run `cargo run -p gen-header` and commit it");
+        eprintln!(
+            "include/opccomn.h differs from what the sources generate: run `cargo run -p gen-header` and commit it"
+        );
         return ExitCode::FAILURE;
     }
     std::fs::write(&header, generated).expect("write include/opccomn.h");
