@@ -17,6 +17,13 @@
 #include <ocidl.h>
 #endif
 
+/* Interface tags, declared at file scope before any vtable mentions them (in C, a struct tag first
+   seen in a parameter list would be a different type). */
+#if !defined(_WIN32)
+struct IUnknown;
+#endif
+struct IOPCCommon;
+
 
 // The kind of OPC server asking for a text; it decides which specification's text a colliding code
 // gets.

@@ -3,9 +3,9 @@
 //! IOPCCommon and the error texts instead of writing their own.
 //!
 //! Layout, by specification chapter:
-//! - [`com`]: the COM core (types, IUnknown, reference counting, aggregation, allocator, panic boundary)
-//! - [`common`]: IOPCCommon (chapter 5)
-//! - [`errors`]: the error text catalog behind GetErrorString (chapter 5.1.4)
+//! - `com`: the COM core (types, IUnknown, reference counting, aggregation, allocator, panic boundary)
+//! - `common`: IOPCCommon (chapter 5)
+//! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)
 //!
 //! The C API is declared in `include/opccomn.h`, generated from these sources by cbindgen.
 

@@ -192,6 +192,7 @@ impl<T> core::ops::Deref for ComObject<T> {
 impl<T: ComClass> ComObject<T> {
     /// Allocates an object with one reference (owned by the caller through its inner IUnknown).
     /// `build` receives a [`Binder`] for making the object's interface slots.
+    #[allow(clippy::new_ret_no_self)] // the caller gets a counted reference, never the object by value
     pub fn new(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> T) -> ComRef<T> {
         match Self::try_new(outer, |b| Ok::<T, core::convert::Infallible>(build(b))) {
             Ok(obj) => obj,
@@ -220,8 +221,8 @@ impl<T: ComClass> ComObject<T> {
         LIVE_OBJECTS.fetch_add(1, Ordering::AcqRel);
         // SAFETY: fully initialised above.
         let raw = Box::into_raw(unsafe { block.assume_init() });
-        // SAFETY: Box::into_raw never returns NULL.
         Ok(ComRef {
+            // SAFETY: Box::into_raw never returns NULL.
             obj: unsafe { NonNull::new_unchecked(raw) },
         })
     }

@@ -108,7 +108,7 @@ mod tests {
 
     #[test]
     fn guid_from_u128_matches_registry_form() {
-        let g = GUID::from_u128(0xF31DFDE2_07B6_11d2_B2D8_0060083BA1FB);
+        let g = GUID::from_u128(0xF31DFDE2_07B6_11D2_B2D8_0060083BA1FB);
         assert_eq!(g.Data1, 0xF31DFDE2);
         assert_eq!(g.Data2, 0x07B6);
         assert_eq!(g.Data3, 0x11d2);

@@ -1,0 +1,32 @@
+# Sourced by the scripts: installs what a fresh Debian 12 machine with only Rust lacks, and nothing when
+# it is all there already. Needs root (or sudo) only when something is missing.
+need_linux_tools() {
+    local missing=()
+    command -v cmake >/dev/null || missing+=(cmake)
+    command -v cc >/dev/null || missing+=(gcc)
+    command -v c++ >/dev/null || missing+=(g++)
+    command -v pkg-config >/dev/null || missing+=(pkg-config)
+    install_packages "${missing[@]}"
+}
+
+need_windows_tools() {
+    local missing=()
+    command -v x86_64-w64-mingw32-gcc >/dev/null || missing+=(gcc-mingw-w64-x86-64)
+    command -v x86_64-w64-mingw32-g++ >/dev/null || missing+=(g++-mingw-w64-x86-64)
+    command -v x86_64-w64-mingw32-windres >/dev/null || missing+=(binutils-mingw-w64-x86-64)
+    command -v x86_64-w64-mingw32-widl >/dev/null || missing+=(mingw-w64-tools)
+    command -v wine >/dev/null || missing+=(wine wine64)
+    install_packages "${missing[@]}"
+    if ! rustup target list --installed | grep -qx x86_64-pc-windows-gnu; then
+        rustup target add x86_64-pc-windows-gnu
+    fi
+}
+
+install_packages() {
+    [ "$#" -eq 0 ] && return 0
+    local sudo=""
+    [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    echo "== installing: $*"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "$@" >/dev/null
+}

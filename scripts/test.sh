@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Runs every test of the project: lint and header drift, Rust tests, C tests on Linux under
+# AddressSanitizer and UBSan, the installed package (CMake config and pkg-config), and the Windows DLL
+# with the same C tests under Wine. Installs what is missing on a fresh Debian 12 machine.
+#
+# Usage: scripts/test.sh [--no-wine] [--no-lint]     (CI runs it with no options)
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+. scripts/deps.sh
+
+wine_stage=1
+lint_stage=1
+for arg in "$@"; do
+    case "$arg" in
+        --no-wine) wine_stage=0 ;;
+        --no-lint) lint_stage=0 ;;
+        *) echo "usage: scripts/test.sh [--no-wine] [--no-lint]" >&2; exit 2 ;;
+    esac
+done
+
+build="$root/build"
+stage() { printf '\n==== %s\n' "$*"; }
+
+need_linux_tools
+[ "$wine_stage" = 1 ] && need_windows_tools
+
+if [ "$lint_stage" = 1 ]; then
+    stage "format, clippy, header drift"
+    cargo fmt --all -- --check
+    cargo clippy --all-targets -- -D warnings
+    [ "$wine_stage" = 1 ] && cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
+    cargo run -q -p gen-header -- --check
+fi
+
+stage "Rust tests (Linux)"
+cargo test
+
+stage "C tests (Linux, AddressSanitizer + UBSan)"
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+cmake -S . -B "$build/linux" -DOPCCOMN_SANITIZE=ON >/dev/null
+cmake --build "$build/linux" -j2
+ctest --test-dir "$build/linux" --output-on-failure --timeout 300
+
+stage "installed package: find_package(opccomn CONFIG) and pkg-config"
+rm -rf "$build/install" "$build/consumer"
+cmake --install "$build/linux" --prefix "$build/install" >/dev/null
+cmake -S examples/consumer -B "$build/consumer" -DCMAKE_PREFIX_PATH="$build/install" >/dev/null
+cmake --build "$build/consumer" -j2 >/dev/null
+"$build/consumer/consumer"
+PKG_CONFIG_PATH="$build/install/lib/pkgconfig" cc -o "$build/consumer/pkgconfig_demo" examples/demo.c \
+    $(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --cflags --libs opccomn) \
+    -Wl,-rpath,"$build/install/lib"
+"$build/consumer/pkgconfig_demo" >/dev/null
+
+if [ "$wine_stage" = 1 ]; then
+    . scripts/wine-env.sh "$build/windows"
+
+    stage "Rust tests (Windows, under Wine)"
+    CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=wine cargo test --target x86_64-pc-windows-gnu --lib
+
+    stage "C tests (Windows DLL, under Wine)"
+    cmake -S . -B "$build/windows" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" >/dev/null
+    cmake --build "$build/windows" -j2
+    ctest --test-dir "$build/windows" --output-on-failure --timeout 300
+fi
+
+stage "all stages passed"
