@@ -41,6 +41,7 @@ export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktra
 cmake -S . -B "$build/linux" -DOPCCOMN_SANITIZE=ON >/dev/null
 cmake --build "$build/linux" -j2
 ctest --test-dir "$build/linux" --output-on-failure --timeout 300
+scripts/check-exports.sh "$build/linux/cargo/release/libopccomn.so"
 
 stage "installed package: find_package(opccomn CONFIG) and pkg-config"
 rm -rf "$build/install" "$build/consumer"
@@ -63,6 +64,7 @@ if [ "$wine_stage" = 1 ]; then
     cmake -S . -B "$build/windows" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" >/dev/null
     cmake --build "$build/windows" -j2
     ctest --test-dir "$build/windows" --output-on-failure --timeout 300
+    scripts/check-exports.sh "$build/windows/cargo/x86_64-pc-windows-gnu/release/opccomn.dll"
 fi
 
 stage "all stages passed"

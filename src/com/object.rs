@@ -179,13 +179,13 @@ impl ComHeader {
 #[repr(C)]
 pub struct ComObject<T> {
     header: ComHeader,
-    value: T,
+    state: T,
 }
 
 impl<T> core::ops::Deref for ComObject<T> {
     type Target = T;
     fn deref(&self) -> &T {
-        &self.value
+        &self.state
     }
 }
 
@@ -216,7 +216,7 @@ impl<T: ComClass> ComObject<T> {
                 query: query_thunk::<T>,
                 destroy: destroy_thunk::<T>,
             },
-            value,
+            state: value,
         });
         LIVE_OBJECTS.fetch_add(1, Ordering::AcqRel);
         // SAFETY: fully initialised above.
@@ -345,7 +345,7 @@ impl<T: ComClass> Drop for ComRef<T> {
 unsafe fn query_thunk<T: ComClass>(header: *const ComHeader, iid: &GUID) -> *mut c_void {
     // SAFETY: installed only in headers of ComObject<T>, which starts with the header.
     let obj = unsafe { &*(header as *const ComObject<T>) };
-    obj.value.interface(iid).map_or(ptr::null_mut(), Slot::as_ptr)
+    obj.state.interface(iid).map_or(ptr::null_mut(), Slot::as_ptr)
 }
 
 unsafe fn destroy_thunk<T: ComClass>(header: *const ComHeader) {
@@ -447,4 +447,199 @@ pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> ULONG {
             }
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::com::hresult::E_INVALIDARG;
+    use crate::com::unknown::release;
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+
+    /// A test interface: IUnknown plus one method that returns a value and one that panics.
+    #[repr(C)]
+    struct ITestVtbl {
+        QueryInterface: unsafe extern "system" fn(*mut ITest, REFIID, *mut *mut c_void) -> HRESULT,
+        AddRef: unsafe extern "system" fn(*mut ITest) -> ULONG,
+        Release: unsafe extern "system" fn(*mut ITest) -> ULONG,
+        Value: unsafe extern "system" fn(*mut ITest, *mut u32) -> HRESULT,
+        Explode: unsafe extern "system" fn(*mut ITest) -> HRESULT,
+    }
+    #[repr(C)]
+    struct ITest {
+        lpVtbl: *const ITestVtbl,
+    }
+    const IID_ITEST: GUID = GUID::from_u128(0x11111111_2222_3333_4444_555555555555);
+
+    struct TestObject {
+        test: Slot,
+        value: u32,
+        died: Arc<AtomicBool>,
+    }
+    impl Drop for TestObject {
+        fn drop(&mut self) {
+            assert!(!self.died.swap(true, Ordering::SeqCst), "dropped twice");
+        }
+    }
+    impl ComClass for TestObject {
+        fn interface(&self, iid: &GUID) -> Option<&Slot> {
+            (*iid == IID_ITEST).then_some(&self.test)
+        }
+    }
+
+    unsafe extern "system" fn value(this: *mut ITest, out: *mut u32) -> HRESULT {
+        if out.is_null() {
+            return E_INVALIDARG;
+        }
+        // SAFETY: called through TEST_VTBL only, on a live TestObject; `out` checked.
+        catch(E_UNEXPECTED, || unsafe {
+            *out = ComObject::<TestObject>::from_interface(this).value;
+            S_OK
+        })
+    }
+    unsafe extern "system" fn explode(_this: *mut ITest) -> HRESULT {
+        catch(E_UNEXPECTED, || panic!("a bug inside a method"))
+    }
+    static TEST_VTBL: ITestVtbl = ITestVtbl {
+        QueryInterface: delegating_query_interface::<ITest>,
+        AddRef: delegating_add_ref::<ITest>,
+        Release: delegating_release::<ITest>,
+        Value: value,
+        Explode: explode,
+    };
+
+    fn create(died: &Arc<AtomicBool>) -> *mut ITest {
+        let mut p: *mut c_void = ptr::null_mut();
+        let died = died.clone();
+        // SAFETY: valid arguments.
+        let hr = unsafe {
+            ComObject::<TestObject>::create(ptr::null_mut(), &IID_ITEST, &mut p, |b| {
+                Ok(TestObject {
+                    test: b.slot(&TEST_VTBL),
+                    value: 42,
+                    died,
+                })
+            })
+        };
+        assert_eq!(hr, S_OK);
+        p.cast()
+    }
+
+    #[test]
+    fn objects_die_exactly_at_the_last_release() {
+        let died = Arc::new(AtomicBool::new(false));
+        let t = create(&died);
+        // SAFETY: `t` is a live interface pointer until its last Release.
+        unsafe {
+            let vt = &*(*t).lpVtbl;
+            assert_eq!((vt.AddRef)(t), 2);
+            assert_eq!((vt.Release)(t), 1);
+            let mut unk: *mut c_void = ptr::null_mut();
+            assert_eq!((vt.QueryInterface)(t, &IID_IUNKNOWN, &mut unk), S_OK);
+            assert!(!died.load(Ordering::SeqCst));
+            assert_eq!((vt.Release)(t), 1);
+            assert!(!died.load(Ordering::SeqCst));
+            assert_eq!(release(unk.cast()), 0);
+        }
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn identity_and_query_interface_rules() {
+        let died = Arc::new(AtomicBool::new(false));
+        let t = create(&died);
+        // SAFETY: `t` is live throughout; every reference taken is released.
+        unsafe {
+            let vt = &*(*t).lpVtbl;
+            let (mut u1, mut u2, mut again) = (ptr::null_mut(), ptr::null_mut(), ptr::null_mut());
+            assert_eq!((vt.QueryInterface)(t, &IID_IUNKNOWN, &mut u1), S_OK);
+            assert_eq!(
+                crate::com::unknown::query_interface(u1.cast(), &IID_IUNKNOWN, &mut u2),
+                S_OK
+            );
+            assert_eq!(u1, u2);
+            assert_eq!(
+                crate::com::unknown::query_interface(u1.cast(), &IID_ITEST, &mut again),
+                S_OK
+            );
+            assert_eq!(again, t.cast());
+            let mut missing: *mut c_void = 1 as *mut c_void;
+            let other = GUID::from_u128(0x99);
+            assert_eq!((vt.QueryInterface)(t, &other, &mut missing), E_NOINTERFACE);
+            assert!(missing.is_null());
+            assert_eq!((vt.QueryInterface)(t, &IID_ITEST, ptr::null_mut()), E_POINTER);
+            let mut p: *mut c_void = 1 as *mut c_void;
+            assert_eq!((vt.QueryInterface)(t, ptr::null(), &mut p), E_POINTER);
+            assert!(p.is_null());
+            release(u1.cast());
+            release(u2.cast());
+            release(again.cast());
+            assert_eq!((vt.Release)(t), 0);
+        }
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn a_panic_in_a_method_becomes_e_unexpected_and_the_object_lives_on() {
+        let died = Arc::new(AtomicBool::new(false));
+        let t = create(&died);
+        // SAFETY: `t` is live until the final Release.
+        unsafe {
+            let vt = &*(*t).lpVtbl;
+            assert_eq!((vt.Explode)(t), E_UNEXPECTED);
+            let mut v = 0;
+            assert_eq!((vt.Value)(t, &mut v), S_OK);
+            assert_eq!(v, 42);
+            assert_eq!((vt.Release)(t), 0);
+        }
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn reference_counts_are_exact_under_concurrency() {
+        let died = Arc::new(AtomicBool::new(false));
+        let t = create(&died) as usize;
+        let threads: Vec<_> = (0..4)
+            .map(|_| {
+                std::thread::spawn(move || {
+                    let t = t as *mut ITest;
+                    for _ in 0..20_000 {
+                        // SAFETY: the creating reference keeps the object alive meanwhile.
+                        unsafe {
+                            ((*(*t).lpVtbl).AddRef)(t);
+                            ((*(*t).lpVtbl).Release)(t);
+                        }
+                    }
+                })
+            })
+            .collect();
+        for th in threads {
+            th.join().unwrap();
+        }
+        assert!(!died.load(Ordering::SeqCst));
+        let t = t as *mut ITest;
+        // SAFETY: the last reference.
+        assert_eq!(unsafe { ((*(*t).lpVtbl).Release)(t) }, 0);
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn aggregation_is_refused_for_other_interfaces_and_failed_builds_allocate_nothing() {
+        let mut p: *mut c_void = 1 as *mut c_void;
+        let fake_outer = 8 as *mut IUnknown; // never dereferenced: refused before use
+                                             // SAFETY: the outer pointer is not touched on this path.
+        let hr = unsafe {
+            ComObject::<TestObject>::create(fake_outer, &IID_ITEST, &mut p, |_| -> Result<TestObject, HRESULT> {
+                unreachable!("must not build")
+            })
+        };
+        assert_eq!(hr, CLASS_E_NOAGGREGATION);
+        assert!(p.is_null());
+        let mut p: *mut c_void = 1 as *mut c_void;
+        // SAFETY: valid arguments.
+        let hr = unsafe { ComObject::<TestObject>::create(ptr::null_mut(), &IID_ITEST, &mut p, |_| Err(E_INVALIDARG)) };
+        assert_eq!(hr, E_INVALIDARG);
+        assert!(p.is_null());
+    }
 }
