@@ -45,6 +45,11 @@ static void test_create_errors(void) {
     CHECK_HR(OpcCommonCreate(&o, NULL, &IID_IOPCCommon, &p), E_INVALIDARG);
     CHECK(p == NULL);
 
+    o.struct_size = (uint32_t)offsetof(OpcCommonOptions, locales) + 4; /* ends inside a pointer */
+    p = GARBAGE_PTR;
+    CHECK_HR(OpcCommonCreate(&o, NULL, &IID_IOPCCommon, &p), E_INVALIDARG);
+    CHECK(p == NULL);
+
     o.struct_size = sizeof o;
     o.server_kind = 99;
     CHECK_HR(OpcCommonCreate(&o, NULL, &IID_IOPCCommon, &p), E_INVALIDARG);

@@ -80,6 +80,27 @@ pub struct OpcCommonOptions {
 /// The most locales a server may declare.
 const MAX_LOCALES: u32 = 4096;
 
+/// True when `size` is what `sizeof(OpcCommonOptions)` is or was in some version: the struct ends
+/// after a whole field (with or without the padding C adds). A size cutting a field in two would
+/// leave half a pointer, and is refused.
+fn valid_options_size(size: usize) -> bool {
+    use core::mem::{offset_of, size_of};
+    type O = OpcCommonOptions;
+    let ptr = size_of::<*const c_void>();
+    let ends = [
+        offset_of!(O, server_kind),
+        offset_of!(O, locales),
+        offset_of!(O, locales) + ptr,
+        offset_of!(O, locale_count) + size_of::<u32>(),
+        offset_of!(O, vendor_error_string),
+        offset_of!(O, vendor_error_context),
+        offset_of!(O, client_name_changed),
+        offset_of!(O, client_name_context),
+        size_of::<O>(),
+    ];
+    ends.contains(&size)
+}
+
 /// The options as the object keeps them.
 struct Settings {
     kind: OpcServerKind,
@@ -119,7 +140,7 @@ impl Settings {
         if !options.is_null() {
             // SAFETY: the first field is always present.
             let size = unsafe { ptr::addr_of!((*options).struct_size).read_unaligned() } as usize;
-            if size < core::mem::size_of::<u32>() || size > core::mem::size_of::<OpcCommonOptions>() {
+            if !valid_options_size(size) {
                 return Err(E_INVALIDARG);
             }
             // SAFETY: the caller vouches `size` bytes are readable; `o` has room for them.
