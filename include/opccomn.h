@@ -26,7 +26,7 @@ struct IOPCCommon;
 
 
 // The kind of OPC server asking for a text; it decides which specification's text a colliding code
-// gets.
+// gets (other codes get their text whatever the kind).
 enum OpcServerKind
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
   : uint32_t
@@ -38,6 +38,12 @@ enum OpcServerKind
   OPC_SERVER_KIND_ALARMS_EVENTS = 1,
   // Historical Data Access.
   OPC_SERVER_KIND_HISTORICAL_DATA = 2,
+  // Batch.
+  OPC_SERVER_KIND_BATCH = 3,
+  // Data eXchange.
+  OPC_SERVER_KIND_DATA_EXCHANGE = 4,
+  // Command Execution.
+  OPC_SERVER_KIND_COMMAND_EXECUTION = 5,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -70,10 +76,10 @@ typedef const WCHAR *LPCWSTR;
 // A server's own texts for its vendor-specific codes, asked before the catalog.
 //
 // Called with the code and the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete
-// language). To answer, store a NUL-terminated string in `*text` and return S_OK; the library copies
-// it before the callback is called again, so a static string or one the server keeps is fine. Any
-// other return (S_FALSE to decline) lets the library look the code up itself. May be called from any
-// thread, concurrently.
+// locale, e.g. 0x0407). To answer, store a NUL-terminated string in `*text` and return S_OK; the
+// library copies it into task memory before the callback is called again, so a static string or one
+// the server keeps is fine. Any other return (S_FALSE to decline) lets the library look the code up
+// itself. May be called from any thread, concurrently.
 typedef HRESULT (*OpcVendorErrorStringFn)(void *context, HRESULT code, LCID locale, LPCWSTR *text);
 
 // Called after a client set its name; `name` is valid only during the call. May be called from any
@@ -339,14 +345,26 @@ HRESULT OpcCommonGetClientName(struct IUnknown *common, LPWSTR *ppName);
 
 // Returns the text for an OPC, COM or system error code in the given locale, for servers that
 // implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
-// Texts are those of a Data Access server where codes collide.
+// Texts are those of a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
 //
-// `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree on Windows), or
-// NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
+// `locale` may be a concrete LCID or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
+// LOCALE_INVARIANT. `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree
+// on Windows), or NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
 //
 // # Safety
 // `ppString` must be NULL or writable.
 HRESULT OpcGetErrorString(HRESULT code, LCID locale, LPWSTR *ppString);
+
+// `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
+// server passes OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized
+// as an area name." rather than the Data Access text.
+//
+// Returns E_INVALIDARG, with `*ppString` NULL, for an unknown `kind`, a NULL `ppString` or a code
+// without a text.
+//
+// # Safety
+// `ppString` must be NULL or writable.
+HRESULT OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -1,22 +1,37 @@
-//! Error texts: `IOPCCommon::GetErrorString` and `OpcGetErrorString`.
+//! Error texts: `IOPCCommon::GetErrorString`, `OpcGetErrorString` and `OpcGetErrorStringEx`.
 //!
-//! Lookup order: the server's own (vendor) callback, then the OPC catalog for the kind of server asking
-//! (the same HRESULT means different things to a Data Access and an Alarms & Events server), then the
-//! COM and system codes. Unknown codes fail with E_INVALIDARG, as the specification requires.
+//! Lookup order (specification 5.1.4 and what OPC clients expect of it):
+//! 1. the server's own callback for its vendor-specific codes, asked with the resolved locale;
+//! 2. the OPC catalog (Data Access, Alarms & Events, HDA, Security, Batch, DX, Command Execution and
+//!    the connection point codes), in the session's language, falling back to English text by text.
+//!    Where one HRESULT means different things to different kinds of server (C0040203 is
+//!    OPC_E_INVALID_PID to Data Access and OPC_E_INVALIDBRANCHNAME to Alarms & Events), the kind the
+//!    server declared decides;
+//! 3. system codes: on Windows the system's own text (FormatMessage in the resolved language, else in
+//!    the system's default choice, trailing line break removed); on other platforms, and where Windows
+//!    has no text, the catalog's Windows texts of the COM and RPC codes an OPC client meets.
+//!
+//! Codes without a text fail with E_INVALIDARG and a NULL string, as the specification requires.
 
 use core::ffi::c_void;
 use core::ptr;
 
-use crate::com::alloc::{alloc_wstr, alloc_wstr_from_str};
+use crate::com::alloc::alloc_wstr;
 use crate::com::boundary::catch;
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{E_INVALIDARG, E_UNEXPECTED, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
-use crate::common::locale::{resolve_locale, Language};
+use crate::common::locale::resolve_locale;
+#[cfg(test)]
+use crate::common::locale::Language;
 
-mod en;
+mod catalog;
+#[cfg(windows)]
+mod system;
+
+use catalog::Spec;
 
 /// The kind of OPC server asking for a text; it decides which specification's text a colliding code
-/// gets.
+/// gets (other codes get their text whatever the kind).
 #[repr(u32)]
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 pub enum OpcServerKind {
@@ -27,6 +42,12 @@ pub enum OpcServerKind {
     AlarmsEvents = 1,
     /// Historical Data Access.
     HistoricalData = 2,
+    /// Batch.
+    Batch = 3,
+    /// Data eXchange.
+    DataExchange = 4,
+    /// Command Execution.
+    CommandExecution = 5,
 }
 
 impl OpcServerKind {
@@ -36,7 +57,21 @@ impl OpcServerKind {
             0 => Some(OpcServerKind::DataAccess),
             1 => Some(OpcServerKind::AlarmsEvents),
             2 => Some(OpcServerKind::HistoricalData),
+            3 => Some(OpcServerKind::Batch),
+            4 => Some(OpcServerKind::DataExchange),
+            5 => Some(OpcServerKind::CommandExecution),
             _ => None,
+        }
+    }
+
+    fn spec(self) -> Spec {
+        match self {
+            OpcServerKind::DataAccess => Spec::DataAccess,
+            OpcServerKind::AlarmsEvents => Spec::AlarmsEvents,
+            OpcServerKind::HistoricalData => Spec::HistoricalData,
+            OpcServerKind::Batch => Spec::Batch,
+            OpcServerKind::DataExchange => Spec::DataExchange,
+            OpcServerKind::CommandExecution => Spec::CommandExecution,
         }
     }
 }
@@ -44,10 +79,10 @@ impl OpcServerKind {
 /// A server's own texts for its vendor-specific codes, asked before the catalog.
 ///
 /// Called with the code and the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete
-/// language). To answer, store a NUL-terminated string in `*text` and return S_OK; the library copies
-/// it before the callback is called again, so a static string or one the server keeps is fine. Any
-/// other return (S_FALSE to decline) lets the library look the code up itself. May be called from any
-/// thread, concurrently.
+/// locale, e.g. 0x0407). To answer, store a NUL-terminated string in `*text` and return S_OK; the
+/// library copies it into task memory before the callback is called again, so a static string or one
+/// the server keeps is fine. Any other return (S_FALSE to decline) lets the library look the code up
+/// itself. May be called from any thread, concurrently.
 pub type OpcVendorErrorStringFn =
     Option<unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT>;
 
@@ -90,36 +125,44 @@ pub(crate) fn error_string(
     if let Some(answer) = vendor.and_then(|v| v.lookup(code, resolved.lcid)) {
         return answer;
     }
-    match catalog_text(code, kind, resolved.language) {
-        Some(text) => alloc_wstr_from_str(text),
+    let code = code as u32;
+    let spec = catalog::spec_of(code, kind.spec());
+    #[cfg(windows)]
+    if matches!(spec, Some(Spec::System) | None) {
+        if let Some(answer) = system::message(code, resolved.lcid) {
+            return answer;
+        }
+    }
+    match spec.and_then(|spec| catalog::text(code, spec, resolved.language)) {
+        // The table holds the text with its NUL; alloc_wstr adds its own.
+        Some(entry) => alloc_wstr(&entry.wide[..entry.wide.len() - 1]),
         None => Err(E_INVALIDARG),
     }
 }
 
-/// The catalog text for `code` in `language`, falling back to English.
-pub(crate) fn catalog_text(code: HRESULT, kind: OpcServerKind, language: Language) -> Option<&'static str> {
-    let _ = language; // only English ships so far; every language falls back to it
-    en::text(code as u32, kind)
+/// The catalog text for `code` as a server of `kind` means it, in `language` (English where the
+/// language has none); system texts are not consulted.
+#[cfg(test)]
+fn catalog_text(code: HRESULT, kind: OpcServerKind, language: Language) -> Option<&'static str> {
+    let spec = catalog::spec_of(code as u32, kind.spec())?;
+    catalog::text(code as u32, spec, language).map(|e| e.text)
 }
 
-/// Returns the text for an OPC, COM or system error code in the given locale, for servers that
-/// implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
-/// Texts are those of a Data Access server where codes collide.
-///
-/// `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree on Windows), or
-/// NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
+/// Shared body of the exports: writes `*ppString` first, then looks the text up.
 ///
 /// # Safety
 /// `ppString` must be NULL or writable.
-#[no_mangle]
-pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString: *mut LPWSTR) -> HRESULT {
+unsafe fn export_error_string(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> HRESULT {
     if ppString.is_null() {
         return E_INVALIDARG;
     }
     // SAFETY: checked non-NULL; the caller vouches it is writable.
     unsafe { *ppString = ptr::null_mut() };
     catch(E_UNEXPECTED, || {
-        match error_string(code, locale, OpcServerKind::DataAccess, None) {
+        let Some(kind) = OpcServerKind::from_raw(kind) else {
+            return E_INVALIDARG;
+        };
+        match error_string(code, locale, kind, None) {
             Ok(p) => {
                 // SAFETY: as above.
                 unsafe { *ppString = p };
@@ -128,4 +171,180 @@ pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString
             Err(hr) => hr,
         }
     })
+}
+
+/// Returns the text for an OPC, COM or system error code in the given locale, for servers that
+/// implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
+/// Texts are those of a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
+///
+/// `locale` may be a concrete LCID or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
+/// LOCALE_INVARIANT. `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree
+/// on Windows), or NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
+///
+/// # Safety
+/// `ppString` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString: *mut LPWSTR) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    unsafe { export_error_string(code, locale, OpcServerKind::DataAccess as u32, ppString) }
+}
+
+/// `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
+/// server passes OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized
+/// as an area name." rather than the Data Access text.
+///
+/// Returns E_INVALIDARG, with `*ppString` NULL, for an unknown `kind`, a NULL `ppString` or a code
+/// without a text.
+///
+/// # Safety
+/// `ppString` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    unsafe { export_error_string(code, locale, kind, ppString) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::com::alloc::task_free;
+
+    fn get(code: u32, locale: LCID, kind: u32) -> Result<String, HRESULT> {
+        let mut p: LPWSTR = 1 as LPWSTR; // garbage: the function must overwrite it
+                                         // SAFETY: `p` is writable.
+        let hr = unsafe { OpcGetErrorStringEx(code as HRESULT, locale, kind, &mut p) };
+        if hr != S_OK {
+            assert!(p.is_null());
+            return Err(hr);
+        }
+        // SAFETY: S_OK gives a NUL-terminated task string, freed once here.
+        unsafe {
+            let units = wstr_units(p, MAX_STRING_UNITS).unwrap();
+            let s = String::from_utf16(units).unwrap();
+            task_free(p.cast());
+            Ok(s)
+        }
+    }
+
+    #[test]
+    fn collisions_answer_as_the_kind_of_server_asks() {
+        assert_eq!(
+            get(0xC0040203, 0x0409, 0).unwrap(),
+            "The specified property ID is not valid for the item."
+        );
+        assert_eq!(
+            get(0xC0040203, 0x0409, 1).unwrap(),
+            "The string was not recognized as an area name."
+        );
+        assert_eq!(
+            get(0xC0040203, 0x0407, 1).unwrap(),
+            "Die Zeichenfolge wurde nicht als Bereichsname erkannt."
+        );
+        assert_eq!(
+            get(0x00040200, 0x0409, 0).unwrap(),
+            "The condition has already been acknowleged."
+        );
+    }
+
+    #[test]
+    fn unknown_codes_kinds_and_null_out_pointers_are_invalid_arguments() {
+        assert_eq!(get(0xC004FFFF, 0x0409, 0), Err(E_INVALIDARG));
+        assert_eq!(get(0xC0040001, 0x0409, 6), Err(E_INVALIDARG));
+        // SAFETY: NULL is the point of the test.
+        let hr = unsafe { OpcGetErrorString(0xC0040001_u32 as HRESULT, 0x0409, ptr::null_mut()) };
+        assert_eq!(hr, E_INVALIDARG);
+    }
+
+    #[test]
+    fn languages_without_texts_get_english() {
+        assert_eq!(
+            get(0xC0040001, 0x040C, 0).unwrap(),
+            "The value of the handle is invalid."
+        );
+        assert_eq!(
+            get(0xC0040001, 0x0C07, 0).unwrap(),
+            "Der Wert des Handles ist ungültig."
+        );
+        assert_eq!(
+            get(0xC0040001, 0x0000, 0).unwrap(),
+            "The value of the handle is invalid."
+        );
+        assert_eq!(
+            get(0xC0040001, 0x007F, 0).unwrap(),
+            "The value of the handle is invalid."
+        );
+    }
+
+    #[test]
+    fn catalog_texts_skip_the_system() {
+        assert_eq!(
+            catalog_text(0xC0040011_u32 as HRESULT, OpcServerKind::DataAccess, Language::ENGLISH),
+            Some("The requested object (e.g. a public group) was not found.")
+        );
+        assert_eq!(
+            catalog_text(0x80040200_u32 as HRESULT, OpcServerKind::DataAccess, Language::GERMAN),
+            Some("Für diese Verbindungs-ID besteht keine Verbindung.")
+        );
+    }
+
+    #[cfg(not(windows))]
+    #[test]
+    fn com_codes_have_windows_texts_elsewhere() {
+        assert_eq!(get(0x80070057, 0x0409, 0).unwrap(), "The parameter is incorrect.");
+        assert_eq!(get(0x800706BA, 0x0409, 0).unwrap(), "The RPC server is unavailable.");
+        assert_eq!(get(0x80070057, 0x0407, 0).unwrap(), "Falscher Parameter.");
+    }
+
+    unsafe extern "C" fn vendor(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT {
+        static ANSWER: [u16; 4] = [0x56, 0x31, 0x21, 0]; // "V1!"
+                                                         // SAFETY: the test passes a pointer to an LCID as context.
+        unsafe { *context.cast::<LCID>() = locale };
+        if code as u32 == 0xE0000001 {
+            // SAFETY: `text` is the library's out-parameter.
+            unsafe { *text = ANSWER.as_ptr() };
+            return S_OK;
+        }
+        1 // S_FALSE: decline
+    }
+
+    #[test]
+    fn vendor_callback_is_asked_first_with_the_resolved_locale() {
+        let mut seen: LCID = 0;
+        let texts = VendorTexts {
+            callback: vendor,
+            context: (&mut seen as *mut LCID).cast(),
+        };
+        let p = error_string(
+            0xE0000001_u32 as HRESULT,
+            0x007F,
+            OpcServerKind::DataAccess,
+            Some(&texts),
+        )
+        .unwrap();
+        // SAFETY: a NUL-terminated task string, freed once.
+        unsafe {
+            assert_eq!(wstr_units(p, 10).unwrap(), &[0x56, 0x31, 0x21]);
+            task_free(p.cast());
+        }
+        assert_eq!(seen, 0x0409);
+        let p = error_string(
+            0xC0040001_u32 as HRESULT,
+            0x0407,
+            OpcServerKind::DataAccess,
+            Some(&texts),
+        )
+        .unwrap();
+        assert_eq!(seen, 0x0407);
+        // SAFETY: as above.
+        unsafe { task_free(p.cast()) };
+        assert_eq!(
+            error_string(
+                0xE0000002_u32 as HRESULT,
+                0x0409,
+                OpcServerKind::DataAccess,
+                Some(&texts)
+            ),
+            Err(E_INVALIDARG)
+        );
+    }
 }
