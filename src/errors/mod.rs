@@ -126,16 +126,19 @@ pub(crate) fn error_string(
         return answer;
     }
     let code = code as u32;
-    let spec = catalog::spec_of(code, kind.spec());
+    let found = catalog::lookup(code, kind.spec());
     #[cfg(windows)]
-    if matches!(spec, Some(Spec::System) | None) {
+    if found.map_or(true, |f| f.spec() == Spec::System) {
         if let Some(answer) = system::message(code, resolved.lcid) {
             return answer;
         }
     }
-    match spec.and_then(|spec| catalog::text(code, spec, resolved.language)) {
+    match found {
         // The table holds the text with its NUL; alloc_wstr adds its own.
-        Some(entry) => alloc_wstr(&entry.wide[..entry.wide.len() - 1]),
+        Some(found) => {
+            let wide = found.text(resolved.language).wide;
+            alloc_wstr(&wide[..wide.len() - 1])
+        }
         None => Err(E_INVALIDARG),
     }
 }
@@ -144,8 +147,7 @@ pub(crate) fn error_string(
 /// language has none); system texts are not consulted.
 #[cfg(test)]
 fn catalog_text(code: HRESULT, kind: OpcServerKind, language: Language) -> Option<&'static str> {
-    let spec = catalog::spec_of(code as u32, kind.spec())?;
-    catalog::text(code as u32, spec, language).map(|e| e.text)
+    catalog::lookup(code as u32, kind.spec()).map(|found| found.text(language).text)
 }
 
 /// Shared body of the exports: writes `*ppString` first, then looks the text up.
