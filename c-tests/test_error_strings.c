@@ -3,6 +3,9 @@
    German texts, the Data Access / Alarms & Events collision, locale resolution, the vendor callback,
    unknown codes and NULL out-pointers. On Windows also the DLL's own message table through
    FormatMessage and its version resource through GetFileVersionInfo. */
+#if !defined(_WIN32)
+#define _POSIX_C_SOURCE 200809L /* setenv, unsetenv */
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,6 +15,10 @@
 
 #if defined(_WIN32)
 #include <winver.h>
+/* version.dll is loaded at run time, so the test needs no extra import library. */
+typedef DWORD(WINAPI *GetFileVersionInfoSizeW_fn)(LPCWSTR, LPDWORD);
+typedef BOOL(WINAPI *GetFileVersionInfoW_fn)(LPCWSTR, DWORD, DWORD, LPVOID);
+typedef BOOL(WINAPI *VerQueryValueW_fn)(LPCVOID, LPCWSTR, LPVOID *, PUINT);
 #endif
 
 static int passed, failed;
@@ -372,13 +379,27 @@ static void test_dll_message_table(void)
 static void test_dll_version_resource(void)
 {
     HMODULE dll = GetModuleHandleW(L"opccomn.dll");
+    HMODULE version = LoadLibraryW(L"version.dll");
+    CHECK(version != NULL, "version.dll");
+    if (!version)
+        return;
+    GetFileVersionInfoSizeW_fn GetFileVersionInfoSizeW =
+        (GetFileVersionInfoSizeW_fn)(void (*)(void))GetProcAddress(version, "GetFileVersionInfoSizeW");
+    GetFileVersionInfoW_fn GetFileVersionInfoW =
+        (GetFileVersionInfoW_fn)(void (*)(void))GetProcAddress(version, "GetFileVersionInfoW");
+    VerQueryValueW_fn VerQueryValueW = (VerQueryValueW_fn)(void (*)(void))GetProcAddress(version, "VerQueryValueW");
+    CHECK(GetFileVersionInfoSizeW && GetFileVersionInfoW && VerQueryValueW, "version.dll exports");
+    if (!GetFileVersionInfoSizeW || !GetFileVersionInfoW || !VerQueryValueW)
+        return;
     WCHAR path[MAX_PATH];
     DWORD handle = 0;
     CHECK(dll && GetModuleFileNameW(dll, path, MAX_PATH) > 0, "module path");
     DWORD size = GetFileVersionInfoSizeW(path, &handle);
     CHECK(size > 0, "version resource present (error %lu)", (unsigned long)GetLastError());
-    if (!size)
+    if (!size) {
+        FreeLibrary(version);
         return;
+    }
     void *info = malloc(size);
     CHECK(GetFileVersionInfoW(path, 0, size, info), "GetFileVersionInfoW");
     VS_FIXEDFILEINFO *fixed = NULL;
@@ -402,6 +423,7 @@ static void test_dll_version_resource(void)
               same(value, "opccomn.dll"),
           "OriginalFilename");
     free(info);
+    FreeLibrary(version);
 }
 #endif
 
