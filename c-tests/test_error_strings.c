@@ -6,79 +6,30 @@
 #if !defined(_WIN32)
 #define _POSIX_C_SOURCE 200809L /* setenv, unsetenv */
 #endif
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "opccomn.h"
+#include "test_util.h"
 #include "published_error_texts.h"
 
 #if defined(_WIN32)
 #include <winver.h>
-/* version.dll is loaded at run time, so the test needs no extra import library. */
-typedef DWORD(WINAPI *GetFileVersionInfoSizeW_fn)(LPCWSTR, LPDWORD);
-typedef BOOL(WINAPI *GetFileVersionInfoW_fn)(LPCWSTR, DWORD, DWORD, LPVOID);
-typedef BOOL(WINAPI *VerQueryValueW_fn)(LPCVOID, LPCWSTR, LPVOID *, PUINT);
 #endif
 
-static int passed, failed;
-
-#define CHECK(cond, ...)                                                                                      \
+/* CHECK with a printf-style explanation of what was seen. */
+#define CHECKF(cond, ...)                                                                                     \
     do {                                                                                                      \
         if (cond) {                                                                                           \
-            passed++;                                                                                         \
+            test_passed++;                                                                                    \
         } else {                                                                                              \
-            failed++;                                                                                         \
-            printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                            \
-            printf(__VA_ARGS__);                                                                              \
-            printf("\n");                                                                                     \
+            test_failed++;                                                                                    \
+            fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond);                          \
+            fprintf(stderr, __VA_ARGS__);                                                                     \
+            fputc('\n', stderr);                                                                              \
         }                                                                                                     \
     } while (0)
 
-/* UTF-8 to a new NUL-terminated UTF-16 string (malloc). */
-static WCHAR *wide(const char *s)
-{
-    size_t n = strlen(s);
-    WCHAR *w = malloc((n + 1) * sizeof(WCHAR));
-    size_t j = 0;
-    for (size_t i = 0; i < n;) {
-        unsigned char c = (unsigned char)s[i];
-        unsigned long cp;
-        int len = c < 0x80 ? 1 : c < 0xE0 ? 2 : c < 0xF0 ? 3 : 4;
-        cp = len == 1 ? c : len == 2 ? c & 0x1F : len == 3 ? c & 0x0F : c & 0x07;
-        for (int k = 1; k < len; k++)
-            cp = (cp << 6) | ((unsigned char)s[i + k] & 0x3F);
-        i += len;
-        if (cp >= 0x10000) {
-            cp -= 0x10000;
-            w[j++] = (WCHAR)(0xD800 + (cp >> 10));
-            w[j++] = (WCHAR)(0xDC00 + (cp & 0x3FF));
-        } else {
-            w[j++] = (WCHAR)cp;
-        }
-    }
-    w[j] = 0;
-    return w;
-}
-
-static size_t wlen(const WCHAR *w)
-{
-    size_t n = 0;
-    while (w[n])
-        n++;
-    return n;
-}
-
-/* Whether `w` equals the UTF-8 `expected`. */
+/* Whether `w` equals the UTF-8 `expected` (NULL never does). */
 static int same(const WCHAR *w, const char *expected)
 {
-    if (!w)
-        return 0;
-    WCHAR *e = wide(expected);
-    size_t n = wlen(e);
-    int eq = wlen(w) == n && memcmp(w, e, n * sizeof(WCHAR)) == 0;
-    free(e);
-    return eq;
+    return w != NULL && wstr_is(w, expected);
 }
 
 /* For messages: `w` with non-ASCII shown as '?' (static buffer). */
@@ -97,7 +48,7 @@ static const char *show(const WCHAR *w)
 /* OpcGetErrorStringEx with a garbage-filled out-pointer; the result is owned by the caller. */
 static HRESULT get(uint32_t code, LCID lcid, uint32_t kind, LPWSTR *text)
 {
-    *text = (LPWSTR)(uintptr_t)0xDEADBEEF;
+    *text = (LPWSTR)GARBAGE_PTR;
     return OpcGetErrorStringEx((HRESULT)code, lcid, kind, text);
 }
 
@@ -106,7 +57,7 @@ static void expect(uint32_t code, LCID lcid, uint32_t kind, const char *text, co
 {
     LPWSTR s;
     HRESULT hr = get(code, lcid, kind, &s);
-    CHECK(hr == S_OK && same(s, text), "%s %08X lcid %04X kind %u: hr %08X, got \"%s\", want \"%s\"", what,
+    CHECKF(hr == S_OK && same(s, text), "%s %08X lcid %04X kind %u: hr %08X, got \"%s\", want \"%s\"", what,
           (unsigned)code, (unsigned)lcid, (unsigned)kind, (unsigned)hr, show(s), text);
     if (hr == S_OK)
         OpcTaskMemFree(s);
@@ -122,7 +73,7 @@ static void test_every_published_english_text(void)
         if (!(p->kind == K_AE && p->code == 0xC0040203u)) {
             LPWSTR s = (LPWSTR)(uintptr_t)1;
             HRESULT hr = OpcGetErrorString((HRESULT)p->code, 0x0409, &s);
-            CHECK(hr == S_OK && same(s, p->text), "%s via OpcGetErrorString: \"%s\"", p->symbol, show(s));
+            CHECKF(hr == S_OK && same(s, p->text), "%s via OpcGetErrorString: \"%s\"", p->symbol, show(s));
             if (hr == S_OK)
                 OpcTaskMemFree(s);
         }
@@ -189,7 +140,7 @@ static void test_default_locales_resolve(void)
         LPWSTR a, b;
         HRESULT ha = get(0xC0040006u, specials[i], K_DA, &a);
         HRESULT hb = get(0xC0040006u, expected_default(specials[i]), K_DA, &b);
-        CHECK(ha == S_OK && hb == S_OK && wlen(a) == wlen(b) && memcmp(a, b, wlen(a) * sizeof(WCHAR)) == 0,
+        CHECKF(ha == S_OK && hb == S_OK && wlen(a) == wlen(b) && memcmp(a, b, wlen(a) * sizeof(WCHAR)) == 0,
               "%04X: \"%s\"", (unsigned)specials[i], show(a));
         if (ha == S_OK)
             OpcTaskMemFree(a);
@@ -209,13 +160,13 @@ static void test_unknown_codes_and_null_pointers(void)
     for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; i++) {
         LPWSTR s;
         HRESULT hr = get(unknown[i], 0x0409, K_DA, &s);
-        CHECK(hr == E_INVALIDARG && s == NULL, "%08X: hr %08X", (unsigned)unknown[i], (unsigned)hr);
+        CHECKF(hr == E_INVALIDARG && s == NULL, "%08X: hr %08X", (unsigned)unknown[i], (unsigned)hr);
     }
     LPWSTR s;
     HRESULT hr = get(0xC0040001u, 0x0409, 6, &s);
-    CHECK(hr == E_INVALIDARG && s == NULL, "unknown kind: hr %08X", (unsigned)hr);
-    CHECK(OpcGetErrorString((HRESULT)0xC0040001u, 0x0409, NULL) == E_INVALIDARG, "NULL out-pointer");
-    CHECK(OpcGetErrorStringEx((HRESULT)0xC0040001u, 0x0409, K_AE, NULL) == E_INVALIDARG, "NULL out-pointer (Ex)");
+    CHECKF(hr == E_INVALIDARG && s == NULL, "unknown kind: hr %08X", (unsigned)hr);
+    CHECKF(OpcGetErrorString((HRESULT)0xC0040001u, 0x0409, NULL) == E_INVALIDARG, "NULL out-pointer");
+    CHECKF(OpcGetErrorStringEx((HRESULT)0xC0040001u, 0x0409, K_AE, NULL) == E_INVALIDARG, "NULL out-pointer (Ex)");
 }
 
 static void test_com_codes(void)
@@ -231,7 +182,7 @@ static void test_com_codes(void)
         LPWSTR s;
         HRESULT hr = get(codes[i], 0x0409, K_DA, &s);
         size_t n = hr == S_OK ? wlen(s) : 0;
-        CHECK(hr == S_OK && n > 0 && s[n - 1] != '\n' && s[n - 1] != '\r', "%08X: \"%s\"", (unsigned)codes[i],
+        CHECKF(hr == S_OK && n > 0 && s[n - 1] != '\n' && s[n - 1] != '\r', "%08X: \"%s\"", (unsigned)codes[i],
               show(hr == S_OK ? s : NULL));
         if (hr == S_OK)
             OpcTaskMemFree(s);
@@ -252,7 +203,7 @@ static int vendor_calls;
 static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *text)
 {
     static WCHAR answer[] = {'P', 'u', 'm', 'p', 'e', ' ', 0x00FC, 'b', 'e', 'r', 'h', 'i', 't', 'z', 't', 0};
-    CHECK(context == (void *)&vendor_calls, "context passed through");
+    CHECKF(context == (void *)&vendor_calls, "context passed through");
     vendor_calls++;
     vendor_seen_locale = locale;
     if ((uint32_t)code == 0xE0040001u) {
@@ -274,22 +225,22 @@ static IOPCCommon *create_common(uint32_t kind, int with_vendor)
     }
     void *p = NULL;
     HRESULT hr = OpcCommonCreate(&options, NULL, &IID_IOPCCommon, &p);
-    CHECK(hr == S_OK && p != NULL, "OpcCommonCreate: %08X", (unsigned)hr);
+    CHECKF(hr == S_OK && p != NULL, "OpcCommonCreate: %08X", (unsigned)hr);
     return (IOPCCommon *)p;
 }
 
 /* IOPCCommon::GetErrorString with a garbage-filled out-pointer; checks the text (NULL: expects failure). */
 static void expect_common(IOPCCommon *common, uint32_t code, const char *text, const char *what)
 {
-    LPWSTR s = (LPWSTR)(uintptr_t)0xDEADBEEF;
+    LPWSTR s = (LPWSTR)GARBAGE_PTR;
     HRESULT hr = common->lpVtbl->GetErrorString(common, (HRESULT)code, &s);
     if (text) {
-        CHECK(hr == S_OK && same(s, text), "%s %08X: hr %08X \"%s\"", what, (unsigned)code, (unsigned)hr,
+        CHECKF(hr == S_OK && same(s, text), "%s %08X: hr %08X \"%s\"", what, (unsigned)code, (unsigned)hr,
               show(hr == S_OK ? s : NULL));
         if (hr == S_OK)
             OpcTaskMemFree(s);
     } else {
-        CHECK(hr == E_INVALIDARG && s == NULL, "%s %08X: hr %08X", what, (unsigned)code, (unsigned)hr);
+        CHECKF(hr == E_INVALIDARG && s == NULL, "%s %08X: hr %08X", what, (unsigned)code, (unsigned)hr);
     }
 }
 
@@ -299,26 +250,26 @@ static void test_iopccommon(void)
     IOPCCommon *ae = create_common(K_AE, 0);
     if (!da || !ae)
         return;
-    CHECK(da->lpVtbl->SetLocaleID(da, 0x0409) == S_OK, "SetLocaleID en-US");
-    CHECK(ae->lpVtbl->SetLocaleID(ae, 0x0409) == S_OK, "SetLocaleID en-US");
+    CHECKF(da->lpVtbl->SetLocaleID(da, 0x0409) == S_OK, "SetLocaleID en-US");
+    CHECKF(ae->lpVtbl->SetLocaleID(ae, 0x0409) == S_OK, "SetLocaleID en-US");
     expect_common(da, 0xC0040203u, "The specified property ID is not valid for the item.", "DA session");
     expect_common(ae, 0xC0040203u, "The string was not recognized as an area name.", "AE session");
-    CHECK(ae->lpVtbl->SetLocaleID(ae, 0x0407) == S_OK, "SetLocaleID de-DE is available by default");
+    CHECKF(ae->lpVtbl->SetLocaleID(ae, 0x0407) == S_OK, "SetLocaleID de-DE is available by default");
     expect_common(ae, 0xC0040203u, "Die Zeichenfolge wurde nicht als Bereichsname erkannt.", "AE session de");
-    CHECK(ae->lpVtbl->SetLocaleID(ae, LOCALE_INVARIANT) == S_OK, "SetLocaleID invariant");
+    CHECKF(ae->lpVtbl->SetLocaleID(ae, LOCALE_INVARIANT) == S_OK, "SetLocaleID invariant");
     expect_common(ae, 0xC0040205u, "A refresh is currently in progress.", "AE session invariant");
     expect_common(da, 0xC004FFFFu, NULL, "unknown code");
-    CHECK(da->lpVtbl->GetErrorString(da, (HRESULT)0xC0040001u, NULL) == E_INVALIDARG, "NULL out-pointer");
+    CHECKF(da->lpVtbl->GetErrorString(da, (HRESULT)0xC0040001u, NULL) == E_INVALIDARG, "NULL out-pointer");
 
     DWORD count = 0;
     LCID *lcids = NULL;
-    CHECK(da->lpVtbl->QueryAvailableLocaleIDs(da, &count, &lcids) == S_OK, "QueryAvailableLocaleIDs");
+    CHECKF(da->lpVtbl->QueryAvailableLocaleIDs(da, &count, &lcids) == S_OK, "QueryAvailableLocaleIDs");
     int en = 0, de = 0;
     for (DWORD i = 0; i < count; i++) {
         en |= lcids[i] == 0x0409;
         de |= lcids[i] == 0x0407;
     }
-    CHECK(en && de, "en-US and de-DE available by default");
+    CHECKF(en && de, "en-US and de-DE available by default");
     OpcTaskMemFree(lcids);
     da->lpVtbl->Release(da);
     ae->lpVtbl->Release(ae);
@@ -332,19 +283,19 @@ static void test_vendor_callback(void)
     /* Answered, with the session's default locale resolved to a concrete one. */
     vendor_calls = 0;
     expect_common(common, 0xE0040001u, "Pumpe überhitzt", "vendor code");
-    CHECK(vendor_calls == 1, "asked once: %d", vendor_calls);
-    CHECK(vendor_seen_locale == expected_default(LOCALE_SYSTEM_DEFAULT), "resolved locale %04X",
+    CHECKF(vendor_calls == 1, "asked once: %d", vendor_calls);
+    CHECKF(vendor_seen_locale == expected_default(LOCALE_SYSTEM_DEFAULT), "resolved locale %04X",
           (unsigned)vendor_seen_locale);
-    CHECK(common->lpVtbl->SetLocaleID(common, 0x0407) == S_OK, "SetLocaleID de-DE");
+    CHECKF(common->lpVtbl->SetLocaleID(common, 0x0407) == S_OK, "SetLocaleID de-DE");
     expect_common(common, 0xE0040001u, "Pumpe überhitzt", "vendor code");
-    CHECK(vendor_seen_locale == 0x0407, "locale %04X", (unsigned)vendor_seen_locale);
-    CHECK(common->lpVtbl->SetLocaleID(common, LOCALE_NEUTRAL) == S_OK, "SetLocaleID neutral");
+    CHECKF(vendor_seen_locale == 0x0407, "locale %04X", (unsigned)vendor_seen_locale);
+    CHECKF(common->lpVtbl->SetLocaleID(common, LOCALE_NEUTRAL) == S_OK, "SetLocaleID neutral");
     expect_common(common, 0xE0040001u, "Pumpe überhitzt", "vendor code");
-    CHECK(vendor_seen_locale == 0x0409, "neutral resolves to en-US: %04X", (unsigned)vendor_seen_locale);
+    CHECKF(vendor_seen_locale == 0x0409, "neutral resolves to en-US: %04X", (unsigned)vendor_seen_locale);
     /* Declined: the catalog answers, or nobody does. */
     vendor_calls = 0;
     expect_common(common, 0xC0040001u, "The value of the handle is invalid.", "declined OPC code");
-    CHECK(vendor_calls == 1, "vendor asked first: %d", vendor_calls);
+    CHECKF(vendor_calls == 1, "vendor asked first: %d", vendor_calls);
     expect_common(common, 0xE0040002u, NULL, "declined unknown code");
     common->lpVtbl->Release(common);
 }
@@ -353,7 +304,7 @@ static void test_vendor_callback(void)
 static void test_dll_message_table(void)
 {
     HMODULE dll = GetModuleHandleW(L"opccomn.dll");
-    CHECK(dll != NULL, "opccomn.dll loaded");
+    CHECKF(dll != NULL, "opccomn.dll loaded");
     if (!dll)
         return;
     WCHAR buf[1024];
@@ -364,66 +315,51 @@ static void test_dll_message_table(void)
         DWORD n = FormatMessageW(FORMAT_MESSAGE_FROM_HMODULE | FORMAT_MESSAGE_IGNORE_INSERTS, dll, p->code, 0x0409,
                                  buf, 1024, NULL);
         buf[n < 1024 ? n : 1023] = 0;
-        CHECK(n > 0 && same(buf, p->text), "FormatMessage %s: \"%s\" (error %lu)", p->symbol, show(buf),
+        CHECKF(n > 0 && same(buf, p->text), "FormatMessage %s: \"%s\" (error %lu)", p->symbol, show(buf),
               (unsigned long)GetLastError());
     }
     DWORD n = FormatMessageW(FORMAT_MESSAGE_FROM_HMODULE | FORMAT_MESSAGE_IGNORE_INSERTS, dll, 0xC0040401u, 0x0407,
                              buf, 1024, NULL);
     buf[n < 1024 ? n : 1023] = 0;
-    CHECK(n > 0 && same(buf, "Das Element unterstützt kein Totband."), "German message: \"%s\"", show(buf));
+    CHECKF(n > 0 && same(buf, "Das Element unterstützt kein Totband."), "German message: \"%s\"", show(buf));
     n = FormatMessageW(FORMAT_MESSAGE_FROM_HMODULE | FORMAT_MESSAGE_IGNORE_INSERTS, dll, 0x80070057u, 0x0409, buf,
                        1024, NULL);
-    CHECK(n == 0, "system codes are not in the DLL's table");
+    CHECKF(n == 0, "system codes are not in the DLL's table");
 }
 
 static void test_dll_version_resource(void)
 {
     HMODULE dll = GetModuleHandleW(L"opccomn.dll");
-    HMODULE version = LoadLibraryW(L"version.dll");
-    CHECK(version != NULL, "version.dll");
-    if (!version)
-        return;
-    GetFileVersionInfoSizeW_fn GetFileVersionInfoSizeW =
-        (GetFileVersionInfoSizeW_fn)(void (*)(void))GetProcAddress(version, "GetFileVersionInfoSizeW");
-    GetFileVersionInfoW_fn GetFileVersionInfoW =
-        (GetFileVersionInfoW_fn)(void (*)(void))GetProcAddress(version, "GetFileVersionInfoW");
-    VerQueryValueW_fn VerQueryValueW = (VerQueryValueW_fn)(void (*)(void))GetProcAddress(version, "VerQueryValueW");
-    CHECK(GetFileVersionInfoSizeW && GetFileVersionInfoW && VerQueryValueW, "version.dll exports");
-    if (!GetFileVersionInfoSizeW || !GetFileVersionInfoW || !VerQueryValueW)
-        return;
     WCHAR path[MAX_PATH];
     DWORD handle = 0;
-    CHECK(dll && GetModuleFileNameW(dll, path, MAX_PATH) > 0, "module path");
+    CHECKF(dll && GetModuleFileNameW(dll, path, MAX_PATH) > 0, "module path");
     DWORD size = GetFileVersionInfoSizeW(path, &handle);
-    CHECK(size > 0, "version resource present (error %lu)", (unsigned long)GetLastError());
-    if (!size) {
-        FreeLibrary(version);
+    CHECKF(size > 0, "version resource present (error %lu)", (unsigned long)GetLastError());
+    if (!size)
         return;
-    }
     void *info = malloc(size);
-    CHECK(GetFileVersionInfoW(path, 0, size, info), "GetFileVersionInfoW");
+    CHECKF(GetFileVersionInfoW(path, 0, size, info), "GetFileVersionInfoW");
     VS_FIXEDFILEINFO *fixed = NULL;
     UINT len = 0;
-    CHECK(VerQueryValueW(info, L"\\", (void **)&fixed, &len) && fixed && len >= sizeof *fixed, "fixed info");
+    CHECKF(VerQueryValueW(info, L"\\", (void **)&fixed, &len) && fixed && len >= sizeof *fixed, "fixed info");
     if (fixed) {
         /* Specification 6.4: MM.mm.bb is written MM,mm,0,bb, for the file and the product. */
         DWORD ms = ((DWORD)OPCCOMN_VERSION_MAJOR << 16) | OPCCOMN_VERSION_MINOR;
         DWORD ls = (DWORD)OPCCOMN_VERSION_PATCH;
-        CHECK(fixed->dwSignature == 0xFEEF04BDu, "signature");
-        CHECK(fixed->dwFileVersionMS == ms && fixed->dwFileVersionLS == ls, "file version %08lX %08lX",
+        CHECKF(fixed->dwSignature == 0xFEEF04BDu, "signature");
+        CHECKF(fixed->dwFileVersionMS == ms && fixed->dwFileVersionLS == ls, "file version %08lX %08lX",
               (unsigned long)fixed->dwFileVersionMS, (unsigned long)fixed->dwFileVersionLS);
-        CHECK(fixed->dwProductVersionMS == ms && fixed->dwProductVersionLS == ls, "product version");
-        CHECK(fixed->dwFileType == VFT_DLL, "file type");
+        CHECKF(fixed->dwProductVersionMS == ms && fixed->dwProductVersionLS == ls, "product version");
+        CHECKF(fixed->dwFileType == VFT_DLL, "file type");
     }
     WCHAR *value = NULL;
-    CHECK(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\FileVersion", (void **)&value, &len) &&
+    CHECKF(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\FileVersion", (void **)&value, &len) &&
               same(value, OPCCOMN_VERSION),
           "FileVersion string \"%s\"", show(value));
-    CHECK(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\OriginalFilename", (void **)&value, &len) &&
+    CHECKF(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\OriginalFilename", (void **)&value, &len) &&
               same(value, "opccomn.dll"),
           "OriginalFilename");
     free(info);
-    FreeLibrary(version);
 }
 #endif
 
@@ -448,7 +384,6 @@ int main(void)
     test_dll_message_table();
     test_dll_version_resource();
 #endif
-    CHECK(OpcObjectCount() == 0, "objects leaked: %u", (unsigned)OpcObjectCount());
-    printf("%d passed, %d failed\n", passed, failed);
-    return failed ? 1 : 0;
+    CHECKF(OpcObjectCount() == 0, "objects leaked: %u", (unsigned)OpcObjectCount());
+    return test_summary("test_error_strings");
 }

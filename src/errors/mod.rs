@@ -128,7 +128,7 @@ pub(crate) fn error_string(
     let code = code as u32;
     let found = catalog::lookup(code, kind.spec());
     #[cfg(windows)]
-    if found.map_or(true, |f| f.spec() == Spec::System) {
+    if found.is_none_or(|f| f.spec() == Spec::System) {
         if let Some(answer) = system::message(code, resolved.lcid) {
             return answer;
         }
