@@ -178,11 +178,11 @@ static void test_com_codes(void)
 #if defined(_WIN32)
     /* The system's text, without the trailing line break. */
     uint32_t codes[] = {0x80070057u, 0x80004002u, 0x80070005u, 0x800706BAu};
-    for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++) {
+    for (size_t i = 0; i < 2 * sizeof codes / sizeof codes[0]; i++) {
         LPWSTR s;
-        HRESULT hr = get(codes[i], 0x0409, K_DA, &s);
+        HRESULT hr = get(codes[i / 2], i % 2 ? 0x0407 : 0x0409, K_DA, &s);
         size_t n = hr == S_OK ? wlen(s) : 0;
-        CHECKF(hr == S_OK && n > 0 && s[n - 1] != '\n' && s[n - 1] != '\r', "%08X: \"%s\"", (unsigned)codes[i],
+        CHECKF(hr == S_OK && n > 0 && s[n - 1] != '\n' && s[n - 1] != '\r', "%08X: \"%s\"", (unsigned)codes[i / 2],
               show(hr == S_OK ? s : NULL));
         if (hr == S_OK)
             OpcTaskMemFree(s);

@@ -60,11 +60,18 @@ impl Found {
 
     /// The text in `language`, or in English where the language has none.
     pub fn text(self, language: Language) -> &'static Text {
+        self.text_in(language).unwrap_or(&ENGLISH[self.0].text)
+    }
+
+    /// The text in `language` if the catalog has it in that language.
+    pub fn text_in(self, language: Language) -> Option<&'static Text> {
+        if language == Language::ENGLISH {
+            return Some(&ENGLISH[self.0].text);
+        }
         TRANSLATIONS
             .iter()
             .find(|(l, _)| *l == language)
             .and_then(|(_, table)| table[self.0].as_ref())
-            .unwrap_or(&ENGLISH[self.0].text)
     }
 }
 
@@ -140,5 +147,10 @@ mod tests {
         let found = lookup(0xC0040001, Spec::DataAccess).unwrap();
         assert_eq!(found.text(Language(0x0C)).text, "The value of the handle is invalid.");
         assert_eq!(found.text(Language::GERMAN).text, "Der Wert des Handles ist ungültig.");
+        assert!(found.text_in(Language(0x0C)).is_none());
+        assert_eq!(
+            found.text_in(Language::ENGLISH).map(|t| t.text),
+            Some("The value of the handle is invalid.")
+        );
     }
 }

@@ -7,9 +7,10 @@
 //!    Where one HRESULT means different things to different kinds of server (C0040203 is
 //!    OPC_E_INVALID_PID to Data Access and OPC_E_INVALIDBRANCHNAME to Alarms & Events), the kind the
 //!    server declared decides;
-//! 3. system codes: on Windows the system's own text (FormatMessage in the resolved language, else in
-//!    the system's default choice, trailing line break removed); on other platforms, and where Windows
-//!    has no text, the catalog's Windows texts of the COM and RPC codes an OPC client meets.
+//! 3. system codes: on Windows the system's own text (FormatMessage, trailing line break removed) in
+//!    the resolved language; if Windows lacks that language, the catalog's text in it; then the
+//!    system's text in its own choice of language. On other platforms, and where Windows has no text,
+//!    the catalog's Windows texts of the COM and RPC codes an OPC client meets.
 //!
 //! Codes without a text fail with E_INVALIDARG and a NULL string, as the specification requires.
 
@@ -127,20 +128,31 @@ pub(crate) fn error_string(
     }
     let code = code as u32;
     let found = catalog::lookup(code, kind.spec());
+    // On Windows system codes get the system's text in the session's language; where Windows lacks
+    // that language, the catalog's text in it; then the system's text in its own choice of language.
     #[cfg(windows)]
     if found.is_none_or(|f| f.spec() == Spec::System) {
-        if let Some(answer) = system::message(code, resolved.lcid) {
+        let language = (resolved.lcid & 0xFFFF) as u16;
+        if let Some(answer) = system::message(code, language) {
+            return answer;
+        }
+        if let Some(text) = found.and_then(|f| f.text_in(resolved.language)) {
+            return copy(text);
+        }
+        if let Some(answer) = system::message(code, 0) {
             return answer;
         }
     }
     match found {
-        // The table holds the text with its NUL; alloc_wstr adds its own.
-        Some(found) => {
-            let wide = found.text(resolved.language).wide;
-            alloc_wstr(&wide[..wide.len() - 1])
-        }
+        Some(found) => copy(found.text(resolved.language)),
         None => Err(E_INVALIDARG),
     }
+}
+
+/// A catalog text as a new task-allocated string.
+fn copy(text: &catalog::Text) -> Result<LPWSTR, HRESULT> {
+    // The table holds the text with its NUL; alloc_wstr adds its own.
+    alloc_wstr(&text.wide[..text.wide.len() - 1])
 }
 
 /// The catalog text for `code` as a server of `kind` means it, in `language` (English where the
