@@ -2,8 +2,9 @@
    allocation of the returned string and its free, against the plainest C implementation measured in
    the same run: a switch returning a literal, copied into OpcTaskMem memory and freed.
 
-   Run: scripts/bench-error-strings.sh (builds the release library and this program, prints the
-   ratio; the goal is at most 1.5x the baseline). Only the public header is used, as a server would. */
+   Run: scripts/bench-error-strings.sh [--wine] (builds the release library and this program, prints
+   the ratio; the goal is at most 1.5x the baseline). Only the public header is used, as a server
+   would. */
 #if !defined(_WIN32)
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #endif
