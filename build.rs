@@ -1,10 +1,10 @@
 //! Build script.
 //!
-//! 0. Platform details of the shared library (the SONAME on Linux).
-//! 1. Turns the error catalog (`src/errors/catalog/<language>.txt`, one file per language, reviewed as
+//! 1. Sets platform details of the shared library (the SONAME on Linux).
+//! 2. Turns the error catalog (`src/errors/catalog/<language>.txt`, one file per language, reviewed as
 //!    text) into static tables (`$OUT_DIR/catalog.rs`, included by `src/errors/catalog.rs`). Malformed
 //!    or inconsistent catalog lines fail the build with the file and line.
-//! 2. For Windows targets built with mingw, compiles the DLL's resources from the same data: a message
+//! 3. For Windows targets built with mingw, compiles the DLL's resources from the same data: a message
 //!    table (so `FormatMessage(FORMAT_MESSAGE_FROM_HMODULE, opccomn.dll, code)` returns the catalog
 //!    texts) and a VERSIONINFO following the specification's version convention (section 6.4: version
 //!    MM.mm.bb is written FILEVERSION MM,mm,0,bb, the same for PRODUCTVERSION), taken from Cargo.toml.
