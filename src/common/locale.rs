@@ -13,7 +13,8 @@
 //! environment variables `LC_ALL`, `LC_MESSAGES` and `LANG` (for example `de_DE.UTF-8` -> de-DE, 0x0407),
 //! read once, at the first resolution; unset, `C`, `POSIX` or a language without a Windows locale ID in
 //! the table below resolve to en-US. Any other LCID is taken as it is: its primary language picks the
-//! texts, and languages without texts get English.
+//! texts, and languages without texts get English; other locales with a neutral primary language
+//! (such as LOCALE_CUSTOM_DEFAULT, 0x0C00) are en-US.
 
 use crate::com::LCID;
 
@@ -70,12 +71,16 @@ pub(crate) fn resolve_locale(lcid: LCID) -> Resolved {
         LOCALE_NEUTRAL | LOCALE_INVARIANT => LOCALE_EN_US,
         other => other,
     };
-    let language = Language::of(concrete);
-    // Neutral primary languages (0) resolve to English too.
-    let language = if language.0 == 0 { Language::ENGLISH } else { language };
+    // Other locales with a neutral primary language (LOCALE_CUSTOM_DEFAULT 0x0C00 and the like) are
+    // English too, so callers always see a concrete locale.
+    let concrete = if Language::of(concrete).0 == 0 {
+        LOCALE_EN_US
+    } else {
+        concrete
+    };
     Resolved {
         lcid: concrete,
-        language,
+        language: Language::of(concrete),
     }
 }
 
@@ -182,6 +187,8 @@ mod tests {
         assert_eq!(resolve_locale(0x0407).language, Language::GERMAN);
         assert_eq!(resolve_locale(0x0C07).language, Language::GERMAN);
         assert_eq!(resolve_locale(0x0407).lcid, 0x0407);
+        assert_eq!(resolve_locale(0x10407).language, Language::GERMAN); // German, phone book sort
+        assert_eq!(resolve_locale(0x0C00).lcid, LOCALE_EN_US);
     }
 
     #[test]
