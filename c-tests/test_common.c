@@ -147,6 +147,8 @@ static void test_error_string(void) {
     IOPCCommon *c = create_common(NULL);
     LPWSTR text = (LPWSTR)GARBAGE_PTR;
     if (!c) return;
+    /* English explicitly: the default session locale follows the machine's language. */
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0409), S_OK);
     CHECK_HR(c->lpVtbl->GetErrorString(c, CODE_INVALIDHANDLE, &text), S_OK);
     CHECK(wstr_is(text, "The value of the handle is invalid."));
     OpcTaskMemFree(text);
@@ -170,7 +172,7 @@ static void test_error_string(void) {
 
     /* The standalone function gives the same texts. */
     text = (LPWSTR)GARBAGE_PTR;
-    CHECK_HR(OpcGetErrorString(CODE_INVALIDHANDLE, LOCALE_SYSTEM_DEFAULT, &text), S_OK);
+    CHECK_HR(OpcGetErrorString(CODE_INVALIDHANDLE, 0x0409, &text), S_OK);
     CHECK(wstr_is(text, "The value of the handle is invalid."));
     OpcTaskMemFree(text);
     text = (LPWSTR)GARBAGE_PTR;
@@ -217,13 +219,13 @@ static void test_vendor_callback(void) {
     CHECK(log.calls == 1);
     CHECK(log.last_locale != LOCALE_SYSTEM_DEFAULT); /* the callback sees a concrete locale */
 
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0409), S_OK);
     text = NULL;
     CHECK_HR(c->lpVtbl->GetErrorString(c, CODE_INVALIDHANDLE, &text), S_OK); /* declined: catalog */
     CHECK(wstr_is(text, "The value of the handle is invalid."));
     OpcTaskMemFree(text);
     CHECK(log.calls == 2);
 
-    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0409), S_OK);
     text = NULL;
     CHECK_HR(c->lpVtbl->GetErrorString(c, CODE_VENDOR, &text), S_OK);
     OpcTaskMemFree(text);
