@@ -21,8 +21,13 @@
    seen in a parameter list would be a different type). */
 #if !defined(_WIN32)
 struct IUnknown;
+struct IConnectionPointContainer;
+struct IEnumConnectionPoints;
+struct IConnectionPoint;
+struct IEnumConnections;
 #endif
 struct IOPCCommon;
+struct IOPCShutdown;
 
 
 // The kind of OPC server asking for a text; it decides which specification's text a colliding code
@@ -170,8 +175,9 @@ typedef struct OpcShutdownOptions {
 
 // Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
 // the server gave no reason) and is valid only during the call. Runs on the thread that called
-// ShutdownRequest; the library holds no lock, so the callback may unadvise the sink and release
-// the server.
+// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
+// in-process server in another apartment calls it directly); the library holds no lock, so the
+// callback may unadvise the sink and release the server.
 typedef void (*OpcShutdownCallback)(void *context, LPCWSTR reason);
 
 #if !defined(_WIN32)

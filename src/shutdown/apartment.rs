@@ -5,8 +5,10 @@
 //! `GetInterfaceFromGlobal`, which gives the notifying thread a pointer valid in its own apartment
 //! (a proxy when the sink lives in another apartment and is not agile). When the GIT is unavailable
 //! (the advising thread has not initialised COM) or refuses the sink (an apartment-bound sink whose
-//! interface has no registered proxy/stub), the pointer is held directly, which is correct whenever
-//! notification happens in the sink's apartment or the sink is agile.
+//! interface has no registered proxy/stub, such as IOPCShutdown on a machine without the OPC proxy
+//! DLL), the pointer is held directly. If it was advised from a single-threaded apartment it is then
+//! only called on that apartment's thread: from any other thread it counts as unreachable
+//! (RPC_E_WRONG_THREAD) rather than being called where COM forbids it.
 //!
 //! Off Windows there are no apartments: the pointer is always held directly.
 
@@ -22,8 +24,8 @@ pub(crate) struct SinkRef {
 }
 
 enum Held {
-    /// A counted IOPCShutdown pointer used as is.
-    Direct(NonNull<IOPCShutdown>),
+    /// A counted IOPCShutdown pointer used as is, on the threads `home` allows.
+    Direct(NonNull<IOPCShutdown>, Home),
     /// A Global Interface Table cookie; the GIT holds the reference.
     #[cfg(windows)]
     Global(u32),
@@ -35,6 +37,47 @@ enum Held {
 unsafe impl Send for SinkRef {}
 // SAFETY: as above; `SinkRef` has no interior mutability.
 unsafe impl Sync for SinkRef {}
+
+/// Where a directly held sink may be called.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Home {
+    /// From any thread (no apartments, or advised from the multithreaded apartment).
+    Anywhere,
+    /// Only on the thread of the single-threaded apartment it was advised from.
+    #[cfg(windows)]
+    Thread(u32),
+}
+
+impl Home {
+    /// The calling thread's apartment.
+    fn here() -> Home {
+        #[cfg(windows)]
+        {
+            use windows_sys::Win32::System::Com::{CoGetApartmentType, APTTYPEQUALIFIER, APTTYPE_MAINSTA, APTTYPE_STA};
+            let (mut kind, mut qualifier) = (0, 0 as APTTYPEQUALIFIER);
+            // SAFETY: two valid out-pointers; fails cleanly when COM is not initialised here.
+            let hr = unsafe { CoGetApartmentType(&mut kind, &mut qualifier) };
+            if hr == 0 && (kind == APTTYPE_STA || kind == APTTYPE_MAINSTA) {
+                // SAFETY: no preconditions.
+                return Home::Thread(unsafe { windows_sys::Win32::System::Threading::GetCurrentThreadId() });
+            }
+        }
+        Home::Anywhere
+    }
+
+    /// Whether a sink with this home may be called on the calling thread.
+    fn allows_here(self) -> bool {
+        match self {
+            Home::Anywhere => true,
+            #[cfg(windows)]
+            // SAFETY: no preconditions.
+            Home::Thread(id) => id == unsafe { windows_sys::Win32::System::Threading::GetCurrentThreadId() },
+        }
+    }
+}
+
+/// `RPC_E_WRONG_THREAD`: the sink belongs to another thread's apartment.
+pub(crate) const RPC_E_WRONG_THREAD: HRESULT = 0x8001010E_u32 as HRESULT;
 
 /// A counted IOPCShutdown pointer usable on the current thread, released on drop.
 pub(crate) struct SinkCall(NonNull<IOPCShutdown>);
@@ -78,14 +121,15 @@ impl SinkRef {
             }
         }
         SinkRef {
-            held: Held::Direct(sink),
+            held: Held::Direct(sink, Home::here()),
         }
     }
 
     /// A counted pointer to the sink that is valid on the calling thread.
     pub(crate) fn get(&self) -> Result<SinkCall, HRESULT> {
         match self.held {
-            Held::Direct(p) => {
+            Held::Direct(_, home) if !home.allows_here() => Err(RPC_E_WRONG_THREAD),
+            Held::Direct(p, _) => {
                 // SAFETY: `p` is counted by this SinkRef, so it is alive.
                 unsafe { add_ref(p.as_ptr().cast()) };
                 Ok(SinkCall(p))
@@ -100,7 +144,7 @@ impl Drop for SinkRef {
     fn drop(&mut self) {
         match self.held {
             // SAFETY: the reference adopted in `adopt`.
-            Held::Direct(p) => unsafe {
+            Held::Direct(p, _) => unsafe {
                 release(p.as_ptr().cast());
             },
             #[cfg(windows)]

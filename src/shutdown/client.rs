@@ -15,16 +15,21 @@ use crate::com::{IUnknown, DWORD, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, H
 
 /// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
 /// the server gave no reason) and is valid only during the call. Runs on the thread that called
-/// ShutdownRequest; the library holds no lock, so the callback may unadvise the sink and release
-/// the server.
+/// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
+/// in-process server in another apartment calls it directly); the library holds no lock, so the
+/// callback may unadvise the sink and release the server.
 pub type OpcShutdownCallback = Option<unsafe extern "C" fn(context: *mut c_void, reason: LPCWSTR)>;
 
 /// The NUL string passed for a NULL reason (specification section 3.1.4).
 pub(crate) static NUL_STRING: [WCHAR; 1] = [0];
 
-/// The sink object.
+/// The sink object. On Windows it is agile: it aggregates the free-threaded marshaler (see `agile`).
 pub struct ShutdownSink {
     shutdown: Slot,
+    #[cfg(windows)]
+    marshal: Slot,
+    #[cfg(windows)]
+    ftm: super::agile::Ftm,
     callback: unsafe extern "C" fn(context: *mut c_void, reason: LPCWSTR),
     context: *mut c_void,
 }
@@ -36,9 +41,23 @@ unsafe impl Sync for ShutdownSink {}
 
 impl ComClass for ShutdownSink {
     fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        #[cfg(windows)]
+        if *iid == super::agile::IID_IMARSHAL {
+            return Some(&self.marshal);
+        }
         (*iid == IID_IOPCShutdown).then_some(&self.shutdown)
     }
 }
+
+#[cfg(windows)]
+impl super::agile::HasFtm for ShutdownSink {
+    fn ftm(&self) -> &super::agile::Ftm {
+        &self.ftm
+    }
+}
+
+#[cfg(windows)]
+static SINK_MARSHAL_VTBL: super::agile::IMarshalVtbl = super::agile::MarshalVtbl::<ShutdownSink>::VTBL;
 
 static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
     QueryInterface: delegating_query_interface::<IOPCShutdown>,
@@ -91,6 +110,10 @@ pub unsafe extern "C" fn OpcShutdownSinkCreate(
                 let callback = callback.ok_or(E_INVALIDARG)?;
                 Ok(ShutdownSink {
                     shutdown: binder.slot(&SINK_VTBL),
+                    #[cfg(windows)]
+                    marshal: binder.slot(&SINK_MARSHAL_VTBL),
+                    #[cfg(windows)]
+                    ftm: Default::default(),
                     callback,
                     context,
                 })

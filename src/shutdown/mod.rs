@@ -11,6 +11,8 @@
 //! IOPCShutdown is CONNECT_E_CANNOTCONNECT; another IID is CONNECT_E_NOCONNECTION; EnumConnections
 //! works; and ShutdownRequest is never called while a lock is held.
 
+#[cfg(windows)]
+mod agile;
 pub mod apartment;
 pub mod client;
 pub mod enumerator;
