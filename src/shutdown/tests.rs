@@ -125,6 +125,9 @@ fn w(s: &str) -> Vec<WCHAR> {
 struct Server(*mut IConnectionPointContainer);
 
 // SAFETY: the library's shutdown objects are free-threaded.
+unsafe impl Sync for Server {}
+
+// SAFETY: the library's shutdown objects are free-threaded.
 unsafe impl Send for Server {}
 
 impl Server {
@@ -773,4 +776,32 @@ fn the_helpers_report_servers_without_shutdown_support() {
         assert_eq!(OpcShutdownUnadvise(server.unk(), 12345), CONNECT_E_NOCONNECTION);
     }
     assert_eq!((not_a_server.refs(), sink.refs()), (1, 1));
+}
+
+#[test]
+fn concurrent_advise_unadvise_and_notify_stay_consistent() {
+    let server = std::sync::Arc::new(Server::with_limit(Some(64)));
+    let sinks: Vec<_> = (0..4).map(|_| MockSink::new(true, S_OK)).collect();
+    let sink_ptrs: Vec<usize> = sinks.iter().map(|s| s.unk() as usize).collect();
+    std::thread::scope(|scope| {
+        for &sink in &sink_ptrs {
+            let server = server.clone();
+            scope.spawn(move || {
+                let point = server.point();
+                for _ in 0..200 {
+                    let (hr, cookie) = point.advise(sink as *mut IUnknown);
+                    assert_eq!(hr, S_OK);
+                    let (hr, _, failed) = server.notify(ptr::null());
+                    assert_eq!((hr, failed), (S_OK, 0));
+                    assert_eq!(point.unadvise(cookie), S_OK);
+                }
+            });
+        }
+    });
+    assert_eq!(server.connections(), 0);
+    drop(server);
+    for s in &sinks {
+        assert_eq!(s.refs(), 1, "every reference taken was given back");
+        assert!(s.calls() >= 200, "each sink was advised during its own notifications");
+    }
 }
