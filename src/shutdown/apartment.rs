@@ -10,6 +10,11 @@
 //! only called on that apartment's thread: from any other thread it counts as unreachable
 //! (RPC_E_WRONG_THREAD) rather than being called where COM forbids it.
 //!
+//! A directly held sink is released by whichever thread ends its connection (Unadvise, or the last
+//! Release of the server object); a GIT registration is revoked there, which COM allows from any
+//! apartment of the process, but only on a thread that has initialised COM (otherwise the
+//! registration stays until the process ends).
+//!
 //! Off Windows there are no apartments: the pointer is always held directly.
 
 use core::ptr::NonNull;

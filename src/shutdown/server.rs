@@ -368,10 +368,24 @@ unsafe extern "system" fn get_connection_point_container(
     // SAFETY: non-NULL out-parameter.
     unsafe { *ppCPC = ptr::null_mut() };
     catch(E_UNEXPECTED, || {
-        // The container slot delegates its IUnknown to the controlling unknown, so when the object is
-        // aggregated the result belongs to the outer object's identity and counts on it.
         // SAFETY: COM calls this only through our vtable.
-        let container = unsafe { object(this) }.container_ptr();
+        let obj = unsafe { object(this) };
+        let header = obj.header();
+        if header.is_aggregated() {
+            // The container is whatever the server object (the controlling unknown) answers for
+            // IConnectionPointContainer: usually this object's container slot, forwarded.
+            let mut found: *mut c_void = ptr::null_mut();
+            // SAFETY: the outer unknown is valid while this object lives; `found` is writable.
+            let hr =
+                unsafe { query_interface(header.controlling_unknown(), &IID_ICONNECTIONPOINTCONTAINER, &mut found) };
+            if hr >= 0 && !found.is_null() {
+                // SAFETY: non-NULL out-parameter; the reference QueryInterface gave us goes to the caller.
+                unsafe { *ppCPC = found.cast() };
+                return S_OK;
+            }
+        }
+        // Our own container slot; its AddRef counts on the controlling unknown.
+        let container = obj.container_ptr();
         // SAFETY: a slot of the live object.
         unsafe {
             add_ref(container.cast());
