@@ -217,6 +217,15 @@ static void test_find_and_enumerate_points(void) {
         CHECK_HR(e->lpVtbl->Skip(e, 1), S_OK);
         CHECK_HR(e->lpVtbl->Skip(e, 1), S_FALSE);
         CHECK_HR(e->lpVtbl->Reset(e), S_OK);
+        CHECK_HR(e->lpVtbl->Skip(e, 0xFFFFFFFFu), S_FALSE);
+        CHECK_HR(e->lpVtbl->Reset(e), S_OK);
+        /* A huge count with a small array: only the elements that exist are written. */
+        got[1] = (IConnectionPoint *)GARBAGE_PTR;
+        CHECK_HR(e->lpVtbl->Next(e, 0xFFFFFFFFu, got, &fetched), S_FALSE);
+        CHECK(fetched == 1 && got[1] == (IConnectionPoint *)GARBAGE_PTR);
+        if (fetched == 1) got[0]->lpVtbl->Release(got[0]);
+        CHECK_HR(e->lpVtbl->Next(e, 0, NULL, NULL), S_OK); /* nothing asked, nothing done */
+        CHECK_HR(e->lpVtbl->Reset(e), S_OK);
         CHECK_HR(e->lpVtbl->Clone(e, NULL), E_POINTER);
         CHECK_HR(e->lpVtbl->Clone(e, &clone), S_OK);
         CHECK(e->lpVtbl->Release(e) == 0);
