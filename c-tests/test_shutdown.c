@@ -158,6 +158,9 @@ static void test_create_errors(void) {
     o.struct_size = sizeof o + 4; /* from a newer header than the library knows */
     CHECK_HR(OpcShutdownCreateEx(&o, NULL, &IID_IConnectionPointContainer, &p), E_INVALIDARG);
     CHECK(p == NULL);
+    o.struct_size = 6; /* ends inside advise_limit */
+    CHECK_HR(OpcShutdownCreateEx(&o, NULL, &IID_IConnectionPointContainer, &p), E_INVALIDARG);
+    CHECK(p == NULL);
     o.struct_size = 4; /* an older header without advise_limit: the default applies */
     CHECK_HR(OpcShutdownCreateEx(&o, NULL, &IID_Unknown_, &p), S_OK);
     if (p) ((IUnknown *)p)->lpVtbl->Release((IUnknown *)p);

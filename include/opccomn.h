@@ -527,8 +527,8 @@ HRESULT OpcShutdownCreate(struct IUnknown *outer, REFIID riid, void **ppv);
 
 // As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
 //
-// Returns in addition E_INVALIDARG for a `struct_size` smaller than 4 or larger than this
-// library's `sizeof(OpcShutdownOptions)`.
+// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
+// `OpcShutdownOptions` (4, or 8 as of this version).
 //
 // # Safety
 // `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for

@@ -457,7 +457,12 @@ pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<
     if !options.is_null() {
         // SAFETY: the first field is always present.
         let size = unsafe { ptr::addr_of!((*options).struct_size).read_unaligned() } as usize;
-        if size < core::mem::size_of::<u32>() || size > core::mem::size_of::<OpcShutdownOptions>() {
+        // Only sizes the struct has (had) in some version: ending after a whole field.
+        let ends = [
+            core::mem::offset_of!(OpcShutdownOptions, advise_limit),
+            core::mem::size_of::<OpcShutdownOptions>(),
+        ];
+        if !ends.contains(&size) {
             return Err(E_INVALIDARG);
         }
         // SAFETY: the caller vouches `size` bytes are readable; `o` has room for them.
