@@ -13,9 +13,9 @@
 
 #[cfg(windows)]
 mod agile;
-pub mod apartment;
+mod apartment;
 pub mod client;
-pub mod enumerator;
+mod enumerator;
 pub mod interfaces;
 pub mod server;
 
@@ -84,8 +84,8 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
 /// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
 /// from a snapshot made under the object's lock and called without holding it, one after the other
 /// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
-/// ShutdownRequest. A sink unadvised during the notification is not called after its Unadvise
-/// returned. A sink that fails (returns a failure code, or cannot be reached from this thread) does
+/// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
+/// not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
 /// not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
 /// fetched from the Global Interface Table for the calling apartment.
 ///

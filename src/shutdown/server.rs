@@ -183,9 +183,10 @@ impl OpcShutdown {
         self.connections().list.iter().any(|c| c.cookie == cookie)
     }
 
-    /// Calls ShutdownRequest on every advised sink, never holding the lock during a call. A sink
-    /// unadvised while the notification runs (by itself or by another sink) is not called after its
-    /// Unadvise returned.
+    /// Calls ShutdownRequest on every advised sink, never holding the lock during a call. Just before
+    /// each call the sink is checked to be still advised, so a sink unadvised from inside the
+    /// notification (by itself or by an earlier sink) is not called any more. An Unadvise racing on
+    /// another thread may still see one call that was already under way.
     ///
     /// # Safety
     /// `reason` must point at a NUL-terminated UTF-16 string.
@@ -214,7 +215,9 @@ impl OpcShutdown {
         result
     }
 
-    /// IConnectionPoint::EnumConnections: the connections now, with sinks valid on this thread.
+    /// IConnectionPoint::EnumConnections: the connections now, with sinks valid on this thread. Fails
+    /// with the sink's error when one cannot be had on this thread (on Windows: an apartment-bound
+    /// sink held directly, asked for from another thread, gives RPC_E_WRONG_THREAD).
     fn enum_connections(&self) -> Result<*mut IEnumConnections, HRESULT> {
         let mut data = Vec::new();
         for (cookie, sink) in self.snapshot() {
