@@ -145,6 +145,14 @@ impl SinkRef {
     }
 }
 
+#[cfg(all(test, windows))]
+impl SinkRef {
+    /// Whether the sink is held through the Global Interface Table.
+    pub(crate) fn is_global(&self) -> bool {
+        matches!(self.held, Held::Global(_))
+    }
+}
+
 impl Drop for SinkRef {
     fn drop(&mut self) {
         match self.held {

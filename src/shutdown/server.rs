@@ -122,6 +122,12 @@ impl OpcShutdown {
         self.connections().list.len()
     }
 
+    /// For each connection, whether its sink went through the Global Interface Table.
+    #[cfg(all(test, windows))]
+    pub(crate) fn held_globally(&self) -> Vec<bool> {
+        self.connections().list.iter().map(|c| c.sink.is_global()).collect()
+    }
+
     /// IConnectionPoint::Advise after the argument checks.
     ///
     /// # Safety

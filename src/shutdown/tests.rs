@@ -805,3 +805,46 @@ fn concurrent_advise_unadvise_and_notify_stay_consistent() {
         assert!(s.calls() >= 200, "each sink was advised during its own notifications");
     }
 }
+
+/// Windows: with COM initialised, Advise puts an agile sink (the library's own, which aggregates the
+/// free-threaded marshaler) into the Global Interface Table; an apartment-bound sink whose interface
+/// has no proxy/stub stays held directly. Both are notified.
+#[cfg(windows)]
+#[test]
+fn sinks_go_through_the_global_interface_table_when_com_is_initialised() {
+    use windows_sys::Win32::System::Com::{CoInitializeEx, CoUninitialize, COINIT_MULTITHREADED};
+    std::thread::spawn(|| {
+        // SAFETY: a fresh thread of our own; balanced by CoUninitialize below.
+        assert!(unsafe { CoInitializeEx(ptr::null(), COINIT_MULTITHREADED as u32) } >= 0);
+        {
+            let received = Received(Mutex::new(Vec::new()));
+            let server = Server::with_limit(Some(2));
+            let mut sink: *mut c_void = ptr::null_mut();
+            let mock = MockSink::new(true, S_OK);
+            let (mut agile_cookie, mut bound_cookie): (DWORD, DWORD) = (0, 0);
+            let ctx = &received as *const Received as *mut c_void;
+            // SAFETY: live objects; references released below.
+            unsafe {
+                assert_eq!(OpcShutdownSinkCreate(Some(record), ctx, &IID_IUNKNOWN, &mut sink), S_OK);
+                assert_eq!(OpcShutdownAdvise(server.unk(), sink.cast(), &mut agile_cookie), S_OK);
+                assert_eq!(OpcShutdownAdvise(server.unk(), mock.unk(), &mut bound_cookie), S_OK);
+                release(sink.cast());
+            }
+            // SAFETY: a live container of ours.
+            let held = unsafe { from_container(server.0) }.unwrap().held_globally();
+            assert_eq!(held, vec![true, false]);
+            assert_eq!(server.notify(ptr::null()), (S_OK, 2, 0));
+            assert_eq!((received.0.lock().unwrap().len(), mock.calls()), (1, 1));
+            // SAFETY: live objects.
+            unsafe {
+                assert_eq!(OpcShutdownUnadvise(server.unk(), agile_cookie), S_OK);
+                assert_eq!(OpcShutdownUnadvise(server.unk(), bound_cookie), S_OK);
+            }
+            assert_eq!(mock.refs(), 1);
+        }
+        // SAFETY: balances CoInitializeEx above.
+        unsafe { CoUninitialize() };
+    })
+    .join()
+    .unwrap();
+}
