@@ -1,6 +1,7 @@
 /* opccomn demo: what an OPC server does with the library's IOPCCommon session object, seen from
  * both sides: the server creates one session per client, the client sets its locale and name and asks
- * for error texts. */
+ * for error texts. Then shutdown (chapter 4), again with the library on both sides: the server object
+ * offers the IOPCShutdown connection point, the client advises a sink, and the server tells it to go. */
 #include <stdio.h>
 #include <string.h>
 
@@ -22,6 +23,53 @@ static void client_name_changed(void *context, LPCWSTR name) {
     printf("  [server] %s: client is now \"", (const char *)context);
     print_utf16(name);
     printf("\"\n");
+}
+
+/* The client's shutdown callback: release everything from this server, starting with the connection. */
+typedef struct DemoClient {
+    IUnknown *server;
+    DWORD cookie;
+} DemoClient;
+
+static void on_shutdown(void *context, LPCWSTR reason) {
+    DemoClient *client = (DemoClient *)context;
+    HRESULT hr;
+    printf("  [client] server asks us to disconnect: \"");
+    print_utf16(reason);
+    printf("\"\n");
+    hr = OpcShutdownUnadvise(client->server, client->cookie); /* allowed from inside the callback */
+    printf("  [client] unadvised from inside the callback: 0x%08lX\n", (unsigned long)(unsigned int)hr);
+}
+
+/* Shutdown, both sides. Returns the number of failures. */
+static int shutdown_demo(void) {
+    IConnectionPointContainer *server = NULL;
+    IOPCShutdown *sink = NULL;
+    DemoClient client = {NULL, 0};
+    ULONG notified = 0, failed = 0;
+    WCHAR buf[64];
+    int failures = 0;
+    static const char *reason = "Server is shutting down for maintenance";
+    size_t i;
+
+    /* Server side: a real server aggregates this into its server object (see README). */
+    if (OpcShutdownCreate(NULL, &IID_IConnectionPointContainer, (void **)&server) != S_OK) return 1;
+
+    /* Client side: a sink that calls back, advised on the server's IOPCShutdown connection point. */
+    client.server = (IUnknown *)server;
+    failures += OpcShutdownSinkCreate(on_shutdown, &client, &IID_IOPCShutdown, (void **)&sink) != S_OK;
+    failures += OpcShutdownAdvise(client.server, (IUnknown *)sink, &client.cookie) != S_OK;
+    printf("  [client] advised a shutdown sink, cookie %lu\n", (unsigned long)client.cookie);
+    if (sink) sink->lpVtbl->Release(sink); /* the connection keeps the sink alive */
+
+    /* Server side: going down. */
+    for (i = 0; reason[i] && i + 1 < 64; i++) buf[i] = (WCHAR)reason[i];
+    buf[i] = 0;
+    failures += OpcShutdownNotifyEx((IUnknown *)server, buf, &notified, &failed) != S_OK;
+    printf("  [server] notified %lu client(s), %lu failed\n", (unsigned long)notified, (unsigned long)failed);
+    failures += notified != 1;
+    server->lpVtbl->Release(server);
+    return failures;
 }
 
 static const WCHAR *ascii(const char *s, WCHAR *buf, size_t n) {
@@ -78,6 +126,8 @@ int main(void) {
            (unsigned long)(unsigned int)session->lpVtbl->GetErrorString(session, 0x12345678, &text));
 
     session->lpVtbl->Release(session);
+
+    failures += shutdown_demo();
     printf("%s\n", failures == 0 && OpcObjectCount() == 0 ? "demo finished" : "demo FAILED");
     return failures == 0 && OpcObjectCount() == 0 ? 0 : 1;
 }

@@ -5,10 +5,15 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 lib=$1
 header="$root/include/opccomn.h"
+# Items under `#if !defined(_WIN32)` (the standard COM identifiers off Windows) are not part of the DLL.
+case "$lib" in
+    *.dll) header_text=$(sed '/^#if !defined(_WIN32)$/,/^#endif$/d' "$header") ;;
+    *) header_text=$(cat "$header") ;;
+esac
 # cbindgen writes each declaration on one line, starting in column 0.
-declared=$( { grep -E '^[A-Za-z_][A-Za-z0-9_ *]*[ *][A-Za-z_][A-Za-z0-9_]*\(.*\);$' "$header" | grep -v '^typedef' |
+declared=$( { grep -E '^[A-Za-z_][A-Za-z0-9_ *]*[ *][A-Za-z_][A-Za-z0-9_]*\(.*\);$' <<<"$header_text" | grep -v '^typedef' |
                 sed -E 's/^.*[ *]([A-Za-z_][A-Za-z0-9_]*)\(.*$/\1/';
-              grep -E '^extern const ' "$header" | sed -E 's/^.*[ *]([A-Za-z_][A-Za-z0-9_]*);$/\1/'; } | sort -u)
+              grep -E '^extern const ' <<<"$header_text" | sed -E 's/^.*[ *]([A-Za-z_][A-Za-z0-9_]*);$/\1/'; } | sort -u)
 case "$lib" in
     *.dll) exported=$(x86_64-w64-mingw32-objdump -p "$lib" | sed -nE 's/^\s*\[ *[0-9]+\] ([A-Za-z_][A-Za-z0-9_]*)$/\1/p') ;;
     *) exported=$(nm -D --defined-only "$lib" | awk '{print $3}') ;;

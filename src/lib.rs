@@ -6,6 +6,7 @@
 //! - `com`: the COM core (types, IUnknown, reference counting, aggregation, allocator, panic boundary)
 //! - `common`: IOPCCommon (chapter 5)
 //! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)
+//! - `shutdown`: the IOPCShutdown connection point for servers and a shutdown sink for clients (chapter 4)
 //!
 //! The C API is declared in `include/opccomn.h`, generated from these sources by cbindgen.
 
@@ -14,6 +15,7 @@
 pub mod com;
 pub mod common;
 pub mod errors;
+pub mod shutdown;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.

@@ -1,0 +1,225 @@
+//! The client side: a shutdown sink that forwards ShutdownRequest to a C callback (specification
+//! section 4.2), and helpers to advise it on a server and unadvise it again.
+
+use core::ffi::c_void;
+use core::ptr;
+
+use super::interfaces::{IConnectionPoint, IConnectionPointContainer, IOPCShutdown, IOPCShutdownVtbl};
+use crate::com::boundary::catch;
+use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINTCONTAINER};
+use crate::com::object::{
+    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
+};
+use crate::com::unknown::{query_interface, release};
+use crate::com::{IUnknown, DWORD, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
+
+/// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
+/// the server gave no reason) and is valid only during the call. Runs on the thread that called
+/// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
+/// in-process server in another apartment calls it directly); the library holds no lock, so the
+/// callback may unadvise the sink and release the server.
+pub type OpcShutdownCallback = Option<unsafe extern "C" fn(context: *mut c_void, reason: LPCWSTR)>;
+
+/// The NUL string passed for a NULL reason (specification section 3.1.4).
+pub(crate) static NUL_STRING: [WCHAR; 1] = [0];
+
+/// The sink object. On Windows it is agile: it aggregates the free-threaded marshaler (see `agile`).
+pub struct ShutdownSink {
+    shutdown: Slot,
+    #[cfg(windows)]
+    marshal: Slot,
+    #[cfg(windows)]
+    ftm: super::agile::Ftm,
+    callback: unsafe extern "C" fn(context: *mut c_void, reason: LPCWSTR),
+    context: *mut c_void,
+}
+
+// SAFETY: the sink's contract says the callback is called with its context from any thread.
+unsafe impl Send for ShutdownSink {}
+// SAFETY: as above; the fields are never modified after construction.
+unsafe impl Sync for ShutdownSink {}
+
+impl ComClass for ShutdownSink {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        #[cfg(windows)]
+        if *iid == super::agile::IID_IMARSHAL {
+            return Some(&self.marshal);
+        }
+        (*iid == IID_IOPCShutdown).then_some(&self.shutdown)
+    }
+}
+
+#[cfg(windows)]
+impl super::agile::HasFtm for ShutdownSink {
+    fn ftm(&self) -> &super::agile::Ftm {
+        &self.ftm
+    }
+}
+
+#[cfg(windows)]
+static SINK_MARSHAL_VTBL: super::agile::IMarshalVtbl = super::agile::MarshalVtbl::<ShutdownSink>::VTBL;
+
+static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
+    QueryInterface: delegating_query_interface::<IOPCShutdown>,
+    AddRef: delegating_add_ref::<IOPCShutdown>,
+    Release: delegating_release::<IOPCShutdown>,
+    ShutdownRequest: shutdown_request,
+};
+
+unsafe extern "system" fn shutdown_request(this: *mut IOPCShutdown, szReason: LPCWSTR) -> HRESULT {
+    // The specification requires S_OK whatever happens.
+    catch(S_OK, || {
+        // SAFETY: COM calls this only through our vtable.
+        let sink = unsafe { ComObject::<ShutdownSink>::from_interface(this) };
+        let reason = if szReason.is_null() {
+            NUL_STRING.as_ptr()
+        } else {
+            szReason
+        };
+        // SAFETY: the client registered the callback for this; `reason` is a valid string.
+        unsafe { (sink.callback)(sink.context, reason) };
+        S_OK
+    })
+}
+
+/// Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
+/// ShutdownRequest calls `callback(context, reason)` and returns S_OK.
+///
+/// `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
+/// IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
+/// client may release its reference at any time. `context` must stay valid until the sink is
+/// destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
+///
+/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; E_INVALIDARG for a NULL `callback`;
+/// E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
+///
+/// # Safety
+/// `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
+/// `ppv` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownSinkCreate(
+    callback: OpcShutdownCallback,
+    context: *mut c_void,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: forwarded from the caller's contract; not aggregated.
+        unsafe {
+            ComObject::<ShutdownSink>::create(ptr::null_mut(), riid, ppv, |binder| {
+                let callback = callback.ok_or(E_INVALIDARG)?;
+                Ok(ShutdownSink {
+                    shutdown: binder.slot(&SINK_VTBL),
+                    #[cfg(windows)]
+                    marshal: binder.slot(&SINK_MARSHAL_VTBL),
+                    #[cfg(windows)]
+                    ftm: Default::default(),
+                    callback,
+                    context,
+                })
+            })
+        }
+    })
+}
+
+/// The IOPCShutdown connection point of `server`, as a counted pointer.
+///
+/// # Safety
+/// `server` must be a valid COM interface pointer.
+unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint, HRESULT> {
+    let mut container: *mut c_void = ptr::null_mut();
+    // SAFETY: valid per the caller.
+    let hr = unsafe { query_interface(server, &IID_ICONNECTIONPOINTCONTAINER, &mut container) };
+    if hr < 0 || container.is_null() {
+        return Err(if hr < 0 { hr } else { E_POINTER });
+    }
+    let container = container.cast::<IConnectionPointContainer>();
+    let mut point: *mut IConnectionPoint = ptr::null_mut();
+    // SAFETY: a counted IConnectionPointContainer pointer; we release it right after.
+    let hr = unsafe {
+        let hr = ((*(*container).lpVtbl).FindConnectionPoint)(container, &IID_IOPCShutdown, &mut point);
+        release(container.cast());
+        hr
+    };
+    if hr < 0 || point.is_null() {
+        if !point.is_null() {
+            // SAFETY: a misbehaving server returned a reference along with a failure.
+            unsafe { release(point.cast()) };
+        }
+        return Err(if hr < 0 { hr } else { E_POINTER });
+    }
+    Ok(point)
+}
+
+/// Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
+/// IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
+///
+/// `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
+/// three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
+/// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
+/// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
+/// E_POINTER for a NULL argument.
+///
+/// # Safety
+/// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownAdvise(
+    server: *mut IUnknown,
+    sink: *mut IUnknown,
+    pdwCookie: *mut DWORD,
+) -> HRESULT {
+    if pdwCookie.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *pdwCookie = 0 };
+    if server.is_null() || sink.is_null() {
+        return E_POINTER;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: valid per the caller.
+        let point = match unsafe { shutdown_point(server) } {
+            Ok(p) => p,
+            Err(hr) => return hr,
+        };
+        let mut cookie: DWORD = 0;
+        // SAFETY: a counted IConnectionPoint pointer, released right after.
+        let hr = unsafe {
+            let hr = ((*(*point).lpVtbl).Advise)(point, sink, &mut cookie);
+            release(point.cast());
+            hr
+        };
+        if hr >= 0 {
+            // SAFETY: non-NULL out-parameter.
+            unsafe { *pdwCookie = cookie };
+        }
+        hr
+    })
+}
+
+/// Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
+///
+/// Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
+/// gives CONNECT_E_NOCONNECTION. E_POINTER for a NULL `server`.
+///
+/// # Safety
+/// `server` must be NULL or a valid COM interface pointer.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownUnadvise(server: *mut IUnknown, cookie: DWORD) -> HRESULT {
+    if server.is_null() {
+        return E_POINTER;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: valid per the caller.
+        let point = match unsafe { shutdown_point(server) } {
+            Ok(p) => p,
+            Err(hr) => return hr,
+        };
+        // SAFETY: a counted IConnectionPoint pointer, released right after.
+        unsafe {
+            let hr = ((*(*point).lpVtbl).Unadvise)(point, cookie);
+            release(point.cast());
+            hr
+        }
+    })
+}

@@ -1,0 +1,150 @@
+//! Shutdown of OPC servers (specification chapter 4), both sides.
+//!
+//! - Server side ([`server`]): `OpcShutdownCreate` makes an aggregatable object with
+//!   IConnectionPointContainer and one connection point for IOPCShutdown; `OpcShutdownNotify` calls
+//!   ShutdownRequest on every advised sink.
+//! - Client side ([`client`]): `OpcShutdownSinkCreate` makes an IOPCShutdown sink that calls a C
+//!   callback; `OpcShutdownAdvise` / `OpcShutdownUnadvise` connect it to a server.
+//!
+//! The rules this module keeps, which existing implementations often break: cookies are non-zero
+//! counters, never pointers; an unknown cookie is CONNECT_E_NOCONNECTION; a sink without
+//! IOPCShutdown is CONNECT_E_CANNOTCONNECT; another IID is CONNECT_E_NOCONNECTION; EnumConnections
+//! works; and ShutdownRequest is never called while a lock is held.
+
+#[cfg(windows)]
+mod agile;
+mod apartment;
+pub mod client;
+mod enumerator;
+pub mod interfaces;
+pub mod server;
+
+#[cfg(test)]
+mod tests;
+
+use core::ffi::c_void;
+use core::ptr;
+
+use crate::com::boundary::catch;
+use crate::com::object::ComObject;
+use crate::com::{IUnknown, E_UNEXPECTED, HRESULT, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
+use client::NUL_STRING;
+use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
+
+/// Creates a shutdown object with the default options (at most one advised sink): the
+/// IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
+///
+/// With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
+/// object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
+/// as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
+/// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+///
+/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
+/// `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
+///
+/// # Safety
+/// `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
+/// NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    unsafe { OpcShutdownCreateEx(ptr::null(), outer, riid, ppv) }
+}
+
+/// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
+///
+/// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
+/// `OpcShutdownOptions` (4, or 8 as of this version).
+///
+/// # Safety
+/// `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
+/// `OpcShutdownCreate`.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownCreateEx(
+    options: *const OpcShutdownOptions,
+    outer: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: forwarded from the caller's contract.
+        unsafe {
+            ComObject::<OpcShutdown>::create(outer, riid, ppv, |binder| {
+                let limit = read_options(options)?;
+                Ok(OpcShutdown::build(binder, limit))
+            })
+        }
+    })
+}
+
+/// Asks every client advised on `shutdown` to disconnect: calls IOPCShutdown::ShutdownRequest on
+/// each advised sink with `reason` (a NUL string when `reason` is NULL).
+///
+/// `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
+/// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+/// from a snapshot made under the object's lock and called without holding it, one after the other
+/// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
+/// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
+/// not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
+/// not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
+/// fetched from the Global Interface Table for the calling apartment.
+///
+/// Returns S_OK when every advised sink accepted the request (also when none is advised), S_FALSE
+/// when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
+/// library. Use `OpcShutdownNotifyEx` for the counts.
+///
+/// # Safety
+/// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
+/// UTF-16 string.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownNotify(shutdown: *mut IUnknown, reason: LPCWSTR) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    unsafe { OpcShutdownNotifyEx(shutdown, reason, ptr::null_mut(), ptr::null_mut()) }
+}
+
+/// As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
+/// many failed (`*pFailed`). Either pointer may be NULL; both are set (to 0 on failure) before
+/// anything else happens.
+///
+/// # Safety
+/// As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownNotifyEx(
+    shutdown: *mut IUnknown,
+    reason: LPCWSTR,
+    pNotified: *mut ULONG,
+    pFailed: *mut ULONG,
+) -> HRESULT {
+    // SAFETY: each out-parameter is written only when non-NULL.
+    unsafe {
+        if !pNotified.is_null() {
+            *pNotified = 0;
+        }
+        if !pFailed.is_null() {
+            *pFailed = 0;
+        }
+    }
+    catch(E_UNEXPECTED, || {
+        let reason = if reason.is_null() { NUL_STRING.as_ptr() } else { reason };
+        // SAFETY: `shutdown` is valid per the contract; `reason` is a NUL-terminated string.
+        match unsafe { with_object(shutdown, |obj| obj.notify(reason)) } {
+            Ok(done) => {
+                // SAFETY: each out-parameter is written only when non-NULL.
+                unsafe {
+                    if !pNotified.is_null() {
+                        *pNotified = done.notified;
+                    }
+                    if !pFailed.is_null() {
+                        *pFailed = done.failed;
+                    }
+                }
+                if done.failed == 0 {
+                    S_OK
+                } else {
+                    S_FALSE
+                }
+            }
+            Err(hr) => hr,
+        }
+    })
+}

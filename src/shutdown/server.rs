@@ -1,0 +1,509 @@
+//! The server side: an aggregatable object with IConnectionPointContainer and one connection point
+//! for IOPCShutdown (specification section 4.1).
+//!
+//! Ownership, and why there is no reference cycle: the connection point is part of the container
+//! object (a second interface slot with its own COM identity). Its AddRef/Release count on the
+//! container's controlling unknown, so a client holding only the connection point keeps the server
+//! alive, exactly as holding any other interface of it would, and the container needs no counted
+//! reference to its point. Enumerators of connection points hold counted references (and so keep
+//! the server alive while they exist); nothing the server holds refers back to them. Sinks are held
+//! by the connections; a sink that holds the server is the client's business (it must Unadvise).
+
+use core::ffi::c_void;
+use core::ptr::{self, NonNull};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use super::apartment::SinkRef;
+use super::enumerator::{ConnectionSnapshot, Enumerator, PointSnapshot};
+use super::interfaces::{
+    IConnectionPoint, IConnectionPointContainer, IConnectionPointContainerVtbl, IConnectionPointVtbl,
+    IEnumConnectionPoints, IEnumConnections, IOPCShutdown, CONNECTDATA,
+};
+use crate::com::boundary::catch;
+use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IUNKNOWN};
+use crate::com::object::{
+    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
+};
+use crate::com::unknown::{add_ref, query_interface, release};
+use crate::com::{
+    IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
+    E_NOINTERFACE, E_POINTER, E_UNEXPECTED, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
+};
+
+/// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
+/// `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
+/// `struct_size` bytes, so code built against an older header keeps working.
+#[repr(C)]
+pub struct OpcShutdownOptions {
+    /// `sizeof(OpcShutdownOptions)` as the caller's header declares it.
+    pub struct_size: u32,
+    /// The most sinks that may be advised at the same time; 0 means the default, 1 (the
+    /// specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
+    pub advise_limit: u32,
+}
+
+/// The advise limit when the server sets none.
+pub(crate) const DEFAULT_ADVISE_LIMIT: u32 = 1;
+
+/// One advised sink.
+struct Connection {
+    cookie: DWORD,
+    sink: Arc<SinkRef>,
+}
+
+/// The connections of the point and the cookie the next Advise gets.
+struct Connections {
+    /// Starts at 1 and only grows, so a cookie is never 0 and never reused; 0 once all 2^32 - 1
+    /// cookies have been handed out (Advise then fails with CONNECT_E_ADVISELIMIT).
+    next_cookie: DWORD,
+    list: Vec<Connection>,
+}
+
+/// The shutdown object: IConnectionPointContainer plus the IOPCShutdown connection point.
+pub struct OpcShutdown {
+    container: Slot,
+    point: Slot,
+    advise_limit: u32,
+    connections: Mutex<Connections>,
+}
+
+impl ComClass for OpcShutdown {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        // The connection point is not reachable by QueryInterface on the container: it is a
+        // different COM object (it answers QueryInterface itself, see `point_query_interface`).
+        (*iid == IID_ICONNECTIONPOINTCONTAINER).then_some(&self.container)
+    }
+}
+
+/// What one notification achieved.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Notified {
+    /// Sinks whose ShutdownRequest succeeded.
+    pub(crate) notified: u32,
+    /// Sinks that could not be reached or whose ShutdownRequest failed.
+    pub(crate) failed: u32,
+}
+
+impl OpcShutdown {
+    pub(crate) fn build(binder: &crate::com::object::Binder, advise_limit: u32) -> OpcShutdown {
+        OpcShutdown {
+            container: binder.slot(&CONTAINER_VTBL),
+            point: binder.slot(&POINT_VTBL),
+            advise_limit: if advise_limit == 0 {
+                DEFAULT_ADVISE_LIMIT
+            } else {
+                advise_limit
+            },
+            connections: Mutex::new(Connections {
+                next_cookie: 1,
+                list: Vec::new(),
+            }),
+        }
+    }
+
+    fn connections(&self) -> MutexGuard<'_, Connections> {
+        // Every update of Connections is a single push/remove: a panic cannot leave it half-written.
+        self.connections.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The container interface (not AddRef'd).
+    pub(crate) fn container_ptr(&self) -> *mut IConnectionPointContainer {
+        self.container.as_ptr().cast()
+    }
+
+    /// The connection point interface (not AddRef'd).
+    pub(crate) fn point_ptr(&self) -> *mut IConnectionPoint {
+        self.point.as_ptr().cast()
+    }
+
+    /// Number of sinks advised now.
+    #[cfg(test)]
+    pub(crate) fn connection_count(&self) -> usize {
+        self.connections().list.len()
+    }
+
+    /// For each connection, whether its sink went through the Global Interface Table.
+    #[cfg(all(test, windows))]
+    pub(crate) fn held_globally(&self) -> Vec<bool> {
+        self.connections().list.iter().map(|c| c.sink.is_global()).collect()
+    }
+
+    /// IConnectionPoint::Advise after the argument checks.
+    ///
+    /// # Safety
+    /// `sink` must be a valid COM interface pointer.
+    unsafe fn advise(&self, sink: *mut IUnknown) -> Result<DWORD, HRESULT> {
+        let mut shutdown: *mut c_void = ptr::null_mut();
+        // SAFETY: `sink` is valid per the caller.
+        let hr = unsafe { query_interface(sink, &IID_IOPCShutdown, &mut shutdown) };
+        let shutdown = match NonNull::new(shutdown.cast::<IOPCShutdown>()) {
+            Some(p) if hr >= 0 => p,
+            Some(p) => {
+                // A failing QueryInterface that still returned a pointer: give the reference back.
+                // SAFETY: the sink handed us this reference.
+                unsafe { release(p.as_ptr().cast()) };
+                return Err(CONNECT_E_CANNOTCONNECT);
+            }
+            None => return Err(CONNECT_E_CANNOTCONNECT),
+        };
+        // Registering in the GIT may call into the sink, so it happens before the lock is taken.
+        // SAFETY: a counted IOPCShutdown pointer of the calling apartment.
+        let sink = Arc::new(unsafe { SinkRef::adopt(shutdown) });
+        let mut connections = self.connections();
+        if connections.list.len() >= self.advise_limit as usize || connections.next_cookie == 0 {
+            drop(connections);
+            // Released outside the lock: the sink's Release may call back into this object.
+            drop(sink);
+            return Err(CONNECT_E_ADVISELIMIT);
+        }
+        let cookie = connections.next_cookie;
+        connections.next_cookie = cookie.wrapping_add(1);
+        connections.list.push(Connection { cookie, sink });
+        Ok(cookie)
+    }
+
+    /// IConnectionPoint::Unadvise.
+    fn unadvise(&self, cookie: DWORD) -> HRESULT {
+        let removed = {
+            let mut connections = self.connections();
+            match connections.list.iter().position(|c| c.cookie == cookie) {
+                Some(i) => connections.list.remove(i),
+                None => return CONNECT_E_NOCONNECTION,
+            }
+        };
+        // Released outside the lock: the sink's Release may call back into this object.
+        drop(removed);
+        S_OK
+    }
+
+    /// The advised sinks, as counted references taken under the lock.
+    fn snapshot(&self) -> Vec<(DWORD, Arc<SinkRef>)> {
+        self.connections()
+            .list
+            .iter()
+            .map(|c| (c.cookie, c.sink.clone()))
+            .collect()
+    }
+
+    fn is_connected(&self, cookie: DWORD) -> bool {
+        self.connections().list.iter().any(|c| c.cookie == cookie)
+    }
+
+    /// Calls ShutdownRequest on every advised sink, never holding the lock during a call. Just before
+    /// each call the sink is checked to be still advised, so a sink unadvised from inside the
+    /// notification (by itself or by an earlier sink) is not called any more. An Unadvise racing on
+    /// another thread may still see one call that was already under way.
+    ///
+    /// # Safety
+    /// `reason` must point at a NUL-terminated UTF-16 string.
+    pub(crate) unsafe fn notify(&self, reason: LPCWSTR) -> Notified {
+        let mut result = Notified::default();
+        for (cookie, sink) in self.snapshot() {
+            if !self.is_connected(cookie) {
+                continue;
+            }
+            let ok = match sink.get() {
+                Ok(call) => {
+                    let p = call.as_ptr();
+                    // SAFETY: `p` is a counted IOPCShutdown pointer valid on this thread; no lock is held.
+                    let hr = unsafe { ((*(*p).lpVtbl).ShutdownRequest)(p, reason) };
+                    hr >= 0
+                }
+                Err(_) => false,
+            };
+            if ok {
+                result.notified += 1;
+            } else {
+                result.failed += 1;
+            }
+            // `sink` (and `call`) drop here, outside any lock.
+        }
+        result
+    }
+
+    /// IConnectionPoint::EnumConnections: the connections now, with sinks valid on this thread. Fails
+    /// with the sink's error when one cannot be had on this thread (on Windows: an apartment-bound
+    /// sink held directly, asked for from another thread, gives RPC_E_WRONG_THREAD).
+    fn enum_connections(&self) -> Result<*mut IEnumConnections, HRESULT> {
+        let mut data = Vec::new();
+        for (cookie, sink) in self.snapshot() {
+            match sink.get() {
+                Ok(call) => data.push(CONNECTDATA {
+                    pUnk: call.into_raw().cast(),
+                    dwCookie: cookie,
+                }),
+                Err(hr) => {
+                    drop(ConnectionSnapshot::adopt(data));
+                    return Err(hr);
+                }
+            }
+        }
+        Ok(Enumerator::create(Arc::new(ConnectionSnapshot::adopt(data)), 0))
+    }
+}
+
+static CONTAINER_VTBL: IConnectionPointContainerVtbl = IConnectionPointContainerVtbl {
+    QueryInterface: delegating_query_interface::<IConnectionPointContainer>,
+    AddRef: delegating_add_ref::<IConnectionPointContainer>,
+    Release: delegating_release::<IConnectionPointContainer>,
+    EnumConnectionPoints: enum_connection_points,
+    FindConnectionPoint: find_connection_point,
+};
+
+static POINT_VTBL: IConnectionPointVtbl = IConnectionPointVtbl {
+    QueryInterface: point_query_interface,
+    AddRef: delegating_add_ref::<IConnectionPoint>,
+    Release: delegating_release::<IConnectionPoint>,
+    GetConnectionInterface: get_connection_interface,
+    GetConnectionPointContainer: get_connection_point_container,
+    Advise: advise,
+    Unadvise: unadvise,
+    EnumConnections: enum_connections,
+};
+
+/// The object behind any of its interfaces, if it is one of ours.
+///
+/// # Safety
+/// `this` must be NULL or a valid COM interface pointer.
+pub(crate) unsafe fn from_container<'a>(this: *mut IConnectionPointContainer) -> Option<&'a ComObject<OpcShutdown>> {
+    // SAFETY: forwarded from the caller.
+    unsafe { ComObject::<OpcShutdown>::from_foreign(this, &CONTAINER_VTBL) }
+}
+
+/// # Safety
+/// `this` is a slot of a live OpcShutdown (COM calls only reach us through its vtables).
+unsafe fn object<'a, I>(this: *mut I) -> &'a ComObject<OpcShutdown> {
+    // SAFETY: CONTAINER_VTBL and POINT_VTBL are only installed in OpcShutdown objects.
+    unsafe { ComObject::<OpcShutdown>::from_interface(this) }
+}
+
+unsafe extern "system" fn enum_connection_points(
+    this: *mut IConnectionPointContainer,
+    ppEnum: *mut *mut IEnumConnectionPoints,
+) -> HRESULT {
+    if ppEnum.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppEnum = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        let point = unsafe { object(this) }.point_ptr();
+        // The snapshot's reference to the point counts on the server, which it keeps alive.
+        // SAFETY: `point` is a slot of the live object.
+        unsafe { add_ref(point.cast()) };
+        let items = PointSnapshot::adopt(vec![NonNull::new(point).expect("slot pointers are never NULL")]);
+        // SAFETY: non-NULL out-parameter.
+        unsafe { *ppEnum = Enumerator::create(Arc::new(items), 0) };
+        S_OK
+    })
+}
+
+unsafe extern "system" fn find_connection_point(
+    this: *mut IConnectionPointContainer,
+    riid: REFIID,
+    ppCP: *mut *mut IConnectionPoint,
+) -> HRESULT {
+    if ppCP.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppCP = ptr::null_mut() };
+    if riid.is_null() {
+        return E_POINTER;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: checked non-NULL; COM callers pass a readable IID.
+        if unsafe { *riid } != IID_IOPCShutdown {
+            return CONNECT_E_NOCONNECTION;
+        }
+        // SAFETY: COM calls this only through our vtable.
+        let point = unsafe { object(this) }.point_ptr();
+        // SAFETY: a slot of the live object; the AddRef counts on the controlling unknown.
+        unsafe {
+            add_ref(point.cast());
+            *ppCP = point;
+        }
+        S_OK
+    })
+}
+
+/// QueryInterface of the connection point: its own identity, answering IUnknown and
+/// IConnectionPoint only (a connection point is not its container).
+unsafe extern "system" fn point_query_interface(
+    this: *mut IConnectionPoint,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    if ppv.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppv = ptr::null_mut() };
+    if riid.is_null() {
+        return E_POINTER;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: checked non-NULL; COM callers pass a readable IID.
+        let iid = unsafe { *riid };
+        if iid != IID_IUNKNOWN && iid != IID_ICONNECTIONPOINT {
+            return E_NOINTERFACE;
+        }
+        // SAFETY: `this` is the point slot of a live object.
+        unsafe {
+            add_ref(this.cast());
+            *ppv = this.cast();
+        }
+        S_OK
+    })
+}
+
+unsafe extern "system" fn get_connection_interface(_this: *mut IConnectionPoint, pIID: *mut IID) -> HRESULT {
+    if pIID.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *pIID = IID_IOPCShutdown };
+    S_OK
+}
+
+unsafe extern "system" fn get_connection_point_container(
+    this: *mut IConnectionPoint,
+    ppCPC: *mut *mut IConnectionPointContainer,
+) -> HRESULT {
+    if ppCPC.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppCPC = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        let obj = unsafe { object(this) };
+        let header = obj.header();
+        if header.is_aggregated() {
+            // The container is whatever the server object (the controlling unknown) answers for
+            // IConnectionPointContainer: usually this object's container slot, forwarded.
+            let mut found: *mut c_void = ptr::null_mut();
+            // SAFETY: the outer unknown is valid while this object lives; `found` is writable.
+            let hr =
+                unsafe { query_interface(header.controlling_unknown(), &IID_ICONNECTIONPOINTCONTAINER, &mut found) };
+            if hr >= 0 && !found.is_null() {
+                // SAFETY: non-NULL out-parameter; the reference QueryInterface gave us goes to the caller.
+                unsafe { *ppCPC = found.cast() };
+                return S_OK;
+            }
+        }
+        // Our own container slot; its AddRef counts on the controlling unknown.
+        let container = obj.container_ptr();
+        // SAFETY: a slot of the live object.
+        unsafe {
+            add_ref(container.cast());
+            *ppCPC = container;
+        }
+        S_OK
+    })
+}
+
+unsafe extern "system" fn advise(
+    this: *mut IConnectionPoint,
+    pUnkSink: *mut IUnknown,
+    pdwCookie: *mut DWORD,
+) -> HRESULT {
+    if pdwCookie.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *pdwCookie = 0 };
+    if pUnkSink.is_null() {
+        return E_POINTER;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable; the sink is a valid COM pointer.
+        match unsafe { object(this).advise(pUnkSink) } {
+            Ok(cookie) => {
+                // SAFETY: non-NULL out-parameter.
+                unsafe { *pdwCookie = cookie };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+unsafe extern "system" fn unadvise(this: *mut IConnectionPoint, dwCookie: DWORD) -> HRESULT {
+    // SAFETY: COM calls this only through our vtable.
+    catch(E_UNEXPECTED, || unsafe { object(this) }.unadvise(dwCookie))
+}
+
+unsafe extern "system" fn enum_connections(this: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> HRESULT {
+    if ppEnum.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppEnum = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        match unsafe { object(this) }.enum_connections() {
+            Ok(e) => {
+                // SAFETY: non-NULL out-parameter.
+                unsafe { *ppEnum = e };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+/// Reads the caller's options, honouring `struct_size`; returns the advise limit.
+///
+/// # Safety
+/// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcShutdownOptions.
+pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<u32, HRESULT> {
+    let mut o = OpcShutdownOptions {
+        struct_size: 0,
+        advise_limit: 0,
+    };
+    if !options.is_null() {
+        // SAFETY: the first field is always present.
+        let size = unsafe { ptr::addr_of!((*options).struct_size).read_unaligned() } as usize;
+        // Only sizes the struct has (had) in some version: ending after a whole field.
+        let ends = [
+            core::mem::offset_of!(OpcShutdownOptions, advise_limit),
+            core::mem::size_of::<OpcShutdownOptions>(),
+        ];
+        if !ends.contains(&size) {
+            return Err(E_INVALIDARG);
+        }
+        // SAFETY: the caller vouches `size` bytes are readable; `o` has room for them.
+        unsafe { ptr::copy_nonoverlapping(options.cast::<u8>(), ptr::addr_of_mut!(o).cast::<u8>(), size) };
+    }
+    Ok(o.advise_limit)
+}
+
+/// Finds the shutdown object behind any interface of it (or of a server aggregating it) and runs
+/// `f` on it while holding a reference, so a sink releasing the server cannot pull it away.
+///
+/// # Safety
+/// `shutdown` must be NULL or a valid COM interface pointer.
+pub(crate) unsafe fn with_object<R>(
+    shutdown: *mut IUnknown,
+    f: impl FnOnce(&ComObject<OpcShutdown>) -> R,
+) -> Result<R, HRESULT> {
+    if shutdown.is_null() {
+        return Err(E_INVALIDARG);
+    }
+    let mut container: *mut c_void = ptr::null_mut();
+    // SAFETY: valid per the caller.
+    let hr = unsafe { query_interface(shutdown, &IID_ICONNECTIONPOINTCONTAINER, &mut container) };
+    if hr < 0 || container.is_null() {
+        return Err(E_INVALIDARG);
+    }
+    // SAFETY: a valid IConnectionPointContainer pointer, ours or not.
+    let result = match unsafe { from_container(container.cast()) } {
+        Some(obj) => Ok(f(obj)),
+        None => Err(E_INVALIDARG),
+    };
+    // SAFETY: the reference QueryInterface gave us.
+    unsafe { release(container.cast()) };
+    result
+}

@@ -1,0 +1,850 @@
+//! Tests of both sides of the shutdown capability, with sinks that count their references.
+
+use core::ffi::c_void;
+use core::ptr;
+use core::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Mutex;
+
+use super::client::{OpcShutdownAdvise, OpcShutdownSinkCreate, OpcShutdownUnadvise};
+use super::interfaces::*;
+use super::server::{from_container, OpcShutdownOptions};
+use super::*;
+use crate::com::iids::{
+    IID_IOPCCommon, IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
+    IID_IENUMCONNECTIONS, IID_IUNKNOWN,
+};
+use crate::com::unknown::{add_ref, query_interface, release};
+use crate::com::{
+    CLASS_E_NOAGGREGATION, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_FAIL,
+    E_INVALIDARG, E_NOINTERFACE, E_POINTER, GUID, IID, WCHAR,
+};
+
+// ---------------------------------------------------------------------------------------------
+// A client sink written by hand, counting its references and recording its calls.
+
+type Hook = Box<dyn FnMut() + Send>;
+
+#[repr(C)]
+struct MockSink {
+    vtbl: &'static IOPCShutdownVtbl,
+    refs: AtomicU32,
+    has_shutdown: bool,
+    result: HRESULT,
+    calls: AtomicU32,
+    reasons: Mutex<Vec<Vec<WCHAR>>>,
+    hook: Mutex<Option<Hook>>,
+}
+
+static MOCK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
+    QueryInterface: mock_qi,
+    AddRef: mock_add_ref,
+    Release: mock_release,
+    ShutdownRequest: mock_shutdown_request,
+};
+
+unsafe extern "system" fn mock_qi(this: *mut IOPCShutdown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    // SAFETY: only MockSink objects present MOCK_VTBL; the caller passes valid pointers.
+    unsafe {
+        let m = &*(this as *const MockSink);
+        *ppv = ptr::null_mut();
+        if *riid == IID_IUNKNOWN || (m.has_shutdown && *riid == IID_IOPCShutdown) {
+            m.refs.fetch_add(1, Ordering::SeqCst);
+            *ppv = this.cast();
+            return S_OK;
+        }
+    }
+    E_NOINTERFACE
+}
+
+unsafe extern "system" fn mock_add_ref(this: *mut IOPCShutdown) -> ULONG {
+    // SAFETY: as above.
+    unsafe { &*(this as *const MockSink) }
+        .refs
+        .fetch_add(1, Ordering::SeqCst)
+        + 1
+}
+
+unsafe extern "system" fn mock_release(this: *mut IOPCShutdown) -> ULONG {
+    // SAFETY: as above. The test owns the memory; the count only has to stay observable.
+    let m = unsafe { &*(this as *const MockSink) };
+    let before = m.refs.fetch_sub(1, Ordering::SeqCst);
+    assert!(before > 0, "Release without a reference");
+    before - 1
+}
+
+unsafe extern "system" fn mock_shutdown_request(this: *mut IOPCShutdown, reason: LPCWSTR) -> HRESULT {
+    // SAFETY: as above; the server passes a NUL-terminated string.
+    let m = unsafe { &*(this as *const MockSink) };
+    m.calls.fetch_add(1, Ordering::SeqCst);
+    assert!(!reason.is_null(), "the server must never pass a NULL reason");
+    // SAFETY: NUL-terminated per the interface contract.
+    let units = unsafe { crate::com::wstr::wstr_units(reason, 1000) }.unwrap().to_vec();
+    m.reasons.lock().unwrap().push(units);
+    // Taken out of the mutex while it runs, so the hook may re-enter the server freely.
+    let hook = m.hook.lock().unwrap().take();
+    if let Some(mut hook) = hook {
+        hook();
+        *m.hook.lock().unwrap() = Some(hook);
+    }
+    m.result
+}
+
+impl MockSink {
+    fn new(has_shutdown: bool, result: HRESULT) -> Box<MockSink> {
+        Box::new(MockSink {
+            vtbl: &MOCK_VTBL,
+            refs: AtomicU32::new(1),
+            has_shutdown,
+            result,
+            calls: AtomicU32::new(0),
+            reasons: Mutex::new(Vec::new()),
+            hook: Mutex::new(None),
+        })
+    }
+    fn unk(&self) -> *mut IUnknown {
+        self as *const MockSink as *mut IUnknown
+    }
+    fn refs(&self) -> u32 {
+        self.refs.load(Ordering::SeqCst)
+    }
+    fn calls(&self) -> u32 {
+        self.calls.load(Ordering::SeqCst)
+    }
+    fn set_hook(&self, hook: impl FnMut() + Send + 'static) {
+        *self.hook.lock().unwrap() = Some(Box::new(hook));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Small wrappers over the vtables, as a C++ client would write them.
+
+fn w(s: &str) -> Vec<WCHAR> {
+    s.encode_utf16().chain(Some(0)).collect()
+}
+
+struct Server(*mut IConnectionPointContainer);
+
+// SAFETY: the library's shutdown objects are free-threaded.
+unsafe impl Sync for Server {}
+
+// SAFETY: the library's shutdown objects are free-threaded.
+unsafe impl Send for Server {}
+
+impl Server {
+    fn new() -> Server {
+        Self::with_limit(None)
+    }
+    fn with_limit(limit: Option<u32>) -> Server {
+        let options = limit.map(|advise_limit| OpcShutdownOptions {
+            struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
+            advise_limit,
+        });
+        let mut p: *mut c_void = ptr::null_mut();
+        let opts = options.as_ref().map_or(ptr::null(), |o| o as *const OpcShutdownOptions);
+        // SAFETY: valid arguments.
+        let hr = unsafe { OpcShutdownCreateEx(opts, ptr::null_mut(), &IID_ICONNECTIONPOINTCONTAINER, &mut p) };
+        assert_eq!(hr, S_OK);
+        Server(p.cast())
+    }
+    fn unk(&self) -> *mut IUnknown {
+        self.0.cast()
+    }
+    fn find(&self, iid: &IID) -> (HRESULT, *mut IConnectionPoint) {
+        let mut cp = 0x1 as *mut IConnectionPoint; // garbage, to prove it is written
+                                                   // SAFETY: a live container.
+        let hr = unsafe { ((*(*self.0).lpVtbl).FindConnectionPoint)(self.0, iid, &mut cp) };
+        (hr, cp)
+    }
+    fn point(&self) -> Point {
+        let (hr, cp) = self.find(&IID_IOPCShutdown);
+        assert_eq!(hr, S_OK);
+        Point(cp)
+    }
+    fn notify(&self, reason: LPCWSTR) -> (HRESULT, u32, u32) {
+        let (mut n, mut f) = (99, 99);
+        // SAFETY: a live object.
+        let hr = unsafe { OpcShutdownNotifyEx(self.unk(), reason, &mut n, &mut f) };
+        (hr, n, f)
+    }
+    fn connections(&self) -> usize {
+        // SAFETY: a live container of ours.
+        unsafe { from_container(self.0) }.unwrap().connection_count()
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        // SAFETY: the reference this wrapper owns.
+        unsafe { release(self.0.cast()) };
+    }
+}
+
+struct Point(*mut IConnectionPoint);
+
+impl Point {
+    fn advise(&self, sink: *mut IUnknown) -> (HRESULT, DWORD) {
+        let mut cookie: DWORD = 0xDEAD;
+        // SAFETY: a live point.
+        let hr = unsafe { ((*(*self.0).lpVtbl).Advise)(self.0, sink, &mut cookie) };
+        (hr, cookie)
+    }
+    fn unadvise(&self, cookie: DWORD) -> HRESULT {
+        // SAFETY: a live point.
+        unsafe { ((*(*self.0).lpVtbl).Unadvise)(self.0, cookie) }
+    }
+}
+
+impl Drop for Point {
+    fn drop(&mut self) {
+        // SAFETY: the reference this wrapper owns.
+        unsafe { release(self.0.cast()) };
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn creation_follows_the_standard_protocol() {
+    let mut p: *mut c_void = 0x1 as *mut c_void;
+    // SAFETY: deliberately bad arguments, all of which the function must reject cleanly.
+    unsafe {
+        assert_eq!(OpcShutdownCreate(ptr::null_mut(), ptr::null(), &mut p), E_POINTER);
+        assert!(p.is_null());
+        assert_eq!(
+            OpcShutdownCreate(ptr::null_mut(), &IID_IUNKNOWN, ptr::null_mut()),
+            E_POINTER
+        );
+        p = 0x1 as *mut c_void;
+        assert_eq!(
+            OpcShutdownCreate(ptr::null_mut(), &IID_IOPCCommon, &mut p),
+            E_NOINTERFACE
+        );
+        assert!(p.is_null());
+        let outer = MockSink::new(false, S_OK);
+        assert_eq!(
+            OpcShutdownCreate(outer.unk(), &IID_ICONNECTIONPOINTCONTAINER, &mut p),
+            CLASS_E_NOAGGREGATION
+        );
+        assert!(p.is_null());
+        let bad = OpcShutdownOptions {
+            struct_size: 2,
+            advise_limit: 1,
+        };
+        assert_eq!(
+            OpcShutdownCreateEx(&bad, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
+            E_INVALIDARG
+        );
+        let bad = OpcShutdownOptions {
+            struct_size: 64,
+            advise_limit: 1,
+        };
+        assert_eq!(
+            OpcShutdownCreateEx(&bad, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
+            E_INVALIDARG
+        );
+        assert!(p.is_null());
+        assert_eq!(outer.refs(), 1);
+    }
+}
+
+#[test]
+fn find_connection_point_answers_only_iopcshutdown() {
+    let server = Server::new();
+    let (hr, cp) = server.find(&IID_IOPCCommon);
+    assert_eq!(hr, CONNECT_E_NOCONNECTION);
+    assert!(cp.is_null());
+    // SAFETY: NULL arguments must be refused without touching anything.
+    unsafe {
+        let mut cp = 0x1 as *mut IConnectionPoint;
+        assert_eq!(
+            ((*(*server.0).lpVtbl).FindConnectionPoint)(server.0, ptr::null(), &mut cp),
+            E_POINTER
+        );
+        assert!(cp.is_null());
+        assert_eq!(
+            ((*(*server.0).lpVtbl).FindConnectionPoint)(server.0, &IID_IOPCShutdown, ptr::null_mut()),
+            E_POINTER
+        );
+        assert_eq!(
+            ((*(*server.0).lpVtbl).EnumConnectionPoints)(server.0, ptr::null_mut()),
+            E_POINTER
+        );
+    }
+    let point = server.point();
+    let mut iid = GUID::default();
+    // SAFETY: a live point.
+    unsafe {
+        assert_eq!(((*(*point.0).lpVtbl).GetConnectionInterface)(point.0, &mut iid), S_OK);
+        assert_eq!(
+            ((*(*point.0).lpVtbl).GetConnectionInterface)(point.0, ptr::null_mut()),
+            E_POINTER
+        );
+    }
+    assert_eq!(iid, IID_IOPCShutdown);
+}
+
+#[test]
+fn the_connection_point_is_its_own_object_and_knows_its_container() {
+    let server = Server::new();
+    let point = server.point();
+    // SAFETY: live objects; every reference obtained is released.
+    unsafe {
+        // Its identity is its own, not the container's.
+        let mut a: *mut c_void = ptr::null_mut();
+        let mut b: *mut c_void = ptr::null_mut();
+        assert_eq!(query_interface(point.0.cast(), &IID_IUNKNOWN, &mut a), S_OK);
+        assert_eq!(query_interface(server.unk(), &IID_IUNKNOWN, &mut b), S_OK);
+        assert_ne!(a, b);
+        release(a.cast());
+        release(b.cast());
+        assert_eq!(query_interface(point.0.cast(), &IID_ICONNECTIONPOINT, &mut a), S_OK);
+        assert_eq!(a, point.0.cast());
+        release(a.cast());
+        a = 0x1 as *mut c_void;
+        assert_eq!(
+            query_interface(point.0.cast(), &IID_ICONNECTIONPOINTCONTAINER, &mut a),
+            E_NOINTERFACE
+        );
+        assert!(a.is_null());
+        // The container does not hand out the point through QueryInterface either.
+        a = 0x1 as *mut c_void;
+        assert_eq!(
+            query_interface(server.unk(), &IID_ICONNECTIONPOINT, &mut a),
+            E_NOINTERFACE
+        );
+        assert!(a.is_null());
+
+        let mut cpc: *mut IConnectionPointContainer = ptr::null_mut();
+        assert_eq!(
+            ((*(*point.0).lpVtbl).GetConnectionPointContainer)(point.0, &mut cpc),
+            S_OK
+        );
+        assert_eq!(cpc, server.0);
+        release(cpc.cast());
+        assert_eq!(
+            ((*(*point.0).lpVtbl).GetConnectionPointContainer)(point.0, ptr::null_mut()),
+            E_POINTER
+        );
+    }
+}
+
+#[test]
+fn advise_checks_its_arguments_and_the_sink() {
+    let server = Server::new();
+    let point = server.point();
+    let (hr, cookie) = point.advise(ptr::null_mut());
+    assert_eq!((hr, cookie), (E_POINTER, 0));
+    // SAFETY: NULL cookie pointer must be refused.
+    let hr = unsafe { ((*(*point.0).lpVtbl).Advise)(point.0, ptr::null_mut(), ptr::null_mut()) };
+    assert_eq!(hr, E_POINTER);
+
+    let plain = MockSink::new(false, S_OK);
+    let (hr, cookie) = point.advise(plain.unk());
+    assert_eq!((hr, cookie), (CONNECT_E_CANNOTCONNECT, 0));
+    assert_eq!(plain.refs(), 1, "a refused sink keeps no reference");
+
+    let sink = MockSink::new(true, S_OK);
+    let (hr, cookie) = point.advise(sink.unk());
+    assert_eq!(hr, S_OK);
+    assert_ne!(cookie, 0);
+    assert_eq!(sink.refs(), 2, "the connection holds exactly one reference");
+
+    // The default limit is one sink.
+    let other = MockSink::new(true, S_OK);
+    let (hr, c2) = point.advise(other.unk());
+    assert_eq!((hr, c2), (CONNECT_E_ADVISELIMIT, 0));
+    assert_eq!(other.refs(), 1);
+
+    assert_eq!(point.unadvise(0), CONNECT_E_NOCONNECTION);
+    assert_eq!(point.unadvise(cookie + 1), CONNECT_E_NOCONNECTION);
+    assert_eq!(point.unadvise(cookie), S_OK);
+    assert_eq!(sink.refs(), 1);
+    assert_eq!(point.unadvise(cookie), CONNECT_E_NOCONNECTION);
+}
+
+#[test]
+fn cookies_are_never_zero_and_never_reused() {
+    let server = Server::new();
+    let point = server.point();
+    let sink = MockSink::new(true, S_OK);
+    let mut seen = Vec::new();
+    for _ in 0..50 {
+        let (hr, cookie) = point.advise(sink.unk());
+        assert_eq!(hr, S_OK);
+        assert_ne!(cookie, 0);
+        assert!(!seen.contains(&cookie));
+        seen.push(cookie);
+        assert_eq!(point.unadvise(cookie), S_OK);
+    }
+    assert_eq!(sink.refs(), 1);
+}
+
+#[test]
+fn the_advise_limit_can_be_raised() {
+    let server = Server::with_limit(Some(3));
+    let point = server.point();
+    let sinks: Vec<_> = (0..4).map(|_| MockSink::new(true, S_OK)).collect();
+    let mut cookies = Vec::new();
+    for s in &sinks[..3] {
+        let (hr, cookie) = point.advise(s.unk());
+        assert_eq!(hr, S_OK);
+        cookies.push(cookie);
+    }
+    assert_eq!(point.advise(sinks[3].unk()), (CONNECT_E_ADVISELIMIT, 0));
+    assert_eq!(point.unadvise(cookies[1]), S_OK);
+    let (hr, cookie) = point.advise(sinks[3].unk());
+    assert_eq!(hr, S_OK);
+    assert!(!cookies.contains(&cookie));
+    assert_eq!(server.connections(), 3);
+
+    // A limit of 0 in the options means the default, one.
+    let default = Server::with_limit(Some(0));
+    let p = default.point();
+    assert_eq!(p.advise(sinks[0].unk()).0, S_OK);
+    assert_eq!(p.advise(sinks[1].unk()).0, CONNECT_E_ADVISELIMIT);
+    drop(p);
+    drop(default);
+    drop(point);
+    drop(server);
+    for s in &sinks {
+        assert_eq!(s.refs(), 1, "the server released every sink when it died");
+    }
+}
+
+#[test]
+fn notify_passes_the_reason_and_a_nul_string_for_null() {
+    let server = Server::new();
+    assert_eq!(server.notify(ptr::null()), (S_OK, 0, 0), "no sink advised");
+    let point = server.point();
+    let sink = MockSink::new(true, S_OK);
+    let (_, cookie) = point.advise(sink.unk());
+    let reason = w("Server going down");
+    assert_eq!(server.notify(reason.as_ptr()), (S_OK, 1, 0));
+    assert_eq!(server.notify(ptr::null()), (S_OK, 1, 0));
+    // SAFETY: the plain variant, through the connection point (any interface of the object works).
+    assert_eq!(unsafe { OpcShutdownNotify(point.0.cast(), ptr::null()) }, E_INVALIDARG);
+    // SAFETY: through the container.
+    assert_eq!(unsafe { OpcShutdownNotify(server.unk(), ptr::null()) }, S_OK);
+    let reasons = sink.reasons.lock().unwrap().clone();
+    assert_eq!(reasons, vec![w("Server going down")[..17].to_vec(), vec![], vec![]]);
+    assert_eq!(point.unadvise(cookie), S_OK);
+    assert_eq!(sink.refs(), 1);
+}
+
+#[test]
+fn notify_rejects_what_is_not_a_shutdown_object() {
+    let foreign = MockSink::new(true, S_OK);
+    let (mut n, mut f) = (7, 7);
+    // SAFETY: a NULL and a foreign object (no IConnectionPointContainer).
+    unsafe {
+        assert_eq!(
+            OpcShutdownNotifyEx(ptr::null_mut(), ptr::null(), &mut n, &mut f),
+            E_INVALIDARG
+        );
+        assert_eq!((n, f), (0, 0));
+        assert_eq!(OpcShutdownNotify(foreign.unk(), ptr::null()), E_INVALIDARG);
+    }
+    assert_eq!(foreign.refs(), 1);
+}
+
+#[test]
+fn a_failing_sink_does_not_stop_the_others() {
+    let server = Server::with_limit(Some(3));
+    let point = server.point();
+    let good1 = MockSink::new(true, S_OK);
+    let bad = MockSink::new(true, E_FAIL);
+    let good2 = MockSink::new(true, S_OK);
+    for s in [&good1, &bad, &good2] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    assert_eq!(server.notify(ptr::null()), (S_FALSE, 2, 1));
+    assert_eq!((good1.calls(), bad.calls(), good2.calls()), (1, 1, 1));
+    drop(point);
+    drop(server);
+    for s in [&good1, &bad, &good2] {
+        assert_eq!(s.refs(), 1);
+    }
+}
+
+#[test]
+fn a_sink_may_unadvise_itself_inside_shutdown_request() {
+    let server = Server::new();
+    let sink = MockSink::new(true, S_OK);
+    let mut cookie: DWORD = 0;
+    // SAFETY: live objects.
+    let hr = unsafe { OpcShutdownAdvise(server.unk(), sink.unk(), &mut cookie) };
+    assert_eq!(hr, S_OK);
+    let server_unk = server.unk() as usize;
+    let results = std::sync::Arc::new(Mutex::new(Vec::new()));
+    let seen = results.clone();
+    sink.set_hook(move || {
+        // Would deadlock if the server held its lock while calling us.
+        // SAFETY: the server is alive during the notification.
+        let hr = unsafe { OpcShutdownUnadvise(server_unk as *mut IUnknown, cookie) };
+        seen.lock().unwrap().push(hr);
+    });
+    assert_eq!(server.notify(ptr::null()), (S_OK, 1, 0));
+    assert_eq!(*results.lock().unwrap(), vec![S_OK]);
+    assert_eq!(server.connections(), 0);
+    assert_eq!(sink.refs(), 1, "unadvised: the server dropped its reference");
+    assert_eq!(server.notify(ptr::null()), (S_OK, 0, 0));
+    assert_eq!(sink.calls(), 1);
+}
+
+#[test]
+fn a_sink_unadvised_by_another_during_notification_is_not_called() {
+    let server = Server::with_limit(Some(2));
+    let point = server.point();
+    let first = MockSink::new(true, S_OK);
+    let second = MockSink::new(true, S_OK);
+    let (_, c1) = point.advise(first.unk());
+    let (_, c2) = point.advise(second.unk());
+    let cp = point.0 as usize;
+    first.set_hook(move || {
+        // SAFETY: the point is alive during the notification.
+        let hr = unsafe { ((*(*(cp as *mut IConnectionPoint)).lpVtbl).Unadvise)(cp as *mut IConnectionPoint, c2) };
+        assert_eq!(hr, S_OK);
+    });
+    assert_eq!(server.notify(ptr::null()), (S_OK, 1, 0));
+    assert_eq!((first.calls(), second.calls()), (1, 0));
+    assert_eq!(second.refs(), 1);
+    assert_eq!(point.unadvise(c1), S_OK);
+    assert_eq!(first.refs(), 1);
+}
+
+#[test]
+fn a_sink_may_release_the_last_reference_to_the_server_inside_shutdown_request() {
+    let server = Server::new();
+    let point = server.point();
+    let sink = MockSink::new(true, S_OK);
+    assert_eq!(point.advise(sink.unk()).0, S_OK);
+    drop(point);
+    let raw = server.unk() as usize;
+    core::mem::forget(server); // the sink now owns the last reference
+    sink.set_hook(move || {
+        // SAFETY: the reference given to the sink; OpcShutdownNotify holds its own meanwhile.
+        unsafe { release(raw as *mut IUnknown) };
+    });
+    let (mut n, mut f) = (0, 0);
+    // SAFETY: the object is alive when the call starts.
+    let hr = unsafe { OpcShutdownNotifyEx(raw as *mut IUnknown, ptr::null(), &mut n, &mut f) };
+    assert_eq!((hr, n, f), (S_OK, 1, 0));
+    assert_eq!(
+        sink.refs(),
+        1,
+        "the server died after the notification and released the sink"
+    );
+}
+
+#[test]
+fn connection_points_enumerate_with_next_skip_reset_clone() {
+    let server = Server::new();
+    let sink = MockSink::new(true, S_OK);
+    let point = server.point();
+    assert_eq!(point.advise(sink.unk()).0, S_OK);
+    drop(point);
+    let mut e: *mut IEnumConnectionPoints = ptr::null_mut();
+    // SAFETY: live objects; every reference obtained is released.
+    unsafe {
+        assert_eq!(((*(*server.0).lpVtbl).EnumConnectionPoints)(server.0, &mut e), S_OK);
+        let v = &*(*e).lpVtbl;
+        let mut got: [*mut IConnectionPoint; 3] = [ptr::null_mut(); 3];
+        let mut fetched: ULONG = 99;
+        assert_eq!((v.Next)(e, 3, got.as_mut_ptr(), &mut fetched), S_FALSE);
+        assert_eq!(fetched, 1);
+        let mut iid = GUID::default();
+        assert_eq!(((*(*got[0]).lpVtbl).GetConnectionInterface)(got[0], &mut iid), S_OK);
+        assert_eq!(iid, IID_IOPCShutdown);
+        release(got[0].cast());
+        assert_eq!((v.Next)(e, 1, got.as_mut_ptr(), &mut fetched), S_FALSE);
+        assert_eq!(fetched, 0);
+        assert_eq!((v.Next)(e, 2, got.as_mut_ptr(), ptr::null_mut()), E_POINTER);
+        assert_eq!((v.Next)(e, 1, ptr::null_mut(), &mut fetched), E_POINTER);
+        assert_eq!((v.Reset)(e), S_OK);
+        assert_eq!((v.Skip)(e, 1), S_OK);
+        assert_eq!((v.Skip)(e, 1), S_FALSE);
+        assert_eq!((v.Reset)(e), S_OK);
+        let mut c: *mut IEnumConnectionPoints = ptr::null_mut();
+        assert_eq!((v.Clone)(e, &mut c), S_OK);
+        assert_eq!((v.Clone)(e, ptr::null_mut()), E_POINTER);
+        // pcFetched may be NULL when asking for one.
+        assert_eq!((v.Next)(c, 1, got.as_mut_ptr(), ptr::null_mut()), S_OK);
+        release(got[0].cast());
+        let mut other: *mut c_void = ptr::null_mut();
+        assert_eq!(query_interface(e.cast(), &IID_IENUMCONNECTIONPOINTS, &mut other), S_OK);
+        release(other.cast());
+        // The enumerators keep the server alive after the client released it.
+        let e2 = c as usize;
+        drop(server);
+        assert_eq!(sink.refs(), 2);
+        release(e.cast());
+        assert_eq!(sink.refs(), 2);
+        release(e2 as *mut IUnknown);
+        assert_eq!(sink.refs(), 1, "the last enumerator released the server");
+    }
+}
+
+#[test]
+fn connections_enumerate_with_counted_sinks() {
+    let server = Server::with_limit(Some(2));
+    let point = server.point();
+    let a = MockSink::new(true, S_OK);
+    let b = MockSink::new(true, S_OK);
+    let (_, ca) = point.advise(a.unk());
+    let (_, cb) = point.advise(b.unk());
+    let mut e: *mut IEnumConnections = ptr::null_mut();
+    // SAFETY: live objects; every reference obtained is released.
+    unsafe {
+        assert_eq!(
+            ((*(*point.0).lpVtbl).EnumConnections)(point.0, ptr::null_mut()),
+            E_POINTER
+        );
+        assert_eq!(((*(*point.0).lpVtbl).EnumConnections)(point.0, &mut e), S_OK);
+        let v = &*(*e).lpVtbl;
+        assert_eq!(
+            (a.refs(), b.refs()),
+            (3, 3),
+            "the snapshot holds a reference to each sink"
+        );
+        // Unadvising now does not change the snapshot.
+        assert_eq!(point.unadvise(cb), S_OK);
+        let mut data = [CONNECTDATA {
+            pUnk: ptr::null_mut(),
+            dwCookie: 0,
+        }; 4];
+        let mut fetched: ULONG = 0;
+        assert_eq!((v.Skip)(e, 1), S_OK);
+        assert_eq!((v.Next)(e, 4, data.as_mut_ptr(), &mut fetched), S_FALSE);
+        assert_eq!(fetched, 1);
+        assert_eq!(data[0].dwCookie, cb);
+        assert_eq!(data[0].pUnk, b.unk());
+        assert_eq!(b.refs(), 3, "snapshot + the caller's copy");
+        release(data[0].pUnk);
+        assert_eq!((v.Reset)(e), S_OK);
+        assert_eq!((v.Next)(e, 2, data.as_mut_ptr(), &mut fetched), S_OK);
+        assert_eq!(fetched, 2);
+        assert_eq!((data[0].dwCookie, data[1].dwCookie), (ca, cb));
+        release(data[0].pUnk);
+        release(data[1].pUnk);
+        let mut c: *mut IEnumConnections = ptr::null_mut();
+        assert_eq!((v.Clone)(e, &mut c), S_OK);
+        assert_eq!(
+            (v.Next)(c, 1, data.as_mut_ptr(), ptr::null_mut()),
+            S_FALSE,
+            "a clone keeps the position"
+        );
+        let mut other: *mut c_void = ptr::null_mut();
+        assert_eq!(query_interface(c.cast(), &IID_IENUMCONNECTIONS, &mut other), S_OK);
+        release(other.cast());
+        release(e.cast());
+        assert_eq!(b.refs(), 2, "the clone still shares the snapshot");
+        release(c.cast());
+        assert_eq!((a.refs(), b.refs()), (2, 1));
+    }
+    assert_eq!(point.unadvise(ca), S_OK);
+    assert_eq!(a.refs(), 1);
+}
+
+#[test]
+fn holding_only_the_connection_point_keeps_the_server_and_nothing_leaks() {
+    let server = Server::new();
+    let point = server.point();
+    let sink = MockSink::new(true, S_OK);
+    assert_eq!(point.advise(sink.unk()).0, S_OK);
+    drop(server);
+    assert_eq!(sink.refs(), 2, "the point keeps the server alive");
+    let mut cpc: *mut IConnectionPointContainer = ptr::null_mut();
+    // SAFETY: a live point.
+    unsafe {
+        assert_eq!(
+            ((*(*point.0).lpVtbl).GetConnectionPointContainer)(point.0, &mut cpc),
+            S_OK
+        );
+        assert_eq!(OpcShutdownNotify(cpc.cast(), ptr::null()), S_OK);
+        release(cpc.cast());
+    }
+    assert_eq!(sink.calls(), 1);
+    drop(point);
+    assert_eq!(
+        sink.refs(),
+        1,
+        "the server died with the last reference and released the sink"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Client side.
+
+struct Received(Mutex<Vec<Vec<WCHAR>>>);
+
+unsafe extern "C" fn record(context: *mut c_void, reason: LPCWSTR) {
+    // SAFETY: the tests pass a `Received` as context; the library passes a valid string.
+    let received = unsafe { &*(context as *const Received) };
+    // SAFETY: as above.
+    let units = unsafe { crate::com::wstr::wstr_units(reason, 1000) }.unwrap().to_vec();
+    received.0.lock().unwrap().push(units);
+}
+
+#[test]
+fn the_client_sink_calls_back_and_always_returns_s_ok() {
+    let received = Received(Mutex::new(Vec::new()));
+    let ctx = &received as *const Received as *mut c_void;
+    let mut p: *mut c_void = 0x1 as *mut c_void;
+    // SAFETY: valid and deliberately invalid arguments.
+    unsafe {
+        assert_eq!(
+            OpcShutdownSinkCreate(None, ctx, &IID_IOPCShutdown, &mut p),
+            E_INVALIDARG
+        );
+        assert!(p.is_null());
+        assert_eq!(
+            OpcShutdownSinkCreate(Some(record), ctx, &IID_IOPCCommon, &mut p),
+            E_NOINTERFACE
+        );
+        assert_eq!(OpcShutdownSinkCreate(Some(record), ctx, ptr::null(), &mut p), E_POINTER);
+        assert_eq!(
+            OpcShutdownSinkCreate(Some(record), ctx, &IID_IOPCShutdown, ptr::null_mut()),
+            E_POINTER
+        );
+        assert_eq!(
+            OpcShutdownSinkCreate(Some(record), ctx, &IID_IOPCShutdown, &mut p),
+            S_OK
+        );
+        let sink = p.cast::<IOPCShutdown>();
+        let reason = w("maintenance");
+        assert_eq!(((*(*sink).lpVtbl).ShutdownRequest)(sink, reason.as_ptr()), S_OK);
+        assert_eq!(((*(*sink).lpVtbl).ShutdownRequest)(sink, ptr::null()), S_OK);
+        let mut unk: *mut c_void = ptr::null_mut();
+        assert_eq!(query_interface(sink.cast(), &IID_IUNKNOWN, &mut unk), S_OK);
+        assert_eq!(add_ref(unk.cast()), 3);
+        release(unk.cast());
+        release(unk.cast());
+        assert_eq!(release(sink.cast()), 0);
+    }
+    let got = received.0.lock().unwrap().clone();
+    assert_eq!(got, vec![w("maintenance")[..11].to_vec(), vec![]]);
+}
+
+#[test]
+fn client_and_server_of_this_library_work_together() {
+    let received = Received(Mutex::new(Vec::new()));
+    let ctx = &received as *const Received as *mut c_void;
+    let server = Server::new();
+    let mut sink: *mut c_void = ptr::null_mut();
+    let mut cookie: DWORD = 0xDEAD;
+    // SAFETY: live objects; references released below.
+    unsafe {
+        assert_eq!(OpcShutdownSinkCreate(Some(record), ctx, &IID_IUNKNOWN, &mut sink), S_OK);
+        assert_eq!(OpcShutdownAdvise(server.unk(), sink.cast(), &mut cookie), S_OK);
+        assert_ne!(cookie, 0);
+        // The client may let go of its own reference: the connection keeps the sink.
+        release(sink.cast());
+        let reason = w("bye");
+        assert_eq!(OpcShutdownNotify(server.unk(), reason.as_ptr()), S_OK);
+        assert_eq!(OpcShutdownUnadvise(server.unk(), cookie), S_OK);
+        assert_eq!(OpcShutdownUnadvise(server.unk(), cookie), CONNECT_E_NOCONNECTION);
+        assert_eq!(OpcShutdownNotify(server.unk(), reason.as_ptr()), S_OK);
+    }
+    assert_eq!(received.0.lock().unwrap().len(), 1);
+}
+
+#[test]
+fn the_helpers_report_servers_without_shutdown_support() {
+    let not_a_server = MockSink::new(true, S_OK);
+    let sink = MockSink::new(true, S_OK);
+    let mut cookie: DWORD = 0xDEAD;
+    // SAFETY: valid COM objects; NULL arguments refused.
+    unsafe {
+        assert_eq!(
+            OpcShutdownAdvise(not_a_server.unk(), sink.unk(), &mut cookie),
+            E_NOINTERFACE
+        );
+        assert_eq!(cookie, 0);
+        assert_eq!(OpcShutdownUnadvise(not_a_server.unk(), 1), E_NOINTERFACE);
+        cookie = 0xDEAD;
+        assert_eq!(OpcShutdownAdvise(ptr::null_mut(), sink.unk(), &mut cookie), E_POINTER);
+        assert_eq!(cookie, 0);
+        let server = Server::new();
+        assert_eq!(OpcShutdownAdvise(server.unk(), ptr::null_mut(), &mut cookie), E_POINTER);
+        assert_eq!(OpcShutdownAdvise(server.unk(), sink.unk(), ptr::null_mut()), E_POINTER);
+        assert_eq!(OpcShutdownUnadvise(ptr::null_mut(), 1), E_POINTER);
+        let plain = MockSink::new(false, S_OK);
+        assert_eq!(
+            OpcShutdownAdvise(server.unk(), plain.unk(), &mut cookie),
+            CONNECT_E_CANNOTCONNECT
+        );
+        assert_eq!(OpcShutdownUnadvise(server.unk(), 12345), CONNECT_E_NOCONNECTION);
+    }
+    assert_eq!((not_a_server.refs(), sink.refs()), (1, 1));
+}
+
+#[test]
+fn concurrent_advise_unadvise_and_notify_stay_consistent() {
+    let server = std::sync::Arc::new(Server::with_limit(Some(64)));
+    let sinks: Vec<_> = (0..4).map(|_| MockSink::new(true, S_OK)).collect();
+    let sink_ptrs: Vec<usize> = sinks.iter().map(|s| s.unk() as usize).collect();
+    std::thread::scope(|scope| {
+        for &sink in &sink_ptrs {
+            let server = server.clone();
+            scope.spawn(move || {
+                let point = server.point();
+                for _ in 0..200 {
+                    let (hr, cookie) = point.advise(sink as *mut IUnknown);
+                    assert_eq!(hr, S_OK);
+                    let (hr, _, failed) = server.notify(ptr::null());
+                    assert_eq!((hr, failed), (S_OK, 0));
+                    assert_eq!(point.unadvise(cookie), S_OK);
+                }
+            });
+        }
+    });
+    assert_eq!(server.connections(), 0);
+    drop(server);
+    for s in &sinks {
+        assert_eq!(s.refs(), 1, "every reference taken was given back");
+        assert!(s.calls() >= 200, "each sink was advised during its own notifications");
+    }
+}
+
+/// Windows: with COM initialised, Advise puts an agile sink (the library's own, which aggregates the
+/// free-threaded marshaler) into the Global Interface Table; an apartment-bound sink whose interface
+/// has no proxy/stub stays held directly. Both are notified.
+#[cfg(windows)]
+#[test]
+fn sinks_go_through_the_global_interface_table_when_com_is_initialised() {
+    use windows_sys::Win32::System::Com::{CoInitializeEx, CoUninitialize, COINIT_MULTITHREADED};
+    std::thread::spawn(|| {
+        // SAFETY: a fresh thread of our own; balanced by CoUninitialize below.
+        assert!(unsafe { CoInitializeEx(ptr::null(), COINIT_MULTITHREADED as u32) } >= 0);
+        {
+            let received = Received(Mutex::new(Vec::new()));
+            let server = Server::with_limit(Some(2));
+            let mut sink: *mut c_void = ptr::null_mut();
+            let mock = MockSink::new(true, S_OK);
+            let (mut agile_cookie, mut bound_cookie): (DWORD, DWORD) = (0, 0);
+            let ctx = &received as *const Received as *mut c_void;
+            // SAFETY: live objects; references released below.
+            unsafe {
+                assert_eq!(OpcShutdownSinkCreate(Some(record), ctx, &IID_IUNKNOWN, &mut sink), S_OK);
+                assert_eq!(OpcShutdownAdvise(server.unk(), sink.cast(), &mut agile_cookie), S_OK);
+                assert_eq!(OpcShutdownAdvise(server.unk(), mock.unk(), &mut bound_cookie), S_OK);
+                release(sink.cast());
+            }
+            // SAFETY: a live container of ours.
+            let held = unsafe { from_container(server.0) }.unwrap().held_globally();
+            assert_eq!(held, vec![true, false]);
+            assert_eq!(server.notify(ptr::null()), (S_OK, 2, 0));
+            assert_eq!((received.0.lock().unwrap().len(), mock.calls()), (1, 1));
+            // SAFETY: live objects.
+            unsafe {
+                assert_eq!(OpcShutdownUnadvise(server.unk(), agile_cookie), S_OK);
+                assert_eq!(OpcShutdownUnadvise(server.unk(), bound_cookie), S_OK);
+            }
+            assert_eq!(mock.refs(), 1);
+        }
+        // SAFETY: balances CoInitializeEx above.
+        unsafe { CoUninitialize() };
+    })
+    .join()
+    .unwrap();
+}
