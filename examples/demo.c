@@ -122,6 +122,14 @@ int main(void) {
         OpcTaskMemFree(text);
         text = NULL;
     }
+    /* The same session in German: the catalog ships English and German. */
+    failures += session->lpVtbl->SetLocaleID(session, 0x0407) != S_OK;
+    failures += session->lpVtbl->GetErrorString(session, codes[0], &text) != S_OK;
+    printf("  [client] locale 0x0407, 0x%08lX: ", (unsigned long)(unsigned int)codes[0]);
+    print_utf16(text);
+    printf("\n");
+    OpcTaskMemFree(text);
+    text = NULL;
     printf("  [client] unknown code 0x12345678 -> 0x%08lX (E_INVALIDARG, as the specification says)\n",
            (unsigned long)(unsigned int)session->lpVtbl->GetErrorString(session, 0x12345678, &text));
 
