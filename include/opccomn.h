@@ -534,10 +534,9 @@ HRESULT OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *pp
 // in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
 //
 // Returns FALSE if either argument is NULL, if the pattern is malformed (an unclosed `[` or a
-// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER), or if a
-// string is longer than 524,288 code units. Never reads past either terminating NUL. Time is at most
-// proportional to len(string) x len(pattern), and linear for typical filters; ordinary lengths
-// allocate no memory. Thread-safe.
+// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER),. Never
+// reads past either terminating NUL. Time is at most proportional to len(string) x len(pattern), and
+// linear for typical filters; no memory is allocated. Thread-safe.
 //
 // # Safety
 // `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
@@ -562,7 +561,7 @@ BOOL MatchPatternA(LPCSTR string, LPCSTR pattern, BOOL bCaseSensitive);
 //
 // Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
 // as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
-// `pattern` or `ppPattern`, or a pattern longer than 524,288 code units.
+// `pattern` or `ppPattern`.
 //
 // # Safety
 // `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
@@ -577,7 +576,7 @@ HRESULT OpcPatternCompileW(LPCWSTR pattern, BOOL caseSensitive, struct OpcPatter
 HRESULT OpcPatternCompileA(LPCSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
 
 // Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
-// NULL (or the string is longer than 524,288 code units). Same results as `MatchPatternW` with the
+// NULL. Same results as `MatchPatternW` with the
 // pattern and case mode the filter was compiled from. Allocates nothing; thread-safe.
 //
 // # Safety

@@ -17,6 +17,7 @@ mod fold_table;
 mod narrow;
 mod program;
 mod smallvec;
+mod stream;
 mod text;
 
 #[cfg(test)]
@@ -25,10 +26,27 @@ mod tests;
 use core::ptr;
 
 use crate::com::boundary::catch;
-use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{BOOL, E_INVALIDARG, E_UNEXPECTED, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK};
 use program::{Malformed, Program};
+use stream::WideCursor;
 use text::Utf16;
+
+/// The code units of the NUL-terminated UTF-16 string at `p`, without the NUL; `None` for NULL.
+///
+/// # Safety
+/// `p` must be NULL or point at a NUL-terminated UTF-16 string.
+unsafe fn wide_units<'a>(p: LPCWSTR) -> Option<&'a [u16]> {
+    if p.is_null() {
+        return None;
+    }
+    let mut len = 0;
+    // SAFETY: every unit up to the NUL is readable (the caller's contract).
+    while unsafe { *p.add(len) } != 0 {
+        len += 1;
+    }
+    // SAFETY: the `len` units before the NUL were just read.
+    Some(unsafe { core::slice::from_raw_parts(p, len) })
+}
 
 const TRUE: BOOL = 1;
 const FALSE: BOOL = 0;
@@ -39,11 +57,6 @@ fn to_bool(b: bool) -> BOOL {
     } else {
         FALSE
     }
-}
-
-/// Whether `string` matches `pattern`. The core of both `MatchPatternW` and `OpcPatternMatchW`.
-fn match_wide(program: &Program, string: &[u16]) -> bool {
-    program.matches(&Utf16(string))
 }
 
 /// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
@@ -60,26 +73,20 @@ fn match_wide(program: &Program, string: &[u16]) -> bool {
 /// in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
 ///
 /// Returns FALSE if either argument is NULL, if the pattern is malformed (an unclosed `[` or a
-/// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER), or if a
-/// string is longer than 524,288 code units. Never reads past either terminating NUL. Time is at most
-/// proportional to len(string) x len(pattern), and linear for typical filters; ordinary lengths
-/// allocate no memory. Thread-safe.
+/// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER),. Never
+/// reads past either terminating NUL. Time is at most proportional to len(string) x len(pattern), and
+/// linear for typical filters; no memory is allocated. Thread-safe.
 ///
 /// # Safety
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
 pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> BOOL {
     catch(FALSE, || {
-        // SAFETY: the caller vouches both are NULL or NUL-terminated.
-        let (Some(string), Some(pattern)) = (unsafe { wstr_units(string, MAX_STRING_UNITS) }, unsafe {
-            wstr_units(pattern, MAX_STRING_UNITS)
-        }) else {
+        if string.is_null() || pattern.is_null() {
             return FALSE;
-        };
-        match Program::compile(&Utf16(pattern), bCaseSensitive != 0) {
-            Ok(program) => to_bool(match_wide(&program, string)),
-            Err(_) => FALSE,
         }
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        to_bool(unsafe { stream::matches(WideCursor(string), WideCursor(pattern), bCaseSensitive != 0) })
     })
 }
 
@@ -96,16 +103,11 @@ pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseS
 #[no_mangle]
 pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, bCaseSensitive: BOOL) -> BOOL {
     catch(FALSE, || {
-        // SAFETY: the caller vouches both are NULL or NUL-terminated.
-        let (Some(string), Some(pattern)) = (unsafe { narrow::cstr_bytes(string, MAX_STRING_UNITS) }, unsafe {
-            narrow::cstr_bytes(pattern, MAX_STRING_UNITS)
-        }) else {
+        if string.is_null() || pattern.is_null() {
             return FALSE;
-        };
-        match narrow::compile(pattern, bCaseSensitive != 0) {
-            Ok(program) => to_bool(narrow::matches(&program, string)),
-            Err(_) => FALSE,
         }
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        to_bool(unsafe { narrow::match_once(string.cast(), pattern.cast(), bCaseSensitive != 0) })
     })
 }
 
@@ -140,7 +142,7 @@ unsafe fn deliver(compiled: Result<Program, Malformed>, ppPattern: *mut *mut Opc
 ///
 /// Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
 /// as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
-/// `pattern` or `ppPattern`, or a pattern longer than 524,288 code units.
+/// `pattern` or `ppPattern`.
 ///
 /// # Safety
 /// `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
@@ -158,7 +160,7 @@ pub unsafe extern "C" fn OpcPatternCompileW(
     unsafe { *ppPattern = ptr::null_mut() };
     catch(E_UNEXPECTED, || {
         // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
-        let Some(pattern) = (unsafe { wstr_units(pattern, MAX_STRING_UNITS) }) else {
+        let Some(pattern) = (unsafe { wide_units(pattern) }) else {
             return E_INVALIDARG;
         };
         let compiled = Program::compile(&Utf16(pattern), caseSensitive != 0);
@@ -185,7 +187,7 @@ pub unsafe extern "C" fn OpcPatternCompileA(
     unsafe { *ppPattern = ptr::null_mut() };
     catch(E_UNEXPECTED, || {
         // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
-        let Some(pattern) = (unsafe { narrow::cstr_bytes(pattern, MAX_STRING_UNITS) }) else {
+        let Some(pattern) = (unsafe { narrow::cstr_bytes(pattern) }) else {
             return E_INVALIDARG;
         };
         let compiled = narrow::compile(pattern, caseSensitive != 0);
@@ -195,7 +197,7 @@ pub unsafe extern "C" fn OpcPatternCompileA(
 }
 
 /// Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
-/// NULL (or the string is longer than 524,288 code units). Same results as `MatchPatternW` with the
+/// NULL. Same results as `MatchPatternW` with the
 /// pattern and case mode the filter was compiled from. Allocates nothing; thread-safe.
 ///
 /// # Safety
@@ -215,10 +217,7 @@ pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LP
             return TRUE;
         }
         // SAFETY: the caller vouches `string` is NUL-terminated.
-        match unsafe { wstr_units(string, MAX_STRING_UNITS) } {
-            Some(string) => to_bool(match_wide(&pattern.program, string)),
-            None => FALSE,
-        }
+        to_bool(unsafe { pattern.program.matches_cursor(WideCursor(string)) })
     })
 }
 
@@ -234,11 +233,11 @@ pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LP
         let Some(pattern) = (unsafe { pattern.as_ref() }) else {
             return FALSE;
         };
-        // SAFETY: the caller vouches `string` is NULL or NUL-terminated.
-        match unsafe { narrow::cstr_bytes(string, MAX_STRING_UNITS) } {
-            Some(string) => to_bool(narrow::matches(&pattern.program, string)),
-            None => FALSE,
+        if string.is_null() {
+            return FALSE;
         }
+        // SAFETY: the caller vouches `string` is NUL-terminated.
+        to_bool(unsafe { narrow::matches(&pattern.program, string.cast()) })
     })
 }
 

@@ -4,30 +4,21 @@
 
 use super::program::{Malformed, Program};
 
-/// The bytes of the NUL-terminated string at `p`, without the NUL; `None` for NULL or a string longer
-/// than `max` bytes (only `max + 1` bytes are ever read).
+/// The bytes of the NUL-terminated string at `p`, without the NUL; `None` for NULL.
 ///
 /// # Safety
-/// `p` must be NULL or point at a NUL-terminated string (or at least `max + 1` readable bytes).
-pub(crate) unsafe fn cstr_bytes<'a>(p: *const core::ffi::c_char, max: usize) -> Option<&'a [u8]> {
+/// `p` must be NULL or point at a NUL-terminated string.
+pub(crate) unsafe fn cstr_bytes<'a>(p: *const core::ffi::c_char) -> Option<&'a [u8]> {
     if p.is_null() {
         return None;
     }
-    let p = p.cast::<u8>();
-    let mut len = 0;
-    // SAFETY: the caller vouches every byte up to the NUL (or `max + 1` bytes) is readable.
-    while unsafe { *p.add(len) } != 0 {
-        if len == max {
-            return None;
-        }
-        len += 1;
-    }
-    // SAFETY: the `len` bytes before the NUL were just read.
-    Some(unsafe { core::slice::from_raw_parts(p, len) })
+    // SAFETY: non-NULL and NUL-terminated (the caller's contract).
+    Some(unsafe { core::ffi::CStr::from_ptr(p) }.to_bytes())
 }
 
 #[cfg(not(windows))]
 mod imp {
+    use super::super::stream::{self, Utf8Cursor};
     use super::super::text::Utf8;
     use super::*;
 
@@ -35,8 +26,22 @@ mod imp {
         Program::compile(&Utf8(pattern), case_sensitive)
     }
 
-    pub(crate) fn matches(program: &Program, string: &[u8]) -> bool {
-        program.matches(&Utf8(string))
+    /// Whether the NUL-terminated `string` matches the compiled `program`.
+    ///
+    /// # Safety
+    /// `string` must point at a NUL-terminated string.
+    pub(crate) unsafe fn matches(program: &Program, string: *const u8) -> bool {
+        // SAFETY: NUL-terminated (the caller's contract).
+        unsafe { program.matches_cursor(Utf8Cursor(string)) }
+    }
+
+    /// `MatchPatternA` without compiling: reads both strings in place.
+    ///
+    /// # Safety
+    /// Both must point at NUL-terminated strings.
+    pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) }
     }
 }
 
@@ -48,6 +53,7 @@ mod imp {
     use windows_sys::Win32::Globalization::{GetACP, GetCPInfo, MultiByteToWideChar, CPINFO, CP_ACP, CP_UTF8};
 
     use super::super::smallvec::SmallVec;
+    use super::super::stream::{self, DecodedCursor};
     use super::super::text::{invalid_byte, Chars, Text, Utf16, Utf8};
     use super::*;
 
@@ -155,11 +161,46 @@ mod imp {
         Program::compile(&Chars(chars.as_slice()), case_sensitive)
     }
 
-    pub(crate) fn matches(program: &Program, string: &[u8]) -> bool {
+    /// Whether the NUL-terminated `string` matches the compiled `program`.
+    ///
+    /// # Safety
+    /// `string` must point at a NUL-terminated string.
+    pub(crate) unsafe fn matches(program: &Program, string: *const u8) -> bool {
+        // SAFETY: NUL-terminated (the caller's contract).
+        let Some(string) = (unsafe { cstr_bytes(string.cast()) }) else {
+            return false;
+        };
         let mut chars = SmallVec::new();
         decode(string, &mut chars);
         program.matches(&Chars(chars.as_slice()))
     }
+
+    /// `MatchPatternA`: decodes both strings from the ANSI code page (on the stack for ordinary
+    /// lengths), then matches without compiling.
+    ///
+    /// # Safety
+    /// Both must point at NUL-terminated strings.
+    pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        let (string, pattern) = unsafe { (cstr_bytes(string.cast()), cstr_bytes(pattern.cast())) };
+        let (Some(string), Some(pattern)) = (string, pattern) else {
+            return false;
+        };
+        let mut s = SmallVec::new();
+        decode(string, &mut s);
+        s.push(0);
+        let mut p = SmallVec::new();
+        decode(pattern, &mut p);
+        p.push(0);
+        // SAFETY: both buffers end with a 0 and hold no other 0 (the strings had no NUL before their end).
+        unsafe {
+            stream::matches(
+                DecodedCursor(s.as_slice().as_ptr()),
+                DecodedCursor(p.as_slice().as_ptr()),
+                case_sensitive,
+            )
+        }
+    }
 }
 
-pub(crate) use imp::{compile, matches};
+pub(crate) use imp::{compile, match_once, matches};

@@ -10,6 +10,7 @@
 
 use super::fold::{fold, for_each_folded_range};
 use super::smallvec::SmallVec;
+use super::stream::Cursor;
 use super::text::Text;
 
 /// One pattern element that consumes exactly one character.
@@ -48,6 +49,10 @@ pub(crate) enum Malformed {
 /// patterns spill over transparently.
 pub(crate) struct Program {
     case_sensitive: bool,
+    /// The pattern's leading ASCII literals as (unit, mask): a string unit `u` matches when
+    /// `u | mask == unit` (mask 0x20 for letters when case-insensitive), so the common literal prefix
+    /// of a filter is compared a code unit at a time, without decoding.
+    lead: SmallVec<(u16, u16), 16>,
     tokens: SmallVec<Token, 40>,
     /// End (exclusive token index) of each segment; segments are separated by one `*`.
     segments: SmallVec<u32, 8>,
@@ -69,6 +74,7 @@ impl Program {
     pub(crate) fn compile(pattern: &impl Text, case_sensitive: bool) -> Result<Program, Malformed> {
         let mut p = Program {
             case_sensitive,
+            lead: SmallVec::new(),
             tokens: SmallVec::new(),
             segments: SmallVec::new(),
             sets: SmallVec::new(),
@@ -95,6 +101,19 @@ impl Program {
         }
         let len = p.tokens.len() as u32;
         p.segments.push(len);
+        for &t in &p.tokens.as_slice()[..p.segments.as_slice()[0] as usize] {
+            match t {
+                Token::Literal(c) if c < 0x80 => {
+                    let mask = if !case_sensitive && c.wrapping_sub('a' as u32) < 26 {
+                        0x20
+                    } else {
+                        0
+                    };
+                    p.lead.push((c as u16, mask));
+                }
+                _ => break,
+            }
+        }
         Ok(p)
     }
 
@@ -267,15 +286,63 @@ impl Program {
 
     /// Whether the whole of `s` matches the pattern.
     pub(crate) fn matches(&self, s: &impl Text) -> bool {
+        let first = &self.tokens.as_slice()[..self.segments.as_slice()[0] as usize];
+        match self.match_at(first, s, 0, s.units()) {
+            Some(from) => self.match_rest(s, from),
+            None => false,
+        }
+    }
+
+    /// Whether the NUL-terminated string behind `cursor` matches. The first segment is matched while
+    /// reading, so most strings that do not match are rejected before their end is even looked for.
+    ///
+    /// # Safety
+    /// `cursor` must point at a NUL-terminated string.
+    pub(crate) unsafe fn matches_cursor(&self, cursor: impl Cursor) -> bool {
+        let tokens = self.tokens.as_slice();
+        let segments = self.segments.as_slice();
+        let mut i = 0;
+        for &(unit, mask) in self.lead.as_slice() {
+            // SAFETY: units before `i` were not NUL (they matched ASCII literals), so unit `i` is at or
+            // before the terminator.
+            let u = unsafe { cursor.unit(i) };
+            if u | mask as u32 != unit as u32 {
+                if !self.case_sensitive && u >= 0x80 {
+                    // A non-ASCII character may still fold to an ASCII letter (KELVIN SIGN is a `k`).
+                    // SAFETY: NUL-terminated.
+                    let end = unsafe { cursor.end_from(0) };
+                    // SAFETY: `end` is the terminator's index.
+                    return self.matches(&unsafe { cursor.slice(end) });
+                }
+                return false;
+            }
+            i += 1;
+        }
+        for &t in &tokens[self.lead.len()..segments[0] as usize] {
+            // SAFETY: `i` is a character boundary at or before the terminator.
+            let (c, next) = unsafe { cursor.at(i) };
+            if c == 0 || !self.token_matches(t, c) {
+                return false;
+            }
+            i = next;
+        }
+        if segments.len() == 1 {
+            // SAFETY: as above.
+            return unsafe { cursor.at(i) }.0 == 0;
+        }
+        if segments.len() == 2 && segments[1] == segments[0] {
+            return true; // nothing but `*` after the first segment
+        }
+        // SAFETY: as above; `end` is the terminator's index.
+        let end = unsafe { cursor.end_from(i) };
+        self.match_rest(&unsafe { cursor.slice(end) }, i)
+    }
+
+    /// Whether the rest of `s`, from `from` (just after the first segment), matches the rest.
+    fn match_rest(&self, s: &impl Text, mut from: usize) -> bool {
         let tokens = self.tokens.as_slice();
         let segments = self.segments.as_slice();
         let n = s.units();
-
-        // The first segment is anchored at the start.
-        let first_end = segments[0] as usize;
-        let Some(mut from) = self.match_at(&tokens[..first_end], s, 0, n) else {
-            return false;
-        };
         if segments.len() == 1 {
             return from == n;
         }
@@ -307,7 +374,27 @@ impl Program {
 
     /// The end of the leftmost match of `seg` within `from..to`.
     fn find(&self, seg: &[Token], s: &impl Text, mut from: usize, to: usize) -> Option<usize> {
+        let first = match seg.first() {
+            Some(&Token::Literal(l)) => Some(l),
+            _ => None,
+        };
         while to - from >= seg.len() {
+            if let Some(l) = first {
+                // Skip straight to the next place the segment's first character occurs.
+                loop {
+                    if from >= to {
+                        return None;
+                    }
+                    let (c, next) = s.next(from);
+                    if c == l || (!self.case_sensitive && fold(c) == l) {
+                        break;
+                    }
+                    from = next;
+                }
+                if to - from < seg.len() {
+                    return None;
+                }
+            }
             if let Some(end) = self.match_at(seg, s, from, to) {
                 return Some(end);
             }

@@ -20,10 +20,12 @@ impl<T: Copy, const N: usize> SmallVec<T, N> {
         }
     }
 
+    #[inline]
     fn spilled(&self) -> bool {
         self.heap.capacity() != 0
     }
 
+    #[inline]
     pub(crate) fn push(&mut self, value: T) {
         if self.spilled() {
             self.heap.push(value);
@@ -38,6 +40,7 @@ impl<T: Copy, const N: usize> SmallVec<T, N> {
         }
     }
 
+    #[inline]
     pub(crate) fn len(&self) -> usize {
         if self.spilled() {
             self.heap.len()
@@ -54,6 +57,7 @@ impl<T: Copy, const N: usize> SmallVec<T, N> {
         }
     }
 
+    #[inline]
     pub(crate) fn as_slice(&self) -> &[T] {
         if self.spilled() {
             &self.heap
@@ -63,6 +67,7 @@ impl<T: Copy, const N: usize> SmallVec<T, N> {
         }
     }
 
+    #[inline]
     pub(crate) fn as_mut_slice(&mut self) -> &mut [T] {
         if self.spilled() {
             &mut self.heap

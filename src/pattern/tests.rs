@@ -343,7 +343,14 @@ fn differential_wide(seed: u64, cases: usize) {
         let cs = rng.next() & 1 == 0;
         let expected = ref_match(&decode_wide(&s), &decode_wide(&p), cs);
         let got = match Program::compile(&Utf16(&p), cs) {
-            Ok(prog) => prog.matches(&Utf16(&s)),
+            Ok(prog) => {
+                let mut nul_terminated = s.clone();
+                nul_terminated.push(0);
+                // SAFETY: NUL-terminated.
+                let by_cursor = unsafe { prog.matches_cursor(stream::WideCursor(nul_terminated.as_ptr())) };
+                assert_eq!(by_cursor, prog.matches(&Utf16(&s)), "case {case}");
+                by_cursor
+            }
             Err(_) => false,
         };
         assert_eq!(
@@ -353,10 +360,8 @@ fn differential_wide(seed: u64, cases: usize) {
             String::from_utf16_lossy(&s),
             String::from_utf16_lossy(&p)
         );
-        if case % 64 == 0 {
-            // The exported function gives the same answer as the internal path.
-            assert_eq!(match_w(&s, &p, cs), expected);
-        }
+        // The one-call matcher (reading in place) agrees too.
+        assert_eq!(match_w(&s, &p, cs), expected, "MatchPatternW, case {case}");
     }
 }
 
@@ -420,10 +425,21 @@ fn differential_against_reference_narrow() {
         let cs = rng.next() & 1 == 0;
         let expected = ref_match(&decode(&s), &decode(&p), cs);
         let got = match narrow::compile(&p, cs) {
-            Ok(prog) => narrow::matches(&prog, &s),
+            Ok(prog) => {
+                let nul_terminated = CString::new(s.clone()).unwrap();
+                // SAFETY: NUL-terminated.
+                let by_cursor = unsafe { narrow::matches(&prog, nul_terminated.as_ptr().cast()) };
+                assert_eq!(by_cursor, prog.matches(&text::Utf8(&s)), "case {case}");
+                by_cursor
+            }
             Err(_) => false,
         };
         assert_eq!(got, expected, "case {case}: {s:x?} Like {p:x?} (case sensitive: {cs})");
+        assert_eq!(
+            match_a(&s, &p, cs),
+            expected,
+            "MatchPatternA, case {case}: {s:x?} Like {p:x?}"
+        );
     }
 }
 
