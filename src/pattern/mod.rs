@@ -86,7 +86,20 @@ pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseS
             return FALSE;
         }
         // SAFETY: both are NUL-terminated (the caller's contract).
-        to_bool(unsafe { stream::matches(WideCursor(string), WideCursor(pattern), bCaseSensitive != 0) })
+        let case_sensitive = bCaseSensitive != 0;
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        let matched = unsafe { stream::matches(WideCursor(string), WideCursor(pattern), case_sensitive) }
+            .unwrap_or_else(|| {
+                // A long pattern: compile it (on the heap; ordinary patterns never get here).
+                // SAFETY: both are NUL-terminated (the caller's contract).
+                let units = unsafe { wide_units(pattern) }.unwrap_or_default();
+                match Program::compile(&Utf16(units), case_sensitive) {
+                    // SAFETY: as above.
+                    Ok(program) => unsafe { program.matches_cursor(WideCursor(string)) },
+                    Err(_) => false,
+                }
+            });
+        to_bool(matched)
     })
 }
 

@@ -41,7 +41,16 @@ mod imp {
     /// Both must point at NUL-terminated strings.
     pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
         // SAFETY: both are NUL-terminated (the caller's contract).
-        unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) }
+        unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) }.unwrap_or_else(|| {
+            // A long pattern: compile it (see `stream::matches`).
+            // SAFETY: as above.
+            let bytes = unsafe { cstr_bytes(pattern.cast()) }.unwrap_or_default();
+            match compile(bytes, case_sensitive) {
+                // SAFETY: as above.
+                Ok(program) => unsafe { matches(&program, string) },
+                Err(_) => false,
+            }
+        })
     }
 }
 
@@ -193,13 +202,22 @@ mod imp {
         decode(pattern, &mut p);
         p.push(0);
         // SAFETY: both buffers end with a 0 and hold no other 0 (the strings had no NUL before their end).
-        unsafe {
+        let once = unsafe {
             stream::matches(
                 DecodedCursor(s.as_slice().as_ptr()),
                 DecodedCursor(p.as_slice().as_ptr()),
                 case_sensitive,
             )
-        }
+        };
+        once.unwrap_or_else(|| {
+            // A long pattern: compile it (see `stream::matches`).
+            let pattern = &p.as_slice()[..p.len() - 1];
+            let string = &s.as_slice()[..s.len() - 1];
+            match Program::compile(&Chars(pattern), case_sensitive) {
+                Ok(program) => program.matches(&Chars(string)),
+                Err(_) => false,
+            }
+        })
     }
 }
 

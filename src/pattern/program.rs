@@ -60,6 +60,9 @@ pub(crate) struct Program {
     ranges: SmallVec<(u32, u32), 12>,
 }
 
+/// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt.
+const KMP_MIN_RUN: usize = 4;
+
 const STAR: u32 = '*' as u32;
 const ANY: u32 = '?' as u32;
 const DIGIT: u32 = '#' as u32;
@@ -93,7 +96,17 @@ impl Program {
                         p.segments.push(len);
                     }
                 }
-                ANY => p.tokens.push(Token::Any),
+                ANY => {
+                    p.tokens.push(Token::Any);
+                    // `*?` matches what `?*` does; moving the `?` in front of the `*` means the search
+                    // after the `*` never has to try a run of `?`s at every place.
+                    let len = p.tokens.len() as u32;
+                    if let Some(end) = p.segments.as_mut_slice().last_mut() {
+                        if *end == len - 1 {
+                            *end = len;
+                        }
+                    }
+                }
                 DIGIT => p.tokens.push(Token::Digit),
                 OPEN => i = p.list(pattern, i)?,
                 _ => p.push_literal(c),
@@ -335,6 +348,7 @@ impl Program {
         }
         // SAFETY: as above; `end` is the terminator's index.
         let end = unsafe { cursor.end_from(i) };
+        // SAFETY: `end` is the index of the terminator.
         self.match_rest(&unsafe { cursor.slice(end) }, i)
     }
 
@@ -373,7 +387,61 @@ impl Program {
     }
 
     /// The end of the leftmost match of `seg` within `from..to`.
-    fn find(&self, seg: &[Token], s: &impl Text, mut from: usize, to: usize) -> Option<usize> {
+    fn find(&self, seg: &[Token], s: &impl Text, from: usize, to: usize) -> Option<usize> {
+        let run = seg.iter().take_while(|t| matches!(t, Token::Literal(_))).count();
+        if run >= KMP_MIN_RUN {
+            self.find_by_literal_run(seg, run, s, from, to)
+        } else {
+            self.find_naive(seg, s, from, to)
+        }
+    }
+
+    /// `find` for a segment that starts with `run` literals: Knuth-Morris-Pratt over the string finds
+    /// each place the literals occur in one pass, and only there is the rest of the segment tried.
+    /// Linear where the naive search is quadratic (a long run of `a` against a long run of `a`).
+    fn find_by_literal_run(&self, seg: &[Token], run: usize, s: &impl Text, from: usize, to: usize) -> Option<usize> {
+        let lit = |k: usize| match seg[k] {
+            Token::Literal(l) => l,
+            _ => unreachable!("the first `run` tokens are literals"),
+        };
+        // fail[k]: length of the longest proper border of the first k + 1 literals.
+        let mut fail = SmallVec::<u32, 32>::new();
+        fail.push(0);
+        let mut b = 0usize;
+        for k in 1..run {
+            while b > 0 && lit(k) != lit(b) {
+                b = fail.as_slice()[b - 1] as usize;
+            }
+            if lit(k) == lit(b) {
+                b += 1;
+            }
+            fail.push(b as u32);
+        }
+        let fail = fail.as_slice();
+        let rest = &seg[run..];
+        let mut q = 0usize;
+        let mut i = from;
+        while i < to {
+            let (c, next) = s.next(i);
+            let c = if self.case_sensitive { c } else { fold(c) };
+            while q > 0 && lit(q) != c {
+                q = fail[q - 1] as usize;
+            }
+            if lit(q) == c {
+                q += 1;
+            }
+            i = next;
+            if q == run {
+                if let Some(end) = self.match_at(rest, s, i, to) {
+                    return Some(end);
+                }
+                q = fail[q - 1] as usize;
+            }
+        }
+        None
+    }
+
+    fn find_naive(&self, seg: &[Token], s: &impl Text, mut from: usize, to: usize) -> Option<usize> {
         let first = match seg.first() {
             Some(&Token::Literal(l)) => Some(l),
             _ => None,
@@ -426,8 +494,10 @@ mod tests {
             p.tokens.as_slice()[..3],
             [Token::Literal('a' as u32), Token::Any, Token::Digit]
         );
-        assert_eq!(p.segments.as_slice(), &[1, 4]);
+        assert_eq!(p.segments.as_slice(), &[2, 4]); // `*?` is compiled as `?*`
         assert_eq!(p.ranges.as_slice(), &[('b' as u32, 'd' as u32)]);
+        let p = compile("a*??b*?", true).unwrap(); // `*?` is compiled as `?*`
+        assert_eq!(p.segments.as_slice(), &[3, 5, 5]);
         let p = compile("***", true).unwrap();
         assert!(p.matches_everything());
         assert!(!compile("", true).unwrap().matches_everything());
@@ -459,6 +529,20 @@ mod tests {
         }
         assert_eq!(compile("[Z-A]", true).err(), Some(Malformed::ReversedRange));
         assert_eq!(compile("a[b", true).err(), Some(Malformed::UnclosedList));
+    }
+
+    #[test]
+    fn middle_segments_found_by_literal_runs_overlap_correctly() {
+        // Segments with at least KMP_MIN_RUN leading literals take the Knuth-Morris-Pratt search.
+        assert!(is_match("aaaaab1", "*aaab#*", true));
+        assert!(!is_match("aaaaab", "*aaab#*", true));
+        assert!(is_match("abcabcabd", "*abcabd*", true));
+        assert!(is_match("xabababc", "x*ababc*", true));
+        assert!(is_match("ABABABC!", "*ababc?", false));
+        assert!(!is_match("ababab", "*ababc*", false));
+        assert!(is_match("aaaa_aaaa1", "*aaaa#", true));
+        assert!(is_match("aaaaaaaa1z", "*aaaa?z*", true));
+        assert!(!is_match("aaaaaaaa1z", "*aaaa#y*", true));
     }
 
     #[test]

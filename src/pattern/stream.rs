@@ -227,8 +227,7 @@ unsafe fn list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> List {
     let f = if case_sensitive { c } else { fold(c) };
     let contains =
         |lo: u32, hi: u32| (lo <= c && c <= hi) || (!case_sensitive && c >= 0x41 && range_has_folding(lo, hi, f));
-    // SAFETY (every `p.at` below): each index comes from the previous character, and the walk stops
-    // at the terminator (0).
+    // SAFETY: an index from an earlier character; walks stop at the terminator.
     let (c1, mut j) = unsafe { p.at(i) };
     match c1 {
         0 => return List::Malformed,
@@ -237,6 +236,7 @@ unsafe fn list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> List {
     }
     let mut negated = false;
     if c1 == BANG {
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (c2, after) = unsafe { p.at(j) };
         match c2 {
             0 => return List::Malformed,
@@ -251,6 +251,7 @@ unsafe fn list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> List {
     let mut first = true;
     let mut after_range = false;
     loop {
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (lo, next) = unsafe { p.at(j) };
         j = next;
         match lo {
@@ -266,8 +267,10 @@ unsafe fn list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> List {
         }
         first = false;
         after_range = false;
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (h, after_h) = unsafe { p.at(j) };
         if h == HYPHEN {
+            // SAFETY: an index from an earlier character; walks stop at the terminator.
             let (hi, after_hi) = unsafe { p.at(after_h) };
             if hi == 0 {
                 return List::Malformed;
@@ -287,20 +290,27 @@ unsafe fn list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> List {
     List::Match(found != negated, j)
 }
 
-/// Where the last `*` of a pattern is and how many characters the tokens after it consume; `None`
-/// when the pattern (from `i` on) is malformed.
+/// Patterns longer than this (in code units) that contain a `*` are compiled instead: on long
+/// patterns the compiled form's precomputed lists pay for the compilation (see `matches`).
+pub(crate) const LONG_PATTERN: usize = 128;
+
+/// Where the last `*` of a pattern is, how many characters the tokens after it consume, and where the
+/// pattern ends; `None` when the pattern (from `i` on) is malformed.
 ///
 /// # Safety
 /// `i` must be a character boundary of `pattern`.
-unsafe fn last_star(pattern: impl Cursor, mut i: usize) -> Option<(usize, usize)> {
+unsafe fn last_star(pattern: impl Cursor, mut i: usize) -> Option<(usize, usize, usize)> {
     let mut last = (usize::MAX, 0);
-    // SAFETY (every `at`): indices come from earlier characters; the walk stops at the terminator.
     loop {
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (c, next) = unsafe { pattern.at(i) };
-        i = next;
         match c {
-            0 => return Some(last),
+            0 => return Some((last.0, last.1, i)),
+            _ => i = next,
+        }
+        match c {
             STAR => last = (next, 0),
+            // SAFETY: an index from an earlier character; walks stop at the terminator.
             OPEN => match unsafe { list(pattern, next, 0, true) } {
                 List::Empty(after) => i = after,
                 List::Match(_, after) => {
@@ -351,11 +361,14 @@ unsafe fn skip_to(string: impl Cursor, mut i: usize, lit: Option<u32>, case_sens
     }
 }
 
-/// Whether the NUL-terminated `string` matches the NUL-terminated `pattern`.
+/// Whether the NUL-terminated `string` matches the NUL-terminated `pattern`; `None` when the pattern
+/// is longer than [`LONG_PATTERN`] and has a `*`: the caller then compiles it, because matching a long
+/// pattern can take up to len(string) x len(pattern) steps, and a compiled step is cheaper (lists are
+/// precomputed bitmaps instead of being read again at every step).
 ///
 /// # Safety
 /// Both cursors must point at NUL-terminated strings.
-pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sensitive: bool) -> bool {
+pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sensitive: bool) -> Option<bool> {
     let (mut pi, mut si) = (0usize, 0usize);
     // After the last `*` the rest of the pattern is anchored at the end of the string; found (and the
     // whole pattern checked) when the first `*` is reached.
@@ -364,32 +377,35 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
     // the literal that must come next.
     let mut star: Option<(usize, usize, Option<u32>)> = None;
     loop {
-        // SAFETY (every `at`, `list`, `skip_to` below): indices only ever come from earlier characters
-        // of the same string, and neither walk goes on after its terminator.
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (pc, pn) = unsafe { pattern.at(pi) };
         match pc {
             STAR => {
                 let (last, tail) = match last_star_at {
                     Some(l) => l,
+                    // SAFETY: an index from an earlier character; walks stop at the terminator.
                     None => match unsafe { last_star(pattern, pi) } {
-                        Some(l) => {
-                            last_star_at = Some(l);
-                            l
+                        Some((_, _, end)) if end > LONG_PATTERN => return None,
+                        Some((last, tail, _)) => {
+                            last_star_at = Some((last, tail));
+                            (last, tail)
                         }
-                        None => return false,
+                        None => return Some(false),
                     },
                 };
                 if pn == last {
                     // The tail must match the last `tail` characters.
                     if tail == 0 {
-                        return true;
+                        return Some(true);
                     }
+                    // SAFETY: an index from an earlier character; walks stop at the terminator.
                     let end = unsafe { string.end_from(si) };
+                    // SAFETY: an index from an earlier character; walks stop at the terminator.
                     let text = unsafe { string.slice(end) };
                     let mut q = end;
                     for _ in 0..tail {
                         if q <= si {
-                            return false;
+                            return Some(false);
                         }
                         q = text.prev(q).1;
                     }
@@ -398,9 +414,11 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
                     si = q;
                     continue;
                 }
+                // SAFETY: an index from an earlier character; walks stop at the terminator.
                 let lit = unsafe { literal_after(pattern, pn, case_sensitive) };
+                // SAFETY: an index from an earlier character; walks stop at the terminator.
                 let Some(from) = (unsafe { skip_to(string, si, lit, case_sensitive) }) else {
-                    return false;
+                    return Some(false);
                 };
                 star = Some((pn, from, lit));
                 pi = pn;
@@ -408,15 +426,18 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
                 continue;
             }
             0 => {
+                // SAFETY: an index from an earlier character; walks stop at the terminator.
                 if unsafe { string.at(si) }.0 == 0 {
-                    return true;
+                    return Some(true);
                 }
             }
             _ => {
+                // SAFETY: an index from an earlier character; walks stop at the terminator.
                 let (sc, sn) = unsafe { string.at(si) };
                 let hit = match pc {
                     ANY => sc != 0,
                     DIGIT => sc.wrapping_sub('0' as u32) < 10,
+                    // SAFETY: an index from an earlier character; walks stop at the terminator.
                     OPEN => match unsafe { list(pattern, pn, sc, case_sensitive) } {
                         List::Empty(next) => {
                             pi = next;
@@ -430,7 +451,7 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
                             }
                             false
                         }
-                        List::Malformed => return false,
+                        List::Malformed => return Some(false),
                     },
                     _ => sc == pc || (!case_sensitive && sc != 0 && fold(sc) == fold(pc)),
                 };
@@ -443,14 +464,16 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
         }
         // Mismatch: retry after the last `*`, at the next place its literal occurs in the string.
         let Some((resume, from, lit)) = star else {
-            return false;
+            return Some(false);
         };
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (c, next) = unsafe { string.at(from) };
         if c == 0 {
-            return false;
+            return Some(false);
         }
+        // SAFETY: an index from an earlier character; walks stop at the terminator.
         let Some(next) = (unsafe { skip_to(string, next, lit, case_sensitive) }) else {
-            return false;
+            return Some(false);
         };
         star = Some((resume, next, lit));
         pi = resume;

@@ -379,6 +379,30 @@ fn differential_against_reference_wide() {
 }
 
 #[test]
+fn differential_long_patterns() {
+    // Patterns beyond stream::LONG_PATTERN take the compiled path inside MatchPatternW/A.
+    let mut rng = XorShift(0xD1B5_4A32_D192_ED03);
+    for case in 0..2_000 {
+        let mut p = random_wide(&mut rng, 100);
+        while p.len() <= stream::LONG_PATTERN {
+            p.push(b'*' as u16);
+            p.extend(random_wide(&mut rng, 20));
+        }
+        let s = random_wide(&mut rng, 200);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode_wide(&s), &decode_wide(&p), cs);
+        assert_eq!(match_w(&s, &p, cs), expected, "case {case}");
+        if let (Ok(sn), Ok(pn)) = (String::from_utf16(&s), String::from_utf16(&p)) {
+            assert_eq!(
+                match_a(sn.as_bytes(), pn.as_bytes(), cs),
+                expected,
+                "case {case} narrow"
+            );
+        }
+    }
+}
+
+#[test]
 fn differential_against_reference_narrow() {
     let bytes: &[&[u8]] = &[
         b"a",
