@@ -89,6 +89,7 @@ impl Cursor for WideCursor {
 }
 
 /// A NUL-terminated UTF-8 string; bytes outside well-formed sequences are characters of their own.
+#[cfg_attr(windows, allow(dead_code))]
 #[derive(Clone, Copy)]
 pub(crate) struct Utf8Cursor(pub *const u8);
 
