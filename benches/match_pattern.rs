@@ -403,7 +403,7 @@ mod bench {
     pub fn run() {
         // `cargo bench --bench match_pattern -- typical` runs one set (adversarial, typical, worst).
         let only = std::env::args().skip(1).find(|a| !a.starts_with('-'));
-        let wanted = |set: &str| only.as_deref().map_or(true, |o| o == set);
+        let wanted = |set: &str| only.is_none() || only.as_deref() == Some(set);
         println!("MatchPattern benchmark: baseline = the specification's Appendix B sample (recursive),");
         println!("ported for this benchmark, cut off after {BUDGET} recursive calls; ratios > 1 mean ours is faster.");
 
