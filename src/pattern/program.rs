@@ -60,8 +60,9 @@ pub(crate) struct Program {
     ranges: SmallVec<(u32, u32), 12>,
 }
 
-/// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt.
-const KMP_MIN_RUN: usize = 4;
+/// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt (shorter
+/// runs cost at most this many steps per place tried, and skip to their first character quickly).
+const KMP_MIN_RUN: usize = 16;
 
 const STAR: u32 = '*' as u32;
 const ANY: u32 = '?' as u32;
@@ -534,15 +535,29 @@ mod tests {
     #[test]
     fn middle_segments_found_by_literal_runs_overlap_correctly() {
         // Segments with at least KMP_MIN_RUN leading literals take the Knuth-Morris-Pratt search.
+        let ab8 = "ab".repeat(8);
+        let a16 = "a".repeat(16);
+        assert!(is_match(&("ab".repeat(9) + "c"), &format!("*{ab8}c*"), true));
+        assert!(!is_match(&"ab".repeat(9), &format!("*{ab8}c*"), true));
+        assert!(is_match(&("a".repeat(20) + "1"), &format!("*{a16}#"), true));
+        assert!(is_match(&format!("{a16}_{a16}1"), &format!("*{a16}#*"), true));
+        assert!(!is_match(&("a".repeat(15) + "1"), &format!("*{a16}#*"), true));
+        assert!(is_match(
+            &format!("x{}z!", "aB".repeat(9)),
+            &format!("*{}?!", "Ab".repeat(8)),
+            false
+        ));
+        assert!(!is_match(
+            &format!("x{}z!", "aB".repeat(9)),
+            &format!("*{}?!", "Ab".repeat(8)),
+            true
+        ));
+        let border = "aabaabaabaabaabaab"; // borders of every length that is a multiple of 3
+        assert!(is_match(&format!("aabaab{border}x"), &format!("*{border}?"), true));
+        assert!(is_match(&format!("aabaa{border}x1"), &format!("*{border}x#"), true));
+        // Short runs take the naive search.
         assert!(is_match("aaaaab1", "*aaab#*", true));
         assert!(!is_match("aaaaab", "*aaab#*", true));
-        assert!(is_match("abcabcabd", "*abcabd*", true));
-        assert!(is_match("xabababc", "x*ababc*", true));
-        assert!(is_match("ABABABC!", "*ababc?", false));
-        assert!(!is_match("ababab", "*ababc*", false));
-        assert!(is_match("aaaa_aaaa1", "*aaaa#", true));
-        assert!(is_match("aaaaaaaa1z", "*aaaa?z*", true));
-        assert!(!is_match("aaaaaaaa1z", "*aaaa#y*", true));
     }
 
     #[test]

@@ -410,6 +410,42 @@ fn differential_long_patterns() {
     }
 }
 
+#[test]
+fn differential_long_literal_runs() {
+    // Runs of 16 or more literals in a middle segment take the Knuth-Morris-Pratt search; a two-letter
+    // alphabet makes partial matches and borders common.
+    let mut rng = XorShift(0x6A09_E667_F3BC_C909);
+    let ab = |rng: &mut XorShift, n: usize| -> Vec<u16> {
+        (0..n)
+            .map(|_| if rng.next() & 1 == 0 { b'a' as u16 } else { b'B' as u16 })
+            .collect()
+    };
+    for case in 0..20_000 {
+        let mut p = vec![b'*' as u16];
+        let run = 16 + rng.below(9);
+        p.extend(ab(&mut rng, run));
+        p.extend_from_slice(UNITS[rng.below(UNITS.len())]);
+        p.push(b'*' as u16);
+        if rng.next() & 1 == 0 {
+            p.extend(ab(&mut rng, 2));
+        }
+        let len = rng.below(70);
+        let s = ab(&mut rng, len);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode_wide(&s), &decode_wide(&p), cs);
+        let prog = Program::compile(&Utf16(&p), cs);
+        let got = prog.map(|prog| prog.matches(&Utf16(&s))).unwrap_or(false);
+        assert_eq!(
+            got,
+            expected,
+            "case {case}: {:?} Like {:?}",
+            String::from_utf16_lossy(&s),
+            String::from_utf16_lossy(&p)
+        );
+        assert_eq!(match_w(&s, &p, cs), expected, "MatchPatternW, case {case}");
+    }
+}
+
 #[cfg(windows)]
 #[test]
 fn narrow_strings_use_the_ansi_code_page() {
