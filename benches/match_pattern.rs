@@ -59,6 +59,7 @@ mod bench {
     ///
     /// # Safety
     /// Both pointers must point at NUL-terminated UTF-16 strings; the pattern must have no unclosed `[`.
+    #[inline(never)] // called once per item like the library's functions, not inlined into the loop
     unsafe fn baseline(mut s: *const u16, mut p: *const u16, cs: bool, budget: &mut Budget) -> Option<bool> {
         if budget.0 == 0 {
             return None;

@@ -349,6 +349,21 @@ unsafe fn skip_to(string: impl Cursor, mut i: usize, lit: Option<u32>, case_sens
     let Some(lit) = lit else {
         return Some(i);
     };
+    // An ASCII literal is found a code unit at a time: an ASCII unit always starts a character, and
+    // no other character equals it, or folds to it unless it is `k` or `s` (KELVIN SIGN, LONG S).
+    if lit < 0x80 && (case_sensitive || (lit != 'k' as u32 && lit != 's' as u32)) {
+        loop {
+            // SAFETY: units before `i` were not NUL, so unit `i` is at or before the terminator.
+            let u = unsafe { string.unit(i) };
+            if u == lit || (!case_sensitive && u.wrapping_sub('A' as u32) < 26 && u + 32 == lit) {
+                return Some(i);
+            }
+            if u == 0 {
+                return None;
+            }
+            i += 1;
+        }
+    }
     loop {
         // SAFETY: `i` is a boundary; the walk stops at the terminator.
         let (c, next) = unsafe { string.at(i) };
@@ -378,6 +393,23 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
     // the literal that must come next.
     let mut star: Option<(usize, usize, Option<u32>)> = None;
     loop {
+        // Fast path: an ASCII literal of the pattern against an ASCII unit of the string (every ASCII
+        // unit is a whole character); anything else takes the general path below.
+        // SAFETY: units before `pi` and `si` were not NUL, so both are at or before their terminators.
+        let (p, u) = unsafe { (pattern.unit(pi), string.unit(si)) };
+        if p < 0x80 && u < 0x80 && PLAIN_ASCII & (1 << p) != 0 {
+            if u == p || (!case_sensitive && ascii_fold(u) == ascii_fold(p)) {
+                pi += 1;
+                si += 1;
+                continue;
+            }
+            // SAFETY: `star` only holds indices from earlier characters.
+            if let Some(next) = unsafe { retry(string, &mut star, case_sensitive) } {
+                (pi, si) = next;
+                continue;
+            }
+            return Some(false);
+        }
         // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (pc, pn) = unsafe { pattern.at(pi) };
         match pc {
@@ -463,21 +495,45 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
                 }
             }
         }
-        // Mismatch: retry after the last `*`, at the next place its literal occurs in the string.
-        let Some((resume, from, lit)) = star else {
-            return Some(false);
-        };
-        // SAFETY: an index from an earlier character; walks stop at the terminator.
-        let (c, next) = unsafe { string.at(from) };
-        if c == 0 {
-            return Some(false);
+        // SAFETY: `star` only holds indices from earlier characters.
+        match unsafe { retry(string, &mut star, case_sensitive) } {
+            Some(next) => (pi, si) = next,
+            None => return Some(false),
         }
-        // SAFETY: an index from an earlier character; walks stop at the terminator.
-        let Some(next) = (unsafe { skip_to(string, next, lit, case_sensitive) }) else {
-            return Some(false);
-        };
-        star = Some((resume, next, lit));
-        pi = resume;
-        si = next;
+    }
+}
+
+/// After a mismatch: the pattern and string positions to retry from, just after the last `*` and at
+/// the next place in the string its literal occurs; `None` when there is no `*` or no place left.
+///
+/// # Safety
+/// `star` must hold indices of `string` reached by earlier characters.
+#[inline(always)]
+unsafe fn retry(
+    string: impl Cursor,
+    star: &mut Option<(usize, usize, Option<u32>)>,
+    case_sensitive: bool,
+) -> Option<(usize, usize)> {
+    let (resume, from, lit) = (*star)?;
+    // SAFETY: `from` is a character boundary at or before the terminator.
+    let (c, next) = unsafe { string.at(from) };
+    if c == 0 {
+        return None;
+    }
+    // SAFETY: `next` follows a character that was not the terminator.
+    let next = unsafe { skip_to(string, next, lit, case_sensitive) }?;
+    *star = Some((resume, next, lit));
+    Some((resume, next))
+}
+
+/// ASCII characters that stand for themselves in a pattern: all but NUL, `*`, `?`, `#` and `[`.
+const PLAIN_ASCII: u128 = !(1 | 1 << STAR | 1 << ANY | 1 << DIGIT | 1 << OPEN);
+
+#[inline(always)]
+fn ascii_fold(c: u32) -> u32 {
+    if c.wrapping_sub('A' as u32) < 26 {
+        c + 32
+    } else {
+        c
     }
 }
