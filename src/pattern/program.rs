@@ -449,7 +449,17 @@ impl Program {
         };
         while to - from >= seg.len() {
             if let Some(l) = first {
-                // Skip straight to the next place the segment's first character occurs.
+                // Skip straight to the next place the segment's first character occurs; an ASCII
+                // literal a code unit at a time (see `stream::skip_to`).
+                if l < 0x80 && (self.case_sensitive || (l != 'k' as u32 && l != 's' as u32)) {
+                    while from < to {
+                        let u = s.unit(from);
+                        if u == l || (!self.case_sensitive && u.wrapping_sub('A' as u32) < 26 && u + 32 == l) {
+                            break;
+                        }
+                        from += 1;
+                    }
+                }
                 loop {
                     if from >= to {
                         return None;

@@ -303,6 +303,13 @@ pub(crate) const LONG_PATTERN: usize = 128;
 unsafe fn last_star(pattern: impl Cursor, mut i: usize) -> Option<(usize, usize, usize)> {
     let mut last = (usize::MAX, 0);
     loop {
+        // SAFETY: units before `i` were not NUL, so unit `i` is at or before the terminator.
+        let u = unsafe { pattern.unit(i) };
+        if (u < 0x80 && PLAIN_ASCII & (1 << u) != 0) || u == ANY || u == DIGIT {
+            last.1 += 1; // a one-unit token
+            i += 1;
+            continue;
+        }
         // SAFETY: an index from an earlier character; walks stop at the terminator.
         let (c, next) = unsafe { pattern.at(i) };
         match c {

@@ -21,6 +21,8 @@ pub(crate) trait Text {
     fn next(&self, i: usize) -> (u32, usize);
     /// The character ending at unit `i` (`0 < i <= units()`) and the index where it starts.
     fn prev(&self, i: usize) -> (u32, usize);
+    /// The code unit at `i` (`i < units()`), undecoded.
+    fn unit(&self, i: usize) -> u32;
 }
 
 /// UTF-16 text; unpaired surrogates are characters of their own.
@@ -56,6 +58,11 @@ impl Text for Utf16<'_> {
             }
         }
         (v, i - 1)
+    }
+
+    #[inline(always)]
+    fn unit(&self, i: usize) -> u32 {
+        self.0[i] as u32
     }
 }
 
@@ -130,6 +137,11 @@ impl Text for Utf8<'_> {
         }
         (invalid_byte(b), i - 1)
     }
+
+    #[inline(always)]
+    fn unit(&self, i: usize) -> u32 {
+        self.0[i] as u32
+    }
 }
 
 /// Text already decoded into code points (one per character).
@@ -151,6 +163,11 @@ impl Text for Chars<'_> {
     #[inline(always)]
     fn prev(&self, i: usize) -> (u32, usize) {
         (self.0[i - 1], i - 1)
+    }
+
+    #[inline(always)]
+    fn unit(&self, i: usize) -> u32 {
+        self.0[i]
     }
 }
 
