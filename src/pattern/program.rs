@@ -53,6 +53,8 @@ pub(crate) struct Program {
     /// `u | mask == unit` (mask 0x20 for letters when case-insensitive), so the common literal prefix
     /// of a filter is compared a code unit at a time, without decoding.
     lead: SmallVec<(u16, u16), 16>,
+    /// No segment starts with a literal run long enough for the Knuth-Morris-Pratt search.
+    kmp_free: bool,
     tokens: SmallVec<Token, 40>,
     /// End (exclusive token index) of each segment; segments are separated by one `*`.
     segments: SmallVec<u32, 8>,
@@ -79,6 +81,7 @@ impl Program {
         let mut p = Program {
             case_sensitive,
             lead: SmallVec::new(),
+            kmp_free: true,
             tokens: SmallVec::new(),
             segments: SmallVec::new(),
             sets: SmallVec::new(),
@@ -115,6 +118,14 @@ impl Program {
         }
         let len = p.tokens.len() as u32;
         p.segments.push(len);
+        let mut start = 0;
+        for &end in p.segments.as_slice() {
+            let seg = &p.tokens.as_slice()[start..end as usize];
+            if seg.iter().take_while(|t| matches!(t, Token::Literal(_))).count() >= KMP_MIN_RUN {
+                p.kmp_free = false;
+            }
+            start = end as usize;
+        }
         for &t in &p.tokens.as_slice()[..p.segments.as_slice()[0] as usize] {
             match t {
                 Token::Literal(c) if c < 0x80 => {
@@ -344,13 +355,70 @@ impl Program {
             // SAFETY: as above.
             return unsafe { cursor.at(i) }.0 == 0;
         }
-        if segments.len() == 2 && segments[1] == segments[0] {
-            return true; // nothing but `*` after the first segment
+        let n = segments.len();
+        if segments[n - 1] == segments[n - 2] && self.kmp_free {
+            // The pattern ends with `*`: the end of the string does not matter, so the segments in
+            // between are searched for without looking for it.
+            for w in segments[..n - 1].windows(2) {
+                let seg = &tokens[w[0] as usize..w[1] as usize];
+                // SAFETY: `i` is a character boundary at or before the terminator.
+                match unsafe { self.find_in_cursor(seg, cursor, i) } {
+                    Some(end) => i = end,
+                    None => return false,
+                }
+            }
+            return true;
         }
         // SAFETY: as above; `end` is the terminator's index.
         let end = unsafe { cursor.end_from(i) };
         // SAFETY: `end` is the index of the terminator.
         self.match_rest(&unsafe { cursor.slice(end) }, i)
+    }
+
+    /// The end of the leftmost match of `seg` at or after `from` in a NUL-terminated string.
+    ///
+    /// # Safety
+    /// `from` must be a character boundary of `cursor`'s string, at or before its terminator.
+    unsafe fn find_in_cursor(&self, seg: &[Token], cursor: impl Cursor, mut from: usize) -> Option<usize> {
+        let first = match seg.first() {
+            Some(&Token::Literal(l)) => Some(l),
+            _ => None,
+        };
+        loop {
+            if let Some(l) = first {
+                // Skip to the next place the first character occurs (see `stream::skip_to`).
+                loop {
+                    // SAFETY: `from` is a boundary at or before the terminator.
+                    let (c, next) = unsafe { cursor.at(from) };
+                    if c == 0 {
+                        return None;
+                    }
+                    if c == l || (!self.case_sensitive && fold(c) == l) {
+                        break;
+                    }
+                    from = next;
+                }
+            }
+            let mut i = from;
+            let mut matched = true;
+            for &t in seg {
+                // SAFETY: `i` is a boundary at or before the terminator (it only moves past non-NULs).
+                let (c, next) = unsafe { cursor.at(i) };
+                if c == 0 {
+                    return None; // not enough characters left here, nor anywhere further on
+                }
+                if !self.token_matches(t, c) {
+                    matched = false;
+                    break;
+                }
+                i = next;
+            }
+            if matched {
+                return Some(i);
+            }
+            // SAFETY: `from` is a boundary before the terminator (a character matched or was tried there).
+            from = unsafe { cursor.at(from) }.1;
+        }
     }
 
     /// Whether the rest of `s`, from `from` (just after the first segment), matches the rest.
