@@ -72,10 +72,12 @@ fn to_bool(b: bool) -> BOOL {
 /// one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
 /// in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
 ///
-/// Returns FALSE if either argument is NULL, if the pattern is malformed (an unclosed `[` or a
-/// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER),. Never
-/// reads past either terminating NUL. Time is at most proportional to len(string) x len(pattern), and
-/// linear for typical filters; no memory is allocated. Thread-safe.
+/// Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
+/// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
+/// reads past either terminating NUL (strings have no length limit). Time is at most proportional to
+/// len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
+/// read in place and allocate no memory; longer ones with a `*` are compiled first, as
+/// `OpcPatternCompileW` does. Thread-safe.
 ///
 /// # Safety
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
@@ -210,8 +212,8 @@ pub unsafe extern "C" fn OpcPatternCompileA(
 }
 
 /// Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
-/// NULL. Same results as `MatchPatternW` with the
-/// pattern and case mode the filter was compiled from. Allocates nothing; thread-safe.
+/// NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
+/// Allocates nothing; thread-safe.
 ///
 /// # Safety
 /// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
