@@ -40,6 +40,9 @@ mod bench {
 
     // ---- The baseline: the specification's sample, ported faithfully ----
 
+    /// Timing rounds per contender; each reports its best round.
+    const ROUNDS: usize = 5;
+
     /// Recursive calls the baseline may make per match before it is cut off.
     const BUDGET: u64 = 20_000_000;
 
@@ -373,22 +376,33 @@ mod bench {
         assert_eq!(ours_a(&sa, &pa, cs), expected, "{case}");
         let compiled = Compiled::new(&pw, cs);
         assert_eq!(compiled.matches(&sw), expected, "{case}");
-        let min = Duration::from_millis(100);
-        let w = time_per_call(1, min, || {
-            black_box(ours_w(black_box(&sw), black_box(&pw), cs));
-        });
-        let c = time_per_call(1, min, || {
-            black_box(compiled.matches(black_box(&sw)));
-        });
-        let a = time_per_call(1, min, || {
-            black_box(ours_a(black_box(&sa), black_box(&pa), cs));
-        });
+        let min = Duration::from_millis(30);
+        let (mut w, mut c, mut a) = (f64::MAX, f64::MAX, f64::MAX);
+        for _ in 0..ROUNDS {
+            w = w.min(time_per_call(1, min, || {
+                black_box(ours_w(black_box(&sw), black_box(&pw), cs));
+            }));
+            c = c.min(time_per_call(1, min, || {
+                black_box(compiled.matches(black_box(&sw)));
+            }));
+            a = a.min(time_per_call(1, min, || {
+                black_box(ours_a(black_box(&sa), black_box(&pa), cs));
+            }));
+        }
         let flags = fnmatch_flags(cs);
         let fnm = in_child_with_limit(Duration::from_secs(2), || {
             assert_eq!(fnmatch(&sf, &pf, flags), expected, "fnmatch disagrees: {case}");
-            time_per_call(1, min, || {
-                black_box(fnmatch(black_box(&sf), black_box(&pf), flags));
-            })
+            let start = Instant::now();
+            let mut best = f64::MAX;
+            for _ in 0..ROUNDS {
+                best = best.min(time_per_call(1, min, || {
+                    black_box(fnmatch(black_box(&sf), black_box(&pf), flags));
+                }));
+                if start.elapsed() > Duration::from_secs(1) {
+                    break;
+                }
+            }
+            best
         });
         let baseline = time_baseline(&sw, &pw, cs, expected);
         Row {
@@ -469,34 +483,45 @@ mod bench {
                     count(&|i| unsafe { baseline(ids_w[i].as_ptr(), pw.as_ptr(), cs, &mut Budget(u64::MAX)) }.unwrap());
                 assert_eq!(base_count, expected, "baseline {p}");
 
-                let min = Duration::from_millis(150);
-                let b = time_per_call(n, min, || {
-                    for s in &ids_w {
-                        let mut budget = Budget(BUDGET);
-                        // SAFETY: as above.
-                        black_box(unsafe { baseline(s.as_ptr(), black_box(pw.as_ptr()), cs, &mut budget) });
+                // The machine may be shared: the contenders take turns, ROUNDS times, and each keeps
+                // its best round, so a busy moment does not land on one contender only.
+                let min = Duration::from_millis(40);
+                let mut best = [f64::MAX; 5];
+                for _ in 0..ROUNDS {
+                    let times = [
+                        time_per_call(n, min, || {
+                            for s in &ids_w {
+                                let mut budget = Budget(BUDGET);
+                                // SAFETY: as above.
+                                black_box(unsafe { baseline(s.as_ptr(), black_box(pw.as_ptr()), cs, &mut budget) });
+                            }
+                        }),
+                        time_per_call(n, min, || {
+                            for s in &ids_w {
+                                black_box(ours_w(s, black_box(&pw), cs));
+                            }
+                        }),
+                        time_per_call(n, min, || {
+                            for s in &ids_w {
+                                black_box(compiled.matches(s));
+                            }
+                        }),
+                        time_per_call(n, min, || {
+                            for s in &ids_a {
+                                black_box(ours_a(s, black_box(&pa), cs));
+                            }
+                        }),
+                        time_per_call(n, min, || {
+                            for s in &ids_a {
+                                black_box(fnmatch(s, black_box(&pf), flags));
+                            }
+                        }),
+                    ];
+                    for (b, t) in best.iter_mut().zip(times) {
+                        *b = b.min(t);
                     }
-                });
-                let w = time_per_call(n, min, || {
-                    for s in &ids_w {
-                        black_box(ours_w(s, black_box(&pw), cs));
-                    }
-                });
-                let c = time_per_call(n, min, || {
-                    for s in &ids_w {
-                        black_box(compiled.matches(s));
-                    }
-                });
-                let a = time_per_call(n, min, || {
-                    for s in &ids_a {
-                        black_box(ours_a(s, black_box(&pa), cs));
-                    }
-                });
-                let f = time_per_call(n, min, || {
-                    for s in &ids_a {
-                        black_box(fnmatch(s, black_box(&pf), flags));
-                    }
-                });
+                }
+                let [b, w, c, a, f] = best;
                 for (t, x) in totals.iter_mut().zip([b, w, c, a, f]) {
                     *t += x;
                 }
