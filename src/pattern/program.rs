@@ -387,6 +387,17 @@ impl Program {
         loop {
             if let Some(l) = first {
                 // Skip to the next place the first character occurs (see `stream::skip_to`).
+                if l < 0x80 && (self.case_sensitive || (l != 'k' as u32 && l != 's' as u32)) {
+                    loop {
+                        // SAFETY: units before `from` were not NUL, so it is at or before the terminator.
+                        let u = unsafe { cursor.unit(from) };
+                        if u == l || u == 0 || (!self.case_sensitive && u.wrapping_sub('A' as u32) < 26 && u + 32 == l)
+                        {
+                            break;
+                        }
+                        from += 1;
+                    }
+                }
                 loop {
                     // SAFETY: `from` is a boundary at or before the terminator.
                     let (c, next) = unsafe { cursor.at(from) };

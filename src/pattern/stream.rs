@@ -421,6 +421,10 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
         let (pc, pn) = unsafe { pattern.at(pi) };
         match pc {
             STAR => {
+                // SAFETY: `pn` follows a character that was not the terminator.
+                if last_star_at.is_none() && unsafe { pattern.unit(pn) } == 0 {
+                    return Some(true); // a final `*`, and the only one: everything before it matched
+                }
                 let (last, tail) = match last_star_at {
                     Some(l) => l,
                     // SAFETY: an index from an earlier character; walks stop at the terminator.
