@@ -400,12 +400,17 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
     // the literal that must come next.
     let mut star: Option<(usize, usize, Option<u32>)> = None;
     loop {
-        // Fast path: an ASCII literal of the pattern against an ASCII unit of the string (every ASCII
-        // unit is a whole character); anything else takes the general path below.
+        // Fast path: an ASCII literal, `?` or `#` of the pattern against an ASCII unit of the string
+        // (every ASCII unit is a whole character); anything else takes the general path below.
         // SAFETY: units before `pi` and `si` were not NUL, so both are at or before their terminators.
         let (p, u) = unsafe { (pattern.unit(pi), string.unit(si)) };
-        if p < 0x80 && u < 0x80 && PLAIN_ASCII & (1 << p) != 0 {
-            if u == p || (!case_sensitive && ascii_fold(u) == ascii_fold(p)) {
+        if p < 0x80 && u < 0x80 && (PLAIN_ASCII & (1 << p) != 0 || p == ANY || p == DIGIT) {
+            let hit = match p {
+                ANY => u != 0,
+                DIGIT => u.wrapping_sub('0' as u32) < 10,
+                _ => u == p || (!case_sensitive && ascii_fold(u) == ascii_fold(p)),
+            };
+            if hit {
                 pi += 1;
                 si += 1;
                 continue;
