@@ -6,7 +6,9 @@
 //! the last at the end, and each segment in between at its leftmost place after the previous one
 //! (taking the leftmost place never hurts the segments that follow, because every segment has a fixed
 //! length). That is O(len(string) x len(pattern)) at worst, linear for typical filters, and uses no
-//! recursion.
+//! recursion. Two refinements keep inputs built to force the worst case cheap where that is easy:
+//! a `?` right after a `*` is moved in front of it (`*?` matches what `?*` does), and a segment that
+//! starts with a long literal run is searched with Knuth-Morris-Pratt.
 
 use super::fold::{fold, for_each_folded_range};
 use super::smallvec::SmallVec;

@@ -1,13 +1,17 @@
 //! The one-call matcher behind `MatchPatternW` and `MatchPatternA`: the same rules as the compiled
 //! [`Program`](super::program::Program), but reading the pattern in place, so a call does no setup,
-//! allocates nothing, and stops at the first character that rules a match out.
+//! allocates nothing, and stops at the first character that rules a match out. (Patterns longer than
+//! [`LONG_PATTERN`] units with a `*` are handed back to be compiled: see [`matches`].)
 //!
 //! It is the classic two-cursor scheme: tokens (each consumes exactly one character) are matched left
 //! to right; on a mismatch the pattern restarts just after the last `*`, one character further into the
-//! string. Because every token is one character, this is exact, and it costs at most
-//! O(len(string) x len(pattern)) token steps without recursion. A malformed pattern (an unclosed `[`,
-//! a reversed range) never matches: a match needs every token to have been read, and reading a
-//! malformed list ends the call with FALSE.
+//! string (skipping straight to the next place the literal after that `*` occurs). Because every token
+//! is one character, this is exact, and it costs at most O(len(string) x len(pattern)) token steps
+//! without recursion. When the last `*` is reached, the tokens after it can only match the last
+//! characters of the string, so they are tried there and nowhere else. A malformed pattern (an unclosed
+//! `[`, a reversed range) never matches: the first `*` triggers one pass over the rest of the pattern
+//! that finds the last `*` and checks every list, a match needs every token before it to have been
+//! read, and reading a malformed list ends the call with FALSE.
 //!
 //! Strings are read through NUL-terminated pointers and never past the NUL: a lookahead only happens
 //! after a unit that cannot be the terminator.
@@ -449,7 +453,7 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
                     }
                     // SAFETY: an index from an earlier character; walks stop at the terminator.
                     let end = unsafe { string.end_from(si) };
-                    // SAFETY: an index from an earlier character; walks stop at the terminator.
+                    // SAFETY: `end` is the index of the terminator.
                     let text = unsafe { string.slice(end) };
                     let mut q = end;
                     for _ in 0..tail {
