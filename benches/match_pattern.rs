@@ -416,8 +416,12 @@ mod bench {
     }
 
     pub fn run() {
-        // `cargo bench --bench match_pattern -- typical` runs one set (adversarial, typical, worst).
-        let only = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+        // `cargo bench --bench match_pattern -- typical` runs one set (adversarial, typical, worst);
+        // `-- typical Device` only the typical filters containing "Device".
+        let mut words = std::env::args().skip(1).filter(|a| !a.starts_with('-'));
+        let only = words.next();
+        // A second word keeps only the typical filters containing it.
+        let filter = words.next();
         let wanted = |set: &str| only.is_none() || only.as_deref() == Some(set);
         println!("MatchPattern benchmark: baseline = the specification's Appendix B sample (recursive),");
         println!("ported for this benchmark, cut off after {BUDGET} recursive calls; ratios > 1 mean ours is faster.");
@@ -466,6 +470,9 @@ mod bench {
         let mut totals = [0f64; 5];
         for cs in [true, false].into_iter().filter(|_| wanted("typical")) {
             for p in patterns {
+                if filter.as_deref().is_some_and(|f| !p.contains(f)) {
+                    continue;
+                }
                 let pw = wide(p);
                 let pa = CString::new(p).unwrap();
                 let pf = to_fnmatch(p);

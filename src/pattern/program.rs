@@ -346,8 +346,13 @@ impl Program {
             i += 1;
         }
         for &t in &tokens[self.lead.len()..segments[0] as usize] {
-            // SAFETY: `i` is a character boundary at or before the terminator.
-            let (c, next) = unsafe { cursor.at(i) };
+            // SAFETY: `i` is a character boundary at or before the terminator; an ASCII unit is a whole
+            // character.
+            let (c, next) = match unsafe { cursor.unit(i) } {
+                u @ 0..=0x7F => (u, i + 1),
+                // SAFETY: as above.
+                _ => unsafe { cursor.at(i) },
+            };
             if c == 0 || !self.token_matches(t, c) {
                 return false;
             }
@@ -415,8 +420,13 @@ impl Program {
             let mut i = from;
             let mut matched = true;
             for &t in seg {
-                // SAFETY: `i` is a boundary at or before the terminator (it only moves past non-NULs).
-                let (c, next) = unsafe { cursor.at(i) };
+                // SAFETY: `i` is a boundary at or before the terminator (it only moves past non-NULs);
+                // an ASCII unit is a whole character.
+                let (c, next) = match unsafe { cursor.unit(i) } {
+                    u @ 0..=0x7F => (u, i + 1),
+                    // SAFETY: as above.
+                    _ => unsafe { cursor.at(i) },
+                };
                 if c == 0 {
                     return None; // not enough characters left here, nor anywhere further on
                 }
