@@ -58,6 +58,12 @@ typedef uint32_t OpcServerKind;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
+// A compiled filter: a pattern checked and prepared once by `OpcPatternCompileW` or
+// `OpcPatternCompileA`, then tested against many strings with `OpcPatternMatchW` / `OpcPatternMatchA`,
+// and released with `OpcPatternFree`. It is never modified after compilation, so several threads may
+// use one filter at the same time.
+typedef struct OpcPattern OpcPattern;
+
 #if !defined(_WIN32)
 // A COM result code. Negative values are failures (`FAILED(hr)`).
 typedef int32_t HRESULT;
@@ -162,6 +168,16 @@ typedef struct IUnknown {
 typedef WCHAR *LPWSTR;
 #endif
 
+#if !defined(_WIN32)
+// A Win32 boolean: 0 is FALSE, 1 is TRUE.
+typedef int32_t BOOL;
+#endif
+
+#if !defined(_WIN32)
+// A NUL-terminated narrow string (UTF-8, or the ANSI code page on Windows).
+typedef const char *LPCSTR;
+#endif
+
 // How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
 // `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
 // `struct_size` bytes, so code built against an older header keeps working.
@@ -183,11 +199,6 @@ typedef void (*OpcShutdownCallback)(void *context, LPCWSTR reason);
 #if !defined(_WIN32)
 // A 32-bit unsigned integer.
 typedef uint32_t DWORD;
-#endif
-
-#if !defined(_WIN32)
-// A Win32 boolean: 0 is FALSE, 1 is TRUE.
-typedef int32_t BOOL;
 #endif
 
 // The methods of IOPCCommon, in the order of the specification's IDL.
@@ -509,6 +520,86 @@ HRESULT OpcGetErrorString(HRESULT code, LCID locale, LPWSTR *ppString);
 // `ppString` must be NULL or writable.
 HRESULT OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString);
 
+// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
+//
+// The pattern syntax is that of Visual Basic's `Like` operator:
+// `?` any one character; `*` zero or more characters; `#` one digit `0`-`9`;
+// `[list]` one character in the list and `[!list]` one not in it, where `a-z` is a range by code point,
+// `-` first, last or right after a range stands for itself and `!` negates only right after `[`;
+// `[]` matches the empty string and `[!]` a literal `!`; `[*]`, `[?]`, `[#]` and `[[]` match the
+// special character itself; `]` outside a list and every other character match themselves.
+//
+// A character is one Unicode scalar value (a surrogate pair is one character; an unpaired surrogate is
+// one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
+// in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
+//
+// Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
+// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
+// reads past either terminating NUL (strings have no length limit). Time is at most proportional to
+// len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
+// read in place and allocate no memory; longer ones with a `*` are compiled first, as
+// `OpcPatternCompileW` does. Thread-safe.
+//
+// # Safety
+// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
+BOOL MatchPatternW(LPCWSTR string, LPCWSTR pattern, BOOL bCaseSensitive);
+
+// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
+// strings, with the same syntax and rules.
+//
+// Narrow strings are UTF-8, except on Windows where they are in the process's ANSI code page (as for
+// every `...A` Win32 function). A byte that does not decode is one character of its own, matched only
+// by itself, `?`, `*` or a list containing that same byte; it is never rejected and never causes a
+// read past the terminating NUL.
+//
+// # Safety
+// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
+BOOL MatchPatternA(LPCSTR string, LPCSTR pattern, BOOL bCaseSensitive);
+
+// Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
+//
+// `*ppPattern` receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
+// `caseSensitive` FALSE makes matches compare by Unicode simple case folding.
+//
+// Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
+// as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
+// `pattern` or `ppPattern`.
+//
+// # Safety
+// `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
+// writable.
+HRESULT OpcPatternCompileW(LPCWSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
+
+// `OpcPatternCompileW` for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
+// filter matches wide and narrow strings alike.
+//
+// # Safety
+// `pattern` must be NULL or point at a NUL-terminated string; `ppPattern` must be NULL or writable.
+HRESULT OpcPatternCompileA(LPCSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
+
+// Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
+// NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
+// Allocates nothing; thread-safe.
+//
+// # Safety
+// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
+// or point at a NUL-terminated UTF-16 string.
+BOOL OpcPatternMatchW(const struct OpcPattern *pattern, LPCWSTR string);
+
+// `OpcPatternMatchW` for a narrow string (UTF-8; the ANSI code page on Windows).
+//
+// # Safety
+// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
+// or point at a NUL-terminated string.
+BOOL OpcPatternMatchA(const struct OpcPattern *pattern, LPCSTR string);
+
+// Frees a filter from `OpcPatternCompileW`/`A`. NULL is allowed and ignored.
+//
+// # Safety
+// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
+// other thread may be using it.
+void OpcPatternFree(struct OpcPattern *pattern);
+
 // Creates a shutdown object with the default options (at most one advised sink): the
 // IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
 //
@@ -607,3 +698,17 @@ HRESULT OpcShutdownUnadvise(struct IUnknown *server, DWORD cookie);
 #endif  // __cplusplus
 
 #endif  /* OPCCOMN_H */
+
+/* MatchPattern picks the wide or the narrow function as Win32 does for TCHAR functions. */
+#if !defined(OPCCOMN_TCHAR_MACROS)
+#define OPCCOMN_TCHAR_MACROS
+#if defined(UNICODE)
+#define MatchPattern MatchPatternW
+#define OpcPatternCompile OpcPatternCompileW
+#define OpcPatternMatch OpcPatternMatchW
+#else
+#define MatchPattern MatchPatternA
+#define OpcPatternCompile OpcPatternCompileA
+#define OpcPatternMatch OpcPatternMatchA
+#endif
+#endif

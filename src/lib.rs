@@ -15,6 +15,7 @@
 pub mod com;
 pub mod common;
 pub mod errors;
+pub mod pattern;
 pub mod shutdown;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown

@@ -1,0 +1,272 @@
+//! MatchPattern: the string filter of the specification's Appendix B (Visual Basic `Like` syntax),
+//! exact, safe on any input and fast.
+//!
+//! Semantics (see the README): `?` one character, `*` zero or more, `#` one ASCII digit, `[list]` /
+//! `[!list]` one character in / not in the list (ranges `a-z` by code point), `[]` the empty string,
+//! `[!]` a literal `!`, a `-` first, last or right after a range is itself. An unclosed `[` or a
+//! reversed range makes the pattern malformed: it never matches. Case-insensitive comparison uses
+//! Unicode simple case folding. A character is a Unicode scalar value; unpaired surrogates and bytes
+//! that do not decode are characters of their own.
+//!
+//! - `MatchPatternW` / `MatchPatternA`: one call, one answer (the specification's function).
+//! - `OpcPatternCompileW` / `A`, `OpcPatternMatchW` / `A`, `OpcPatternFree`: compile a filter once and
+//!   test it against many names, as a server's browse does.
+
+mod fold;
+mod fold_table;
+mod narrow;
+mod program;
+mod smallvec;
+mod stream;
+mod text;
+
+#[cfg(test)]
+mod tests;
+
+use core::ptr;
+
+use crate::com::boundary::catch;
+use crate::com::{BOOL, E_INVALIDARG, E_UNEXPECTED, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK};
+use program::{Malformed, Program};
+use stream::WideCursor;
+use text::Utf16;
+
+/// The code units of the NUL-terminated UTF-16 string at `p`, without the NUL; `None` for NULL.
+///
+/// # Safety
+/// `p` must be NULL or point at a NUL-terminated UTF-16 string.
+unsafe fn wide_units<'a>(p: LPCWSTR) -> Option<&'a [u16]> {
+    if p.is_null() {
+        return None;
+    }
+    let mut len = 0;
+    // SAFETY: every unit up to the NUL is readable (the caller's contract).
+    while unsafe { *p.add(len) } != 0 {
+        len += 1;
+    }
+    // SAFETY: the `len` units before the NUL were just read.
+    Some(unsafe { core::slice::from_raw_parts(p, len) })
+}
+
+const TRUE: BOOL = 1;
+const FALSE: BOOL = 0;
+
+fn to_bool(b: bool) -> BOOL {
+    if b {
+        TRUE
+    } else {
+        FALSE
+    }
+}
+
+/// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
+///
+/// The pattern syntax is that of Visual Basic's `Like` operator:
+/// `?` any one character; `*` zero or more characters; `#` one digit `0`-`9`;
+/// `[list]` one character in the list and `[!list]` one not in it, where `a-z` is a range by code point,
+/// `-` first, last or right after a range stands for itself and `!` negates only right after `[`;
+/// `[]` matches the empty string and `[!]` a literal `!`; `[*]`, `[?]`, `[#]` and `[[]` match the
+/// special character itself; `]` outside a list and every other character match themselves.
+///
+/// A character is one Unicode scalar value (a surrogate pair is one character; an unpaired surrogate is
+/// one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
+/// in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
+///
+/// Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
+/// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
+/// reads past either terminating NUL (strings have no length limit). Time is at most proportional to
+/// len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
+/// read in place and allocate no memory; longer ones with a `*` are compiled first, as
+/// `OpcPatternCompileW` does. Thread-safe.
+///
+/// # Safety
+/// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
+#[no_mangle]
+pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> BOOL {
+    catch(FALSE, || {
+        if string.is_null() || pattern.is_null() {
+            return FALSE;
+        }
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        let case_sensitive = bCaseSensitive != 0;
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        let matched = unsafe { stream::matches(WideCursor(string), WideCursor(pattern), case_sensitive) }
+            .unwrap_or_else(|| {
+                // A long pattern: compile it (on the heap; ordinary patterns never get here).
+                // SAFETY: both are NUL-terminated (the caller's contract).
+                let units = unsafe { wide_units(pattern) }.unwrap_or_default();
+                match Program::compile(&Utf16(units), case_sensitive) {
+                    // SAFETY: as above.
+                    Ok(program) => unsafe { program.matches_cursor(WideCursor(string)) },
+                    Err(_) => false,
+                }
+            });
+        to_bool(matched)
+    })
+}
+
+/// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
+/// strings, with the same syntax and rules.
+///
+/// Narrow strings are UTF-8, except on Windows where they are in the process's ANSI code page (as for
+/// every `...A` Win32 function). A byte that does not decode is one character of its own, matched only
+/// by itself, `?`, `*` or a list containing that same byte; it is never rejected and never causes a
+/// read past the terminating NUL.
+///
+/// # Safety
+/// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, bCaseSensitive: BOOL) -> BOOL {
+    catch(FALSE, || {
+        if string.is_null() || pattern.is_null() {
+            return FALSE;
+        }
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        to_bool(unsafe { narrow::match_once(string.cast(), pattern.cast(), bCaseSensitive != 0) })
+    })
+}
+
+/// A compiled filter: a pattern checked and prepared once by `OpcPatternCompileW` or
+/// `OpcPatternCompileA`, then tested against many strings with `OpcPatternMatchW` / `OpcPatternMatchA`,
+/// and released with `OpcPatternFree`. It is never modified after compilation, so several threads may
+/// use one filter at the same time.
+pub struct OpcPattern {
+    program: Program,
+}
+
+/// Stores a compiled pattern (or the failure) in `*ppPattern`, which has already been set to NULL.
+///
+/// # Safety
+/// `ppPattern` must be writable.
+unsafe fn deliver(compiled: Result<Program, Malformed>, ppPattern: *mut *mut OpcPattern) -> HRESULT {
+    match compiled {
+        Ok(program) => {
+            let boxed = Box::new(OpcPattern { program });
+            // SAFETY: the caller vouches `ppPattern` is writable.
+            unsafe { *ppPattern = Box::into_raw(boxed) };
+            S_OK
+        }
+        Err(_) => OPC_E_INVALIDFILTER,
+    }
+}
+
+/// Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
+///
+/// `*ppPattern` receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
+/// `caseSensitive` FALSE makes matches compare by Unicode simple case folding.
+///
+/// Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
+/// as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
+/// `pattern` or `ppPattern`.
+///
+/// # Safety
+/// `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcPatternCompileW(
+    pattern: LPCWSTR,
+    caseSensitive: BOOL,
+    ppPattern: *mut *mut OpcPattern,
+) -> HRESULT {
+    if ppPattern.is_null() {
+        return E_INVALIDARG;
+    }
+    // SAFETY: checked non-NULL; the caller vouches it is writable.
+    unsafe { *ppPattern = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
+        let Some(pattern) = (unsafe { wide_units(pattern) }) else {
+            return E_INVALIDARG;
+        };
+        let compiled = Program::compile(&Utf16(pattern), caseSensitive != 0);
+        // SAFETY: `ppPattern` is writable (above).
+        unsafe { deliver(compiled, ppPattern) }
+    })
+}
+
+/// `OpcPatternCompileW` for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
+/// filter matches wide and narrow strings alike.
+///
+/// # Safety
+/// `pattern` must be NULL or point at a NUL-terminated string; `ppPattern` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcPatternCompileA(
+    pattern: LPCSTR,
+    caseSensitive: BOOL,
+    ppPattern: *mut *mut OpcPattern,
+) -> HRESULT {
+    if ppPattern.is_null() {
+        return E_INVALIDARG;
+    }
+    // SAFETY: checked non-NULL; the caller vouches it is writable.
+    unsafe { *ppPattern = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
+        let Some(pattern) = (unsafe { narrow::cstr_bytes(pattern) }) else {
+            return E_INVALIDARG;
+        };
+        let compiled = narrow::compile(pattern, caseSensitive != 0);
+        // SAFETY: `ppPattern` is writable (above).
+        unsafe { deliver(compiled, ppPattern) }
+    })
+}
+
+/// Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
+/// NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
+/// Allocates nothing; thread-safe.
+///
+/// # Safety
+/// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
+/// or point at a NUL-terminated UTF-16 string.
+#[no_mangle]
+pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LPCWSTR) -> BOOL {
+    catch(FALSE, || {
+        // SAFETY: the caller vouches `pattern` is NULL or a live filter.
+        let Some(pattern) = (unsafe { pattern.as_ref() }) else {
+            return FALSE;
+        };
+        if string.is_null() {
+            return FALSE;
+        }
+        if pattern.program.matches_everything() {
+            return TRUE;
+        }
+        // SAFETY: the caller vouches `string` is NUL-terminated.
+        to_bool(unsafe { pattern.program.matches_cursor(WideCursor(string)) })
+    })
+}
+
+/// `OpcPatternMatchW` for a narrow string (UTF-8; the ANSI code page on Windows).
+///
+/// # Safety
+/// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
+/// or point at a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LPCSTR) -> BOOL {
+    catch(FALSE, || {
+        // SAFETY: the caller vouches `pattern` is NULL or a live filter.
+        let Some(pattern) = (unsafe { pattern.as_ref() }) else {
+            return FALSE;
+        };
+        if string.is_null() {
+            return FALSE;
+        }
+        // SAFETY: the caller vouches `string` is NUL-terminated.
+        to_bool(unsafe { narrow::matches(&pattern.program, string.cast()) })
+    })
+}
+
+/// Frees a filter from `OpcPatternCompileW`/`A`. NULL is allowed and ignored.
+///
+/// # Safety
+/// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
+/// other thread may be using it.
+#[no_mangle]
+pub unsafe extern "C" fn OpcPatternFree(pattern: *mut OpcPattern) {
+    catch((), || {
+        if !pattern.is_null() {
+            // SAFETY: the caller vouches it came from `Box::into_raw` in `deliver` and is freed once.
+            drop(unsafe { Box::from_raw(pattern) });
+        }
+    })
+}

@@ -1,0 +1,224 @@
+//! Narrow (`char`) strings for `MatchPatternA`: UTF-8 everywhere except Windows, where they are in the
+//! process's ANSI code page like every `...A` Win32 function. Bytes that do not decode are characters
+//! of their own (see `text.rs`).
+
+use super::program::{Malformed, Program};
+
+/// The bytes of the NUL-terminated string at `p`, without the NUL; `None` for NULL.
+///
+/// # Safety
+/// `p` must be NULL or point at a NUL-terminated string.
+pub(crate) unsafe fn cstr_bytes<'a>(p: *const core::ffi::c_char) -> Option<&'a [u8]> {
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL and NUL-terminated (the caller's contract).
+    Some(unsafe { core::ffi::CStr::from_ptr(p) }.to_bytes())
+}
+
+#[cfg(not(windows))]
+mod imp {
+    use super::super::stream::{self, Utf8Cursor};
+    use super::super::text::Utf8;
+    use super::*;
+
+    pub(crate) fn compile(pattern: &[u8], case_sensitive: bool) -> Result<Program, Malformed> {
+        Program::compile(&Utf8(pattern), case_sensitive)
+    }
+
+    /// Whether the NUL-terminated `string` matches the compiled `program`.
+    ///
+    /// # Safety
+    /// `string` must point at a NUL-terminated string.
+    pub(crate) unsafe fn matches(program: &Program, string: *const u8) -> bool {
+        // SAFETY: NUL-terminated (the caller's contract).
+        unsafe { program.matches_cursor(Utf8Cursor(string)) }
+    }
+
+    /// `MatchPatternA` without compiling: reads both strings in place.
+    ///
+    /// # Safety
+    /// Both must point at NUL-terminated strings.
+    pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) }.unwrap_or_else(|| {
+            // A long pattern: compile it (see `stream::matches`).
+            // SAFETY: as above.
+            let bytes = unsafe { cstr_bytes(pattern.cast()) }.unwrap_or_default();
+            match compile(bytes, case_sensitive) {
+                // SAFETY: as above.
+                Ok(program) => unsafe { matches(&program, string) },
+                Err(_) => false,
+            }
+        })
+    }
+}
+
+#[cfg(windows)]
+mod imp {
+    use std::sync::OnceLock;
+
+    use windows_sys::Win32::Globalization::MB_ERR_INVALID_CHARS;
+    use windows_sys::Win32::Globalization::{GetACP, GetCPInfo, MultiByteToWideChar, CPINFO, CP_ACP, CP_UTF8};
+
+    use super::super::smallvec::SmallVec;
+    use super::super::stream::{self, DecodedCursor};
+    use super::super::text::{invalid_byte, Chars, Text, Utf16, Utf8};
+    use super::*;
+
+    /// How the process's ANSI code page decodes each byte (it cannot change while the process runs).
+    struct CodePage {
+        utf8: bool,
+        /// The character of each byte standing alone (`invalid_byte` where it has none).
+        single: [u32; 256],
+        /// Lead bytes of double-byte characters (DBCS code pages such as 932).
+        lead: [bool; 256],
+    }
+
+    /// Decodes up to two bytes of the ANSI code page; `None` when they are not one valid character.
+    fn decode_acp(bytes: &[u8]) -> Option<u32> {
+        let mut wide = [0u16; 2];
+        // SAFETY: `bytes` and `wide` are valid for the lengths passed.
+        let n = unsafe {
+            MultiByteToWideChar(
+                CP_ACP,
+                MB_ERR_INVALID_CHARS,
+                bytes.as_ptr(),
+                bytes.len() as i32,
+                wide.as_mut_ptr(),
+                wide.len() as i32,
+            )
+        };
+        match n {
+            1 => Some(wide[0] as u32),
+            2 => match Utf16(&wide).next(0) {
+                (c, 2) => Some(c),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    fn code_page() -> &'static CodePage {
+        static CODE_PAGE: OnceLock<CodePage> = OnceLock::new();
+        CODE_PAGE.get_or_init(|| {
+            // SAFETY: no arguments.
+            let acp = unsafe { GetACP() };
+            let mut cp = CodePage {
+                utf8: acp == CP_UTF8,
+                single: [0; 256],
+                lead: [false; 256],
+            };
+            let mut info = CPINFO {
+                MaxCharSize: 1,
+                DefaultChar: [0; 2],
+                LeadByte: [0; 12],
+            };
+            // SAFETY: `info` is a writable CPINFO.
+            if unsafe { GetCPInfo(CP_ACP, &mut info) } != 0 && info.MaxCharSize == 2 {
+                for pair in info.LeadByte.chunks(2) {
+                    if pair[0] == 0 && pair[1] == 0 {
+                        break;
+                    }
+                    for b in pair[0]..=pair[1] {
+                        cp.lead[b as usize] = true;
+                    }
+                }
+            }
+            for b in 0..=255u8 {
+                cp.single[b as usize] = match b {
+                    0..=0x7F => b as u32,
+                    _ if cp.lead[b as usize] => invalid_byte(b),
+                    _ => decode_acp(&[b]).unwrap_or(invalid_byte(b)),
+                };
+            }
+            cp
+        })
+    }
+
+    /// Decodes `bytes` into `out`, one code point per character.
+    fn decode(bytes: &[u8], out: &mut SmallVec<u32, 256>) {
+        let cp = code_page();
+        if cp.utf8 {
+            let t = Utf8(bytes);
+            let mut i = 0;
+            while i < bytes.len() {
+                let (c, next) = t.next(i);
+                out.push(c);
+                i = next;
+            }
+            return;
+        }
+        let mut i = 0;
+        while i < bytes.len() {
+            let b = bytes[i];
+            if cp.lead[b as usize] && i + 1 < bytes.len() {
+                if let Some(c) = decode_acp(&bytes[i..i + 2]) {
+                    out.push(c);
+                    i += 2;
+                    continue;
+                }
+            }
+            out.push(cp.single[b as usize]);
+            i += 1;
+        }
+    }
+
+    pub(crate) fn compile(pattern: &[u8], case_sensitive: bool) -> Result<Program, Malformed> {
+        let mut chars = SmallVec::new();
+        decode(pattern, &mut chars);
+        Program::compile(&Chars(chars.as_slice()), case_sensitive)
+    }
+
+    /// Whether the NUL-terminated `string` matches the compiled `program`.
+    ///
+    /// # Safety
+    /// `string` must point at a NUL-terminated string.
+    pub(crate) unsafe fn matches(program: &Program, string: *const u8) -> bool {
+        // SAFETY: NUL-terminated (the caller's contract).
+        let Some(string) = (unsafe { cstr_bytes(string.cast()) }) else {
+            return false;
+        };
+        let mut chars = SmallVec::new();
+        decode(string, &mut chars);
+        program.matches(&Chars(chars.as_slice()))
+    }
+
+    /// `MatchPatternA`: decodes both strings from the ANSI code page (on the stack for ordinary
+    /// lengths), then matches without compiling.
+    ///
+    /// # Safety
+    /// Both must point at NUL-terminated strings.
+    pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        let (string, pattern) = unsafe { (cstr_bytes(string.cast()), cstr_bytes(pattern.cast())) };
+        let (Some(string), Some(pattern)) = (string, pattern) else {
+            return false;
+        };
+        let mut s = SmallVec::new();
+        decode(string, &mut s);
+        s.push(0);
+        let mut p = SmallVec::new();
+        decode(pattern, &mut p);
+        p.push(0);
+        // SAFETY: both buffers end with a 0 and hold no other 0 (the strings had no NUL before their end).
+        let once = unsafe {
+            stream::matches(
+                DecodedCursor(s.as_slice().as_ptr()),
+                DecodedCursor(p.as_slice().as_ptr()),
+                case_sensitive,
+            )
+        };
+        once.unwrap_or_else(|| {
+            // A long pattern: compile it (see `stream::matches`).
+            let pattern = &p.as_slice()[..p.len() - 1];
+            let string = &s.as_slice()[..s.len() - 1];
+            match Program::compile(&Chars(pattern), case_sensitive) {
+                Ok(program) => program.matches(&Chars(string)),
+                Err(_) => false,
+            }
+        })
+    }
+}
+
+pub(crate) use imp::{compile, match_once, matches};

@@ -1,0 +1,676 @@
+//! A pattern compiled into single-character tokens, and the matcher.
+//!
+//! Compiling turns the pattern into segments of tokens separated by `*`: every token (a literal, `?`,
+//! `#` or a character list) consumes exactly one character, `[]` disappears and runs of `*` become one.
+//! Matching then needs no backtracking beyond a search: the first segment must match at the start,
+//! the last at the end, and each segment in between at its leftmost place after the previous one
+//! (taking the leftmost place never hurts the segments that follow, because every segment has a fixed
+//! length). That is O(len(string) x len(pattern)) at worst, linear for typical filters, and uses no
+//! recursion. Two refinements keep inputs built to force the worst case cheap where that is easy:
+//! a `?` right after a `*` is moved in front of it (`*?` matches what `?*` does), and a segment that
+//! starts with a long literal run is searched with Knuth-Morris-Pratt.
+
+use super::fold::{fold, for_each_folded_range};
+use super::smallvec::SmallVec;
+use super::stream::Cursor;
+use super::text::Text;
+
+/// One pattern element that consumes exactly one character.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Token {
+    /// The character itself (case-folded when matching case-insensitively).
+    Literal(u32),
+    /// `?`: any character.
+    Any,
+    /// `#`: an ASCII digit `0`-`9`.
+    Digit,
+    /// `[list]` / `[!list]`: index into `Program::sets`.
+    Set(u32),
+}
+
+/// A character list. `ascii` answers for characters below U+0080 directly (negation applied);
+/// other characters are looked up in `ranges[start..start + len]` (sorted, disjoint, merged).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CharSet {
+    ascii: [u64; 2],
+    negated: bool,
+    start: u32,
+    len: u32,
+}
+
+/// Why a pattern cannot be compiled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Malformed {
+    /// A `[` without its `]`.
+    UnclosedList,
+    /// A range whose end comes before its start, as in `[Z-A]`.
+    ReversedRange,
+}
+
+/// A compiled pattern. The inline capacities fit ordinary filters without touching the heap; longer
+/// patterns spill over transparently.
+pub(crate) struct Program {
+    case_sensitive: bool,
+    /// The pattern's leading ASCII literals as (unit, mask): a string unit `u` matches when
+    /// `u | mask == unit` (mask 0x20 for letters when case-insensitive), so the common literal prefix
+    /// of a filter is compared a code unit at a time, without decoding.
+    lead: SmallVec<(u16, u16), 16>,
+    /// No segment starts with a literal run long enough for the Knuth-Morris-Pratt search.
+    kmp_free: bool,
+    tokens: SmallVec<Token, 40>,
+    /// End (exclusive token index) of each segment; segments are separated by one `*`.
+    segments: SmallVec<u32, 8>,
+    sets: SmallVec<CharSet, 4>,
+    ranges: SmallVec<(u32, u32), 12>,
+}
+
+/// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt (shorter
+/// runs cost at most this many steps per place tried, and skip to their first character quickly).
+const KMP_MIN_RUN: usize = 16;
+
+const STAR: u32 = '*' as u32;
+const ANY: u32 = '?' as u32;
+const DIGIT: u32 = '#' as u32;
+const OPEN: u32 = '[' as u32;
+const CLOSE: u32 = ']' as u32;
+const BANG: u32 = '!' as u32;
+const HYPHEN: u32 = '-' as u32;
+
+impl Program {
+    /// Compiles `pattern`. Matching later is case-insensitive (Unicode simple case folding) unless
+    /// `case_sensitive`.
+    pub(crate) fn compile(pattern: &impl Text, case_sensitive: bool) -> Result<Program, Malformed> {
+        let mut p = Program {
+            case_sensitive,
+            lead: SmallVec::new(),
+            kmp_free: true,
+            tokens: SmallVec::new(),
+            segments: SmallVec::new(),
+            sets: SmallVec::new(),
+            ranges: SmallVec::new(),
+        };
+        let n = pattern.units();
+        let mut i = 0;
+        while i < n {
+            let (c, next) = pattern.next(i);
+            i = next;
+            match c {
+                STAR => {
+                    let len = p.tokens.len() as u32;
+                    // A `*` right after another `*` (with at most `[]` between) adds nothing.
+                    if p.segments.as_slice().last() != Some(&len) {
+                        p.segments.push(len);
+                    }
+                }
+                ANY => {
+                    p.tokens.push(Token::Any);
+                    // `*?` matches what `?*` does; moving the `?` in front of the `*` means the search
+                    // after the `*` never has to try a run of `?`s at every place.
+                    let len = p.tokens.len() as u32;
+                    if let Some(end) = p.segments.as_mut_slice().last_mut() {
+                        if *end == len - 1 {
+                            *end = len;
+                        }
+                    }
+                }
+                DIGIT => p.tokens.push(Token::Digit),
+                OPEN => i = p.list(pattern, i)?,
+                _ => p.push_literal(c),
+            }
+        }
+        let len = p.tokens.len() as u32;
+        p.segments.push(len);
+        let mut start = 0;
+        for &end in p.segments.as_slice() {
+            let seg = &p.tokens.as_slice()[start..end as usize];
+            if seg.iter().take_while(|t| matches!(t, Token::Literal(_))).count() >= KMP_MIN_RUN {
+                p.kmp_free = false;
+            }
+            start = end as usize;
+        }
+        for &t in &p.tokens.as_slice()[..p.segments.as_slice()[0] as usize] {
+            match t {
+                Token::Literal(c) if c < 0x80 => {
+                    let mask = if !case_sensitive && c.wrapping_sub('a' as u32) < 26 {
+                        0x20
+                    } else {
+                        0
+                    };
+                    p.lead.push((c as u16, mask));
+                }
+                _ => break,
+            }
+        }
+        Ok(p)
+    }
+
+    fn push_literal(&mut self, c: u32) {
+        self.tokens
+            .push(Token::Literal(if self.case_sensitive { c } else { fold(c) }));
+    }
+
+    /// Parses the list after a `[` at `i`; returns the index after its `]`.
+    fn list(&mut self, pattern: &impl Text, mut i: usize) -> Result<usize, Malformed> {
+        let n = pattern.units();
+        let next = |i: usize| {
+            if i < n {
+                Ok(pattern.next(i))
+            } else {
+                Err(Malformed::UnclosedList)
+            }
+        };
+        let (c, after) = next(i)?;
+        if c == CLOSE {
+            return Ok(after); // `[]` is the empty string
+        }
+        let mut negated = false;
+        if c == BANG {
+            let (c2, after2) = next(after)?;
+            if c2 == CLOSE {
+                self.push_literal(BANG); // `[!]` is a literal `!`
+                return Ok(after2);
+            }
+            negated = true;
+            i = after;
+        }
+        let start = self.ranges.len();
+        let mut first = true;
+        let mut after_range = false;
+        loop {
+            let (lo, after) = next(i)?;
+            i = after;
+            if lo == CLOSE {
+                break;
+            }
+            // A `-` first in the list or right after a range stands for itself.
+            if lo == HYPHEN && (first || after_range) {
+                self.ranges.push((HYPHEN, HYPHEN));
+                first = false;
+                after_range = false;
+                continue;
+            }
+            first = false;
+            after_range = false;
+            let (h, after_h) = next(i)?;
+            if h == HYPHEN {
+                let (hi, after_hi) = next(after_h)?;
+                if hi != CLOSE {
+                    if hi < lo {
+                        return Err(Malformed::ReversedRange);
+                    }
+                    self.ranges.push((lo, hi));
+                    i = after_hi;
+                    after_range = true;
+                    continue;
+                }
+                // `-` before the `]` stands for itself: the next round reads it.
+            }
+            self.ranges.push((lo, lo));
+        }
+        self.finish_set(start, negated);
+        Ok(i)
+    }
+
+    /// Turns `ranges[start..]` into a set: adds the case foldings when case-insensitive, sorts,
+    /// merges, and builds the ASCII bitmap.
+    fn finish_set(&mut self, start: usize, negated: bool) {
+        if !self.case_sensitive {
+            let end = self.ranges.len();
+            for k in start..end {
+                let (lo, hi) = self.ranges.as_slice()[k];
+                let ranges = &mut self.ranges;
+                for_each_folded_range(lo, hi, |a, b| ranges.push((a, b)));
+            }
+        }
+        let list = &mut self.ranges.as_mut_slice()[start..];
+        list.sort_unstable();
+        let mut merged = 0;
+        for k in 0..list.len() {
+            let (lo, hi) = list[k];
+            if merged > 0 && lo <= list[merged - 1].1.saturating_add(1) {
+                list[merged - 1].1 = list[merged - 1].1.max(hi);
+            } else {
+                list[merged] = (lo, hi);
+                merged += 1;
+            }
+        }
+        self.ranges.truncate(start + merged);
+
+        let mut ascii = [0u64; 2];
+        for &(lo, hi) in &self.ranges.as_slice()[start..] {
+            for c in lo..=hi.min(0x7F) {
+                ascii[(c >> 6) as usize] |= 1 << (c & 63);
+            }
+        }
+        if !self.case_sensitive {
+            // An ASCII capital is in the list when its folding (the small letter) is.
+            for c in b'A' as u32..=b'Z' as u32 {
+                let f = c + 32;
+                if ascii[(f >> 6) as usize] & (1 << (f & 63)) != 0 {
+                    ascii[(c >> 6) as usize] |= 1 << (c & 63);
+                }
+            }
+        }
+        if negated {
+            ascii = [!ascii[0], !ascii[1]];
+        }
+        let set = CharSet {
+            ascii,
+            negated,
+            start: start as u32,
+            len: merged as u32,
+        };
+        self.tokens.push(Token::Set(self.sets.len() as u32));
+        self.sets.push(set);
+    }
+
+    /// True when every string matches (the pattern is only `*`s, possibly with `[]`).
+    pub(crate) fn matches_everything(&self) -> bool {
+        self.tokens.len() == 0 && self.segments.len() > 1
+    }
+
+    #[inline(always)]
+    fn set_contains(&self, set: &CharSet, c: u32) -> bool {
+        if c < 0x80 {
+            return set.ascii[(c >> 6) as usize] & (1 << (c & 63)) != 0;
+        }
+        let c = if self.case_sensitive { c } else { fold(c) };
+        let ranges = &self.ranges.as_slice()[set.start as usize..(set.start + set.len) as usize];
+        let found = if ranges.len() <= 4 {
+            ranges.iter().any(|&(lo, hi)| lo <= c && c <= hi)
+        } else {
+            let k = ranges.partition_point(|r| r.1 < c);
+            k < ranges.len() && ranges[k].0 <= c
+        };
+        found != set.negated
+    }
+
+    #[inline(always)]
+    fn token_matches(&self, t: Token, c: u32) -> bool {
+        match t {
+            Token::Literal(l) => c == l || (!self.case_sensitive && fold(c) == l),
+            Token::Any => true,
+            Token::Digit => c.wrapping_sub('0' as u32) < 10,
+            Token::Set(k) => self.set_contains(&self.sets.as_slice()[k as usize], c),
+        }
+    }
+
+    /// Matches `seg` at unit `i`, using no characters at or after `end`; returns the index after it.
+    #[inline(always)]
+    fn match_at(&self, seg: &[Token], s: &impl Text, mut i: usize, end: usize) -> Option<usize> {
+        for &t in seg {
+            if i >= end {
+                return None;
+            }
+            let (c, next) = s.next(i);
+            if !self.token_matches(t, c) {
+                return None;
+            }
+            i = next;
+        }
+        Some(i)
+    }
+
+    /// Whether the whole of `s` matches the pattern.
+    pub(crate) fn matches(&self, s: &impl Text) -> bool {
+        let first = &self.tokens.as_slice()[..self.segments.as_slice()[0] as usize];
+        match self.match_at(first, s, 0, s.units()) {
+            Some(from) => self.match_rest(s, from),
+            None => false,
+        }
+    }
+
+    /// Whether the NUL-terminated string behind `cursor` matches. The first segment is matched while
+    /// reading, so most strings that do not match are rejected before their end is even looked for.
+    ///
+    /// # Safety
+    /// `cursor` must point at a NUL-terminated string.
+    pub(crate) unsafe fn matches_cursor(&self, cursor: impl Cursor) -> bool {
+        let tokens = self.tokens.as_slice();
+        let segments = self.segments.as_slice();
+        let mut i = 0;
+        for &(unit, mask) in self.lead.as_slice() {
+            // SAFETY: units before `i` were not NUL (they matched ASCII literals), so unit `i` is at or
+            // before the terminator.
+            let u = unsafe { cursor.unit(i) };
+            if u | mask as u32 != unit as u32 {
+                if !self.case_sensitive && u >= 0x80 {
+                    // A non-ASCII character may still fold to an ASCII letter (KELVIN SIGN is a `k`).
+                    // SAFETY: NUL-terminated.
+                    let end = unsafe { cursor.end_from(0) };
+                    // SAFETY: `end` is the terminator's index.
+                    return self.matches(&unsafe { cursor.slice(end) });
+                }
+                return false;
+            }
+            i += 1;
+        }
+        for &t in &tokens[self.lead.len()..segments[0] as usize] {
+            // SAFETY: `i` is a character boundary at or before the terminator; an ASCII unit is a whole
+            // character.
+            let (c, next) = match unsafe { cursor.unit(i) } {
+                u @ 0..=0x7F => (u, i + 1),
+                // SAFETY: as above.
+                _ => unsafe { cursor.at(i) },
+            };
+            if c == 0 || !self.token_matches(t, c) {
+                return false;
+            }
+            i = next;
+        }
+        if segments.len() == 1 {
+            // SAFETY: as above.
+            return unsafe { cursor.at(i) }.0 == 0;
+        }
+        let n = segments.len();
+        if segments[n - 1] == segments[n - 2] && self.kmp_free {
+            // The pattern ends with `*`: the end of the string does not matter, so the segments in
+            // between are searched for without looking for it.
+            for w in segments[..n - 1].windows(2) {
+                let seg = &tokens[w[0] as usize..w[1] as usize];
+                // SAFETY: `i` is a character boundary at or before the terminator.
+                match unsafe { self.find_in_cursor(seg, cursor, i) } {
+                    Some(end) => i = end,
+                    None => return false,
+                }
+            }
+            return true;
+        }
+        // SAFETY: as above; `end` is the terminator's index.
+        let end = unsafe { cursor.end_from(i) };
+        // SAFETY: `end` is the index of the terminator.
+        self.match_rest(&unsafe { cursor.slice(end) }, i)
+    }
+
+    /// The end of the leftmost match of `seg` at or after `from` in a NUL-terminated string.
+    ///
+    /// # Safety
+    /// `from` must be a character boundary of `cursor`'s string, at or before its terminator.
+    unsafe fn find_in_cursor(&self, seg: &[Token], cursor: impl Cursor, mut from: usize) -> Option<usize> {
+        let first = match seg.first() {
+            Some(&Token::Literal(l)) => Some(l),
+            _ => None,
+        };
+        loop {
+            if let Some(l) = first {
+                // Skip to the next place the first character occurs (see `stream::skip_to`).
+                if l < 0x80 && (self.case_sensitive || (l != 'k' as u32 && l != 's' as u32)) {
+                    loop {
+                        // SAFETY: units before `from` were not NUL, so it is at or before the terminator.
+                        let u = unsafe { cursor.unit(from) };
+                        if u == l || u == 0 || (!self.case_sensitive && u.wrapping_sub('A' as u32) < 26 && u + 32 == l)
+                        {
+                            break;
+                        }
+                        from += 1;
+                    }
+                }
+                loop {
+                    // SAFETY: `from` is a boundary at or before the terminator.
+                    let (c, next) = unsafe { cursor.at(from) };
+                    if c == 0 {
+                        return None;
+                    }
+                    if c == l || (!self.case_sensitive && fold(c) == l) {
+                        break;
+                    }
+                    from = next;
+                }
+            }
+            let mut i = from;
+            let mut matched = true;
+            for &t in seg {
+                // SAFETY: `i` is a boundary at or before the terminator (it only moves past non-NULs);
+                // an ASCII unit is a whole character.
+                let (c, next) = match unsafe { cursor.unit(i) } {
+                    u @ 0..=0x7F => (u, i + 1),
+                    // SAFETY: as above.
+                    _ => unsafe { cursor.at(i) },
+                };
+                if c == 0 {
+                    return None; // not enough characters left here, nor anywhere further on
+                }
+                if !self.token_matches(t, c) {
+                    matched = false;
+                    break;
+                }
+                i = next;
+            }
+            if matched {
+                return Some(i);
+            }
+            // SAFETY: `from` is a boundary before the terminator (a character matched or was tried there).
+            from = unsafe { cursor.at(from) }.1;
+        }
+    }
+
+    /// Whether the rest of `s`, from `from` (just after the first segment), matches the rest.
+    fn match_rest(&self, s: &impl Text, mut from: usize) -> bool {
+        let tokens = self.tokens.as_slice();
+        let segments = self.segments.as_slice();
+        let n = s.units();
+        if segments.len() == 1 {
+            return from == n;
+        }
+
+        // The last segment is anchored at the end: walk back over it.
+        let last_start = segments[segments.len() - 2] as usize;
+        let mut to = n;
+        for &t in tokens[last_start..].iter().rev() {
+            if to <= from {
+                return false;
+            }
+            let (c, prev) = s.prev(to);
+            if !self.token_matches(t, c) {
+                return false;
+            }
+            to = prev;
+        }
+
+        // Each segment in between at its leftmost place in what remains.
+        for w in segments[..segments.len() - 1].windows(2) {
+            let seg = &tokens[w[0] as usize..w[1] as usize];
+            from = match self.find(seg, s, from, to) {
+                Some(e) => e,
+                None => return false,
+            };
+        }
+        true
+    }
+
+    /// The end of the leftmost match of `seg` within `from..to`.
+    fn find(&self, seg: &[Token], s: &impl Text, from: usize, to: usize) -> Option<usize> {
+        let run = seg.iter().take_while(|t| matches!(t, Token::Literal(_))).count();
+        if run >= KMP_MIN_RUN {
+            self.find_by_literal_run(seg, run, s, from, to)
+        } else {
+            self.find_naive(seg, s, from, to)
+        }
+    }
+
+    /// `find` for a segment that starts with `run` literals: Knuth-Morris-Pratt over the string finds
+    /// each place the literals occur in one pass, and only there is the rest of the segment tried.
+    /// Linear where the naive search is quadratic (a long run of `a` against a long run of `a`).
+    fn find_by_literal_run(&self, seg: &[Token], run: usize, s: &impl Text, from: usize, to: usize) -> Option<usize> {
+        let lit = |k: usize| match seg[k] {
+            Token::Literal(l) => l,
+            _ => unreachable!("the first `run` tokens are literals"),
+        };
+        // fail[k]: length of the longest proper border of the first k + 1 literals.
+        let mut fail = SmallVec::<u32, 32>::new();
+        fail.push(0);
+        let mut b = 0usize;
+        for k in 1..run {
+            while b > 0 && lit(k) != lit(b) {
+                b = fail.as_slice()[b - 1] as usize;
+            }
+            if lit(k) == lit(b) {
+                b += 1;
+            }
+            fail.push(b as u32);
+        }
+        let fail = fail.as_slice();
+        let rest = &seg[run..];
+        let mut q = 0usize;
+        let mut i = from;
+        while i < to {
+            let (c, next) = s.next(i);
+            let c = if self.case_sensitive { c } else { fold(c) };
+            while q > 0 && lit(q) != c {
+                q = fail[q - 1] as usize;
+            }
+            if lit(q) == c {
+                q += 1;
+            }
+            i = next;
+            if q == run {
+                if let Some(end) = self.match_at(rest, s, i, to) {
+                    return Some(end);
+                }
+                q = fail[q - 1] as usize;
+            }
+        }
+        None
+    }
+
+    fn find_naive(&self, seg: &[Token], s: &impl Text, mut from: usize, to: usize) -> Option<usize> {
+        let first = match seg.first() {
+            Some(&Token::Literal(l)) => Some(l),
+            _ => None,
+        };
+        while to - from >= seg.len() {
+            if let Some(l) = first {
+                // Skip straight to the next place the segment's first character occurs; an ASCII
+                // literal a code unit at a time (see `stream::skip_to`).
+                if l < 0x80 && (self.case_sensitive || (l != 'k' as u32 && l != 's' as u32)) {
+                    while from < to {
+                        let u = s.unit(from);
+                        if u == l || (!self.case_sensitive && u.wrapping_sub('A' as u32) < 26 && u + 32 == l) {
+                            break;
+                        }
+                        from += 1;
+                    }
+                }
+                loop {
+                    if from >= to {
+                        return None;
+                    }
+                    let (c, next) = s.next(from);
+                    if c == l || (!self.case_sensitive && fold(c) == l) {
+                        break;
+                    }
+                    from = next;
+                }
+                if to - from < seg.len() {
+                    return None;
+                }
+            }
+            if let Some(end) = self.match_at(seg, s, from, to) {
+                return Some(end);
+            }
+            from = s.next(from).1;
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::text::Utf16;
+    use super::*;
+
+    fn compile(p: &str, cs: bool) -> Result<Program, Malformed> {
+        let w: Vec<u16> = p.encode_utf16().collect();
+        Program::compile(&Utf16(&w), cs)
+    }
+
+    fn is_match(s: &str, p: &str, cs: bool) -> bool {
+        let w: Vec<u16> = s.encode_utf16().collect();
+        compile(p, cs).map(|p| p.matches(&Utf16(&w))).unwrap_or(false)
+    }
+
+    #[test]
+    fn compiles_into_single_character_tokens() {
+        let p = compile("a**[]*?#[!b-d]", true).unwrap();
+        assert_eq!(
+            p.tokens.as_slice()[..3],
+            [Token::Literal('a' as u32), Token::Any, Token::Digit]
+        );
+        assert_eq!(p.segments.as_slice(), &[2, 4]); // `*?` is compiled as `?*`
+        assert_eq!(p.ranges.as_slice(), &[('b' as u32, 'd' as u32)]);
+        let p = compile("a*??b*?", true).unwrap(); // `*?` is compiled as `?*`
+        assert_eq!(p.segments.as_slice(), &[3, 5, 5]);
+        let p = compile("***", true).unwrap();
+        assert!(p.matches_everything());
+        assert!(!compile("", true).unwrap().matches_everything());
+    }
+
+    #[test]
+    fn hyphen_and_bang_rules() {
+        let set = |p: &str| compile(p, true).unwrap().ranges.as_slice().to_vec();
+        let c = |x: char| x as u32;
+        assert_eq!(set("[-a]"), vec![(c('-'), c('-')), (c('a'), c('a'))]);
+        assert_eq!(set("[a-]"), vec![(c('-'), c('-')), (c('a'), c('a'))]);
+        assert_eq!(
+            set("[a-c-e]"),
+            vec![(c('-'), c('-')), (c('a'), c('c')), (c('e'), c('e'))]
+        );
+        assert_eq!(set("[a-cd]"), vec![(c('a'), c('d'))]); // merged
+        assert!(!is_match("d", "[a-c-e]", true));
+        assert_eq!(
+            compile("[!]", true).unwrap().tokens.as_slice(),
+            &[Token::Literal(c('!'))]
+        );
+        assert!(!is_match("x", "[a!]", true) && is_match("!", "[a!]", true));
+    }
+
+    #[test]
+    fn malformed_patterns_are_reported() {
+        for p in ["[", "a[b", "[!", "[a-", "[a-b", "[Z-A]", "x[b-a]y", "[]]["] {
+            assert!(compile(p, true).is_err(), "{p}");
+        }
+        assert_eq!(compile("[Z-A]", true).err(), Some(Malformed::ReversedRange));
+        assert_eq!(compile("a[b", true).err(), Some(Malformed::UnclosedList));
+    }
+
+    #[test]
+    fn middle_segments_found_by_literal_runs_overlap_correctly() {
+        // Segments with at least KMP_MIN_RUN leading literals take the Knuth-Morris-Pratt search.
+        let ab8 = "ab".repeat(8);
+        let a16 = "a".repeat(16);
+        assert!(is_match(&("ab".repeat(9) + "c"), &format!("*{ab8}c*"), true));
+        assert!(!is_match(&"ab".repeat(9), &format!("*{ab8}c*"), true));
+        assert!(is_match(&("a".repeat(20) + "1"), &format!("*{a16}#"), true));
+        assert!(is_match(&format!("{a16}_{a16}1"), &format!("*{a16}#*"), true));
+        assert!(!is_match(&("a".repeat(15) + "1"), &format!("*{a16}#*"), true));
+        assert!(is_match(
+            &format!("x{}z!", "aB".repeat(9)),
+            &format!("*{}?!", "Ab".repeat(8)),
+            false
+        ));
+        assert!(!is_match(
+            &format!("x{}z!", "aB".repeat(9)),
+            &format!("*{}?!", "Ab".repeat(8)),
+            true
+        ));
+        let border = "aabaabaabaabaabaab"; // borders of every length that is a multiple of 3
+        assert!(is_match(&format!("aabaab{border}x"), &format!("*{border}?"), true));
+        assert!(is_match(&format!("aabaa{border}x1"), &format!("*{border}x#"), true));
+        // Short runs take the naive search.
+        assert!(is_match("aaaaab1", "*aaab#*", true));
+        assert!(!is_match("aaaaab", "*aaab#*", true));
+    }
+
+    #[test]
+    fn case_insensitive_lists_use_simple_folding() {
+        assert!(is_match("Q", "[a-z]", false));
+        assert!(is_match("q", "[A-Z]", false));
+        assert!(is_match("\u{212A}", "[A-Z]", false)); // KELVIN SIGN folds to k
+        assert!(is_match("K", "[\u{212A}]", false));
+        assert!(!is_match("K", "[!\u{212A}]", false));
+        assert!(is_match("É", "[à-ÿ]", false));
+        assert!(!is_match("É", "[à-ÿ]", true));
+        assert!(is_match("ſ", "S", false));
+        assert!(is_match("Ā", "[ā]", false));
+    }
+}

@@ -1,0 +1,559 @@
+//! MatchPattern against the published test vectors, against a reference matcher on random input, and on
+//! adversarial input.
+
+use std::collections::HashMap;
+use std::ffi::CString;
+use std::sync::OnceLock;
+
+use super::fold::fold;
+use super::*;
+
+/// Whether `MatchPatternA` reads UTF-8 (everywhere but Windows).
+const NARROW_IS_UTF8: bool = cfg!(not(windows));
+
+fn wide(s: &str) -> Vec<u16> {
+    s.encode_utf16().chain([0]).collect()
+}
+
+fn match_w(s: &[u16], p: &[u16], cs: bool) -> bool {
+    let mut s = s.to_vec();
+    s.push(0);
+    let mut p = p.to_vec();
+    p.push(0);
+    // SAFETY: both are NUL-terminated.
+    let r = unsafe { MatchPatternW(s.as_ptr(), p.as_ptr(), cs as BOOL) };
+    assert!(r == TRUE || r == FALSE);
+    r == TRUE
+}
+
+fn match_a(s: &[u8], p: &[u8], cs: bool) -> bool {
+    let s = CString::new(s).unwrap();
+    let p = CString::new(p).unwrap();
+    // SAFETY: both are NUL-terminated.
+    let r = unsafe { MatchPatternA(s.as_ptr(), p.as_ptr(), cs as BOOL) };
+    assert!(r == TRUE || r == FALSE);
+    r == TRUE
+}
+
+/// The compiled filter's answer for a wide and a narrow string, or `None` for OPC_E_INVALIDFILTER.
+fn match_compiled(s: &str, p: &str, cs: bool) -> Option<(bool, bool)> {
+    let pw = wide(p);
+    let mut f = ptr::null_mut();
+    // SAFETY: valid string and out-pointer.
+    let hr = unsafe { OpcPatternCompileW(pw.as_ptr(), cs as BOOL, &mut f) };
+    if hr == OPC_E_INVALIDFILTER {
+        assert!(f.is_null());
+        return None;
+    }
+    assert_eq!(hr, S_OK);
+    let sw = wide(s);
+    let sa = CString::new(s).unwrap();
+    // SAFETY: `f` is a live filter; the strings are NUL-terminated.
+    let r = unsafe { (OpcPatternMatchW(f, sw.as_ptr()), OpcPatternMatchA(f, sa.as_ptr())) };
+    // SAFETY: freed once.
+    unsafe { OpcPatternFree(f) };
+    Some((r.0 == TRUE, r.1 == TRUE))
+}
+
+#[test]
+fn every_vector_row_passes_through_every_entry_point() {
+    let mut rows = 0;
+    for line in include_str!("like-vectors.tsv").lines().skip(1) {
+        let f: Vec<&str> = line.split('\t').collect();
+        let (s, p, cs, expected) = (f[0], f[1], f[2] == "1", f[3] == "1");
+        let what = format!("{s:?} Like {p:?} (case sensitive: {cs}) from {}", f[4]);
+        assert_eq!(
+            match_w(
+                &wide(s)[..s.encode_utf16().count()],
+                &wide(p)[..p.encode_utf16().count()],
+                cs
+            ),
+            expected,
+            "W: {what}"
+        );
+        let (w, a) = match_compiled(s, p, cs).unwrap_or((false, false));
+        assert_eq!(w, expected, "compiled W: {what}");
+        // Narrow strings are UTF-8 except on Windows (the ANSI code page): there, ASCII rows only.
+        if NARROW_IS_UTF8 || (s.is_ascii() && p.is_ascii()) {
+            assert_eq!(match_a(s.as_bytes(), p.as_bytes(), cs), expected, "A: {what}");
+            assert_eq!(a, expected, "compiled A: {what}");
+        }
+        rows += 1;
+    }
+    assert!(rows >= 150, "only {rows} rows");
+}
+
+#[test]
+fn null_arguments_never_match_and_compile_reports_them() {
+    let a = wide("a");
+    // SAFETY: NULL is allowed for every pointer argument here.
+    unsafe {
+        assert_eq!(MatchPatternW(ptr::null(), a.as_ptr(), 1), FALSE);
+        assert_eq!(MatchPatternW(a.as_ptr(), ptr::null(), 1), FALSE);
+        assert_eq!(MatchPatternW(ptr::null(), ptr::null(), 0), FALSE);
+        assert_eq!(MatchPatternA(ptr::null(), c"*".as_ptr(), 0), FALSE);
+        assert_eq!(MatchPatternA(c"".as_ptr(), ptr::null(), 0), FALSE);
+        let mut f = 1usize as *mut OpcPattern;
+        assert_eq!(OpcPatternCompileW(ptr::null(), 1, &mut f), E_INVALIDARG);
+        assert!(f.is_null());
+        f = 1usize as *mut OpcPattern;
+        assert_eq!(OpcPatternCompileA(ptr::null(), 1, &mut f), E_INVALIDARG);
+        assert!(f.is_null());
+        assert_eq!(OpcPatternCompileW(a.as_ptr(), 1, ptr::null_mut()), E_INVALIDARG);
+        assert_eq!(OpcPatternMatchW(ptr::null(), a.as_ptr()), FALSE);
+        assert_eq!(OpcPatternMatchA(ptr::null(), c"a".as_ptr()), FALSE);
+        let star = wide("*");
+        assert_eq!(OpcPatternCompileW(star.as_ptr(), 1, &mut f), S_OK);
+        assert_eq!(OpcPatternMatchW(f, ptr::null()), FALSE);
+        assert_eq!(OpcPatternMatchA(f, ptr::null()), FALSE);
+        assert_eq!(OpcPatternMatchW(f, a.as_ptr()), TRUE);
+        OpcPatternFree(f);
+        OpcPatternFree(ptr::null_mut());
+    }
+}
+
+#[test]
+fn malformed_patterns_never_match_and_compile_to_invalidfilter() {
+    for p in ["[", "a[b", "*[", "[!", "[a-", "[Z-A]", "a*[z-a]", "[]["] {
+        assert!(
+            !match_w(&wide("a")[..1], &wide(p)[..p.encode_utf16().count()], true),
+            "{p}"
+        );
+        for s in ["", "a", "[", "[Z-A]", "ab"] {
+            assert!(!match_a(s.as_bytes(), p.as_bytes(), false), "{s} {p}");
+        }
+        assert_eq!(match_compiled("a", p, true), None, "{p}");
+    }
+    // A pattern ending inside a list is never read past its NUL: the unit after the NUL is no `]`
+    // that could close it.
+    let buf = [b'[' as u16, b'a' as u16, 0, b']' as u16];
+    // SAFETY: `buf` is NUL-terminated at index 2.
+    assert_eq!(unsafe { MatchPatternW(wide("a").as_ptr(), buf.as_ptr(), 1) }, FALSE);
+}
+
+#[test]
+fn unpaired_surrogates_and_invalid_bytes_are_single_characters() {
+    let s = [0x61, 0xD800, 0x62];
+    assert!(match_w(&s, &wide("a?b")[..3], true));
+    assert!(match_w(&s, &[0x61, 0xD800, 0x62], true));
+    assert!(!match_w(&s, &wide("a??b")[..4], true));
+    assert!(match_w(&[0xDC00], &wide("?")[..1], true));
+    assert!(match_w(&[0xD83D, 0xDE00], &wide("?")[..1], true)); // a pair is one character
+    assert!(!match_w(&[0xD83D, 0xDE00], &wide("??")[..2], true));
+    assert!(match_w(&[0xDE00, 0xD83D], &wide("??")[..2], true)); // low then high: two lone surrogates
+    assert!(match_w(&[0xD83D], &[0x5B, 0xD800, 0x2D, 0xDBFF, 0x5D], true)); // [\uD800-\uDBFF]
+    if NARROW_IS_UTF8 {
+        assert!(match_a(b"a\xFFb", b"a?b", true));
+        assert!(match_a(b"a\xC3b", b"a\xC3b", true));
+        assert!(!match_a(b"a\xC3b", b"a\xC4b", true));
+        assert!(match_a(b"\xC3\xA9", b"?", true));
+        assert!(match_a(b"\xE2\x82", b"??", true)); // truncated sequence: two bytes, two characters
+        assert!(match_a(b"\xC3\xA9", b"\xC3\x89", false)); // é vs É
+        assert!(match_a(b"\xF0", b"[\x80-\xFF]", true));
+    }
+}
+
+// ---- differential testing against a reference matcher ----
+
+#[derive(Debug)]
+enum RefToken {
+    Star,
+    Lit(u32),
+    Any,
+    Digit,
+    Set(bool, Vec<(u32, u32)>),
+}
+
+/// The pattern rules read straight off match-pattern.md: a list ends at the first `]`.
+fn ref_parse(p: &[u32]) -> Option<Vec<RefToken>> {
+    let ch = |c: char| c as u32;
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < p.len() {
+        let c = p[i];
+        i += 1;
+        if c == ch('*') {
+            out.push(RefToken::Star);
+        } else if c == ch('?') {
+            out.push(RefToken::Any);
+        } else if c == ch('#') {
+            out.push(RefToken::Digit);
+        } else if c == ch('[') {
+            let close = i + p[i..].iter().position(|&x| x == ch(']'))?;
+            let body = &p[i..close];
+            i = close + 1;
+            if body.is_empty() {
+                continue;
+            }
+            if body == [ch('!')] {
+                out.push(RefToken::Lit(ch('!')));
+                continue;
+            }
+            let (negated, body) = if body[0] == ch('!') {
+                (true, &body[1..])
+            } else {
+                (false, body)
+            };
+            let mut items = Vec::new();
+            let mut k = 0;
+            let mut after_range = false;
+            while k < body.len() {
+                let c = body[k];
+                if c == ch('-') && (k == 0 || after_range) {
+                    items.push((c, c));
+                    k += 1;
+                    after_range = false;
+                } else if k + 2 < body.len() && body[k + 1] == ch('-') {
+                    if body[k + 2] < c {
+                        return None;
+                    }
+                    items.push((c, body[k + 2]));
+                    k += 3;
+                    after_range = true;
+                } else {
+                    items.push((c, c));
+                    k += 1;
+                    after_range = false;
+                }
+            }
+            out.push(RefToken::Set(negated, items));
+        } else {
+            out.push(RefToken::Lit(c));
+        }
+    }
+    Some(out)
+}
+
+/// Every code point with the same simple case folding as `c`.
+fn case_class(c: u32) -> Vec<u32> {
+    static CLASSES: OnceLock<HashMap<u32, Vec<u32>>> = OnceLock::new();
+    let classes = CLASSES.get_or_init(|| {
+        let mut m: HashMap<u32, Vec<u32>> = HashMap::new();
+        for x in 0..0x11_0000 {
+            let f = fold(x);
+            if f != x {
+                m.entry(f).or_insert_with(|| vec![f]).push(x);
+            }
+        }
+        m
+    });
+    classes.get(&fold(c)).cloned().unwrap_or_else(|| vec![c])
+}
+
+fn ref_one(t: &RefToken, c: u32, cs: bool) -> bool {
+    match t {
+        RefToken::Star => unreachable!(),
+        RefToken::Lit(l) => {
+            if cs {
+                c == *l
+            } else {
+                fold(c) == fold(*l)
+            }
+        }
+        RefToken::Any => true,
+        RefToken::Digit => (b'0' as u32..=b'9' as u32).contains(&c),
+        RefToken::Set(negated, items) => {
+            let class = if cs { vec![c] } else { case_class(c) };
+            let inside = items.iter().any(|&(lo, hi)| class.iter().any(|&x| lo <= x && x <= hi));
+            inside != *negated
+        }
+    }
+}
+
+/// Dynamic programming over the token list: `m[j][i]` = tokens `j..` match characters `i..`.
+fn ref_match(s: &[u32], p: &[u32], cs: bool) -> bool {
+    let Some(toks) = ref_parse(p) else {
+        return false;
+    };
+    let (n, m) = (s.len(), toks.len());
+    let mut dp = vec![vec![false; n + 1]; m + 1];
+    dp[m][n] = true;
+    for j in (0..m).rev() {
+        for i in (0..=n).rev() {
+            dp[j][i] = match &toks[j] {
+                RefToken::Star => dp[j + 1][i] || (i < n && dp[j][i + 1]),
+                t => i < n && ref_one(t, s[i], cs) && dp[j + 1][i + 1],
+            };
+        }
+    }
+    dp[0][0]
+}
+
+struct XorShift(u64);
+
+impl XorShift {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// UTF-16 units drawn from an alphabet rich in pattern syntax, case pairs and surrogates.
+const UNITS: &[&[u16]] = &[
+    &[0x61],
+    &[0x62],
+    &[0x41],
+    &[0x42],
+    &[0x6B],
+    &[0x4B],
+    &[0x212A],
+    &[0x73],
+    &[0x17F],
+    &[0xE9],
+    &[0xC9],
+    &[0x5B],
+    &[0x5D],
+    &[0x21],
+    &[0x2D],
+    &[0x23],
+    &[0x2A],
+    &[0x3F],
+    &[0x30],
+    &[0x35],
+    &[0x39],
+    &[0x7A],
+    &[0xD83D, 0xDE00],
+    &[0xD801, 0xDC00],
+    &[0xD801, 0xDC28],
+    &[0xD800],
+    &[0xDC00],
+    &[0xDBFF],
+    &[0x3A3],
+    &[0x3C2],
+];
+
+fn random_wide(rng: &mut XorShift, max: usize) -> Vec<u16> {
+    let len = rng.below(max + 1);
+    let mut v = Vec::new();
+    for _ in 0..len {
+        v.extend_from_slice(UNITS[rng.below(UNITS.len())]);
+    }
+    v
+}
+
+fn decode_wide(s: &[u16]) -> Vec<u32> {
+    char::decode_utf16(s.iter().copied())
+        .map(|r| r.map(|c| c as u32).unwrap_or_else(|e| e.unpaired_surrogate() as u32))
+        .collect()
+}
+
+/// Runs `cases` random (string, pattern) pairs through the library and the reference.
+fn differential_wide(seed: u64, cases: usize) {
+    let mut rng = XorShift(seed);
+    for case in 0..cases {
+        let p = random_wide(&mut rng, 9);
+        let s = random_wide(&mut rng, 9);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode_wide(&s), &decode_wide(&p), cs);
+        let got = match Program::compile(&Utf16(&p), cs) {
+            Ok(prog) => {
+                let mut nul_terminated = s.clone();
+                nul_terminated.push(0);
+                // SAFETY: NUL-terminated.
+                let by_cursor = unsafe { prog.matches_cursor(stream::WideCursor(nul_terminated.as_ptr())) };
+                assert_eq!(by_cursor, prog.matches(&Utf16(&s)), "case {case}");
+                by_cursor
+            }
+            Err(_) => false,
+        };
+        assert_eq!(
+            got,
+            expected,
+            "case {case}: {:?} Like {:?} (case sensitive: {cs})",
+            String::from_utf16_lossy(&s),
+            String::from_utf16_lossy(&p)
+        );
+        // The one-call matcher (reading in place) agrees too.
+        assert_eq!(match_w(&s, &p, cs), expected, "MatchPatternW, case {case}");
+    }
+}
+
+/// How many random cases the differential test runs: `OPCCOMN_DIFFERENTIAL_CASES`, else 1,000,000.
+fn differential_cases() -> usize {
+    std::env::var("OPCCOMN_DIFFERENTIAL_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1_000_000)
+}
+
+#[test]
+fn differential_against_reference_wide() {
+    differential_wide(0x9E37_79B9_7F4A_7C15, differential_cases());
+}
+
+#[test]
+fn differential_long_patterns() {
+    // Patterns beyond stream::LONG_PATTERN take the compiled path inside MatchPatternW/A.
+    let mut rng = XorShift(0xD1B5_4A32_D192_ED03);
+    for case in 0..2_000 {
+        let mut p = random_wide(&mut rng, 100);
+        while p.len() <= stream::LONG_PATTERN {
+            p.push(b'*' as u16);
+            p.extend(random_wide(&mut rng, 20));
+        }
+        let s = random_wide(&mut rng, 200);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode_wide(&s), &decode_wide(&p), cs);
+        assert_eq!(match_w(&s, &p, cs), expected, "case {case}");
+        if let (true, Ok(sn), Ok(pn)) = (NARROW_IS_UTF8, String::from_utf16(&s), String::from_utf16(&p)) {
+            assert_eq!(
+                match_a(sn.as_bytes(), pn.as_bytes(), cs),
+                expected,
+                "case {case} narrow"
+            );
+        }
+    }
+}
+
+#[test]
+fn differential_long_literal_runs() {
+    // Runs of 16 or more literals in a middle segment take the Knuth-Morris-Pratt search; a two-letter
+    // alphabet makes partial matches and borders common.
+    let mut rng = XorShift(0x6A09_E667_F3BC_C909);
+    let ab = |rng: &mut XorShift, n: usize| -> Vec<u16> {
+        (0..n)
+            .map(|_| if rng.next() & 1 == 0 { b'a' as u16 } else { b'B' as u16 })
+            .collect()
+    };
+    for case in 0..20_000 {
+        let mut p = vec![b'*' as u16];
+        let run = 16 + rng.below(9);
+        p.extend(ab(&mut rng, run));
+        p.extend_from_slice(UNITS[rng.below(UNITS.len())]);
+        p.push(b'*' as u16);
+        if rng.next() & 1 == 0 {
+            p.extend(ab(&mut rng, 2));
+        }
+        let len = rng.below(70);
+        let s = ab(&mut rng, len);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode_wide(&s), &decode_wide(&p), cs);
+        let prog = Program::compile(&Utf16(&p), cs);
+        let got = prog.map(|prog| prog.matches(&Utf16(&s))).unwrap_or(false);
+        assert_eq!(
+            got,
+            expected,
+            "case {case}: {:?} Like {:?}",
+            String::from_utf16_lossy(&s),
+            String::from_utf16_lossy(&p)
+        );
+        assert_eq!(match_w(&s, &p, cs), expected, "MatchPatternW, case {case}");
+    }
+}
+
+#[cfg(windows)]
+#[test]
+fn narrow_strings_use_the_ansi_code_page() {
+    // SAFETY: no arguments.
+    let acp = unsafe { windows_sys::Win32::Globalization::GetACP() };
+    if acp != 1252 {
+        eprintln!("ANSI code page {acp}: the Windows-1252 checks do not apply");
+        return;
+    }
+    assert!(match_a(b"\xC9t\xC9", b"\xE9t\xE9", false)); // ÉtÉ vs étÉ
+    assert!(!match_a(b"\xC9", b"\xE9", true));
+    assert!(match_a(b"\x80", b"?", true)); // the euro sign
+    assert!(match_a(b"\xE9", b"[\xE0-\xFF]", true));
+}
+
+#[cfg(not(windows))]
+#[test]
+fn differential_against_reference_narrow() {
+    let bytes: &[&[u8]] = &[
+        b"a",
+        b"b",
+        b"A",
+        b"K",
+        b"k",
+        b"[",
+        b"]",
+        b"!",
+        b"-",
+        b"#",
+        b"*",
+        b"?",
+        b"0",
+        b"9",
+        "é".as_bytes(),
+        "É".as_bytes(),
+        "\u{212A}".as_bytes(),
+        "😀".as_bytes(),
+        b"\xC3",
+        b"\xFF",
+        b"\x80",
+        b"\xE2\x82",
+    ];
+    let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
+    let gen = |rng: &mut XorShift| {
+        let len = rng.below(10);
+        (0..len)
+            .flat_map(|_| bytes[rng.below(bytes.len())].iter().copied())
+            .collect::<Vec<u8>>()
+    };
+    let decode = |b: &[u8]| -> Vec<u32> {
+        let mut out = Vec::new();
+        for chunk in b.utf8_chunks() {
+            out.extend(chunk.valid().chars().map(|c| c as u32));
+            out.extend(chunk.invalid().iter().map(|&x| 0xDC00 + x as u32));
+        }
+        out
+    };
+    for case in 0..differential_cases() / 4 {
+        let p = gen(&mut rng);
+        let s = gen(&mut rng);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode(&s), &decode(&p), cs);
+        let got = match narrow::compile(&p, cs) {
+            Ok(prog) => {
+                let nul_terminated = CString::new(s.clone()).unwrap();
+                // SAFETY: NUL-terminated.
+                let by_cursor = unsafe { narrow::matches(&prog, nul_terminated.as_ptr().cast()) };
+                assert_eq!(by_cursor, prog.matches(&text::Utf8(&s)), "case {case}");
+                by_cursor
+            }
+            Err(_) => false,
+        };
+        assert_eq!(got, expected, "case {case}: {s:x?} Like {p:x?} (case sensitive: {cs})");
+        assert_eq!(
+            match_a(&s, &p, cs),
+            expected,
+            "MatchPatternA, case {case}: {s:x?} Like {p:x?}"
+        );
+    }
+}
+
+#[test]
+fn adversarial_patterns_finish_quickly() {
+    let a100 = "a".repeat(100);
+    let mut cases: Vec<(String, String, bool)> = Vec::new();
+    for k in 4..=12 {
+        cases.push((a100.clone(), "a*".repeat(k) + "b", false));
+        cases.push((a100.clone(), "a*".repeat(k) + "a", true));
+    }
+    cases.push(("a".repeat(24), "*".repeat(12) + "b", false));
+    cases.push(("a".repeat(4096), "*".to_string() + &"a".repeat(2047) + "#*", false));
+    cases.push(("a".repeat(4096), "*?".repeat(1000) + "b", false));
+    cases.push(("ab".repeat(2048), "*a?".repeat(1000) + "c*", false));
+    cases.push((
+        "a".repeat(4095) + "b",
+        "*".to_string() + &"[a-z]".repeat(800) + "*b",
+        true,
+    ));
+
+    let start = std::time::Instant::now();
+    for (s, p, expected) in &cases {
+        let (sw, pw) = (wide(s), wide(p));
+        // SAFETY: both are NUL-terminated.
+        let got = unsafe { MatchPatternW(sw.as_ptr(), pw.as_ptr(), 1) } == TRUE;
+        assert_eq!(got, *expected, "{} chars Like {}...", s.len(), &p[..p.len().min(20)]);
+    }
+    let elapsed = start.elapsed();
+    // Generous on purpose (the benchmark has the real figures): the specification's sample needs
+    // seconds for a single one of these.
+    assert!(elapsed < std::time::Duration::from_secs(1), "{elapsed:?}");
+}
