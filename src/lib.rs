@@ -7,6 +7,7 @@
 //! - `common`: IOPCCommon (chapter 5)
 //! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)
 //! - `shutdown`: the IOPCShutdown connection point for servers and a shutdown sink for clients (chapter 4)
+//! - `registry`: the registry abstraction and the registration helpers (chapter 6)
 //!
 //! The C API is declared in `include/opccomn.h`, generated from these sources by cbindgen.
 
@@ -17,6 +18,7 @@ pub mod common;
 pub mod errors;
 pub mod pattern;
 pub mod shutdown;
+pub mod registry;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.

@@ -1,0 +1,151 @@
+//! The command line of an EXE server (specification section 6.3): `/RegServer` or `-RegServer` asks it
+//! to register itself, `/UnregServer` or `-UnregServer` to unregister, and COM starts it with
+//! `-Embedding` (or `/Embedding`; `-Automation` for automation servers) to serve its classes.
+
+use super::arg_string;
+use crate::com::boundary::catch;
+use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, HRESULT, LPCWSTR, S_OK};
+
+/// What an EXE server's command line asks it to do.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OpcServerCommand {
+    /// No switch the library knows: the server was started by hand.
+    OpcServerCommandNone = 0,
+    /// `/RegServer` or `-RegServer`: register and exit.
+    OpcServerCommandRegister = 1,
+    /// `/UnregServer` or `-UnregServer`: unregister and exit.
+    OpcServerCommandUnregister = 2,
+    /// `-Embedding`, `/Embedding`, `-Automation` or `/Automation`: COM started the server for a client.
+    OpcServerCommandEmbedding = 3,
+}
+
+/// Splits a command line into arguments the way Windows programs do for the cases that matter here:
+/// blanks separate arguments, double quotes group blanks into one.
+fn arguments(line: &str) -> Vec<String> {
+    let mut args = Vec::new();
+    let mut current = String::new();
+    let mut quoted = false;
+    let mut any = false;
+    for c in line.chars() {
+        match c {
+            '"' => {
+                quoted = !quoted;
+                any = true;
+            }
+            ' ' | '\t' if !quoted => {
+                if any {
+                    args.push(core::mem::take(&mut current));
+                    any = false;
+                }
+            }
+            c => {
+                current.push(c);
+                any = true;
+            }
+        }
+    }
+    if any {
+        args.push(current);
+    }
+    args
+}
+
+/// What `line` asks for. Switches are matched without regard to case, anywhere on the line (so the
+/// program name may come first or not); other arguments are ignored. Asking to register and to
+/// unregister at once is an error.
+pub fn parse_command_line(line: &str) -> Result<OpcServerCommand, HRESULT> {
+    let mut register = false;
+    let mut unregister = false;
+    let mut embedding = false;
+    for arg in arguments(line) {
+        let Some(switch) = arg.strip_prefix(['/', '-']) else {
+            continue;
+        };
+        let switch = switch.to_ascii_lowercase();
+        match switch.as_str() {
+            "regserver" => register = true,
+            "unregserver" => unregister = true,
+            "embedding" | "automation" => embedding = true,
+            _ => {}
+        }
+    }
+    Ok(match (register, unregister) {
+        (true, true) => return Err(E_INVALIDARG),
+        (true, false) => OpcServerCommand::OpcServerCommandRegister,
+        (false, true) => OpcServerCommand::OpcServerCommandUnregister,
+        _ if embedding => OpcServerCommand::OpcServerCommandEmbedding,
+        _ => OpcServerCommand::OpcServerCommandNone,
+    })
+}
+
+/// Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
+/// program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
+/// `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
+/// `OpcServerCommand` value: register, unregister, embedding or none.
+///
+/// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG when the line both registers and
+/// unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
+///
+/// # Safety
+/// `command_line` NULL or NUL-terminated; `command` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcParseCommandLine(command_line: LPCWSTR, command: *mut u32) -> HRESULT {
+    if command.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: checked non-NULL; the caller vouches it is writable.
+    unsafe { *command = OpcServerCommand::OpcServerCommandNone as u32 };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: forwarded from the caller's contract.
+        let parsed = unsafe { arg_string(command_line) }.and_then(|line| parse_command_line(&line));
+        match parsed {
+            Ok(c) => {
+                // SAFETY: as above.
+                unsafe { *command = c as u32 };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::OpcServerCommand::*;
+    use super::*;
+
+    #[test]
+    fn switches_are_recognised_in_any_case_and_form() {
+        for line in [
+            "/RegServer",
+            "-regserver",
+            "server.exe /REGSERVER",
+            "\"C:\\My Server\\s.exe\" -RegServer",
+        ] {
+            assert_eq!(parse_command_line(line), Ok(OpcServerCommandRegister), "{line}");
+        }
+        for line in ["/UnregServer", "x.exe -UNREGSERVER", "-unregserver /foo"] {
+            assert_eq!(parse_command_line(line), Ok(OpcServerCommandUnregister), "{line}");
+        }
+        for line in ["-Embedding", "x.exe /embedding", "-Automation"] {
+            assert_eq!(parse_command_line(line), Ok(OpcServerCommandEmbedding), "{line}");
+        }
+        for line in [
+            "",
+            "x.exe",
+            "RegServer",
+            "/RegServerX",
+            "\"/Reg Server\"",
+            "C:\\regserver\\x.exe",
+            "--RegServer",
+        ] {
+            assert_eq!(parse_command_line(line), Ok(OpcServerCommandNone), "{line}");
+        }
+        assert_eq!(parse_command_line("/RegServer -UnregServer"), Err(E_INVALIDARG));
+        assert_eq!(
+            parse_command_line("-Embedding /RegServer"),
+            Ok(OpcServerCommandRegister)
+        );
+    }
+}

@@ -1,0 +1,192 @@
+//! A registry held in memory, with the semantics of the Windows registry that the library relies on:
+//! case-insensitive names that keep the case they were created with, a default value per key, and
+//! keys that can only be deleted once they have no subkeys.
+
+use std::collections::BTreeMap;
+use std::sync::{Mutex, MutexGuard};
+
+use super::{RegValue, Registry, MAX_NAME_UNITS};
+use crate::com::{E_INVALIDARG, HRESULT};
+
+#[derive(Default)]
+struct Node {
+    /// Lower-cased name -> (name as created, value).
+    values: BTreeMap<String, (String, RegValue)>,
+    /// Lower-cased name -> (name as created, key).
+    children: BTreeMap<String, (String, Node)>,
+}
+
+/// A registry held in memory. Safe to share between threads.
+#[derive(Default)]
+pub struct MemoryRegistry {
+    root: Mutex<Node>,
+}
+
+/// The key names of `path`; `None` when a name is empty or too long. The empty path is the root.
+fn split(path: &str) -> Option<Vec<&str>> {
+    if path.is_empty() {
+        return Some(Vec::new());
+    }
+    let parts: Vec<&str> = path.split('\\').collect();
+    parts
+        .iter()
+        .all(|p| !p.is_empty() && p.encode_utf16().count() <= MAX_NAME_UNITS)
+        .then_some(parts)
+}
+
+fn fold(name: &str) -> String {
+    name.to_lowercase()
+}
+
+impl Node {
+    fn find(&self, parts: &[&str]) -> Option<&Node> {
+        parts
+            .iter()
+            .try_fold(self, |node, part| node.children.get(&fold(part)).map(|(_, n)| n))
+    }
+
+    fn find_mut(&mut self, parts: &[&str]) -> Option<&mut Node> {
+        parts
+            .iter()
+            .try_fold(self, |node, part| node.children.get_mut(&fold(part)).map(|(_, n)| n))
+    }
+
+    fn create(&mut self, parts: &[&str]) -> &mut Node {
+        parts.iter().fold(self, |node, part| {
+            &mut node
+                .children
+                .entry(fold(part))
+                .or_insert_with(|| (part.to_string(), Node::default()))
+                .1
+        })
+    }
+}
+
+impl MemoryRegistry {
+    /// An empty registry.
+    pub fn new() -> MemoryRegistry {
+        MemoryRegistry::default()
+    }
+
+    fn root(&self) -> MutexGuard<'_, Node> {
+        // Every operation leaves the tree consistent, so a panic elsewhere cannot corrupt it.
+        self.root.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl Registry for MemoryRegistry {
+    fn key_exists(&self, path: &str) -> bool {
+        split(path).is_some_and(|parts| self.root().find(&parts).is_some())
+    }
+
+    fn subkeys(&self, path: &str) -> Vec<String> {
+        let Some(parts) = split(path) else { return Vec::new() };
+        let root = self.root();
+        root.find(&parts)
+            .map(|n| n.children.values().map(|(name, _)| name.clone()).collect())
+            .unwrap_or_default()
+    }
+
+    fn values(&self, path: &str) -> Vec<(String, RegValue)> {
+        let Some(parts) = split(path) else { return Vec::new() };
+        let root = self.root();
+        root.find(&parts)
+            .map(|n| n.values.values().cloned().collect())
+            .unwrap_or_default()
+    }
+
+    fn value(&self, path: &str, name: &str) -> Option<RegValue> {
+        let parts = split(path)?;
+        let root = self.root();
+        root.find(&parts)?.values.get(&fold(name)).map(|(_, v)| v.clone())
+    }
+
+    fn create_key(&self, path: &str) -> Result<(), HRESULT> {
+        let parts = split(path).filter(|p| !p.is_empty()).ok_or(E_INVALIDARG)?;
+        self.root().create(&parts);
+        Ok(())
+    }
+
+    fn set_value(&self, path: &str, name: &str, value: &RegValue) -> Result<(), HRESULT> {
+        let parts = split(path).ok_or(E_INVALIDARG)?;
+        if name.encode_utf16().count() > MAX_NAME_UNITS {
+            return Err(E_INVALIDARG);
+        }
+        let mut root = self.root();
+        let node = root.create(&parts);
+        node.values.insert(fold(name), (name.to_string(), value.clone()));
+        Ok(())
+    }
+
+    fn delete_value(&self, path: &str, name: &str) -> Result<(), HRESULT> {
+        let parts = split(path).ok_or(E_INVALIDARG)?;
+        if let Some(node) = self.root().find_mut(&parts) {
+            node.values.remove(&fold(name));
+        }
+        Ok(())
+    }
+
+    fn delete_key(&self, path: &str) -> Result<(), HRESULT> {
+        let parts = split(path).filter(|p| !p.is_empty()).ok_or(E_INVALIDARG)?;
+        let (last, parents) = parts.split_last().expect("checked non-empty");
+        let mut root = self.root();
+        let Some(parent) = root.find_mut(parents) else {
+            return Ok(());
+        };
+        match parent.children.get(&fold(last)) {
+            None => Ok(()),
+            // Windows refuses to delete a key with subkeys (ERROR_ACCESS_DENIED).
+            Some((_, node)) if !node.children.is_empty() => Err(crate::com::hr(0x80070005)),
+            Some(_) => {
+                parent.children.remove(&fold(last));
+                Ok(())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sz(s: &str) -> RegValue {
+        RegValue::Sz(s.to_string())
+    }
+
+    #[test]
+    fn names_are_case_insensitive_and_keep_their_case() {
+        let reg = MemoryRegistry::new();
+        reg.set_value("CLSID\\{A}\\ProgID", "", &sz("Vendor.Server.1")).unwrap();
+        assert!(reg.key_exists("clsid\\{a}"));
+        assert_eq!(reg.subkeys("CLSID"), vec!["{A}".to_string()]);
+        assert_eq!(reg.value("clsid\\{A}\\progid", ""), Some(sz("Vendor.Server.1")));
+        reg.set_value("CLSID\\{A}", "AppID", &sz("x")).unwrap();
+        assert_eq!(reg.value("CLSID\\{A}", "appid"), Some(sz("x")));
+        reg.set_value("CLSID\\{A}", "APPID", &sz("y")).unwrap();
+        assert_eq!(reg.values("CLSID\\{A}"), vec![("APPID".to_string(), sz("y"))]);
+    }
+
+    #[test]
+    fn keys_with_subkeys_cannot_be_deleted() {
+        let reg = MemoryRegistry::new();
+        reg.create_key("A\\B").unwrap();
+        assert!(reg.delete_key("A").is_err());
+        reg.delete_key("a\\b").unwrap();
+        reg.delete_key("A").unwrap();
+        assert!(!reg.key_exists("A"));
+        // Deleting what is not there succeeds.
+        reg.delete_key("A\\B\\C").unwrap();
+        reg.delete_value("A", "x").unwrap();
+    }
+
+    #[test]
+    fn malformed_paths_are_refused() {
+        let reg = MemoryRegistry::new();
+        assert_eq!(reg.create_key(""), Err(E_INVALIDARG));
+        assert_eq!(reg.create_key("A\\\\B"), Err(E_INVALIDARG));
+        assert_eq!(reg.create_key(&"x".repeat(256)), Err(E_INVALIDARG));
+        assert!(reg.create_key(&"x".repeat(255)).is_ok());
+        assert!(!reg.key_exists("A\\"));
+        assert!(reg.subkeys("\\").is_empty());
+    }
+}

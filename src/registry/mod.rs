@@ -1,0 +1,401 @@
+//! The registry as the server browser and the registration helpers see it (specification chapter 6).
+//!
+//! All registry logic of the library runs against the [`Registry`] trait, which has two
+//! implementations: [`memory::MemoryRegistry`], a registry held in memory (used by the tests on every
+//! platform, and as the process-wide registry off Windows), and, on Windows, the real registry under
+//! `HKEY_CLASSES_ROOT` (`windows.rs`). Paths are relative to `HKEY_CLASSES_ROOT`, with `\` between
+//! key names, compared without regard to case as Windows does.
+//!
+//! C programs see a registry as an opaque [`OpcRegistry`] handle: `OpcRegistryCreateMemory` makes an
+//! empty one, `OpcRegistryOpenSystem` the system one, and every registration and server-list function
+//! takes one (NULL meaning the system registry).
+
+pub mod categories;
+pub mod cmdline;
+pub mod memory;
+pub mod regfile;
+pub mod register;
+pub mod version;
+#[cfg(windows)]
+pub mod windows;
+
+use core::ptr;
+use std::sync::{Arc, OnceLock};
+
+use crate::com::alloc::alloc_wstr_from_str;
+use crate::com::boundary::catch;
+use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
+use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, LPWSTR, S_OK};
+
+/// `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
+pub const REGDB_E_KEYMISSING: HRESULT = 0x80040152_u32 as HRESULT;
+/// `REGDB_E_WRITEREGDB`: the registry could not be written.
+pub const REGDB_E_WRITEREGDB: HRESULT = 0x80040151_u32 as HRESULT;
+/// `REGDB_E_INVALIDVALUE`: a registry value is not of the expected type or form.
+pub const REGDB_E_INVALIDVALUE: HRESULT = 0x80040153_u32 as HRESULT;
+
+/// The longest key or value name the Windows registry accepts, in UTF-16 units.
+pub(crate) const MAX_NAME_UNITS: usize = 255;
+
+/// One registry value. Registration writes strings only; the other kinds exist so an export of the
+/// real registry is faithful.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RegValue {
+    /// `REG_SZ`.
+    Sz(String),
+    /// `REG_EXPAND_SZ`.
+    ExpandSz(String),
+    /// `REG_DWORD`.
+    Dword(u32),
+    /// Any other type, as its raw bytes (`REG_BINARY` is 3, `REG_MULTI_SZ` 7, ...).
+    Other { kind: u32, bytes: Vec<u8> },
+}
+
+impl RegValue {
+    /// The text of a string value (`REG_SZ` or `REG_EXPAND_SZ`, unexpanded).
+    pub fn as_str(&self) -> Option<&str> {
+        match self {
+            RegValue::Sz(s) | RegValue::ExpandSz(s) => Some(s),
+            _ => None,
+        }
+    }
+}
+
+/// A registry rooted at `HKEY_CLASSES_ROOT`, as the server list and the registration helpers use it.
+///
+/// Reads are best effort: a key that is missing or cannot be read has no subkeys and no values.
+/// Writes report failures as HRESULTs. Names are compared without regard to case. The empty value
+/// name is the key's default value.
+pub trait Registry: Send + Sync {
+    /// True when `path` exists.
+    fn key_exists(&self, path: &str) -> bool;
+    /// The names of the subkeys of `path`, in no particular order (empty when `path` is missing).
+    fn subkeys(&self, path: &str) -> Vec<String>;
+    /// The values of `path` as (name, value) pairs (empty when `path` is missing).
+    fn values(&self, path: &str) -> Vec<(String, RegValue)>;
+    /// The value `name` of `path`, if both exist.
+    fn value(&self, path: &str, name: &str) -> Option<RegValue>;
+    /// Creates `path` and any missing parents; succeeds when it exists already.
+    fn create_key(&self, path: &str) -> Result<(), HRESULT>;
+    /// Writes the value `name` of `path`, creating the key if needed.
+    fn set_value(&self, path: &str, name: &str, value: &RegValue) -> Result<(), HRESULT>;
+    /// Deletes the value `name` of `path`; succeeds when it does not exist.
+    fn delete_value(&self, path: &str, name: &str) -> Result<(), HRESULT>;
+    /// Deletes `path` if it has no subkeys (its values go with it); succeeds when it does not exist.
+    fn delete_key(&self, path: &str) -> Result<(), HRESULT>;
+
+    /// For each subkey of `parent`: its name, and for each of `children` (paths relative to that
+    /// subkey) the subkey names below it, or `None` when it is missing. The server list's scan of
+    /// `CLSID`; implementations may do it faster than one lookup at a time.
+    fn scan(&self, parent: &str, children: &[&str]) -> Vec<(String, Vec<Option<Vec<String>>>)> {
+        self.subkeys(parent)
+            .into_iter()
+            .map(|name| {
+                let found = children
+                    .iter()
+                    .map(|child| {
+                        let path = format!("{parent}\\{name}\\{child}");
+                        self.key_exists(&path).then(|| self.subkeys(&path))
+                    })
+                    .collect();
+                (name, found)
+            })
+            .collect()
+    }
+
+    /// Creates the component category `catid` with `description` for `lcid` (the specification's
+    /// CreateComponentCategory): `Component Categories\{catid}`, value `<lcid in hex>`.
+    fn register_category(&self, catid: &GUID, lcid: u32, description: &str) -> Result<(), HRESULT> {
+        write_category(self, catid, lcid, description)
+    }
+
+    /// Registers `clsid` as implementing (or, with `required`, requiring) `catid`:
+    /// `CLSID\{clsid}\Implemented Categories\{catid}` (the specification's RegisterCLSIDInCategory).
+    fn register_class_category(&self, clsid: &GUID, catid: &GUID, required: bool) -> Result<(), HRESULT> {
+        self.create_key(&class_category_key(clsid, catid, required))
+    }
+
+    /// Removes what `register_class_category` wrote (the specification's UnRegisterCLSIDInCategory);
+    /// the `Implemented Categories` key itself stays.
+    fn unregister_class_category(&self, clsid: &GUID, catid: &GUID, required: bool) -> Result<(), HRESULT> {
+        self.delete_key(&class_category_key(clsid, catid, required))
+    }
+}
+
+/// What `Registry::register_category` writes, with plain registry calls.
+pub(crate) fn write_category<R: Registry + ?Sized>(
+    reg: &R,
+    catid: &GUID,
+    lcid: u32,
+    text: &str,
+) -> Result<(), HRESULT> {
+    reg.set_value(
+        &category_key(catid),
+        &format!("{lcid:x}"),
+        &RegValue::Sz(text.to_string()),
+    )
+}
+
+/// `CLSID\{clsid}\Implemented Categories\{catid}` (or `Required Categories`).
+pub(crate) fn class_category_key(clsid: &GUID, catid: &GUID, required: bool) -> String {
+    format!("{}\\{catid}", class_categories_key(clsid, required))
+}
+
+/// `CLSID\{clsid}`.
+pub(crate) fn class_key(clsid: &GUID) -> String {
+    format!("CLSID\\{clsid}")
+}
+
+/// `CLSID\{clsid}\Implemented Categories` (or `Required Categories`).
+pub(crate) fn class_categories_key(clsid: &GUID, required: bool) -> String {
+    let kind = if required { "Required" } else { "Implemented" };
+    format!("CLSID\\{clsid}\\{kind} Categories")
+}
+
+/// `Component Categories\{catid}`.
+pub(crate) fn category_key(catid: &GUID) -> String {
+    format!("Component Categories\\{catid}")
+}
+
+/// Parses the registry form of a GUID, `{F31DFDE2-07B6-11D2-B2D8-0060083BA1FB}` (any case, braces
+/// required, nothing around it).
+pub fn parse_guid(text: &str) -> Option<GUID> {
+    let b = text.as_bytes();
+    if b.len() != 38 || b[0] != b'{' || b[37] != b'}' {
+        return None;
+    }
+    let inner = &text[1..37];
+    let mut hex = String::with_capacity(32);
+    for (i, c) in inner.char_indices() {
+        if matches!(i, 8 | 13 | 18 | 23) {
+            if c != '-' {
+                return None;
+            }
+        } else if c.is_ascii_hexdigit() {
+            hex.push(c);
+        } else {
+            return None;
+        }
+    }
+    u128::from_str_radix(&hex, 16).ok().map(GUID::from_u128)
+}
+
+/// A registry with the views the server list merges.
+///
+/// `write` is where registration writes; `views` are read in order by the server list (on 64-bit
+/// Windows the 64-bit and the 32-bit registry view, so a server registered in only one of them is still
+/// found; elsewhere just `write`).
+pub(crate) struct Registries {
+    pub(crate) write: Arc<dyn Registry>,
+    pub(crate) views: Vec<Arc<dyn Registry>>,
+}
+
+impl Registries {
+    fn single(reg: Arc<dyn Registry>) -> Registries {
+        Registries {
+            write: reg.clone(),
+            views: vec![reg],
+        }
+    }
+
+    /// The system registry: on Windows `HKEY_CLASSES_ROOT` in both views (native first); elsewhere the
+    /// process-wide in-memory registry, which `DllRegisterServer` writes to as well.
+    pub(crate) fn system() -> Arc<Registries> {
+        static SYSTEM: OnceLock<Arc<Registries>> = OnceLock::new();
+        SYSTEM
+            .get_or_init(|| {
+                #[cfg(windows)]
+                {
+                    Arc::new(windows::system_registries())
+                }
+                #[cfg(not(windows))]
+                {
+                    Arc::new(Registries::single(Arc::new(memory::MemoryRegistry::new())))
+                }
+            })
+            .clone()
+    }
+}
+
+/// A registry the C API works on: the system registry, or one held in memory (for tests and for
+/// preparing `.reg` files). Create with `OpcRegistryCreateMemory` or `OpcRegistryOpenSystem`, free
+/// with `OpcRegistryRelease`. Objects made over a registry (server lists) keep it alive themselves,
+/// so the handle may be released while they live. A handle may be used from several threads.
+pub struct OpcRegistry {
+    pub(crate) inner: Arc<Registries>,
+}
+
+/// The registries behind a C handle; NULL means the system registry.
+///
+/// # Safety
+/// `reg` must be NULL or a live handle from `OpcRegistryCreateMemory` / `OpcRegistryOpenSystem`.
+pub(crate) unsafe fn registries(reg: *const OpcRegistry) -> Arc<Registries> {
+    if reg.is_null() {
+        Registries::system()
+    } else {
+        // SAFETY: the caller vouches for the handle.
+        unsafe { (*reg).inner.clone() }
+    }
+}
+
+/// Reads a caller's string argument as UTF-8; `E_POINTER` for NULL, `E_INVALIDARG` when too long or
+/// not valid UTF-16.
+///
+/// # Safety
+/// `p` must be NULL or a NUL-terminated UTF-16 string.
+pub(crate) unsafe fn arg_string(p: LPCWSTR) -> Result<String, HRESULT> {
+    if p.is_null() {
+        return Err(E_POINTER);
+    }
+    // SAFETY: forwarded from the caller.
+    let units = unsafe { wstr_units(p, MAX_STRING_UNITS) }.ok_or(E_INVALIDARG)?;
+    String::from_utf16(units).map_err(|_| E_INVALIDARG)
+}
+
+/// As [`arg_string`], NULL giving `None`.
+///
+/// # Safety
+/// As for [`arg_string`].
+pub(crate) unsafe fn opt_arg_string(p: LPCWSTR) -> Result<Option<String>, HRESULT> {
+    if p.is_null() {
+        Ok(None)
+    } else {
+        // SAFETY: forwarded.
+        unsafe { arg_string(p) }.map(Some)
+    }
+}
+
+/// Writes `*out = NULL` for a non-NULL out-parameter; `E_POINTER` when it is NULL.
+///
+/// # Safety
+/// `out` must be NULL or writable.
+pub(crate) unsafe fn clear_out<T>(out: *mut *mut T) -> Result<(), HRESULT> {
+    if out.is_null() {
+        return Err(E_POINTER);
+    }
+    // SAFETY: checked non-NULL; the caller vouches it is writable.
+    unsafe { *out = ptr::null_mut() };
+    Ok(())
+}
+
+fn into_hr(r: Result<(), HRESULT>) -> HRESULT {
+    r.err().unwrap_or(S_OK)
+}
+
+/// Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
+/// the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
+///
+/// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+///
+/// # Safety
+/// `out` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    if let Err(hr) = unsafe { clear_out(out) } {
+        return hr;
+    }
+    catch(E_UNEXPECTED, || {
+        let reg = Box::new(OpcRegistry {
+            inner: Arc::new(Registries::single(Arc::new(memory::MemoryRegistry::new()))),
+        });
+        // SAFETY: checked writable above.
+        unsafe { *out = Box::into_raw(reg) };
+        S_OK
+    })
+}
+
+/// Opens the system registry: on Windows `HKEY_CLASSES_ROOT`, where registration writes to the
+/// registry view of the calling process and the server list reads both the 64-bit and the 32-bit view;
+/// elsewhere the process-wide in-memory registry that `DllRegisterServer` and the server list created by
+/// `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
+/// the same registry.
+///
+/// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+///
+/// # Safety
+/// `out` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    if let Err(hr) = unsafe { clear_out(out) } {
+        return hr;
+    }
+    catch(E_UNEXPECTED, || {
+        let reg = Box::new(OpcRegistry {
+            inner: Registries::system(),
+        });
+        // SAFETY: checked writable above.
+        unsafe { *out = Box::into_raw(reg) };
+        S_OK
+    })
+}
+
+/// Frees a registry handle. NULL is ignored. Objects created over the registry stay usable.
+///
+/// # Safety
+/// `reg` must be NULL or a live handle that is not used again.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegistryRelease(reg: *mut OpcRegistry) {
+    if reg.is_null() {
+        return;
+    }
+    // SAFETY: the caller gives up a handle made by Box::into_raw.
+    catch((), || drop(unsafe { Box::from_raw(reg) }))
+}
+
+/// Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
+/// HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
+///
+/// Returns S_OK; E_POINTER for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
+/// UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
+/// is not a string. `*data` is NULL on failure.
+///
+/// # Safety
+/// `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegistryGetString(
+    reg: *const OpcRegistry,
+    key: LPCWSTR,
+    name: LPCWSTR,
+    data: *mut LPWSTR,
+) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    if let Err(hr) = unsafe { clear_out(data) } {
+        return hr;
+    }
+    catch(E_UNEXPECTED, || {
+        let run = || -> Result<(), HRESULT> {
+            // SAFETY: forwarded from the caller's contract.
+            let (key, name) = unsafe { (arg_string(key)?, opt_arg_string(name)?.unwrap_or_default()) };
+            // SAFETY: as above.
+            let regs = unsafe { registries(reg) };
+            let value = regs.write.value(&key, &name).ok_or(REGDB_E_KEYMISSING)?;
+            let text = value.as_str().ok_or(REGDB_E_INVALIDVALUE)?;
+            let p = alloc_wstr_from_str(text)?;
+            // SAFETY: checked writable above.
+            unsafe { *data = p };
+            Ok(())
+        };
+        into_hr(run())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn guids_parse_in_registry_form_only() {
+        let g = GUID::from_u128(0x63D5F432_CFE4_11d1_B2C8_0060083BA1FB);
+        assert_eq!(parse_guid("{63D5F432-CFE4-11d1-B2C8-0060083BA1FB}"), Some(g));
+        assert_eq!(parse_guid(&g.to_string()), Some(g));
+        assert_eq!(parse_guid("63D5F432-CFE4-11d1-B2C8-0060083BA1FB"), None);
+        assert_eq!(parse_guid("{63D5F432-CFE4-11d1-B2C8-0060083BA1FG}"), None);
+        assert_eq!(parse_guid("{63D5F432+CFE4-11d1-B2C8-0060083BA1FB}"), None);
+        assert_eq!(parse_guid("{63D5F432-CFE4-11d1-B2C8-0060083BA1FB} "), None);
+        assert_eq!(parse_guid("{+3D5F432-CFE4-11d1-B2C8-0060083BA1FB}"), None);
+        assert_eq!(parse_guid(""), None);
+        assert_eq!(parse_guid("{éD5F432-CFE4-11d1-B2C8-0060083BA1F}"), None);
+    }
+}

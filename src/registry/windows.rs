@@ -1,0 +1,483 @@
+//! The Windows registry under `HKEY_CLASSES_ROOT`, in one registry view, and the Component Categories
+//! Manager (ICatRegister) through which categories are registered, as specification section 6.1.1
+//! asks.
+//!
+//! On 64-bit Windows a 32-bit server registers in the 32-bit view (`WOW6432Node`) and a 64-bit one in
+//! the 64-bit view; a client only sees its own view unless it looks at both. The server list therefore
+//! reads both views (`KEY_WOW64_64KEY` and `KEY_WOW64_32KEY`), native first. On 32-bit Windows both
+//! flags are ignored and the two views are the same registry (duplicates are removed by the server
+//! list).
+
+use core::ffi::c_void;
+use core::ptr;
+use std::sync::Arc;
+
+use windows_sys::Win32::Foundation::{
+    ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HMODULE, WIN32_ERROR,
+};
+use windows_sys::Win32::System::Com::{CoCreateInstance, CLSCTX_INPROC_SERVER};
+use windows_sys::Win32::System::LibraryLoader::{
+    GetModuleFileNameW, GetModuleHandleExW, GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS,
+    GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
+};
+use windows_sys::Win32::System::Registry::{
+    RegCloseKey, RegCreateKeyExW, RegDeleteKeyExW, RegDeleteValueW, RegEnumKeyExW, RegEnumValueW, RegOpenKeyExW,
+    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_READ, KEY_SET_VALUE, KEY_WOW64_32KEY,
+    KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
+};
+
+use super::{class_category_key, write_category, RegValue, Registries, Registry};
+use crate::com::unknown::{release, IUnknown};
+use crate::com::{E_FAIL, GUID, HRESULT, LCID, ULONG};
+
+/// `HRESULT_FROM_WIN32`.
+fn hr_from_win32(e: WIN32_ERROR) -> HRESULT {
+    if e == ERROR_SUCCESS {
+        0
+    } else {
+        ((e & 0xFFFF) | 0x8007_0000) as HRESULT
+    }
+}
+
+fn wide(s: &str) -> Vec<u16> {
+    s.encode_utf16().chain([0]).collect()
+}
+
+/// An open registry key, closed when dropped.
+struct Key(HKEY);
+
+impl Drop for Key {
+    fn drop(&mut self) {
+        // SAFETY: the handle was opened by this module and is closed once.
+        unsafe { RegCloseKey(self.0) };
+    }
+}
+
+impl Key {
+    fn subkeys(&self) -> Vec<String> {
+        let mut names = Vec::new();
+        let mut buf = [0u16; 256];
+        for index in 0.. {
+            let mut len = buf.len() as u32;
+            // SAFETY: `buf` has room for `len` units; the other outputs are optional.
+            let e = unsafe {
+                RegEnumKeyExW(
+                    self.0,
+                    index,
+                    buf.as_mut_ptr(),
+                    &mut len,
+                    ptr::null(),
+                    ptr::null_mut(),
+                    ptr::null_mut(),
+                    ptr::null_mut(),
+                )
+            };
+            if e != ERROR_SUCCESS {
+                break;
+            }
+            names.push(String::from_utf16_lossy(&buf[..len as usize]));
+        }
+        names
+    }
+
+    fn open(&self, sub: &str, access: u32) -> Option<Key> {
+        let mut h: HKEY = ptr::null_mut();
+        // SAFETY: valid handle and NUL-terminated name; `h` is written on success.
+        let e = unsafe { RegOpenKeyExW(self.0, wide(sub).as_ptr(), 0, access, &mut h) };
+        (e == ERROR_SUCCESS).then_some(Key(h))
+    }
+
+    fn value(&self, name: &str) -> Option<RegValue> {
+        let name = wide(name);
+        let mut data: Vec<u8> = vec![0; 256];
+        loop {
+            let mut kind = 0u32;
+            let mut len = data.len() as u32;
+            // SAFETY: `data` has room for `len` bytes.
+            let e = unsafe {
+                RegQueryValueExW(
+                    self.0,
+                    name.as_ptr(),
+                    ptr::null(),
+                    &mut kind,
+                    data.as_mut_ptr(),
+                    &mut len,
+                )
+            };
+            match e {
+                ERROR_SUCCESS => {
+                    data.truncate(len as usize);
+                    return Some(convert(kind, data));
+                }
+                ERROR_MORE_DATA => data.resize(len as usize, 0),
+                _ => return None,
+            }
+        }
+    }
+
+    fn values(&self) -> Vec<(String, RegValue)> {
+        let mut out = Vec::new();
+        let mut name = vec![0u16; 16384];
+        let mut data: Vec<u8> = vec![0; 1024];
+        let mut index = 0;
+        loop {
+            let mut name_len = name.len() as u32;
+            let mut len = data.len() as u32;
+            let mut kind = 0u32;
+            // SAFETY: both buffers have the room their lengths say.
+            let e = unsafe {
+                RegEnumValueW(
+                    self.0,
+                    index,
+                    name.as_mut_ptr(),
+                    &mut name_len,
+                    ptr::null(),
+                    &mut kind,
+                    data.as_mut_ptr(),
+                    &mut len,
+                )
+            };
+            match e {
+                ERROR_SUCCESS => {
+                    let value = convert(kind, data[..len as usize].to_vec());
+                    out.push((String::from_utf16_lossy(&name[..name_len as usize]), value));
+                    index += 1;
+                }
+                ERROR_MORE_DATA => data.resize((len as usize).max(data.len() * 2), 0),
+                ERROR_NO_MORE_ITEMS => return out,
+                _ => return out,
+            }
+        }
+    }
+}
+
+/// A registry value's bytes as a [`RegValue`].
+fn convert(kind: u32, bytes: Vec<u8>) -> RegValue {
+    if kind == REG_SZ || kind == REG_EXPAND_SZ {
+        if bytes.len() % 2 == 0 {
+            let mut units: Vec<u16> = bytes.chunks(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect();
+            while units.last() == Some(&0) {
+                units.pop();
+            }
+            if let Ok(s) = String::from_utf16(&units) {
+                return if kind == REG_SZ {
+                    RegValue::Sz(s)
+                } else {
+                    RegValue::ExpandSz(s)
+                };
+            }
+        }
+    } else if kind == REG_DWORD && bytes.len() == 4 {
+        return RegValue::Dword(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]));
+    }
+    RegValue::Other { kind, bytes }
+}
+
+/// `HKEY_CLASSES_ROOT` in one registry view.
+pub struct WindowsRegistry {
+    /// `KEY_WOW64_64KEY`, `KEY_WOW64_32KEY`, or 0 for the view of the calling process.
+    view: u32,
+}
+
+impl WindowsRegistry {
+    /// The registry view of the calling process (where registration writes).
+    pub fn native() -> WindowsRegistry {
+        WindowsRegistry { view: 0 }
+    }
+
+    fn open(&self, path: &str, access: u32) -> Option<Key> {
+        let mut h: HKEY = ptr::null_mut();
+        // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
+        let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), 0, access | self.view, &mut h) };
+        (e == ERROR_SUCCESS).then_some(Key(h))
+    }
+
+    fn create(&self, path: &str) -> Result<Key, HRESULT> {
+        let mut h: HKEY = ptr::null_mut();
+        // SAFETY: predefined root, NUL-terminated path, optional arguments NULL; `h` written on success.
+        let e = unsafe {
+            RegCreateKeyExW(
+                HKEY_CLASSES_ROOT,
+                wide(path).as_ptr(),
+                0,
+                ptr::null(),
+                REG_OPTION_NON_VOLATILE,
+                KEY_WRITE | self.view,
+                ptr::null(),
+                &mut h,
+                ptr::null_mut(),
+            )
+        };
+        if e == ERROR_SUCCESS {
+            Ok(Key(h))
+        } else {
+            Err(hr_from_win32(e))
+        }
+    }
+
+    /// The Component Categories Manager, when this is the process's own view and COM is initialised.
+    fn cat_register(&self) -> Option<CatRegister> {
+        if self.view != 0 {
+            return None;
+        }
+        let mut p: *mut c_void = ptr::null_mut();
+        // SAFETY: constant GUIDs with the layout of windows-sys' GUID; `p` is written on success.
+        let hr = unsafe {
+            CoCreateInstance(
+                (&CLSID_STD_COMPONENT_CATEGORIES_MGR as *const GUID).cast(),
+                ptr::null_mut(),
+                CLSCTX_INPROC_SERVER,
+                (&IID_ICAT_REGISTER as *const GUID).cast(),
+                &mut p,
+            )
+        };
+        (hr >= 0 && !p.is_null()).then_some(CatRegister(p.cast()))
+    }
+}
+
+impl Registry for WindowsRegistry {
+    fn key_exists(&self, path: &str) -> bool {
+        self.open(path, KEY_READ).is_some()
+    }
+
+    fn subkeys(&self, path: &str) -> Vec<String> {
+        self.open(path, KEY_READ).map(|k| k.subkeys()).unwrap_or_default()
+    }
+
+    fn values(&self, path: &str) -> Vec<(String, RegValue)> {
+        self.open(path, KEY_READ).map(|k| k.values()).unwrap_or_default()
+    }
+
+    fn value(&self, path: &str, name: &str) -> Option<RegValue> {
+        self.open(path, KEY_READ)?.value(name)
+    }
+
+    fn create_key(&self, path: &str) -> Result<(), HRESULT> {
+        self.create(path).map(drop)
+    }
+
+    fn set_value(&self, path: &str, name: &str, value: &RegValue) -> Result<(), HRESULT> {
+        let key = self.create(path)?;
+        let (kind, bytes): (u32, Vec<u8>) = match value {
+            RegValue::Sz(s) => (REG_SZ, wide(s).iter().flat_map(|u| u.to_le_bytes()).collect()),
+            RegValue::ExpandSz(s) => (REG_EXPAND_SZ, wide(s).iter().flat_map(|u| u.to_le_bytes()).collect()),
+            RegValue::Dword(d) => (REG_DWORD, d.to_le_bytes().to_vec()),
+            RegValue::Other { kind, bytes } => (*kind, bytes.clone()),
+        };
+        let len = u32::try_from(bytes.len()).map_err(|_| crate::com::E_INVALIDARG)?;
+        // SAFETY: open key, NUL-terminated name, `bytes` holds `len` bytes.
+        let e = unsafe { RegSetValueExW(key.0, wide(name).as_ptr(), 0, kind, bytes.as_ptr(), len) };
+        if e == ERROR_SUCCESS {
+            Ok(())
+        } else {
+            Err(hr_from_win32(e))
+        }
+    }
+
+    fn delete_value(&self, path: &str, name: &str) -> Result<(), HRESULT> {
+        let Some(key) = self.open(path, KEY_SET_VALUE) else {
+            return Ok(());
+        };
+        // SAFETY: open key, NUL-terminated name.
+        let e = unsafe { RegDeleteValueW(key.0, wide(name).as_ptr()) };
+        match e {
+            ERROR_SUCCESS | ERROR_FILE_NOT_FOUND => Ok(()),
+            e => Err(hr_from_win32(e)),
+        }
+    }
+
+    fn delete_key(&self, path: &str) -> Result<(), HRESULT> {
+        if path.is_empty() {
+            return Err(crate::com::E_INVALIDARG);
+        }
+        // SAFETY: predefined root, NUL-terminated path. Fails with access denied when subkeys exist.
+        let e = unsafe { RegDeleteKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), self.view, 0) };
+        match e {
+            ERROR_SUCCESS | ERROR_FILE_NOT_FOUND => Ok(()),
+            e => Err(hr_from_win32(e)),
+        }
+    }
+
+    /// One open of `parent`, then one relative open per child: several times faster than opening
+    /// every path from the root.
+    fn scan(&self, parent: &str, children: &[&str]) -> Vec<(String, Vec<Option<Vec<String>>>)> {
+        let Some(parent_key) = self.open(parent, KEY_READ) else {
+            return Vec::new();
+        };
+        parent_key
+            .subkeys()
+            .into_iter()
+            .map(|name| {
+                let found = children
+                    .iter()
+                    .map(|child| {
+                        parent_key
+                            .open(&format!("{name}\\{child}"), KEY_READ | self.view)
+                            .map(|k| k.subkeys())
+                    })
+                    .collect();
+                (name, found)
+            })
+            .collect()
+    }
+
+    fn register_category(&self, catid: &GUID, lcid: u32, description: &str) -> Result<(), HRESULT> {
+        let Some(cats) = self.cat_register() else {
+            return write_category(self, catid, lcid, description);
+        };
+        let mut info = CategoryInfo {
+            catid: *catid,
+            lcid,
+            description: [0; 128],
+        };
+        for (slot, unit) in info.description.iter_mut().zip(description.encode_utf16().take(127)) {
+            *slot = unit;
+        }
+        // SAFETY: live ICatRegister; one CATEGORYINFO.
+        let hr = unsafe { ((*(*cats.0).vtbl).RegisterCategories)(cats.0, 1, &mut info) };
+        ok(hr)
+    }
+
+    fn register_class_category(&self, clsid: &GUID, catid: &GUID, required: bool) -> Result<(), HRESULT> {
+        let Some(cats) = self.cat_register() else {
+            return self.create_key(&class_category_key(clsid, catid, required));
+        };
+        let mut id = *catid;
+        // SAFETY: live ICatRegister; one CATID.
+        let hr = unsafe {
+            let v = &*(*cats.0).vtbl;
+            if required {
+                (v.RegisterClassReqCategories)(cats.0, clsid, 1, &mut id)
+            } else {
+                (v.RegisterClassImplCategories)(cats.0, clsid, 1, &mut id)
+            }
+        };
+        ok(hr)
+    }
+
+    fn unregister_class_category(&self, clsid: &GUID, catid: &GUID, required: bool) -> Result<(), HRESULT> {
+        let Some(cats) = self.cat_register() else {
+            return self.delete_key(&class_category_key(clsid, catid, required));
+        };
+        let mut id = *catid;
+        // SAFETY: live ICatRegister; one CATID.
+        let hr = unsafe {
+            let v = &*(*cats.0).vtbl;
+            if required {
+                (v.UnRegisterClassReqCategories)(cats.0, clsid, 1, &mut id)
+            } else {
+                (v.UnRegisterClassImplCategories)(cats.0, clsid, 1, &mut id)
+            }
+        };
+        ok(hr)
+    }
+}
+
+fn ok(hr: HRESULT) -> Result<(), HRESULT> {
+    if hr < 0 {
+        Err(hr)
+    } else {
+        Ok(())
+    }
+}
+
+/// The registries of the system: writes go to the process's own view, reads merge both views.
+pub(crate) fn system_registries() -> Registries {
+    let native: Arc<dyn Registry> = Arc::new(WindowsRegistry::native());
+    let (first, second) = if cfg!(target_pointer_width = "64") {
+        (KEY_WOW64_64KEY, KEY_WOW64_32KEY)
+    } else {
+        (KEY_WOW64_32KEY, KEY_WOW64_64KEY)
+    };
+    Registries {
+        write: native,
+        views: vec![
+            Arc::new(WindowsRegistry { view: first }),
+            Arc::new(WindowsRegistry { view: second }),
+        ],
+    }
+}
+
+/// The module (DLL or EXE) that contains this code, without taking a reference on it. Found from an
+/// address rather than kept by a DllMain, because a program linking the library statically may have
+/// its own DllMain.
+pub(crate) fn this_module() -> HMODULE {
+    let mut h: HMODULE = ptr::null_mut();
+    // SAFETY: the address of a function in this module; `h` is written on success.
+    let ok = unsafe {
+        GetModuleHandleExW(
+            GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS | GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
+            this_module as *const () as *const u16,
+            &mut h,
+        )
+    };
+    if ok == 0 {
+        ptr::null_mut()
+    } else {
+        h
+    }
+}
+
+/// The full path of `module` (NULL: the executable of the process).
+pub(crate) fn module_file_name(module: HMODULE) -> Result<String, HRESULT> {
+    let mut buf = vec![0u16; 260];
+    loop {
+        // SAFETY: `buf` has room for `buf.len()` units.
+        let n = unsafe { GetModuleFileNameW(module, buf.as_mut_ptr(), buf.len() as u32) } as usize;
+        if n == 0 {
+            return Err(E_FAIL);
+        }
+        if n < buf.len() {
+            return String::from_utf16(&buf[..n]).map_err(|_| E_FAIL);
+        }
+        if buf.len() >= 32768 {
+            return Err(E_FAIL);
+        }
+        buf.resize(buf.len() * 2, 0);
+    }
+}
+
+/// `CLSID_StdComponentCategoriesMgr` {0002E005-0000-0000-C000-000000000046}.
+const CLSID_STD_COMPONENT_CATEGORIES_MGR: GUID = GUID::from_u128(0x0002E005_0000_0000_C000_000000000046);
+/// `IID_ICatRegister` {0002E012-0000-0000-C000-000000000046}.
+const IID_ICAT_REGISTER: GUID = GUID::from_u128(0x0002E012_0000_0000_C000_000000000046);
+
+/// `CATEGORYINFO` of comcat.h.
+#[repr(C)]
+struct CategoryInfo {
+    catid: GUID,
+    lcid: LCID,
+    description: [u16; 128],
+}
+
+/// The methods of `ICatRegister` (comcat.h), in order.
+#[repr(C)]
+#[allow(non_snake_case)]
+struct ICatRegisterVtbl {
+    QueryInterface: unsafe extern "system" fn(*mut ICatRegister, *const GUID, *mut *mut c_void) -> HRESULT,
+    AddRef: unsafe extern "system" fn(*mut ICatRegister) -> ULONG,
+    Release: unsafe extern "system" fn(*mut ICatRegister) -> ULONG,
+    RegisterCategories: unsafe extern "system" fn(*mut ICatRegister, ULONG, *mut CategoryInfo) -> HRESULT,
+    UnRegisterCategories: unsafe extern "system" fn(*mut ICatRegister, ULONG, *mut GUID) -> HRESULT,
+    RegisterClassImplCategories: unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
+    UnRegisterClassImplCategories:
+        unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
+    RegisterClassReqCategories: unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
+    UnRegisterClassReqCategories:
+        unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
+}
+
+#[repr(C)]
+struct ICatRegister {
+    vtbl: *const ICatRegisterVtbl,
+}
+
+/// An owned ICatRegister reference.
+struct CatRegister(*mut ICatRegister);
+
+impl Drop for CatRegister {
+    fn drop(&mut self) {
+        // SAFETY: we own one reference.
+        unsafe { release(self.0 as *mut IUnknown) };
+    }
+}
