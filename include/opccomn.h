@@ -15,6 +15,7 @@
 #if defined(_WIN32)
 #include <windows.h>
 #include <ocidl.h>
+#include <comcat.h>
 #endif
 
 /* Interface tags, declared at file scope before any vtable mentions them (in C, a struct tag first
@@ -25,10 +26,19 @@ struct IConnectionPointContainer;
 struct IEnumConnectionPoints;
 struct IConnectionPoint;
 struct IEnumConnections;
+struct IEnumGUID;
 #endif
 struct IOPCCommon;
 struct IOPCShutdown;
+struct IOPCServerList;
+struct IOPCServerList2;
+struct IOPCEnumGUID;
 
+
+// `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing
+// them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
+// another product registers too (opccomn's own server list under the CLSID of OpcEnum).
+#define OPC_REGISTRATION_KEEP_EXISTING 1
 
 // The kind of OPC server asking for a text; it decides which specification's text a colliding code
 // gets (other codes get their text whatever the kind).
@@ -58,11 +68,59 @@ typedef uint32_t OpcServerKind;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
+// What an EXE server's command line asks it to do.
+enum OpcServerCommand
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  // No switch the library knows: the server was started by hand.
+  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_NONE = 0,
+  // `/RegServer` or `-RegServer`: register and exit.
+  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_REGISTER = 1,
+  // `/UnregServer` or `-UnregServer`: unregister and exit.
+  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_UNREGISTER = 2,
+  // `-Embedding`, `/Embedding`, `-Automation` or `/Automation`: COM started the server for a client.
+  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_EMBEDDING = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum OpcServerCommand OpcServerCommand;
+#else
+typedef uint32_t OpcServerCommand;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+// How a server is packaged.
+enum OpcServerType
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  // A DLL loaded into the client: `InprocServer32`.
+  OPC_SERVER_TYPE_OPC_SERVER_INPROC = 0,
+  // An EXE started by COM: `LocalServer32`.
+  OPC_SERVER_TYPE_OPC_SERVER_LOCAL = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum OpcServerType OpcServerType;
+#else
+typedef uint32_t OpcServerType;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
 // A compiled filter: a pattern checked and prepared once by `OpcPatternCompileW` or
 // `OpcPatternCompileA`, then tested against many strings with `OpcPatternMatchW` / `OpcPatternMatchA`,
 // and released with `OpcPatternFree`. It is never modified after compilation, so several threads may
 // use one filter at the same time.
 typedef struct OpcPattern OpcPattern;
+
+// A registry the C API works on: the system registry, or one held in memory (for tests and for
+// preparing `.reg` files). Create with `OpcRegistryCreateMemory` or `OpcRegistryOpenSystem`, free
+// with `OpcRegistryRelease`. Objects made over a registry (server lists) keep it alive themselves,
+// so the handle may be released while they live. A handle may be used from several threads.
+typedef struct OpcRegistry OpcRegistry;
 
 #if !defined(_WIN32)
 // A COM result code. Negative values are failures (`FAILED(hr)`).
@@ -201,6 +259,80 @@ typedef void (*OpcShutdownCallback)(void *context, LPCWSTR reason);
 typedef uint32_t DWORD;
 #endif
 
+#if !defined(_WIN32)
+// A class identifier.
+typedef struct GUID CLSID;
+#endif
+
+#if !defined(_WIN32)
+// A component category identifier.
+typedef struct GUID CATID;
+#endif
+
+// A server's registration, described once and passed to `OpcRegisterServer`,
+// `OpcUnregisterServer` and `OpcRegistrationExport`. Zero-initialise it, set `struct_size` to
+// `sizeof(OpcServerRegistration)` and fill what applies; NULL strings and arrays mean "none". Fields
+// added in later versions go at the end; the library reads only `struct_size` bytes.
+typedef struct OpcServerRegistration {
+  // `sizeof(OpcServerRegistration)` as the caller's header declares it.
+  uint32_t struct_size;
+  // `OpcServerType`: in-process (0, `InprocServer32`) or local (1, `LocalServer32`).
+  uint32_t server_type;
+  // The server's class identifier.
+  CLSID clsid;
+  // The ProgID, `Vendor.Server.1` (required; no backslash, at most 255 characters).
+  LPCWSTR prog_id;
+  // The version-independent ProgID, `Vendor.Server` (optional).
+  LPCWSTR version_independent_prog_id;
+  // The description users see (required), for example "My OPC Server".
+  LPCWSTR user_type;
+  // Full path of the server's DLL or EXE. NULL means: for a local server the executable of the
+  // calling process (what an EXE server handling `/RegServer` wants); for an in-process server the
+  // module that contains the opccomn code (the server DLL when it links opccomn statically; opccomn
+  // itself when it is loaded as opccomn.dll, so a server DLL using opccomn.dll must pass its path).
+  LPCWSTR module_path;
+  // `ThreadingModel` of an in-process server: "Apartment", "Free", "Both" or "Neutral"; NULL writes
+  // none (COM then uses the main apartment). Ignored for local servers.
+  LPCWSTR threading_model;
+  // The categories the server implements (for example `CATID_OPCDAServer20`).
+  const CATID *implemented_categories;
+  // Number of entries in `implemented_categories` (at most 256).
+  uint32_t implemented_category_count;
+  // Descriptions of the implemented categories, parallel to `implemented_categories`: used to
+  // create a category that does not exist yet. NULL (the array or an entry) uses the standard text
+  // for OPC categories; a category with no description is registered without being created.
+  const LPCWSTR *implemented_category_descriptions;
+  // The categories a client must support to use the server (`Required Categories`).
+  const CATID *required_categories;
+  // Number of entries in `required_categories` (at most 256).
+  uint32_t required_category_count;
+  // For Data Access 1.0 servers only: the vendor name written to `<ProgID>\OPC\Vendor`, by which
+  // OpcEnum and DA 1.0 clients find servers registered the old way.
+  LPCWSTR da10_vendor;
+  // The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+  const CLSID *app_id;
+  // `RunAs` of the AppID ("Interactive User", an account), or NULL.
+  LPCWSTR app_id_run_as;
+  // `LocalService` of the AppID (the Windows service that hosts the server), or NULL.
+  LPCWSTR app_id_local_service;
+  // `DllSurrogate` of the AppID ("" for the system surrogate), or NULL.
+  LPCWSTR app_id_dll_surrogate;
+  // `OPC_REGISTRATION_KEEP_EXISTING` or 0.
+  uint32_t flags;
+} OpcServerRegistration;
+
+#if !defined(_WIN32)
+// A pointer to a class identifier.
+typedef const CLSID *REFCLSID;
+#endif
+
+// A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
+typedef struct OpcVersion {
+  uint16_t major;
+  uint16_t minor;
+  uint16_t build;
+} OpcVersion;
+
 // The methods of IOPCCommon, in the order of the specification's IDL.
 typedef struct IOPCCommonVtbl {
   HRESULT (*QueryInterface)(struct IOPCCommon *This, REFIID riid, void **ppvObject);
@@ -319,6 +451,88 @@ typedef struct IConnectionPointContainer {
 #endif
 
 #if !defined(_WIN32)
+// The methods of the system's IEnumGUID.
+typedef struct IEnumGUIDVtbl {
+  HRESULT (*QueryInterface)(struct IEnumGUID *This, REFIID riid, void **ppvObject);
+  ULONG (*AddRef)(struct IEnumGUID *This);
+  ULONG (*Release)(struct IEnumGUID *This);
+  HRESULT (*Next)(struct IEnumGUID *This, ULONG celt, CLSID *rgelt, ULONG *pceltFetched);
+  HRESULT (*Skip)(struct IEnumGUID *This, ULONG celt);
+  HRESULT (*Reset)(struct IEnumGUID *This);
+  HRESULT (*Clone)(struct IEnumGUID *This, struct IEnumGUID **ppenum);
+} IEnumGUIDVtbl;
+#endif
+
+#if !defined(_WIN32)
+// The system's IEnumGUID (comcat.h), which IOPCServerList::EnumClassesOfCategories returns.
+typedef struct IEnumGUID {
+  const struct IEnumGUIDVtbl *lpVtbl;
+} IEnumGUID;
+#endif
+
+#if !defined(_WIN32)
+// A COM string allocated with the task allocator (same as `LPWSTR`).
+typedef WCHAR *LPOLESTR;
+#endif
+
+#if !defined(_WIN32)
+// A read-only COM string (same as `LPCWSTR`).
+typedef const WCHAR *LPCOLESTR;
+#endif
+
+#if !defined(_WIN32)
+// A pointer to a class identifier the callee writes.
+typedef CLSID *LPCLSID;
+#endif
+
+// The methods of IOPCServerList, in the order of the specification's IDL.
+typedef struct IOPCServerListVtbl {
+  HRESULT (*QueryInterface)(struct IOPCServerList *This, REFIID riid, void **ppvObject);
+  ULONG (*AddRef)(struct IOPCServerList *This);
+  ULONG (*Release)(struct IOPCServerList *This);
+  HRESULT (*EnumClassesOfCategories)(struct IOPCServerList *This, ULONG cImplemented, CATID *rgcatidImpl, ULONG cRequired, CATID *rgcatidReq, struct IEnumGUID **ppenumClsid);
+  HRESULT (*GetClassDetails)(struct IOPCServerList *This, REFCLSID clsid, LPOLESTR *ppszProgID, LPOLESTR *ppszUserType);
+  HRESULT (*CLSIDFromProgID)(struct IOPCServerList *This, LPCOLESTR szProgId, LPCLSID clsid);
+} IOPCServerListVtbl;
+
+// IOPCServerList: the list of OPC servers registered on a machine, by category.
+typedef struct IOPCServerList {
+  const struct IOPCServerListVtbl *lpVtbl;
+} IOPCServerList;
+
+// The methods of IOPCEnumGUID (the same as IEnumGUID's).
+typedef struct IOPCEnumGUIDVtbl {
+  HRESULT (*QueryInterface)(struct IOPCEnumGUID *This, REFIID riid, void **ppvObject);
+  ULONG (*AddRef)(struct IOPCEnumGUID *This);
+  ULONG (*Release)(struct IOPCEnumGUID *This);
+  HRESULT (*Next)(struct IOPCEnumGUID *This, ULONG celt, CLSID *rgelt, ULONG *pceltFetched);
+  HRESULT (*Skip)(struct IOPCEnumGUID *This, ULONG celt);
+  HRESULT (*Reset)(struct IOPCEnumGUID *This);
+  HRESULT (*Clone)(struct IOPCEnumGUID *This, struct IOPCEnumGUID **ppenum);
+} IOPCEnumGUIDVtbl;
+
+// IOPCEnumGUID: an enumeration of GUIDs (the class identifiers of servers).
+typedef struct IOPCEnumGUID {
+  const struct IOPCEnumGUIDVtbl *lpVtbl;
+} IOPCEnumGUID;
+
+// The methods of IOPCServerList2 (OPC Common 1.10).
+typedef struct IOPCServerList2Vtbl {
+  HRESULT (*QueryInterface)(struct IOPCServerList2 *This, REFIID riid, void **ppvObject);
+  ULONG (*AddRef)(struct IOPCServerList2 *This);
+  ULONG (*Release)(struct IOPCServerList2 *This);
+  HRESULT (*EnumClassesOfCategories)(struct IOPCServerList2 *This, ULONG cImplemented, CATID *rgcatidImpl, ULONG cRequired, CATID *rgcatidReq, struct IOPCEnumGUID **ppenumClsid);
+  HRESULT (*GetClassDetails)(struct IOPCServerList2 *This, REFCLSID clsid, LPOLESTR *ppszProgID, LPOLESTR *ppszUserType, LPOLESTR *ppszVerIndProgID);
+  HRESULT (*CLSIDFromProgID)(struct IOPCServerList2 *This, LPCOLESTR szProgId, LPCLSID clsid);
+} IOPCServerList2Vtbl;
+
+// IOPCServerList2 (OPC Common 1.10): IOPCServerList with the version-independent ProgID and an
+// IOPCEnumGUID enumerator.
+typedef struct IOPCServerList2 {
+  const struct IOPCServerList2Vtbl *lpVtbl;
+} IOPCServerList2;
+
+#if !defined(_WIN32)
 #define S_OK 0
 #endif
 
@@ -410,6 +624,21 @@ typedef struct IConnectionPointContainer {
 #define LOCALE_INVARIANT 127
 #endif
 
+#if !defined(_WIN32)
+// `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
+#define REGDB_E_KEYMISSING (HRESULT)2147746130u
+#endif
+
+#if !defined(_WIN32)
+// `REGDB_E_INVALIDVALUE`: a registry value is not of the expected type or form.
+#define REGDB_E_INVALIDVALUE (HRESULT)2147746131u
+#endif
+
+#if !defined(_WIN32)
+// `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
+#define SELFREG_E_CLASS (HRESULT)2147746305u
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -451,6 +680,36 @@ extern const IID IID_IConnectionPoint;
 // `IID_IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
 extern const IID IID_IEnumConnections;
 #endif
+
+// `CATID_OPCDAServer10` {63D5F430-CFE4-11d1-B2C8-0060083BA1FB}: OPC Data Access 1.0 servers.
+extern const CATID CATID_OPCDAServer10;
+
+// `CATID_OPCDAServer20` {63D5F432-CFE4-11d1-B2C8-0060083BA1FB}: OPC Data Access 2.0 servers.
+extern const CATID CATID_OPCDAServer20;
+
+// `CATID_OPCDAServer30` {CC603642-66D7-48f1-B69A-B625E73652D7}: OPC Data Access 3.0 servers.
+extern const CATID CATID_OPCDAServer30;
+
+// `CATID_XMLDAServer10` {3098EDA4-A006-48b2-A27F-247453959408}: OPC XML Data Access 1.0 servers.
+extern const CATID CATID_XMLDAServer10;
+
+// `CATID_OPCAEServer10` {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarms & Events 1.0 servers.
+extern const CATID CATID_OPCAEServer10;
+
+// `CATID_OPCHDAServer10` {7DE5B060-E089-11d2-A5E6-000086339399}: OPC Historical Data Access 1.0 servers.
+extern const CATID CATID_OPCHDAServer10;
+
+// `CATID_OPCBatchServer10` {A8080DA0-E23E-11D2-AFA7-00C04F539421}: OPC Batch 1.0 servers.
+extern const CATID CATID_OPCBatchServer10;
+
+// `CATID_OPCBatchServer20` {843DE67B-B0C9-11d4-A0B7-000102A980B1}: OPC Batch 2.0 servers.
+extern const CATID CATID_OPCBatchServer20;
+
+// `CATID_OPCDXServer10` {A0C85BB8-4161-4fd6-8655-BB584601C9E0}: OPC Data eXchange 1.0 servers.
+extern const CATID CATID_OPCDXServer10;
+
+// `CATID_OPCCMDServer10` {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution 1.0 servers.
+extern const CATID CATID_OPCCMDServer10;
 
 // How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 // connection points, enumerators, ...). Meant for leak checks in tests.
@@ -692,6 +951,234 @@ HRESULT OpcShutdownAdvise(struct IUnknown *server, struct IUnknown *sink, DWORD 
 // # Safety
 // `server` must be NULL or a valid COM interface pointer.
 HRESULT OpcShutdownUnadvise(struct IUnknown *server, DWORD cookie);
+
+// Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
+// the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
+//
+// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+//
+// # Safety
+// `out` must be NULL or writable.
+HRESULT OpcRegistryCreateMemory(struct OpcRegistry **out);
+
+// Opens the system registry: on Windows `HKEY_CLASSES_ROOT`, where registration writes to the
+// registry view of the calling process and the server list reads both the 64-bit and the 32-bit view;
+// elsewhere the process-wide in-memory registry that `DllRegisterServer` and the server list created by
+// `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
+// the same registry.
+//
+// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+//
+// # Safety
+// `out` must be NULL or writable.
+HRESULT OpcRegistryOpenSystem(struct OpcRegistry **out);
+
+// Frees a registry handle. NULL is ignored. Objects created over the registry stay usable.
+//
+// # Safety
+// `reg` must be NULL or a live handle that is not used again.
+void OpcRegistryRelease(struct OpcRegistry *reg);
+
+// Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
+// HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
+//
+// Returns S_OK; E_POINTER for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
+// UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
+// is not a string. `*data` is NULL on failure.
+//
+// # Safety
+// `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.
+HRESULT OpcRegistryGetString(const struct OpcRegistry *reg, LPCWSTR key, LPCWSTR name, LPWSTR *data);
+
+// Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
+// program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
+// `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
+// `OpcServerCommand` value: register, unregister, embedding or none.
+//
+// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG when the line both registers and
+// unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
+//
+// # Safety
+// `command_line` NULL or NUL-terminated; `command` NULL or writable.
+HRESULT OpcParseCommandLine(LPCWSTR command_line, uint32_t *command);
+
+// Exports the subtree at `key` (relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry,
+// which for the system registry is all of HKEY_CLASSES_ROOT and slow) as the text of a `.reg` file,
+// "Windows Registry Editor Version 5.00", into `*text` (free it with `OpcTaskMemFree`). On Windows the
+// registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
+// regedit.
+//
+// Returns S_OK; E_POINTER for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
+// REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
+//
+// # Safety
+// `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
+HRESULT OpcRegistryExport(const struct OpcRegistry *reg, LPCWSTR key, LPWSTR *text);
+
+// Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
+// and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
+//
+// Returns S_OK; E_POINTER for a NULL `text`; E_INVALIDARG for malformed text or a root other than
+// HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
+// case the changes before it remain.
+//
+// # Safety
+// `reg` NULL or a live handle; `text` NULL or NUL-terminated.
+HRESULT OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR text);
+
+// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
+// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
+// (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
+// descriptions when missing; on Windows through the Component Categories Manager) and, for Data Access
+// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
+// reports OPC_SERVER_COMMAND_REGISTER.
+//
+// Returns S_OK; E_POINTER for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
+// wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
+// categories or a count without an array, strings that are not valid UTF-16; a registry error (for
+// example E_ACCESSDENIED without administrator rights) when a write fails.
+//
+// # Safety
+// `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
+HRESULT OpcRegisterServer(const struct OpcServerRegistration *server, const struct OpcRegistry *reg);
+
+// Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
+// values and keys that registration added and restores values it replaced, leaving everything that
+// was there before and everything other products wrote. A category's description stays while another
+// class implements the category.
+//
+// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
+// `OpcRegisterServer` for a bad description or a failing registry write.
+//
+// # Safety
+// As for `OpcRegisterServer`.
+HRESULT OpcUnregisterServer(const struct OpcServerRegistration *server, const struct OpcRegistry *reg);
+
+// Writes the registration `server` describes as the text of a `.reg` file ("Windows Registry Editor
+// Version 5.00") into `*text` (free with `OpcTaskMemFree`), for installers that register servers by
+// importing a file. It holds what `OpcRegisterServer` writes into an empty registry, including the
+// record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
+// module.
+//
+// Returns S_OK; E_POINTER for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
+// `*text` is NULL on failure.
+//
+// # Safety
+// `server` as for `OpcRegisterServer`; `text` NULL or writable.
+HRESULT OpcRegistrationExport(const struct OpcServerRegistration *server, LPWSTR *text);
+
+// Creates the component category `catid` with `description` in English (0x409), as the
+// specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
+// `description` uses the standard text of an OPC category. On Windows this goes through the Component
+// Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
+//
+// Returns S_OK; E_POINTER for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
+// is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
+//
+// # Safety
+// `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
+HRESULT OpcCreateComponentCategory(const struct OpcRegistry *reg, const CATID *catid, LPCWSTR description);
+
+// Registers `clsid` as implementing the category `catid` (the specification's
+// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
+// Categories Manager on Windows.
+//
+// Returns S_OK; E_POINTER for a NULL argument; registry errors.
+//
+// # Safety
+// `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
+HRESULT OpcRegisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
+
+// Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
+// `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
+//
+// Returns S_OK; E_POINTER for a NULL argument; registry errors.
+//
+// # Safety
+// As for `OpcRegisterClassInCategory`.
+HRESULT OpcUnregisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
+
+// The standard English description of an OPC component category (for example "OPC Data Access
+// Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
+//
+// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
+// `*description` is NULL on failure.
+//
+// # Safety
+// `catid` NULL or readable; `description` NULL or writable.
+HRESULT OpcCategoryDescription(const CATID *catid, LPWSTR *description);
+
+// Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
+//
+// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
+// failure.
+//
+// # Safety
+// `text` NULL or NUL-terminated; `version` NULL or writable.
+HRESULT OpcVersionParse(LPCWSTR text, struct OpcVersion *version);
+
+// Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
+//
+// Returns S_OK; E_POINTER for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
+//
+// # Safety
+// `version` NULL or readable; `text` NULL or writable.
+HRESULT OpcVersionFormat(const struct OpcVersion *version, LPWSTR *text);
+
+// The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
+// `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
+//
+// Returns S_OK, or E_POINTER for a NULL argument (the outputs that are not NULL are 0 then).
+//
+// # Safety
+// `version` NULL or readable; `ms` and `ls` NULL or writable.
+HRESULT OpcVersionToFileVersion(const struct OpcVersion *version, DWORD *ms, DWORD *ls);
+
+// The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
+// convention.
+//
+// Returns S_OK; E_POINTER for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
+// does not follow the convention). `*version` is 0.0.0 on failure.
+//
+// # Safety
+// `version` NULL or writable.
+HRESULT OpcVersionFromFileVersion(DWORD ms, DWORD ls, struct OpcVersion *version);
+
+// Compares two versions: negative when `a` is older than `b`, 0 when equal, positive when newer
+// (major first, then minor, then build). A NULL argument counts as older than any version.
+//
+// # Safety
+// `a` and `b` NULL or readable.
+int32_t OpcVersionCompare(const struct OpcVersion *a, const struct OpcVersion *b);
+
+// TRUE when `candidate` is strictly newer than `installed`, so an installer may replace the installed
+// file with it (specification section 6.5); FALSE otherwise, and when `candidate` is NULL. A NULL
+// `installed` (nothing installed) makes any candidate newer.
+//
+// # Safety
+// `candidate` and `installed` NULL or readable.
+BOOL OpcVersionIsNewer(const struct OpcVersion *candidate, const struct OpcVersion *installed);
+
+// Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
+// (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
+// IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
+// (aggregation).
+//
+// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION; E_NOINTERFACE. `*ppv` is
+// NULL on failure.
+//
+// # Safety
+// `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
+// writable.
+HRESULT OpcServerListCreate(struct IUnknown *outer, REFIID riid, void **ppv);
+
+// As `OpcServerListCreate`, over the registry `reg` (for example one from `OpcRegistryCreateMemory`,
+// to test a client's browsing against known contents). The object keeps the registry alive.
+//
+// # Safety
+// `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.
+HRESULT OpcServerListCreateOver(const struct OpcRegistry *reg, struct IUnknown *outer, REFIID riid, void **ppv);
 
 #ifdef __cplusplus
 }  // extern "C"

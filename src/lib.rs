@@ -8,6 +8,7 @@
 //! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)
 //! - `shutdown`: the IOPCShutdown connection point for servers and a shutdown sink for clients (chapter 4)
 //! - `registry`: the registry abstraction and the registration helpers (chapter 6)
+//! - `serverlist`: the server browser OPCServerList and the COM server entry points (chapter 7)
 //!
 //! The C API is declared in `include/opccomn.h`, generated from these sources by cbindgen.
 
@@ -19,6 +20,7 @@ pub mod errors;
 pub mod pattern;
 pub mod shutdown;
 pub mod registry;
+pub mod serverlist;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.

@@ -28,10 +28,10 @@ use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, LPWSTR, S_OK};
 
 /// `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
+#[cfg(not(system_com_headers))]
 pub const REGDB_E_KEYMISSING: HRESULT = 0x80040152_u32 as HRESULT;
-/// `REGDB_E_WRITEREGDB`: the registry could not be written.
-pub const REGDB_E_WRITEREGDB: HRESULT = 0x80040151_u32 as HRESULT;
 /// `REGDB_E_INVALIDVALUE`: a registry value is not of the expected type or form.
+#[cfg(not(system_com_headers))]
 pub const REGDB_E_INVALIDVALUE: HRESULT = 0x80040153_u32 as HRESULT;
 
 /// The longest key or value name the Windows registry accepts, in UTF-16 units.
@@ -387,7 +387,7 @@ mod tests {
 
     #[test]
     fn guids_parse_in_registry_form_only() {
-        let g = GUID::from_u128(0x63D5F432_CFE4_11d1_B2C8_0060083BA1FB);
+        let g = GUID::from_u128(0x63D5F432_CFE4_11D1_B2C8_0060083BA1FB);
         assert_eq!(parse_guid("{63D5F432-CFE4-11d1-B2C8-0060083BA1FB}"), Some(g));
         assert_eq!(parse_guid(&g.to_string()), Some(g));
         assert_eq!(parse_guid("63D5F432-CFE4-11d1-B2C8-0060083BA1FB"), None);

@@ -42,7 +42,7 @@ use super::{
 };
 use crate::com::alloc::alloc_wstr_from_str;
 use crate::com::boundary::catch;
-use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, LPWSTR, REFCLSID};
+use crate::com::{CATID, CLSID, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, LPWSTR, REFCLSID};
 
 /// The value of the module key holding the registration ledger.
 pub(crate) const LEDGER: &str = "OpcComnRegistration";
@@ -77,7 +77,7 @@ pub struct OpcServerRegistration {
     /// `OpcServerType`: in-process (0, `InprocServer32`) or local (1, `LocalServer32`).
     pub server_type: u32,
     /// The server's class identifier.
-    pub clsid: GUID,
+    pub clsid: CLSID,
     /// The ProgID, `Vendor.Server.1` (required; no backslash, at most 255 characters).
     pub prog_id: LPCWSTR,
     /// The version-independent ProgID, `Vendor.Server` (optional).
@@ -93,7 +93,7 @@ pub struct OpcServerRegistration {
     /// none (COM then uses the main apartment). Ignored for local servers.
     pub threading_model: LPCWSTR,
     /// The categories the server implements (for example `CATID_OPCDAServer20`).
-    pub implemented_categories: *const GUID,
+    pub implemented_categories: *const CATID,
     /// Number of entries in `implemented_categories` (at most 256).
     pub implemented_category_count: u32,
     /// Descriptions of the implemented categories, parallel to `implemented_categories`: used to
@@ -101,14 +101,14 @@ pub struct OpcServerRegistration {
     /// for OPC categories; a category with no description is registered without being created.
     pub implemented_category_descriptions: *const LPCWSTR,
     /// The categories a client must support to use the server (`Required Categories`).
-    pub required_categories: *const GUID,
+    pub required_categories: *const CATID,
     /// Number of entries in `required_categories` (at most 256).
     pub required_category_count: u32,
     /// For Data Access 1.0 servers only: the vendor name written to `<ProgID>\OPC\Vendor`, by which
     /// OpcEnum and DA 1.0 clients find servers registered the old way.
     pub da10_vendor: LPCWSTR,
-    /// The AppID of a local server (DCOM settings), or NULL for none.
-    pub app_id: *const GUID,
+    /// The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+    pub app_id: *const CLSID,
     /// `RunAs` of the AppID ("Interactive User", an account), or NULL.
     pub app_id_run_as: LPCWSTR,
     /// `LocalService` of the AppID (the Windows service that hosts the server), or NULL.
@@ -725,7 +725,7 @@ unsafe fn guid_arg(p: *const GUID) -> Result<GUID, HRESULT> {
 #[no_mangle]
 pub unsafe extern "C" fn OpcCreateComponentCategory(
     reg: *const OpcRegistry,
-    catid: *const GUID,
+    catid: *const CATID,
     description: LPCWSTR,
 ) -> HRESULT {
     catch(E_UNEXPECTED, || {
@@ -760,7 +760,7 @@ pub unsafe extern "C" fn OpcCreateComponentCategory(
 pub unsafe extern "C" fn OpcRegisterClassInCategory(
     reg: *const OpcRegistry,
     clsid: REFCLSID,
-    catid: *const GUID,
+    catid: *const CATID,
 ) -> HRESULT {
     catch(E_UNEXPECTED, || {
         let run = || -> Result<(), HRESULT> {
@@ -786,7 +786,7 @@ pub unsafe extern "C" fn OpcRegisterClassInCategory(
 pub unsafe extern "C" fn OpcUnregisterClassInCategory(
     reg: *const OpcRegistry,
     clsid: REFCLSID,
-    catid: *const GUID,
+    catid: *const CATID,
 ) -> HRESULT {
     catch(E_UNEXPECTED, || {
         let run = || -> Result<(), HRESULT> {
@@ -810,7 +810,7 @@ pub unsafe extern "C" fn OpcUnregisterClassInCategory(
 /// # Safety
 /// `catid` NULL or readable; `description` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcCategoryDescription(catid: *const GUID, description: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcCategoryDescription(catid: *const CATID, description: *mut LPWSTR) -> HRESULT {
     // SAFETY: forwarded from the caller's contract.
     if let Err(hr) = unsafe { clear_out(description) } {
         return hr;

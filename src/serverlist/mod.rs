@@ -1,0 +1,565 @@
+//! The OPC server browser (specification chapter 7; IOPCServerList2 from OPC Common 1.10): the class
+//! OPCServerList with IOPCServerList and IOPCServerList2, its enumerator, and the COM server plumbing
+//! (class factory, DllGetClassObject, DllRegisterServer...) that lets clients create it by CLSID.
+//!
+//! The answers are computed from the registry (through the [`Registry`] abstraction), not from the
+//! system's ICatInformation, whose behaviour differs between Windows and Wine:
+//!
+//! - **EnumClassesOfCategories** returns the classes that implement *any* of the listed implemented
+//!   categories and require *all* of the listed required categories (`Required Categories` key). A
+//!   count of 0 means "regardless of category" (the specification; `(ULONG)-1`, what ICatInformation
+//!   uses, is accepted as well): every class registered under `CLSID`, or no requirement. When the Data
+//!   Access 1.0 category is listed, servers registered the old way (an `OPC` key under their ProgID,
+//!   whose `CLSID` is registered) are reported too. Each class is reported once, ordered by CLSID (as
+//!   a 128-bit number). On 64-bit Windows both registry views are read.
+//! - **GetClassDetails** reads `CLSID\{clsid}` (first view that has it): the ProgID, the user type
+//!   (the key's default value, else the ProgID key's, else "") and, for IOPCServerList2, the
+//!   version-independent ProgID, falling back to the ProgID.
+//! - **CLSIDFromProgID** reads `<ProgID>\CLSID`.
+
+pub mod enumguid;
+pub mod server;
+
+use core::ffi::c_void;
+use core::ptr;
+use std::collections::{BTreeMap, HashSet};
+use std::sync::Arc;
+
+use crate::com::alloc::{alloc_wstr_from_str, task_free};
+use crate::com::boundary::catch;
+use crate::com::iids::{IID_IOPCServerList, IID_IOPCServerList2};
+use crate::com::object::{
+    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
+};
+use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
+use crate::com::{
+    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCLSID, LPCOLESTR,
+    LPOLESTR, REFCLSID, REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
+};
+use crate::registry::categories::DA10;
+use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
+use enumguid::{new_enum, IEnumGUID, IOPCEnumGUID};
+
+/// The most categories one EnumClassesOfCategories call may list.
+const MAX_CATEGORIES: ULONG = 4096;
+/// The count ICatInformation uses for "any category"; accepted as a synonym of 0.
+const ANY_CATEGORY: ULONG = ULONG::MAX;
+
+/// The methods of IOPCServerList, in the order of the specification's IDL.
+#[repr(C)]
+#[allow(non_snake_case)]
+pub struct IOPCServerListVtbl {
+    pub QueryInterface:
+        unsafe extern "system" fn(This: *mut IOPCServerList, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList) -> ULONG,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList) -> ULONG,
+    pub EnumClassesOfCategories: unsafe extern "system" fn(
+        This: *mut IOPCServerList,
+        cImplemented: ULONG,
+        rgcatidImpl: *mut CATID,
+        cRequired: ULONG,
+        rgcatidReq: *mut CATID,
+        ppenumClsid: *mut *mut IEnumGUID,
+    ) -> HRESULT,
+    pub GetClassDetails: unsafe extern "system" fn(
+        This: *mut IOPCServerList,
+        clsid: REFCLSID,
+        ppszProgID: *mut LPOLESTR,
+        ppszUserType: *mut LPOLESTR,
+    ) -> HRESULT,
+    pub CLSIDFromProgID:
+        unsafe extern "system" fn(This: *mut IOPCServerList, szProgId: LPCOLESTR, clsid: LPCLSID) -> HRESULT,
+}
+
+/// IOPCServerList: the list of OPC servers registered on a machine, by category.
+#[repr(C)]
+#[allow(non_snake_case)]
+pub struct IOPCServerList {
+    pub lpVtbl: *const IOPCServerListVtbl,
+}
+
+/// The methods of IOPCServerList2 (OPC Common 1.10).
+#[repr(C)]
+#[allow(non_snake_case)]
+pub struct IOPCServerList2Vtbl {
+    pub QueryInterface:
+        unsafe extern "system" fn(This: *mut IOPCServerList2, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList2) -> ULONG,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList2) -> ULONG,
+    pub EnumClassesOfCategories: unsafe extern "system" fn(
+        This: *mut IOPCServerList2,
+        cImplemented: ULONG,
+        rgcatidImpl: *mut CATID,
+        cRequired: ULONG,
+        rgcatidReq: *mut CATID,
+        ppenumClsid: *mut *mut IOPCEnumGUID,
+    ) -> HRESULT,
+    pub GetClassDetails: unsafe extern "system" fn(
+        This: *mut IOPCServerList2,
+        clsid: REFCLSID,
+        ppszProgID: *mut LPOLESTR,
+        ppszUserType: *mut LPOLESTR,
+        ppszVerIndProgID: *mut LPOLESTR,
+    ) -> HRESULT,
+    pub CLSIDFromProgID:
+        unsafe extern "system" fn(This: *mut IOPCServerList2, szProgId: LPCOLESTR, clsid: LPCLSID) -> HRESULT,
+}
+
+/// IOPCServerList2 (OPC Common 1.10): IOPCServerList with the version-independent ProgID and an
+/// IOPCEnumGUID enumerator.
+#[repr(C)]
+#[allow(non_snake_case)]
+pub struct IOPCServerList2 {
+    pub lpVtbl: *const IOPCServerList2Vtbl,
+}
+
+/// The OPCServerList object.
+pub(crate) struct ServerList {
+    list: Slot,
+    list2: Slot,
+    regs: Arc<Registries>,
+}
+
+impl ComClass for ServerList {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        if *iid == IID_IOPCServerList {
+            Some(&self.list)
+        } else if *iid == IID_IOPCServerList2 {
+            Some(&self.list2)
+        } else {
+            None
+        }
+    }
+}
+
+/// Orders GUIDs by their 128-bit value (the registry form read as one hexadecimal number).
+fn guid_key(g: &GUID) -> u128 {
+    (g.Data1 as u128) << 96 | (g.Data2 as u128) << 80 | (g.Data3 as u128) << 64 | u64::from_be_bytes(g.Data4) as u128
+}
+
+fn guids(names: &[String]) -> HashSet<GUID> {
+    names.iter().filter_map(|n| parse_guid(n)).collect()
+}
+
+/// The classes that implement any of `implemented` (`None`: regardless) and require all of `required`
+/// (`None`: no condition), sorted by CLSID, each once.
+pub(crate) fn classes_of_categories(
+    regs: &Registries,
+    implemented: Option<&[CATID]>,
+    required: Option<&[CATID]>,
+) -> Vec<CLSID> {
+    let mut found: BTreeMap<u128, CLSID> = BTreeMap::new();
+    let mut children = Vec::new();
+    if implemented.is_some() {
+        children.push("Implemented Categories");
+    }
+    if required.is_some() {
+        children.push("Required Categories");
+    }
+    let requires_all = |cats: Option<&Vec<String>>| match required {
+        None => true,
+        Some(req) => cats.is_some_and(|names| {
+            let have = guids(names);
+            req.iter().all(|c| have.contains(c))
+        }),
+    };
+    for view in &regs.views {
+        for (name, keys) in view.scan("CLSID", &children) {
+            let Some(clsid) = parse_guid(&name) else { continue };
+            let mut keys = keys.iter();
+            let implements = match implemented {
+                None => true,
+                Some(wanted) => keys
+                    .next()
+                    .and_then(Option::as_ref)
+                    .is_some_and(|names| names.iter().filter_map(|n| parse_guid(n)).any(|c| wanted.contains(&c))),
+            };
+            if implements && requires_all(keys.next().and_then(Option::as_ref)) {
+                found.insert(guid_key(&clsid), clsid);
+            }
+        }
+    }
+    if implemented.is_some_and(|wanted| wanted.contains(&DA10)) {
+        for view in &regs.views {
+            for name in view.subkeys("") {
+                // File extensions and the well-known trees are never ProgIDs.
+                if name.starts_with('.') || name.eq_ignore_ascii_case("CLSID") {
+                    continue;
+                }
+                if !view.key_exists(&format!("{name}\\OPC")) {
+                    continue;
+                }
+                let Some(clsid) = view
+                    .value(&format!("{name}\\CLSID"), "")
+                    .and_then(|v| v.as_str().and_then(parse_guid))
+                else {
+                    continue;
+                };
+                if found.contains_key(&guid_key(&clsid)) {
+                    continue;
+                }
+                let class = class_key(&clsid);
+                let registered = regs.views.iter().find(|v| v.key_exists(&class));
+                if let Some(v) = registered {
+                    let req = v
+                        .key_exists(&format!("{class}\\Required Categories"))
+                        .then(|| v.subkeys(&format!("{class}\\Required Categories")));
+                    if requires_all(req.as_ref()) {
+                        found.insert(guid_key(&clsid), clsid);
+                    }
+                }
+            }
+        }
+    }
+    found.into_values().collect()
+}
+
+/// What GetClassDetails reports.
+#[derive(Debug, PartialEq)]
+pub(crate) struct ClassDetails {
+    pub prog_id: String,
+    pub user_type: String,
+    pub version_independent_prog_id: String,
+}
+
+/// The details of `clsid` from the first view that registers it.
+pub(crate) fn class_details(regs: &Registries, clsid: &CLSID) -> Result<ClassDetails, HRESULT> {
+    let class = class_key(clsid);
+    let view = regs
+        .views
+        .iter()
+        .find(|v| v.key_exists(&class))
+        .ok_or(REGDB_E_CLASSNOTREG)?;
+    let text = |key: &str| {
+        view.value(key, "")
+            .and_then(|v| v.as_str().map(str::to_string))
+            .filter(|s| !s.is_empty())
+    };
+    let prog_id = text(&format!("{class}\\ProgID")).ok_or(REGDB_E_KEYMISSING)?;
+    let user_type = text(&class).or_else(|| text(&prog_id)).unwrap_or_default();
+    let version_independent_prog_id = text(&format!("{class}\\VersionIndependentProgID")).unwrap_or(prog_id.clone());
+    Ok(ClassDetails {
+        prog_id,
+        user_type,
+        version_independent_prog_id,
+    })
+}
+
+/// The CLSID registered for `prog_id`.
+pub(crate) fn clsid_from_prog_id(regs: &Registries, prog_id: &str) -> Result<CLSID, HRESULT> {
+    if prog_id.trim().is_empty() || prog_id.contains('\\') || prog_id.encode_utf16().count() > 255 {
+        return Err(CO_E_CLASSSTRING);
+    }
+    let key = format!("{prog_id}\\CLSID");
+    let value = regs
+        .views
+        .iter()
+        .find_map(|v| v.value(&key, ""))
+        .ok_or(REGDB_E_CLASSNOTREG)?;
+    value.as_str().and_then(parse_guid).ok_or(CO_E_CLASSSTRING)
+}
+
+/// Reads a category list argument: `None` for "any" (a count of 0 or `(ULONG)-1`).
+///
+/// # Safety
+/// `p` must point at `count` readable CATIDs when `count` is neither 0 nor `(ULONG)-1`.
+unsafe fn category_list<'a>(count: ULONG, p: *const CATID) -> Result<Option<&'a [CATID]>, HRESULT> {
+    if count == 0 || count == ANY_CATEGORY {
+        return Ok(None);
+    }
+    if p.is_null() || count > MAX_CATEGORIES {
+        return Err(E_INVALIDARG);
+    }
+    // SAFETY: the caller vouches for `count` readable entries.
+    Ok(Some(unsafe { core::slice::from_raw_parts(p, count as usize) }))
+}
+
+/// # Safety
+/// `this` is a slot of a live ServerList (COM calls only reach us that way).
+unsafe fn object<'a, I>(this: *mut I) -> &'a ServerList {
+    // SAFETY: the server-list vtables are only installed in ServerList objects.
+    unsafe { ComObject::<ServerList>::from_interface(this) }
+}
+
+/// EnumClassesOfCategories of both interfaces.
+///
+/// # Safety
+/// As the method: COM arguments, `this` one of our slots.
+unsafe fn enum_classes<I>(
+    this: *mut I,
+    c_impl: ULONG,
+    rg_impl: *const CATID,
+    c_req: ULONG,
+    rg_req: *const CATID,
+    ppenum: *mut *mut IOPCEnumGUID,
+) -> HRESULT {
+    if ppenum.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppenum = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: forwarded from the caller.
+        let (implemented, required) = match unsafe { (category_list(c_impl, rg_impl), category_list(c_req, rg_req)) } {
+            (Ok(i), Ok(r)) => (i, r),
+            _ => return E_INVALIDARG,
+        };
+        // SAFETY: COM calls this only through our vtables.
+        let list = unsafe { object(this) };
+        let classes = classes_of_categories(&list.regs, implemented, required);
+        // SAFETY: checked non-NULL above.
+        unsafe { *ppenum = new_enum(classes.into(), 0) };
+        S_OK
+    })
+}
+
+/// Strings a call has allocated for its out-parameters; freed unless handed over.
+struct Allocated(Vec<LPOLESTR>);
+
+impl Allocated {
+    fn string(&mut self, text: &str) -> Result<LPOLESTR, HRESULT> {
+        let p = alloc_wstr_from_str(text)?;
+        self.0.push(p);
+        Ok(p)
+    }
+
+    fn hand_over(mut self) {
+        self.0.clear();
+    }
+}
+
+impl Drop for Allocated {
+    fn drop(&mut self) {
+        for p in self.0.drain(..) {
+            // SAFETY: allocated by `string` and not handed over.
+            unsafe { task_free(p.cast()) };
+        }
+    }
+}
+
+/// GetClassDetails of both interfaces (`vi` NULL for IOPCServerList).
+///
+/// # Safety
+/// As the method: COM arguments, `this` one of our slots.
+unsafe fn get_class_details<I>(
+    this: *mut I,
+    clsid: REFCLSID,
+    prog_id: *mut LPOLESTR,
+    user_type: *mut LPOLESTR,
+    vi: Option<*mut LPOLESTR>,
+) -> HRESULT {
+    let outs = [Some(prog_id), Some(user_type), vi];
+    for out in outs.into_iter().flatten() {
+        if !out.is_null() {
+            // SAFETY: non-NULL out-parameter the caller vouches is writable.
+            unsafe { *out = ptr::null_mut() };
+        }
+    }
+    if outs.iter().flatten().any(|p| p.is_null()) {
+        return E_POINTER;
+    }
+    if clsid.is_null() {
+        return E_INVALIDARG;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtables; `clsid` checked non-NULL.
+        let (list, clsid) = unsafe { (object(this), *clsid) };
+        let details = match class_details(&list.regs, &clsid) {
+            Ok(d) => d,
+            Err(hr) => return hr,
+        };
+        let mut strings = Allocated(Vec::new());
+        let made = (|| -> Result<[LPOLESTR; 3], HRESULT> {
+            Ok([
+                strings.string(&details.prog_id)?,
+                strings.string(&details.user_type)?,
+                if vi.is_some() {
+                    strings.string(&details.version_independent_prog_id)?
+                } else {
+                    ptr::null_mut()
+                },
+            ])
+        })();
+        match made {
+            Ok([p, u, v]) => {
+                strings.hand_over();
+                // SAFETY: all out-parameters checked non-NULL above.
+                unsafe {
+                    *prog_id = p;
+                    *user_type = u;
+                    if let Some(vi) = vi {
+                        *vi = v;
+                    }
+                }
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+/// CLSIDFromProgID of both interfaces.
+///
+/// # Safety
+/// As the method: COM arguments, `this` one of our slots.
+unsafe fn clsid_from_prog_id_method<I>(this: *mut I, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
+    if clsid.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *clsid = GUID::default() };
+    if sz_prog_id.is_null() {
+        return E_INVALIDARG;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: the caller passes a NUL-terminated string.
+        let Some(units) = (unsafe { wstr_units(sz_prog_id, MAX_STRING_UNITS) }) else {
+            return CO_E_CLASSSTRING;
+        };
+        let Ok(prog_id) = String::from_utf16(units) else {
+            return CO_E_CLASSSTRING;
+        };
+        // SAFETY: COM calls this only through our vtables.
+        match clsid_from_prog_id(&unsafe { object(this) }.regs, &prog_id) {
+            Ok(found) => {
+                // SAFETY: checked non-NULL above.
+                unsafe { *clsid = found };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
+    })
+}
+
+unsafe extern "system" fn list_enum(
+    this: *mut IOPCServerList,
+    c_impl: ULONG,
+    rg_impl: *mut CATID,
+    c_req: ULONG,
+    rg_req: *mut CATID,
+    ppenum: *mut *mut IEnumGUID,
+) -> HRESULT {
+    // SAFETY: forwarded; the enumerator answers for IEnumGUID with the same layout.
+    unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum.cast()) }
+}
+
+unsafe extern "system" fn list_details(
+    this: *mut IOPCServerList,
+    clsid: REFCLSID,
+    prog_id: *mut LPOLESTR,
+    user_type: *mut LPOLESTR,
+) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe { get_class_details(this, clsid, prog_id, user_type, None) }
+}
+
+unsafe extern "system" fn list_clsid(this: *mut IOPCServerList, prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+}
+
+unsafe extern "system" fn list2_enum(
+    this: *mut IOPCServerList2,
+    c_impl: ULONG,
+    rg_impl: *mut CATID,
+    c_req: ULONG,
+    rg_req: *mut CATID,
+    ppenum: *mut *mut IOPCEnumGUID,
+) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum) }
+}
+
+unsafe extern "system" fn list2_details(
+    this: *mut IOPCServerList2,
+    clsid: REFCLSID,
+    prog_id: *mut LPOLESTR,
+    user_type: *mut LPOLESTR,
+    vi: *mut LPOLESTR,
+) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe { get_class_details(this, clsid, prog_id, user_type, Some(vi)) }
+}
+
+unsafe extern "system" fn list2_clsid(this: *mut IOPCServerList2, prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+}
+
+static LIST_VTBL: IOPCServerListVtbl = IOPCServerListVtbl {
+    QueryInterface: delegating_query_interface::<IOPCServerList>,
+    AddRef: delegating_add_ref::<IOPCServerList>,
+    Release: delegating_release::<IOPCServerList>,
+    EnumClassesOfCategories: list_enum,
+    GetClassDetails: list_details,
+    CLSIDFromProgID: list_clsid,
+};
+
+static LIST2_VTBL: IOPCServerList2Vtbl = IOPCServerList2Vtbl {
+    QueryInterface: delegating_query_interface::<IOPCServerList2>,
+    AddRef: delegating_add_ref::<IOPCServerList2>,
+    Release: delegating_release::<IOPCServerList2>,
+    EnumClassesOfCategories: list2_enum,
+    GetClassDetails: list2_details,
+    CLSIDFromProgID: list2_clsid,
+};
+
+/// Creates a server list over `regs` with the standard creation protocol.
+///
+/// # Safety
+/// As for [`ComObject::create`].
+pub(crate) unsafe fn create(
+    regs: Arc<Registries>,
+    outer: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe {
+        ComObject::<ServerList>::create(outer, riid, ppv, |b| {
+            Ok(ServerList {
+                list: b.slot(&LIST_VTBL),
+                list2: b.slot(&LIST2_VTBL),
+                regs,
+            })
+        })
+    }
+}
+
+/// Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
+/// (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
+/// IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
+/// (aggregation).
+///
+/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION; E_NOINTERFACE. `*ppv` is
+/// NULL on failure.
+///
+/// # Safety
+/// `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcServerListCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    catch(E_UNEXPECTED, || unsafe {
+        create(registries(ptr::null()), outer, riid, ppv)
+    })
+}
+
+/// As `OpcServerListCreate`, over the registry `reg` (for example one from `OpcRegistryCreateMemory`,
+/// to test a client's browsing against known contents). The object keeps the registry alive.
+///
+/// # Safety
+/// `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.
+#[no_mangle]
+pub unsafe extern "C" fn OpcServerListCreateOver(
+    reg: *const OpcRegistry,
+    outer: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    // SAFETY: forwarded from the caller's contract.
+    catch(E_UNEXPECTED, || unsafe { create(registries(reg), outer, riid, ppv) })
+}
+
+#[cfg(test)]
+mod tests;

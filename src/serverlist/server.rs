@@ -1,0 +1,274 @@
+//! opccomn as an in-process COM server of CLSID_OPCServerList: the class factory, DllGetClassObject,
+//! DllCanUnloadNow, DllRegisterServer and DllUnregisterServer.
+//!
+//! The four `Dll*` entry points are exported under their standard names only with the cargo feature
+//! `dll-exports` (on by default), because a server that links opccomn statically into its own COM DLL
+//! has its own. Such a server builds opccomn with `--no-default-features` and, to serve the server
+//! list as well, calls `OpcDllGetClassObject` (and the other `OpcDll*` functions, always exported) from
+//! its own entry points.
+//!
+//! Registration coexists with the OPC Foundation's OpcEnum, which registers the same CLSID as an EXE
+//! server: opccomn adds `InprocServer32` (ThreadingModel Both) and whatever values are missing, keeps
+//! every value it finds (`LocalServer32`, `AppID`, OpcEnum's description...), and unregistration removes
+//! only what it added. It never registers proxies or stubs for the OPC interfaces (specification 6.3).
+
+use core::ffi::c_void;
+use core::ptr;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use crate::com::boundary::catch;
+use crate::com::iids::{CLSID_OPCServerList, IID_ICLASSFACTORY};
+use crate::com::object::{
+    delegating_add_ref, delegating_query_interface, delegating_release, live_objects, ComClass, ComObject, Slot,
+};
+use crate::com::{
+    IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, REFCLSID, REFIID,
+    S_FALSE, S_OK, ULONG,
+};
+use crate::registry::register::{register, unregister, ServerDescription};
+use crate::registry::{registries, REGDB_E_KEYMISSING};
+
+/// `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
+#[cfg(not(system_com_headers))]
+pub const SELFREG_E_CLASS: HRESULT = 0x80040201_u32 as HRESULT;
+
+/// Server locks taken with IClassFactory::LockServer(TRUE) and not yet released.
+static LOCKS: AtomicU32 = AtomicU32::new(0);
+
+/// The methods of IClassFactory.
+#[repr(C)]
+#[allow(non_snake_case)]
+pub(crate) struct IClassFactoryVtbl {
+    QueryInterface: unsafe extern "system" fn(*mut IClassFactory, REFIID, *mut *mut c_void) -> HRESULT,
+    AddRef: unsafe extern "system" fn(*mut IClassFactory) -> ULONG,
+    Release: unsafe extern "system" fn(*mut IClassFactory) -> ULONG,
+    CreateInstance: unsafe extern "system" fn(*mut IClassFactory, *mut IUnknown, REFIID, *mut *mut c_void) -> HRESULT,
+    LockServer: unsafe extern "system" fn(*mut IClassFactory, BOOL) -> HRESULT,
+}
+
+#[repr(C)]
+pub(crate) struct IClassFactory {
+    vtbl: *const IClassFactoryVtbl,
+}
+
+/// The class factory of OPCServerList.
+struct Factory {
+    slot: Slot,
+}
+
+impl ComClass for Factory {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        (*iid == IID_ICLASSFACTORY).then_some(&self.slot)
+    }
+}
+
+static FACTORY_VTBL: IClassFactoryVtbl = IClassFactoryVtbl {
+    QueryInterface: delegating_query_interface::<IClassFactory>,
+    AddRef: delegating_add_ref::<IClassFactory>,
+    Release: delegating_release::<IClassFactory>,
+    CreateInstance: create_instance,
+    LockServer: lock_server,
+};
+
+unsafe extern "system" fn create_instance(
+    _this: *mut IClassFactory,
+    outer: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    // SAFETY: forwarded: the standard creation protocol checks every argument.
+    catch(E_UNEXPECTED, || unsafe {
+        super::create(registries(ptr::null()), outer, riid, ppv)
+    })
+}
+
+unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        if lock != 0 {
+            LOCKS.fetch_add(1, Ordering::AcqRel);
+        } else {
+            // An unlock without a lock is ignored rather than wrapping around.
+            let _ = LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+        }
+        S_OK
+    })
+}
+
+/// The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
+/// over the system registry, and which honours LockServer), as DllGetClassObject returns it. For servers
+/// that link opccomn statically and have their own DllGetClassObject: forward CLSID_OPCServerList here.
+///
+/// Returns S_OK; E_POINTER for a NULL `ppv`; E_INVALIDARG for a NULL `rclsid` or `riid`;
+/// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
+/// IID_IUnknown. `*ppv` is NULL on failure.
+///
+/// # Safety
+/// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+#[no_mangle]
+pub unsafe extern "system" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    if ppv.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppv = ptr::null_mut() };
+    if rclsid.is_null() || riid.is_null() {
+        return E_INVALIDARG;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: checked non-NULL.
+        if unsafe { *rclsid } != CLSID_OPCServerList {
+            return CLASS_E_CLASSNOTAVAILABLE;
+        }
+        let factory = ComObject::<Factory>::new(ptr::null_mut(), |b| Factory {
+            slot: b.slot(&FACTORY_VTBL),
+        });
+        // SAFETY: `factory` keeps the object alive; its IUnknown QueryInterface checks `riid`.
+        unsafe { crate::com::unknown::query_interface(factory.header().inner_unknown(), &*riid, ppv) }
+    })
+}
+
+/// S_OK when no object of the library is alive and no server lock is held, so COM may unload the DLL;
+/// S_FALSE otherwise.
+#[no_mangle]
+pub extern "system" fn OpcDllCanUnloadNow() -> HRESULT {
+    catch(S_FALSE, || {
+        if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 {
+            S_OK
+        } else {
+            S_FALSE
+        }
+    })
+}
+
+/// What opccomn registers for itself.
+fn server_list_registration() -> ServerDescription {
+    ServerDescription {
+        clsid: CLSID_OPCServerList,
+        local: false,
+        prog_id: "OPC.ServerList.1".into(),
+        version_independent_prog_id: Some("OPC.ServerList".into()),
+        user_type: "Opc ServerList Class".into(),
+        module_path: None,
+        threading_model: Some("Both".into()),
+        keep_existing: true,
+        ..Default::default()
+    }
+}
+
+/// Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
+/// ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
+/// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
+/// changing it. Returns S_OK or SELFREG_E_CLASS.
+#[no_mangle]
+pub extern "system" fn OpcDllRegisterServer() -> HRESULT {
+    catch(SELFREG_E_CLASS, || {
+        // SAFETY: NULL is the system registry.
+        match register(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
+            Ok(()) => S_OK,
+            Err(_) => SELFREG_E_CLASS,
+        }
+    })
+}
+
+/// Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
+/// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
+/// SELFREG_E_CLASS.
+#[no_mangle]
+pub extern "system" fn OpcDllUnregisterServer() -> HRESULT {
+    catch(SELFREG_E_CLASS, || {
+        // SAFETY: NULL is the system registry.
+        match unregister(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
+            Ok(()) | Err(REGDB_E_KEYMISSING) => S_OK,
+            Err(_) => SELFREG_E_CLASS,
+        }
+    })
+}
+
+/// The standard COM entry point: `OpcDllGetClassObject`. (Declared by the system headers, so not in
+/// opccomn.h.)
+///
+/// cbindgen:ignore
+///
+/// # Safety
+/// As for `OpcDllGetClassObject`.
+#[cfg(feature = "dll-exports")]
+#[no_mangle]
+pub unsafe extern "system" fn DllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    // SAFETY: forwarded.
+    unsafe { OpcDllGetClassObject(rclsid, riid, ppv) }
+}
+
+/// The standard COM entry point: `OpcDllCanUnloadNow`.
+///
+/// cbindgen:ignore
+#[cfg(feature = "dll-exports")]
+#[no_mangle]
+pub extern "system" fn DllCanUnloadNow() -> HRESULT {
+    OpcDllCanUnloadNow()
+}
+
+/// The standard self-registration entry point (`regsvr32 opccomn.dll`): `OpcDllRegisterServer`.
+///
+/// cbindgen:ignore
+#[cfg(feature = "dll-exports")]
+#[no_mangle]
+pub extern "system" fn DllRegisterServer() -> HRESULT {
+    OpcDllRegisterServer()
+}
+
+/// The standard unregistration entry point (`regsvr32 /u opccomn.dll`): `OpcDllUnregisterServer`.
+///
+/// cbindgen:ignore
+#[cfg(feature = "dll-exports")]
+#[no_mangle]
+pub extern "system" fn DllUnregisterServer() -> HRESULT {
+    OpcDllUnregisterServer()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::com::iids::{IID_IOPCServerList, IID_IUNKNOWN};
+
+    #[test]
+    fn the_class_object_serves_only_the_server_list() {
+        let mut p = 1 as *mut c_void;
+        let other = GUID::from_u128(1);
+        // SAFETY: valid pointers or deliberate NULLs.
+        unsafe {
+            assert_eq!(
+                OpcDllGetClassObject(&other, &IID_ICLASSFACTORY, &mut p),
+                CLASS_E_CLASSNOTAVAILABLE
+            );
+            assert!(p.is_null());
+            assert_eq!(
+                OpcDllGetClassObject(ptr::null(), &IID_ICLASSFACTORY, &mut p),
+                E_INVALIDARG
+            );
+            assert_eq!(
+                OpcDllGetClassObject(&CLSID_OPCServerList, &IID_IOPCServerList, &mut p),
+                crate::com::E_NOINTERFACE
+            );
+            assert_eq!(
+                OpcDllGetClassObject(&CLSID_OPCServerList, &IID_ICLASSFACTORY, ptr::null_mut()),
+                E_POINTER
+            );
+            assert_eq!(OpcDllGetClassObject(&CLSID_OPCServerList, &IID_IUNKNOWN, &mut p), S_OK);
+            crate::com::unknown::release(p.cast());
+            assert_eq!(
+                OpcDllGetClassObject(&CLSID_OPCServerList, &IID_ICLASSFACTORY, &mut p),
+                S_OK
+            );
+            let f = p as *mut IClassFactory;
+            let v = &*(*f).vtbl;
+            let mut list = ptr::null_mut();
+            assert_eq!(
+                (v.CreateInstance)(f, ptr::null_mut(), &IID_IOPCServerList, &mut list),
+                S_OK
+            );
+            assert!(!list.is_null());
+            crate::com::unknown::release(list.cast());
+            (v.Release)(f);
+        }
+    }
+}

@@ -1,0 +1,207 @@
+//! The server list's rules, checked against an in-memory registry.
+
+use std::sync::Arc;
+
+use super::*;
+use crate::registry::categories::{CATID_OPCAEServer10, CATID_OPCDAServer10, CATID_OPCDAServer20, CATID_OPCDAServer30};
+use crate::registry::memory::MemoryRegistry;
+use crate::registry::regfile;
+use crate::registry::Registry;
+
+fn g(n: u128) -> GUID {
+    GUID::from_u128(0xC0000000_0000_0000_0000_000000000000 + n)
+}
+
+/// A registry with: class 1 (DA 2.0), class 2 (DA 2.0 + DA 3.0, requiring AE), class 3 (AE only, no
+/// ProgID), class 4 (DA 1.0 the old way only), class 5 (DA 3.0, requires AE and DA 2.0), and a ProgID
+/// with an OPC key whose class is not registered.
+fn sample() -> Registries {
+    let reg = MemoryRegistry::new();
+    let class = |n: u128, impls: &[GUID], reqs: &[GUID], prog: Option<&str>| {
+        let key = format!("CLSID\\{}", g(n));
+        reg.set_value(&key, "", &crate::registry::RegValue::Sz(format!("Server {n}")))
+            .unwrap();
+        for c in impls {
+            reg.create_key(&format!("{key}\\Implemented Categories\\{c}")).unwrap();
+        }
+        for c in reqs {
+            reg.create_key(&format!("{key}\\Required Categories\\{c}")).unwrap();
+        }
+        if let Some(p) = prog {
+            let text = format!(
+                "REGEDIT4\n[HKCR\\{key}\\ProgID]\n@=\"{p}\"\n[HKCR\\{p}\\CLSID]\n@=\"{}\"\n",
+                g(n)
+            );
+            regfile::apply(&reg, &text).unwrap();
+        }
+    };
+    class(1, &[CATID_OPCDAServer20], &[], Some("V.One.1"));
+    class(
+        2,
+        &[CATID_OPCDAServer20, CATID_OPCDAServer30],
+        &[CATID_OPCAEServer10],
+        Some("V.Two.1"),
+    );
+    class(3, &[CATID_OPCAEServer10], &[], None);
+    class(4, &[], &[], Some("V.Old.1"));
+    reg.create_key("V.Old.1\\OPC\\Vendor").unwrap();
+    class(
+        5,
+        &[CATID_OPCDAServer30],
+        &[CATID_OPCAEServer10, CATID_OPCDAServer20],
+        Some("V.Five.1"),
+    );
+    regfile::apply(&reg, "REGEDIT4\n[HKCR\\V.Ghost.1\\OPC]\n[HKCR\\V.Ghost.1\\CLSID]\n@=\"{C0000000-0000-0000-0000-0000000000FF}\"\n[HKCR\\CLSID\\not-a-guid\\Implemented Categories\\{63D5F432-CFE4-11d1-B2C8-0060083BA1FB}]\n").unwrap();
+    let reg: Arc<dyn Registry> = Arc::new(reg);
+    Registries {
+        write: reg.clone(),
+        views: vec![reg],
+    }
+}
+
+fn ids(list: &[u128]) -> Vec<GUID> {
+    list.iter().map(|&n| g(n)).collect()
+}
+
+#[test]
+fn zero_means_any_category() {
+    let regs = sample();
+    assert_eq!(classes_of_categories(&regs, None, None), ids(&[1, 2, 3, 4, 5]));
+}
+
+#[test]
+fn a_class_qualifies_by_any_implemented_category() {
+    let regs = sample();
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), None),
+        ids(&[1, 2])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer30, CATID_OPCAEServer10]), None),
+        ids(&[2, 3, 5])
+    );
+    // Listing a category twice, or a class matching twice, reports it once.
+    assert_eq!(
+        classes_of_categories(
+            &regs,
+            Some(&[CATID_OPCDAServer20, CATID_OPCDAServer30, CATID_OPCDAServer20]),
+            None
+        ),
+        ids(&[1, 2, 5])
+    );
+    assert_eq!(classes_of_categories(&regs, Some(&[g(0x99)]), None), ids(&[]));
+}
+
+#[test]
+fn a_class_qualifies_only_with_all_required_categories() {
+    let regs = sample();
+    assert_eq!(
+        classes_of_categories(&regs, None, Some(&[CATID_OPCAEServer10])),
+        ids(&[2, 5])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, None, Some(&[CATID_OPCAEServer10, CATID_OPCDAServer20])),
+        ids(&[5])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), Some(&[CATID_OPCAEServer10])),
+        ids(&[2])
+    );
+}
+
+#[test]
+fn data_access_1_servers_registered_the_old_way_are_found() {
+    let regs = sample();
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer10]), None),
+        ids(&[4])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer10, CATID_OPCDAServer20]), None),
+        ids(&[1, 2, 4])
+    );
+    // A class implementing the DA 1.0 category and registered the old way is reported once.
+    regs.write
+        .create_key(&format!(
+            "CLSID\\{}\\Implemented Categories\\{CATID_OPCDAServer10}",
+            g(4)
+        ))
+        .unwrap();
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer10]), None),
+        ids(&[4])
+    );
+}
+
+#[test]
+fn every_view_is_read_and_each_class_reported_once() {
+    let regs = sample();
+    let other = MemoryRegistry::new();
+    other
+        .create_key(&format!(
+            "CLSID\\{}\\Implemented Categories\\{CATID_OPCDAServer20}",
+            g(7)
+        ))
+        .unwrap();
+    other
+        .create_key(&format!(
+            "CLSID\\{}\\Implemented Categories\\{CATID_OPCDAServer20}",
+            g(1)
+        ))
+        .unwrap();
+    other
+        .set_value(
+            &format!("CLSID\\{}\\ProgID", g(7)),
+            "",
+            &crate::registry::RegValue::Sz("W.Seven.1".into()),
+        )
+        .unwrap();
+    let regs = Registries {
+        write: regs.write.clone(),
+        views: vec![regs.write.clone(), Arc::new(other)],
+    };
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), None),
+        ids(&[1, 2, 7])
+    );
+    assert_eq!(class_details(&regs, &g(7)).unwrap().prog_id, "W.Seven.1");
+}
+
+#[test]
+fn details_come_from_the_class_key() {
+    let regs = sample();
+    assert_eq!(
+        class_details(&regs, &g(1)),
+        Ok(ClassDetails {
+            prog_id: "V.One.1".into(),
+            user_type: "Server 1".into(),
+            version_independent_prog_id: "V.One.1".into(),
+        })
+    );
+    regfile::apply(
+        &*regs.write,
+        &format!(
+            "REGEDIT4\n[HKCR\\CLSID\\{}\\VersionIndependentProgID]\n@=\"V.One\"\n",
+            g(1)
+        ),
+    )
+    .unwrap();
+    assert_eq!(
+        class_details(&regs, &g(1)).unwrap().version_independent_prog_id,
+        "V.One"
+    );
+    assert_eq!(class_details(&regs, &g(0x99)), Err(REGDB_E_CLASSNOTREG));
+    assert_eq!(class_details(&regs, &g(3)), Err(REGDB_E_KEYMISSING));
+}
+
+#[test]
+fn prog_ids_map_to_their_clsid() {
+    let regs = sample();
+    assert_eq!(clsid_from_prog_id(&regs, "V.Two.1"), Ok(g(2)));
+    assert_eq!(clsid_from_prog_id(&regs, "v.two.1"), Ok(g(2)));
+    assert_eq!(clsid_from_prog_id(&regs, "V.Nope.1"), Err(REGDB_E_CLASSNOTREG));
+    assert_eq!(clsid_from_prog_id(&regs, ""), Err(CO_E_CLASSSTRING));
+    assert_eq!(clsid_from_prog_id(&regs, "CLSID\\x"), Err(CO_E_CLASSSTRING));
+    regfile::apply(&*regs.write, "REGEDIT4\n[HKCR\\V.Bad.1\\CLSID]\n@=\"garbage\"\n").unwrap();
+    assert_eq!(clsid_from_prog_id(&regs, "V.Bad.1"), Err(CO_E_CLASSSTRING));
+}
