@@ -75,13 +75,13 @@ enum OpcServerCommand
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
   // No switch the library knows: the server was started by hand.
-  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_NONE = 0,
+  OPC_SERVER_COMMAND_NONE = 0,
   // `/RegServer` or `-RegServer`: register and exit.
-  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_REGISTER = 1,
+  OPC_SERVER_COMMAND_REGISTER = 1,
   // `/UnregServer` or `-UnregServer`: unregister and exit.
-  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_UNREGISTER = 2,
+  OPC_SERVER_COMMAND_UNREGISTER = 2,
   // `-Embedding`, `/Embedding`, `-Automation` or `/Automation`: COM started the server for a client.
-  OPC_SERVER_COMMAND_OPC_SERVER_COMMAND_EMBEDDING = 3,
+  OPC_SERVER_COMMAND_EMBEDDING = 3,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -98,9 +98,9 @@ enum OpcServerType
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
   // A DLL loaded into the client: `InprocServer32`.
-  OPC_SERVER_TYPE_OPC_SERVER_INPROC = 0,
+  OPC_SERVER_TYPE_INPROC = 0,
   // An EXE started by COM: `LocalServer32`.
-  OPC_SERVER_TYPE_OPC_SERVER_LOCAL = 1,
+  OPC_SERVER_TYPE_LOCAL = 1,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -1179,6 +1179,33 @@ HRESULT OpcServerListCreate(struct IUnknown *outer, REFIID riid, void **ppv);
 // # Safety
 // `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.
 HRESULT OpcServerListCreateOver(const struct OpcRegistry *reg, struct IUnknown *outer, REFIID riid, void **ppv);
+
+// The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
+// over the system registry, and which honours LockServer), as DllGetClassObject returns it. For servers
+// that link opccomn statically and have their own DllGetClassObject: forward CLSID_OPCServerList here.
+//
+// Returns S_OK; E_POINTER for a NULL `ppv`; E_INVALIDARG for a NULL `rclsid` or `riid`;
+// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
+// IID_IUnknown. `*ppv` is NULL on failure.
+//
+// # Safety
+// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+HRESULT OpcDllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv);
+
+// S_OK when no object of the library is alive and no server lock is held, so COM may unload the DLL;
+// S_FALSE otherwise.
+HRESULT OpcDllCanUnloadNow(void);
+
+// Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
+// ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
+// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
+// changing it. Returns S_OK or SELFREG_E_CLASS.
+HRESULT OpcDllRegisterServer(void);
+
+// Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
+// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
+// SELFREG_E_CLASS.
+HRESULT OpcDllUnregisterServer(void);
 
 #ifdef __cplusplus
 }  // extern "C"

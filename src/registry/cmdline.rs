@@ -11,13 +11,13 @@ use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, HRESULT, LPCWSTR, S_OK};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OpcServerCommand {
     /// No switch the library knows: the server was started by hand.
-    OpcServerCommandNone = 0,
+    None = 0,
     /// `/RegServer` or `-RegServer`: register and exit.
-    OpcServerCommandRegister = 1,
+    Register = 1,
     /// `/UnregServer` or `-UnregServer`: unregister and exit.
-    OpcServerCommandUnregister = 2,
+    Unregister = 2,
     /// `-Embedding`, `/Embedding`, `-Automation` or `/Automation`: COM started the server for a client.
-    OpcServerCommandEmbedding = 3,
+    Embedding = 3,
 }
 
 /// Splits a command line into arguments the way Windows programs do for the cases that matter here:
@@ -72,10 +72,10 @@ pub fn parse_command_line(line: &str) -> Result<OpcServerCommand, HRESULT> {
     }
     Ok(match (register, unregister) {
         (true, true) => return Err(E_INVALIDARG),
-        (true, false) => OpcServerCommand::OpcServerCommandRegister,
-        (false, true) => OpcServerCommand::OpcServerCommandUnregister,
-        _ if embedding => OpcServerCommand::OpcServerCommandEmbedding,
-        _ => OpcServerCommand::OpcServerCommandNone,
+        (true, false) => OpcServerCommand::Register,
+        (false, true) => OpcServerCommand::Unregister,
+        _ if embedding => OpcServerCommand::Embedding,
+        _ => OpcServerCommand::None,
     })
 }
 
@@ -95,7 +95,7 @@ pub unsafe extern "C" fn OpcParseCommandLine(command_line: LPCWSTR, command: *mu
         return E_POINTER;
     }
     // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *command = OpcServerCommand::OpcServerCommandNone as u32 };
+    unsafe { *command = OpcServerCommand::None as u32 };
     catch(E_UNEXPECTED, || {
         // SAFETY: forwarded from the caller's contract.
         let parsed = unsafe { arg_string(command_line) }.and_then(|line| parse_command_line(&line));
@@ -123,13 +123,13 @@ mod tests {
             "server.exe /REGSERVER",
             "\"C:\\My Server\\s.exe\" -RegServer",
         ] {
-            assert_eq!(parse_command_line(line), Ok(OpcServerCommandRegister), "{line}");
+            assert_eq!(parse_command_line(line), Ok(Register), "{line}");
         }
         for line in ["/UnregServer", "x.exe -UNREGSERVER", "-unregserver /foo"] {
-            assert_eq!(parse_command_line(line), Ok(OpcServerCommandUnregister), "{line}");
+            assert_eq!(parse_command_line(line), Ok(Unregister), "{line}");
         }
         for line in ["-Embedding", "x.exe /embedding", "-Automation"] {
-            assert_eq!(parse_command_line(line), Ok(OpcServerCommandEmbedding), "{line}");
+            assert_eq!(parse_command_line(line), Ok(Embedding), "{line}");
         }
         for line in [
             "",
@@ -140,12 +140,9 @@ mod tests {
             "C:\\regserver\\x.exe",
             "--RegServer",
         ] {
-            assert_eq!(parse_command_line(line), Ok(OpcServerCommandNone), "{line}");
+            assert_eq!(parse_command_line(line), Ok(None), "{line}");
         }
         assert_eq!(parse_command_line("/RegServer -UnregServer"), Err(E_INVALIDARG));
-        assert_eq!(
-            parse_command_line("-Embedding /RegServer"),
-            Ok(OpcServerCommandRegister)
-        );
+        assert_eq!(parse_command_line("-Embedding /RegServer"), Ok(Register));
     }
 }

@@ -56,9 +56,9 @@ const LCID_ENGLISH: u32 = 0x409;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OpcServerType {
     /// A DLL loaded into the client: `InprocServer32`.
-    OpcServerInproc = 0,
+    Inproc = 0,
     /// An EXE started by COM: `LocalServer32`.
-    OpcServerLocal = 1,
+    Local = 1,
 }
 
 /// `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing

@@ -105,7 +105,7 @@ unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> 
 /// # Safety
 /// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
 #[no_mangle]
-pub unsafe extern "system" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
     if ppv.is_null() {
         return E_POINTER;
     }
@@ -130,7 +130,7 @@ pub unsafe extern "system" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFII
 /// S_OK when no object of the library is alive and no server lock is held, so COM may unload the DLL;
 /// S_FALSE otherwise.
 #[no_mangle]
-pub extern "system" fn OpcDllCanUnloadNow() -> HRESULT {
+pub extern "C" fn OpcDllCanUnloadNow() -> HRESULT {
     catch(S_FALSE, || {
         if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 {
             S_OK
@@ -160,7 +160,7 @@ fn server_list_registration() -> ServerDescription {
 /// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
 /// changing it. Returns S_OK or SELFREG_E_CLASS.
 #[no_mangle]
-pub extern "system" fn OpcDllRegisterServer() -> HRESULT {
+pub extern "C" fn OpcDllRegisterServer() -> HRESULT {
     catch(SELFREG_E_CLASS, || {
         // SAFETY: NULL is the system registry.
         match register(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
@@ -174,7 +174,7 @@ pub extern "system" fn OpcDllRegisterServer() -> HRESULT {
 /// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
 /// SELFREG_E_CLASS.
 #[no_mangle]
-pub extern "system" fn OpcDllUnregisterServer() -> HRESULT {
+pub extern "C" fn OpcDllUnregisterServer() -> HRESULT {
     catch(SELFREG_E_CLASS, || {
         // SAFETY: NULL is the system registry.
         match unregister(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
