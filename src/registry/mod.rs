@@ -103,6 +103,26 @@ pub trait Registry: Send + Sync {
             .collect()
     }
 
+    /// The default values of `CLSID\{clsid}` and of its `ProgID` and (when `version_independent`)
+    /// `VersionIndependentProgID` subkeys; `None` when the class key does not exist. What
+    /// GetClassDetails reads; implementations may read it with fewer lookups.
+    fn class_strings(&self, clsid: &GUID, version_independent: bool) -> Option<ClassStrings> {
+        let class = class_key(clsid);
+        if !self.key_exists(&class) {
+            return None;
+        }
+        let text = |key: &str| self.value(key, "").and_then(|v| v.as_str().map(str::to_string));
+        Some(ClassStrings {
+            user_type: text(&class),
+            prog_id: text(&format!("{class}\\ProgID")),
+            version_independent_prog_id: if version_independent {
+                text(&format!("{class}\\VersionIndependentProgID"))
+            } else {
+                None
+            },
+        })
+    }
+
     /// Creates the component category `catid` with `description` for `lcid` (the specification's
     /// CreateComponentCategory): `Component Categories\{catid}`, value `<lcid in hex>`.
     fn register_category(&self, catid: &GUID, lcid: u32, description: &str) -> Result<(), HRESULT> {
@@ -139,6 +159,17 @@ pub(crate) fn write_category<R: Registry + ?Sized>(
 /// `CLSID\{clsid}\Implemented Categories\{catid}` (or `Required Categories`).
 pub(crate) fn class_category_key(clsid: &GUID, catid: &GUID, required: bool) -> String {
     format!("{}\\{catid}", class_categories_key(clsid, required))
+}
+
+/// The strings of a class that GetClassDetails reports, as registered (`None` when missing).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ClassStrings {
+    /// The default value of `CLSID\{clsid}`.
+    pub user_type: Option<String>,
+    /// The default value of `CLSID\{clsid}\ProgID`.
+    pub prog_id: Option<String>,
+    /// The default value of `CLSID\{clsid}\VersionIndependentProgID`.
+    pub version_independent_prog_id: Option<String>,
 }
 
 /// `CLSID\{clsid}`.

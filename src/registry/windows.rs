@@ -22,11 +22,11 @@ use windows_sys::Win32::System::LibraryLoader::{
 };
 use windows_sys::Win32::System::Registry::{
     RegCloseKey, RegCreateKeyExW, RegDeleteKeyExW, RegDeleteValueW, RegEnumKeyExW, RegEnumValueW, RegOpenKeyExW,
-    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_READ, KEY_SET_VALUE, KEY_WOW64_32KEY,
-    KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
+    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_QUERY_VALUE, KEY_READ, KEY_SET_VALUE,
+    KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
 };
 
-use super::{class_category_key, write_category, RegValue, Registries, Registry};
+use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::unknown::{release, IUnknown};
 use crate::com::{E_FAIL, GUID, HRESULT, LCID, ULONG};
 
@@ -321,6 +321,22 @@ impl Registry for WindowsRegistry {
             .collect()
     }
 
+    /// One open of the class key from the root, then relative opens: the fewest registry calls.
+    fn class_strings(&self, clsid: &GUID, version_independent: bool) -> Option<ClassStrings> {
+        let class = self.open(&class_key(clsid), KEY_READ)?;
+        let text = |v: Option<RegValue>| v.and_then(|v| v.as_str().map(str::to_string));
+        let sub = |name: &str| text(class.open(name, KEY_QUERY_VALUE | self.view).and_then(|k| k.value("")));
+        Some(ClassStrings {
+            user_type: text(class.value("")),
+            prog_id: sub("ProgID"),
+            version_independent_prog_id: if version_independent {
+                sub("VersionIndependentProgID")
+            } else {
+                None
+            },
+        })
+    }
+
     fn register_category(&self, catid: &GUID, lcid: u32, description: &str) -> Result<(), HRESULT> {
         let Some(cats) = self.cat_register() else {
             return write_category(self, catid, lcid, description);
@@ -384,10 +400,11 @@ fn ok(hr: HRESULT) -> Result<(), HRESULT> {
 /// The registries of the system: writes go to the process's own view, reads merge both views.
 pub(crate) fn system_registries() -> Registries {
     let native: Arc<dyn Registry> = Arc::new(WindowsRegistry::native());
+    // The process's own view first (flag 0: the cheapest opens), then the other one.
     let (first, second) = if cfg!(target_pointer_width = "64") {
-        (KEY_WOW64_64KEY, KEY_WOW64_32KEY)
+        (0, KEY_WOW64_32KEY)
     } else {
-        (KEY_WOW64_32KEY, KEY_WOW64_64KEY)
+        (0, KEY_WOW64_64KEY)
     };
     Registries {
         write: native,

@@ -222,22 +222,29 @@ pub(crate) struct ClassDetails {
     pub version_independent_prog_id: String,
 }
 
-/// The details of `clsid` from the first view that registers it.
-pub(crate) fn class_details(regs: &Registries, clsid: &CLSID) -> Result<ClassDetails, HRESULT> {
-    let class = class_key(clsid);
-    let view = regs
+/// The details of `clsid` from the first view that registers it (`version_independent`: also read the
+/// version-independent ProgID, for IOPCServerList2).
+pub(crate) fn class_details(
+    regs: &Registries,
+    clsid: &CLSID,
+    version_independent: bool,
+) -> Result<ClassDetails, HRESULT> {
+    let found = regs
         .views
         .iter()
-        .find(|v| v.key_exists(&class))
+        .find_map(|v| v.class_strings(clsid, version_independent))
         .ok_or(REGDB_E_CLASSNOTREG)?;
-    let text = |key: &str| {
-        view.value(key, "")
-            .and_then(|v| v.as_str().map(str::to_string))
-            .filter(|s| !s.is_empty())
+    let nonempty = |s: Option<String>| s.filter(|s| !s.is_empty());
+    let prog_id = nonempty(found.prog_id).ok_or(REGDB_E_KEYMISSING)?;
+    let user_type = match nonempty(found.user_type) {
+        Some(u) => u,
+        None => regs
+            .views
+            .iter()
+            .find_map(|v| nonempty(v.value(&prog_id, "").and_then(|v| v.as_str().map(str::to_string))))
+            .unwrap_or_default(),
     };
-    let prog_id = text(&format!("{class}\\ProgID")).ok_or(REGDB_E_KEYMISSING)?;
-    let user_type = text(&class).or_else(|| text(&prog_id)).unwrap_or_default();
-    let version_independent_prog_id = text(&format!("{class}\\VersionIndependentProgID")).unwrap_or(prog_id.clone());
+    let version_independent_prog_id = nonempty(found.version_independent_prog_id).unwrap_or(prog_id.clone());
     Ok(ClassDetails {
         prog_id,
         user_type,
@@ -364,7 +371,7 @@ unsafe fn get_class_details<I>(
     catch(E_UNEXPECTED, || {
         // SAFETY: COM calls this only through our vtables; `clsid` checked non-NULL.
         let (list, clsid) = unsafe { (object(this), *clsid) };
-        let details = match class_details(&list.regs, &clsid) {
+        let details = match class_details(&list.regs, &clsid, vi.is_some()) {
             Ok(d) => d,
             Err(hr) => return hr,
         };

@@ -164,14 +164,14 @@ fn every_view_is_read_and_each_class_reported_once() {
         classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), None),
         ids(&[1, 2, 7])
     );
-    assert_eq!(class_details(&regs, &g(7)).unwrap().prog_id, "W.Seven.1");
+    assert_eq!(class_details(&regs, &g(7), true).unwrap().prog_id, "W.Seven.1");
 }
 
 #[test]
 fn details_come_from_the_class_key() {
     let regs = sample();
     assert_eq!(
-        class_details(&regs, &g(1)),
+        class_details(&regs, &g(1), true),
         Ok(ClassDetails {
             prog_id: "V.One.1".into(),
             user_type: "Server 1".into(),
@@ -187,11 +187,11 @@ fn details_come_from_the_class_key() {
     )
     .unwrap();
     assert_eq!(
-        class_details(&regs, &g(1)).unwrap().version_independent_prog_id,
+        class_details(&regs, &g(1), true).unwrap().version_independent_prog_id,
         "V.One"
     );
-    assert_eq!(class_details(&regs, &g(0x99)), Err(REGDB_E_CLASSNOTREG));
-    assert_eq!(class_details(&regs, &g(3)), Err(REGDB_E_KEYMISSING));
+    assert_eq!(class_details(&regs, &g(0x99), true), Err(REGDB_E_CLASSNOTREG));
+    assert_eq!(class_details(&regs, &g(3), true), Err(REGDB_E_KEYMISSING));
 }
 
 #[test]
