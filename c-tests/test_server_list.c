@@ -242,10 +242,10 @@ static void test_details(IOPCServerList *list, IOPCServerList2 *list2) {
     CHECK_HR(list2->lpVtbl->GetClassDetails(list2, NULL, &prog, &user, &vi), E_INVALIDARG);
     CHECK(prog == NULL && user == NULL && vi == NULL);
     prog = (LPOLESTR)GARBAGE_PTR;
-    CHECK_HR(list->lpVtbl->GetClassDetails(list, &c, &prog, NULL), E_POINTER);
+    CHECK_HR(list->lpVtbl->GetClassDetails(list, &c, &prog, NULL), E_INVALIDARG);
     CHECK(prog == NULL);
     user = (LPOLESTR)GARBAGE_PTR;
-    CHECK_HR(list2->lpVtbl->GetClassDetails(list2, &c, NULL, &user, NULL), E_POINTER);
+    CHECK_HR(list2->lpVtbl->GetClassDetails(list2, &c, NULL, &user, NULL), E_INVALIDARG);
     CHECK(user == NULL);
 }
 
@@ -270,7 +270,7 @@ static void test_prog_ids(IOPCServerList *list) {
     memset(&got, 0xAB, sizeof got);
     CHECK_HR(list->lpVtbl->CLSIDFromProgID(list, NULL, &got), E_INVALIDARG);
     CHECK(same_guid(&got, &null_guid));
-    CHECK_HR(list->lpVtbl->CLSIDFromProgID(list, W("V.Two.1"), NULL), E_POINTER);
+    CHECK_HR(list->lpVtbl->CLSIDFromProgID(list, W("V.Two.1"), NULL), E_INVALIDARG);
 }
 
 static void test_bad_enumeration_arguments(IOPCServerList *list) {
@@ -284,7 +284,7 @@ static void test_bad_enumeration_arguments(IOPCServerList *list) {
     e = (IEnumGUID *)GARBAGE_PTR;
     CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 100000, &da20, 0, NULL, &e), E_INVALIDARG);
     CHECK(e == NULL);
-    CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 1, &da20, 0, NULL, NULL), E_POINTER);
+    CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 1, &da20, 0, NULL, NULL), E_INVALIDARG);
 }
 
 static void test_objects(void) {

@@ -15,7 +15,13 @@
 //! - **GetClassDetails** reads `CLSID\{clsid}` (first view that has it): the ProgID, the user type
 //!   (the key's default value, else the ProgID key's, else "") and, for IOPCServerList2, the
 //!   version-independent ProgID, falling back to the ProgID.
-//! - **CLSIDFromProgID** reads `<ProgID>\CLSID`.
+//! - **CLSIDFromProgID** reads `<ProgID>\CLSID`: REGDB_E_CLASSNOTREG when the ProgID (or its `CLSID`
+//!   key) is not registered, CO_E_CLASSSTRING when the text cannot be a ProgID or the registered CLSID
+//!   is malformed.
+//!
+//! As for every OPC method, NULL arguments (and counts over 4096 or arrays missing for a count) give
+//! E_INVALIDARG, with every out-parameter NULL. GetClassDetails returns REGDB_E_KEYMISSING for a class
+//! without a ProgID.
 
 pub mod enumguid;
 pub mod server;
@@ -301,7 +307,7 @@ unsafe fn enum_classes<I>(
     ppenum: *mut *mut IOPCEnumGUID,
 ) -> HRESULT {
     if ppenum.is_null() {
-        return E_POINTER;
+        return E_INVALIDARG;
     }
     // SAFETY: non-NULL out-parameter.
     unsafe { *ppenum = ptr::null_mut() };
@@ -363,7 +369,7 @@ unsafe fn get_class_details<I>(
         }
     }
     if outs.iter().flatten().any(|p| p.is_null()) {
-        return E_POINTER;
+        return E_INVALIDARG;
     }
     if clsid.is_null() {
         return E_INVALIDARG;
@@ -411,7 +417,7 @@ unsafe fn get_class_details<I>(
 /// As the method: COM arguments, `this` one of our slots.
 unsafe fn clsid_from_prog_id_method<I>(this: *mut I, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
     if clsid.is_null() {
-        return E_POINTER;
+        return E_INVALIDARG;
     }
     // SAFETY: non-NULL out-parameter.
     unsafe { *clsid = GUID::default() };
