@@ -498,3 +498,69 @@ impl Drop for CatRegister {
         unsafe { release(self.0 as *mut IUnknown) };
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCRATCH: &str = "OpcComn.Test.Scratch";
+
+    #[test]
+    fn the_windows_registry_behaves_like_the_memory_one() {
+        let reg = WindowsRegistry::native();
+        let _ = reg.delete_key(&format!("{SCRATCH}\\Sub\\Leaf"));
+        let _ = reg.delete_key(&format!("{SCRATCH}\\Sub"));
+        let _ = reg.delete_key(SCRATCH);
+        reg.set_value(&format!("{SCRATCH}\\Sub"), "", &RegValue::Sz("text".into()))
+            .unwrap();
+        reg.set_value(&format!("{SCRATCH}\\Sub"), "N", &RegValue::Dword(7))
+            .unwrap();
+        reg.create_key(&format!("{SCRATCH}\\Sub\\Leaf")).unwrap();
+        assert!(reg.key_exists(&format!("{}\\sub", SCRATCH.to_uppercase())));
+        assert_eq!(
+            reg.value(&format!("{SCRATCH}\\Sub"), ""),
+            Some(RegValue::Sz("text".into()))
+        );
+        let mut values = reg.values(&format!("{SCRATCH}\\Sub"));
+        values.sort_by(|a, b| a.0.cmp(&b.0));
+        assert_eq!(
+            values,
+            vec![
+                (String::new(), RegValue::Sz("text".into())),
+                ("N".into(), RegValue::Dword(7))
+            ]
+        );
+        assert_eq!(
+            reg.scan(SCRATCH, &["Leaf", "Missing"]),
+            vec![("Sub".to_string(), vec![Some(vec![]), None])]
+        );
+        // A key with subkeys is not deleted.
+        assert!(reg.delete_key(&format!("{SCRATCH}\\Sub")).is_err());
+        reg.delete_value(&format!("{SCRATCH}\\Sub"), "N").unwrap();
+        reg.delete_value(&format!("{SCRATCH}\\Sub"), "N").unwrap();
+        reg.delete_key(&format!("{SCRATCH}\\Sub\\Leaf")).unwrap();
+        reg.delete_key(&format!("{SCRATCH}\\Sub")).unwrap();
+        reg.delete_key(SCRATCH).unwrap();
+        assert!(!reg.key_exists(SCRATCH));
+        assert!(reg.delete_key(SCRATCH).is_ok());
+    }
+
+    #[test]
+    fn the_other_view_is_separate_for_classes() {
+        let key = "CLSID\\{C3000000-0000-4000-8000-000000000001}";
+        let native = WindowsRegistry::native();
+        let other = WindowsRegistry { view: KEY_WOW64_32KEY };
+        other.set_value(key, "", &RegValue::Sz("32-bit only".into())).unwrap();
+        assert!(other.key_exists(key));
+        assert!(
+            !native.key_exists(key),
+            "a 64-bit process sees its own view under HKCR\\CLSID"
+        );
+        let regs = system_registries();
+        let clsid = super::super::parse_guid(&key[6..]).unwrap();
+        let found = regs.views.iter().find_map(|v| v.class_strings(&clsid, false));
+        assert_eq!(found.and_then(|s| s.user_type).as_deref(), Some("32-bit only"));
+        other.delete_key(key).unwrap();
+        assert!(!other.key_exists(key));
+    }
+}

@@ -39,8 +39,8 @@ use crate::com::object::{
 };
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{
-    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCLSID, LPCOLESTR,
-    LPOLESTR, REFCLSID, REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
+    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR,
+    REFCLSID, REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
 };
 use crate::registry::categories::DA10;
 use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
