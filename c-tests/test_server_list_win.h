@@ -311,6 +311,22 @@ static void test_com_activation(void) {
     snapshot(sys, &after);
     expect_same(&pristine, &after, "after regsvr32 and regsvr32 /u");
 
+    /* OpcEnum installed after opccomn: regsvr32 /u takes back only InprocServer32, and OpcEnum's
+       registration (which shares the class key and the ProgIDs) keeps working. */
+    CHECK(regsvr32(dll, 0) == 0);
+    CHECK(set_sz(0, LIST_KEY L"\\LocalServer32", NULL, L"C:\\windows\\system32\\OpcEnum.exe") == ERROR_SUCCESS);
+    CHECK(regsvr32(dll, 1) == 0);
+    CHECK(!key_exists(0, LIST_KEY L"\\InprocServer32"));
+    CHECK(wcscmp(get_sz(LIST_KEY L"\\LocalServer32", NULL), L"C:\\windows\\system32\\OpcEnum.exe") == 0);
+    CHECK(wcscmp(get_sz(L"OPC.ServerList.1\\CLSID", NULL), L"{13486D51-4821-11D2-A494-3CB306C10000}") == 0);
+    CHECK(wcscmp(get_sz(LIST_KEY L"\\ProgID", NULL), L"OPC.ServerList.1") == 0);
+    RegDeleteTreeW(HKEY_CLASSES_ROOT, LIST_KEY);
+    RegDeleteTreeW(HKEY_CLASSES_ROOT, L"OPC.ServerList.1");
+    RegDeleteTreeW(HKEY_CLASSES_ROOT, L"OPC.ServerList");
+    free_snapshot(&after);
+    snapshot(sys, &after);
+    expect_same(&pristine, &after, "after removing OpcEnum installed later");
+
     free_snapshot(&pristine);
     free_snapshot(&before);
     free_snapshot(&registered);

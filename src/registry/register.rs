@@ -28,7 +28,10 @@
 //! it created, the values it added, and the previous data of values it changed. Unregistration deletes
 //! the added values, restores the changed ones, and deletes the created keys that are then empty. A
 //! category description is left in place while another class still implements the category.
-//! Registering twice is harmless: the ledger keeps what the first registration found. Without a
+//! Registering twice is harmless: the ledger keeps what the first registration found. When another
+//! server registered the same class in the other module key *after* this registration (an OpcEnum
+//! installed later next to opccomn's in-process server list), the shared entries serve it too, so
+//! unregistration then takes back only its own module key. Without a
 //! ledger (a registration written by other means) unregistration removes the values whose data is what
 //! this registration would write, and the server's own keys once they are empty.
 
@@ -243,6 +246,12 @@ impl ServerDescription {
         format!("{}\\{kind}", class_key(&self.clsid))
     }
 
+    /// The module key a server of the other packaging would use.
+    fn other_module_key(&self) -> String {
+        let kind = if self.local { "InprocServer32" } else { "LocalServer32" };
+        format!("{}\\{kind}", class_key(&self.clsid))
+    }
+
     fn module_path(&self) -> Result<String, HRESULT> {
         match &self.module_path {
             Some(p) => Ok(p.clone()),
@@ -382,6 +391,9 @@ enum Entry {
     Added(String, String),
     /// Replaced this value (key, name, previous data).
     Replaced(String, String, String),
+    /// At the first registration another server already registered the class in the other module key
+    /// (`LocalServer32` for an in-process server, and the reverse).
+    OtherServer,
 }
 
 fn escape(s: &str) -> String {
@@ -396,6 +408,7 @@ impl Entry {
     fn encode(&self) -> String {
         match self {
             Entry::Key(k) => format!("K{}", escape(k)),
+            Entry::OtherServer => "O".to_string(),
             Entry::Added(k, n) => format!("V{}|{}", escape(k), escape(n)),
             Entry::Replaced(k, n, old) => format!("R{}|{}|{}", escape(k), escape(n), escape(old)),
         }
@@ -409,6 +422,7 @@ impl Entry {
             ('K', [k]) => Some(Entry::Key(k.clone())),
             ('V', [k, n]) => Some(Entry::Added(k.clone(), n.clone())),
             ('R', [k, n, old]) => Some(Entry::Replaced(k.clone(), n.clone(), old.clone())),
+            ('O', [empty]) if empty.is_empty() => Some(Entry::OtherServer),
             _ => None,
         }
     }
@@ -416,7 +430,7 @@ impl Entry {
     /// The value this entry is about, for "already recorded" checks.
     fn value(&self) -> Option<(String, String)> {
         match self {
-            Entry::Key(_) => None,
+            Entry::Key(_) | Entry::OtherServer => None,
             Entry::Added(k, n) | Entry::Replaced(k, n, _) => Some((k.to_lowercase(), n.to_lowercase())),
         }
     }
@@ -505,7 +519,12 @@ impl<'a> Recorder<'a> {
 pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
     let reg = &*regs.write;
     let module_key = d.module_key();
-    let mut rec = Recorder::new(reg, read_ledger(reg, &module_key).unwrap_or_default());
+    let ledger = read_ledger(reg, &module_key).unwrap_or_default();
+    let first = ledger.is_empty();
+    let mut rec = Recorder::new(reg, ledger);
+    if first && reg.key_exists(&d.other_module_key()) {
+        rec.ledger.push(Entry::OtherServer);
+    }
     for (key, name, data, ours) in d.values()? {
         rec.value(&key, &name, &data, ours || !d.keep_existing)?;
     }
@@ -566,10 +585,20 @@ fn class_category_of(path: &str, d: &ServerDescription) -> Option<(GUID, bool)> 
 pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
     let reg = &*regs.write;
     let module_key = d.module_key();
-    let ledger = match read_ledger(reg, &module_key) {
+    let mut ledger = match read_ledger(reg, &module_key) {
         Some(ledger) => ledger,
         None => fallback_ledger(reg, d)?,
     };
+    // Another server registered the class after this one (OpcEnum installed later, say): the class
+    // key, ProgIDs and categories now serve it too. Take back only the own module key.
+    if !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key()) {
+        let own = module_key.to_lowercase();
+        let is_own = |key: &str| key.to_lowercase() == own;
+        ledger.retain(|e| match e {
+            Entry::Key(k) | Entry::Added(k, _) | Entry::Replaced(k, _, _) => is_own(k),
+            Entry::OtherServer => false,
+        });
+    }
     for entry in ledger.iter().rev() {
         match entry {
             Entry::Added(key, name) => {
@@ -583,7 +612,7 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
                 reg.delete_value(key, name)?
             }
             Entry::Replaced(key, name, old) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
-            Entry::Key(_) => {}
+            Entry::Key(_) | Entry::OtherServer => {}
         }
     }
     reg.delete_value(&module_key, LEDGER)?;
@@ -951,6 +980,37 @@ mod tests {
     }
 
     #[test]
+    fn a_server_registered_later_under_the_same_class_keeps_its_entries() {
+        let regs = memory();
+        let mut d = server(9);
+        d.keep_existing = true;
+        register(&regs, &d).unwrap();
+        // Another product registers the class as an EXE server afterwards, writing the same values.
+        let class = class_key(&d.clsid);
+        regs.write
+            .set_value(
+                &format!("{class}\\LocalServer32"),
+                "",
+                &RegValue::Sz("C:\\other.exe".into()),
+            )
+            .unwrap();
+        let with_other = dump(&regs);
+        unregister(&regs, &d).unwrap();
+        assert!(!regs.write.key_exists(&d.module_key()));
+        let s = |k: &str| regs.write.value(k, "").and_then(|v| v.as_str().map(str::to_string));
+        assert_eq!(s(&class).as_deref(), Some("Vendor Server 9"));
+        assert_eq!(s("Vendor.Server9.1\\CLSID"), Some(d.clsid.to_string()));
+        assert!(regs
+            .write
+            .key_exists(&format!("{class}\\Implemented Categories\\{CATID_OPCDAServer20}")));
+        assert_ne!(dump(&regs), with_other);
+        // Registering again and unregistering keeps it so.
+        register(&regs, &d).unwrap();
+        unregister(&regs, &d).unwrap();
+        assert_eq!(s("Vendor.Server9.1\\CLSID"), Some(d.clsid.to_string()));
+    }
+
+    #[test]
     fn a_shared_category_keeps_its_description() {
         let regs = memory();
         let empty = dump(&regs);
@@ -1003,6 +1063,7 @@ mod tests {
             Entry::Key("A;B|C%3B".into()),
             Entry::Added("K".into(), "".into()),
             Entry::Replaced("K".into(), "n|;".into(), "old;data%".into()),
+            Entry::OtherServer,
         ] {
             assert_eq!(Entry::decode(&e.encode()), Some(e.clone()));
         }
