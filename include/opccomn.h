@@ -1029,7 +1029,8 @@ HRESULT OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR text);
 // Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
 // registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
 // (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
-// descriptions when missing; on Windows through the Component Categories Manager) and, for Data Access
+// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
+// on the calling thread, else by writing the same keys) and, for Data Access
 // 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
 // that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
 // reports OPC_SERVER_COMMAND_REGISTER.

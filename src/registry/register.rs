@@ -655,7 +655,8 @@ fn fallback_ledger(reg: &dyn Registry, d: &ServerDescription) -> Result<Vec<Entr
 /// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
 /// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
 /// (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
-/// descriptions when missing; on Windows through the Component Categories Manager) and, for Data Access
+/// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
+/// on the calling thread, else by writing the same keys) and, for Data Access
 /// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
 /// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
 /// reports OPC_SERVER_COMMAND_REGISTER.
@@ -858,7 +859,7 @@ pub unsafe extern "C" fn OpcCategoryDescription(catid: *const CATID, description
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::registry::categories::{CATID_OPCDAServer10, CATID_OPCDAServer20};
     use crate::registry::memory::MemoryRegistry;

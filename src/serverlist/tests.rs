@@ -205,3 +205,31 @@ fn prog_ids_map_to_their_clsid() {
     regfile::apply(&*regs.write, "REGEDIT4\n[HKCR\\V.Bad.1\\CLSID]\n@=\"garbage\"\n").unwrap();
     assert_eq!(clsid_from_prog_id(&regs, "V.Bad.1"), Err(CO_E_CLASSSTRING));
 }
+
+#[test]
+fn enumeration_and_registration_may_run_on_several_threads() {
+    let regs = Arc::new(sample());
+    let workers: Vec<_> = (0..4u128)
+        .map(|t| {
+            let regs = regs.clone();
+            std::thread::spawn(move || {
+                for i in 0..20u128 {
+                    let mut d = crate::registry::register::tests::server(0x1000 + t * 100 + i);
+                    d.implemented = vec![(CATID_OPCAEServer10, None)];
+                    crate::registry::register::register(&regs, &d).unwrap();
+                    let found = classes_of_categories(&regs, Some(&[CATID_OPCAEServer10]), None);
+                    assert!(found.contains(&d.clsid) && found.contains(&g(3)));
+                    assert_eq!(class_details(&regs, &d.clsid, true).unwrap().prog_id, d.prog_id);
+                    crate::registry::register::unregister(&regs, &d).unwrap();
+                }
+            })
+        })
+        .collect();
+    for w in workers {
+        w.join().unwrap();
+    }
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCAEServer10]), None),
+        ids(&[3])
+    );
+}
