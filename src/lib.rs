@@ -18,9 +18,9 @@ pub mod com;
 pub mod common;
 pub mod errors;
 pub mod pattern;
-pub mod shutdown;
 pub mod registry;
 pub mod serverlist;
+pub mod shutdown;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.
