@@ -236,29 +236,6 @@ typedef int32_t BOOL;
 typedef const char *LPCSTR;
 #endif
 
-// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
-// `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
-// `struct_size` bytes, so code built against an older header keeps working.
-typedef struct OpcShutdownOptions {
-  // `sizeof(OpcShutdownOptions)` as the caller's header declares it.
-  uint32_t struct_size;
-  // The most sinks that may be advised at the same time; 0 means the default, 1 (the
-  // specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
-  uint32_t advise_limit;
-} OpcShutdownOptions;
-
-// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
-// the server gave no reason) and is valid only during the call. Runs on the thread that called
-// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
-// in-process server in another apartment calls it directly); the library holds no lock, so the
-// callback may unadvise the sink and release the server.
-typedef void (*OpcShutdownCallback)(void *context, LPCWSTR reason);
-
-#if !defined(_WIN32)
-// A 32-bit unsigned integer.
-typedef uint32_t DWORD;
-#endif
-
 #if !defined(_WIN32)
 // A class identifier.
 typedef struct GUID CLSID;
@@ -332,6 +309,29 @@ typedef struct OpcVersion {
   uint16_t minor;
   uint16_t build;
 } OpcVersion;
+
+#if !defined(_WIN32)
+// A 32-bit unsigned integer.
+typedef uint32_t DWORD;
+#endif
+
+// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
+// `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
+// `struct_size` bytes, so code built against an older header keeps working.
+typedef struct OpcShutdownOptions {
+  // `sizeof(OpcShutdownOptions)` as the caller's header declares it.
+  uint32_t struct_size;
+  // The most sinks that may be advised at the same time; 0 means the default, 1 (the
+  // specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
+  uint32_t advise_limit;
+} OpcShutdownOptions;
+
+// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
+// the server gave no reason) and is valid only during the call. Runs on the thread that called
+// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
+// in-process server in another apartment calls it directly); the library holds no lock, so the
+// callback may unadvise the sink and release the server.
+typedef void (*OpcShutdownCallback)(void *context, LPCWSTR reason);
 
 // The methods of IOPCCommon, in the order of the specification's IDL.
 typedef struct IOPCCommonVtbl {
@@ -661,26 +661,6 @@ extern const IID IID_IOPCServerList2;
 // CLSID of the OPC server browser `OPC.ServerList.1` {13486D51-4821-11D2-A494-3CB306C10000}.
 extern const IID CLSID_OPCServerList;
 
-#if !defined(_WIN32)
-// `IID_IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-extern const IID IID_IConnectionPointContainer;
-#endif
-
-#if !defined(_WIN32)
-// `IID_IEnumConnectionPoints` {B196B285-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-extern const IID IID_IEnumConnectionPoints;
-#endif
-
-#if !defined(_WIN32)
-// `IID_IConnectionPoint` {B196B286-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-extern const IID IID_IConnectionPoint;
-#endif
-
-#if !defined(_WIN32)
-// `IID_IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-extern const IID IID_IEnumConnections;
-#endif
-
 // `CATID_OPCDAServer10` {63D5F430-CFE4-11d1-B2C8-0060083BA1FB}: OPC Data Access 1.0 servers.
 extern const CATID CATID_OPCDAServer10;
 
@@ -710,6 +690,26 @@ extern const CATID CATID_OPCDXServer10;
 
 // `CATID_OPCCMDServer10` {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution 1.0 servers.
 extern const CATID CATID_OPCCMDServer10;
+
+#if !defined(_WIN32)
+// `IID_IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
+extern const IID IID_IConnectionPointContainer;
+#endif
+
+#if !defined(_WIN32)
+// `IID_IEnumConnectionPoints` {B196B285-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
+extern const IID IID_IEnumConnectionPoints;
+#endif
+
+#if !defined(_WIN32)
+// `IID_IConnectionPoint` {B196B286-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
+extern const IID IID_IConnectionPoint;
+#endif
+
+#if !defined(_WIN32)
+// `IID_IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
+extern const IID IID_IEnumConnections;
+#endif
 
 // How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 // connection points, enumerators, ...). Meant for leak checks in tests.
@@ -858,99 +858,6 @@ BOOL OpcPatternMatchA(const struct OpcPattern *pattern, LPCSTR string);
 // `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
 // other thread may be using it.
 void OpcPatternFree(struct OpcPattern *pattern);
-
-// Creates a shutdown object with the default options (at most one advised sink): the
-// IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
-//
-// With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
-// object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
-// as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
-// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
-//
-// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
-// `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
-//
-// # Safety
-// `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
-// NULL or writable.
-HRESULT OpcShutdownCreate(struct IUnknown *outer, REFIID riid, void **ppv);
-
-// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
-//
-// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
-// `OpcShutdownOptions` (4, or 8 as of this version).
-//
-// # Safety
-// `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
-// `OpcShutdownCreate`.
-HRESULT OpcShutdownCreateEx(const struct OpcShutdownOptions *options, struct IUnknown *outer, REFIID riid, void **ppv);
-
-// Asks every client advised on `shutdown` to disconnect: calls IOPCShutdown::ShutdownRequest on
-// each advised sink with `reason` (a NUL string when `reason` is NULL).
-//
-// `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
-// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
-// from a snapshot made under the object's lock and called without holding it, one after the other
-// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
-// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
-// not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
-// not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
-// fetched from the Global Interface Table for the calling apartment.
-//
-// Returns S_OK when every advised sink accepted the request (also when none is advised), S_FALSE
-// when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
-// library. Use `OpcShutdownNotifyEx` for the counts.
-//
-// # Safety
-// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
-// UTF-16 string.
-HRESULT OpcShutdownNotify(struct IUnknown *shutdown, LPCWSTR reason);
-
-// As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
-// many failed (`*pFailed`). Either pointer may be NULL; both are set (to 0 on failure) before
-// anything else happens.
-//
-// # Safety
-// As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
-HRESULT OpcShutdownNotifyEx(struct IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed);
-
-// Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
-// ShutdownRequest calls `callback(context, reason)` and returns S_OK.
-//
-// `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
-// IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
-// client may release its reference at any time. `context` must stay valid until the sink is
-// destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
-//
-// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; E_INVALIDARG for a NULL `callback`;
-// E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
-//
-// # Safety
-// `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
-// `ppv` NULL or writable.
-HRESULT OpcShutdownSinkCreate(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv);
-
-// Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
-// IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
-//
-// `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
-// three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
-// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
-// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
-// E_POINTER for a NULL argument.
-//
-// # Safety
-// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
-HRESULT OpcShutdownAdvise(struct IUnknown *server, struct IUnknown *sink, DWORD *pdwCookie);
-
-// Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
-//
-// Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
-// gives CONNECT_E_NOCONNECTION. E_POINTER for a NULL `server`.
-//
-// # Safety
-// `server` must be NULL or a valid COM interface pointer.
-HRESULT OpcShutdownUnadvise(struct IUnknown *server, DWORD cookie);
 
 // Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
 // the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
@@ -1207,6 +1114,99 @@ HRESULT OpcDllRegisterServer(void);
 // the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
 // SELFREG_E_CLASS.
 HRESULT OpcDllUnregisterServer(void);
+
+// Creates a shutdown object with the default options (at most one advised sink): the
+// IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
+//
+// With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
+// object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
+// as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
+// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+//
+// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
+// `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
+//
+// # Safety
+// `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
+// NULL or writable.
+HRESULT OpcShutdownCreate(struct IUnknown *outer, REFIID riid, void **ppv);
+
+// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
+//
+// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
+// `OpcShutdownOptions` (4, or 8 as of this version).
+//
+// # Safety
+// `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
+// `OpcShutdownCreate`.
+HRESULT OpcShutdownCreateEx(const struct OpcShutdownOptions *options, struct IUnknown *outer, REFIID riid, void **ppv);
+
+// Asks every client advised on `shutdown` to disconnect: calls IOPCShutdown::ShutdownRequest on
+// each advised sink with `reason` (a NUL string when `reason` is NULL).
+//
+// `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
+// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+// from a snapshot made under the object's lock and called without holding it, one after the other
+// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
+// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
+// not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
+// not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
+// fetched from the Global Interface Table for the calling apartment.
+//
+// Returns S_OK when every advised sink accepted the request (also when none is advised), S_FALSE
+// when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
+// library. Use `OpcShutdownNotifyEx` for the counts.
+//
+// # Safety
+// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
+// UTF-16 string.
+HRESULT OpcShutdownNotify(struct IUnknown *shutdown, LPCWSTR reason);
+
+// As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
+// many failed (`*pFailed`). Either pointer may be NULL; both are set (to 0 on failure) before
+// anything else happens.
+//
+// # Safety
+// As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
+HRESULT OpcShutdownNotifyEx(struct IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed);
+
+// Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
+// ShutdownRequest calls `callback(context, reason)` and returns S_OK.
+//
+// `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
+// IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
+// client may release its reference at any time. `context` must stay valid until the sink is
+// destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
+//
+// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; E_INVALIDARG for a NULL `callback`;
+// E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
+//
+// # Safety
+// `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
+// `ppv` NULL or writable.
+HRESULT OpcShutdownSinkCreate(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv);
+
+// Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
+// IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
+//
+// `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
+// three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
+// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
+// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
+// E_POINTER for a NULL argument.
+//
+// # Safety
+// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
+HRESULT OpcShutdownAdvise(struct IUnknown *server, struct IUnknown *sink, DWORD *pdwCookie);
+
+// Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
+//
+// Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
+// gives CONNECT_E_NOCONNECTION. E_POINTER for a NULL `server`.
+//
+// # Safety
+// `server` must be NULL or a valid COM interface pointer.
+HRESULT OpcShutdownUnadvise(struct IUnknown *server, DWORD cookie);
 
 #ifdef __cplusplus
 }  // extern "C"
