@@ -54,6 +54,16 @@ PKG_CONFIG_PATH="$build/install/lib/pkgconfig" cc -o "$build/consumer/pkgconfig_
     -Wl,-rpath,"$build/install/lib"
 "$build/consumer/pkgconfig_demo" >/dev/null
 
+stage "library without the standard Dll* exports (for COM DLLs that have their own)"
+cmake -S . -B "$build/no-dll-exports" -DOPCCOMN_DLL_EXPORTS=OFF -DOPCCOMN_BUILD_TESTS=OFF >/dev/null
+cmake --build "$build/no-dll-exports" -j2 >/dev/null
+no_exports=$(nm -D --defined-only "$build/no-dll-exports/cargo/release/libopccomn.so" | awk '{print $3}')
+if grep -qx DllGetClassObject <<<"$no_exports" || ! grep -qx OpcDllGetClassObject <<<"$no_exports"; then
+    echo "OPCCOMN_DLL_EXPORTS=OFF: expected OpcDllGetClassObject without DllGetClassObject" >&2
+    exit 1
+fi
+echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
+
 if [ "$wine_stage" = 1 ]; then
     . scripts/wine-env.sh "$build/windows"
 
