@@ -9,10 +9,7 @@
 #define CODE_UNKNOWN ((HRESULT)0x12345678u)
 #define CODE_VENDOR ((HRESULT)0xE0000001u)
 
-static const IID IID_Unknown_ = {0x00000000, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 0, 0, 0x46}};
 static const IID IID_Bogus_ = {0x01234567, 0x89AB, 0xCDEF, {1, 2, 3, 4, 5, 6, 7, 8}};
-
-static int same_iid(const IID *a, const IID *b) { return memcmp(a, b, sizeof(IID)) == 0; }
 
 static IOPCCommon *create_common(const OpcCommonOptions *options) {
     void *p = GARBAGE_PTR;
@@ -356,58 +353,15 @@ static void test_refcount_and_identity(void) {
     CHECK(OpcObjectCount() == before);
 }
 
-/* ---- A server object written in C that aggregates the IOPCCommon session. ---- */
-typedef struct Server {
-    IUnknown unk; /* identity */
-    ULONG refs;
-    int add_refs, releases, destroyed;
-    IUnknown *inner; /* the session's non-delegating IUnknown */
-} Server;
-
-static HRESULT server_qi(IUnknown *This, REFIID riid, void **ppv) {
-    Server *s = (Server *)This;
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (same_iid(riid, &IID_Unknown_)) {
-        *ppv = &s->unk;
-        This->lpVtbl->AddRef(This);
-        return S_OK;
-    }
-    if (same_iid(riid, &IID_IOPCCommon)) /* COM_INTERFACE_ENTRY_AGGREGATE */
-        return s->inner->lpVtbl->QueryInterface(s->inner, riid, ppv);
-    return E_NOINTERFACE;
-}
-
-static ULONG server_add_ref(IUnknown *This) {
-    Server *s = (Server *)This;
-    s->add_refs++;
-    return ++s->refs;
-}
-
-static ULONG server_release(IUnknown *This) {
-    Server *s = (Server *)This;
-    s->releases++;
-    if (--s->refs == 0) {
-        s->destroyed = 1;
-        s->inner->lpVtbl->Release(s->inner);
-        s->inner = NULL;
-        return 0;
-    }
-    return s->refs;
-}
-
-static const IUnknownVtbl server_vtbl = {server_qi, server_add_ref, server_release};
 
 static void test_aggregation(void) {
     uint32_t before = OpcObjectCount();
-    Server s;
+    AggregatingServer s;
     void *p = GARBAGE_PTR;
     IOPCCommon *c = NULL;
     IUnknown *identity = NULL;
     LPWSTR name = NULL;
-    memset(&s, 0, sizeof s);
-    s.unk.lpVtbl = &server_vtbl;
-    s.refs = 1;
+    aggregating_server_init(&s, &IID_IOPCCommon);
 
     /* With an outer object only IID_IUnknown may be asked for. */
     CHECK_HR(OpcCommonCreate(NULL, &s.unk, &IID_IOPCCommon, &p), CLASS_E_NOAGGREGATION);
@@ -419,7 +373,7 @@ static void test_aggregation(void) {
     CHECK(s.add_refs == 0 && s.releases == 0); /* creating the inner object does not count on the outer */
     CHECK(OpcObjectCount() == before + 1);
 
-    CHECK_HR(server_qi(&s.unk, &IID_IOPCCommon, (void **)&c), S_OK);
+    CHECK_HR(aggregating_qi(&s.unk, &IID_IOPCCommon, (void **)&c), S_OK);
     if (!c) return;
     CHECK(s.refs == 2 && s.add_refs == 1); /* the interface's AddRef went to the outer object */
     CHECK(c->lpVtbl->AddRef(c) == 3);
@@ -437,7 +391,7 @@ static void test_aggregation(void) {
 
     CHECK(c->lpVtbl->Release(c) == 1);
     CHECK(OpcObjectCount() == before + 1);
-    CHECK(server_release(&s.unk) == 0);
+    CHECK(aggregating_release(&s.unk) == 0);
     CHECK(s.destroyed);
     CHECK(s.add_refs == s.releases - 1); /* balanced: the initial reference was the last Release */
     CHECK(OpcObjectCount() == before);

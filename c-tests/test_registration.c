@@ -12,22 +12,6 @@ static const CLSID CLSID_Test = {0xC1000000, 0x1111, 0x2222, {0x33, 0x33, 0x44, 
 static const CLSID APPID_Test = {0xC1000000, 0x1111, 0x2222, {0x33, 0x33, 0x44, 0x44, 0x55, 0x55, 0x66, 0x02}};
 static const CATID CATID_Vendor = {0xC1000000, 0x1111, 0x2222, {0x33, 0x33, 0x44, 0x44, 0x55, 0x55, 0x66, 0x03}};
 
-static WCHAR *wdup(const char *ascii) {
-    size_t n = strlen(ascii), i;
-    WCHAR *w = (WCHAR *)malloc((n + 1) * sizeof(WCHAR));
-    for (i = 0; i <= n; i++) w[i] = (WCHAR)(unsigned char)ascii[i];
-    return w;
-}
-
-static int wsame(const WCHAR *a, const WCHAR *b) {
-    size_t i = 0;
-    if (!a || !b) return a == b;
-    for (;; i++) {
-        if (a[i] != b[i]) return 0;
-        if (!a[i]) return 1;
-    }
-}
-
 /* True when the UTF-16 text contains the ASCII `needle`. */
 static int wcontains(const WCHAR *text, const char *needle) {
     size_t n = strlen(needle), i, j;

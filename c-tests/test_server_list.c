@@ -18,7 +18,6 @@
 #define STDMETHODCALLTYPE_
 #endif
 
-static const IID IID_Unknown_ = {0x00000000, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 0, 0, 0x46}};
 static const IID IID_EnumGUID_ = {0x0002E000, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 0, 0, 0x46}};
 static const IID IID_ClassFactory_ = {0x00000001, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 0, 0, 0x46}};
 static const IID IID_Bogus_ = {0x01234567, 0x89AB, 0xCDEF, {1, 2, 3, 4, 5, 6, 7, 8}};
@@ -30,23 +29,6 @@ static CLSID test_clsid(unsigned n) {
 }
 
 static int same_guid(const GUID *a, const GUID *b) { return memcmp(a, b, sizeof(GUID)) == 0; }
-
-/* A heap copy of an ASCII text as UTF-16 (for texts longer than W() allows). */
-static WCHAR *wdup(const char *ascii) {
-    size_t n = strlen(ascii), i;
-    WCHAR *w = (WCHAR *)malloc((n + 1) * sizeof(WCHAR));
-    for (i = 0; i <= n; i++) w[i] = (WCHAR)(unsigned char)ascii[i];
-    return w;
-}
-
-static int wsame(const WCHAR *a, const WCHAR *b) {
-    size_t i = 0;
-    if (!a || !b) return a == b;
-    for (;; i++) {
-        if (a[i] != b[i]) return 0;
-        if (!a[i]) return 1;
-    }
-}
 
 /* Classes 1 (DA 2.0), 2 (DA 2.0 + 3.0, requires A&E), 3 (A&E, no ProgID), 4 (DA 1.0 the old way
  * only), 5 (DA 3.0, requires A&E and DA 2.0), and a DA 1.0 ProgID whose class is not registered. */

@@ -10,7 +10,6 @@
 #include <process.h>
 #endif
 
-static const IID IID_Unknown_ = {0x00000000, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 0, 0, 0x46}};
 static const IID IID_Bogus_ = {0x01234567, 0x89AB, 0xCDEF, {1, 2, 3, 4, 5, 6, 7, 8}};
 static const IID IID_Marshal_ = {0x00000003, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 0, 0, 0x46}};
 
@@ -19,7 +18,6 @@ static const IID IID_Marshal_ = {0x00000003, 0x0000, 0x0000, {0xC0, 0, 0, 0, 0, 
 #define CONNECT_E_CANNOTCONNECT_ ((HRESULT)0x80040202u)
 #define RPC_E_WRONG_THREAD_ ((HRESULT)0x8001010Eu)
 
-static int same_iid(const IID *a, const IID *b) { return memcmp(a, b, sizeof(IID)) == 0; }
 
 /* ---- A client sink written by hand: counts references, records calls, runs a hook. ---- */
 typedef struct Mock Mock;
@@ -543,61 +541,17 @@ static void test_lifetimes(void) {
     CHECK(s.refs == 1 && s.add_refs == s.releases);
 }
 
-/* ---- A server object written in C that aggregates the shutdown object. ---- */
-typedef struct Server {
-    IUnknown unk; /* identity */
-    ULONG refs;
-    int add_refs, releases, destroyed;
-    IUnknown *inner; /* the shutdown object's non-delegating IUnknown */
-} Server;
-
-static HRESULT server_qi(IUnknown *This, REFIID riid, void **ppv) {
-    Server *s = (Server *)This;
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (same_iid(riid, &IID_Unknown_)) {
-        *ppv = &s->unk;
-        This->lpVtbl->AddRef(This);
-        return S_OK;
-    }
-    if (same_iid(riid, &IID_IConnectionPointContainer)) /* COM_INTERFACE_ENTRY_AGGREGATE */
-        return s->inner->lpVtbl->QueryInterface(s->inner, riid, ppv);
-    return E_NOINTERFACE;
-}
-
-static ULONG server_add_ref(IUnknown *This) {
-    Server *s = (Server *)This;
-    s->add_refs++;
-    return ++s->refs;
-}
-
-static ULONG server_release(IUnknown *This) {
-    Server *s = (Server *)This;
-    s->releases++;
-    if (--s->refs == 0) {
-        s->destroyed = 1;
-        s->inner->lpVtbl->Release(s->inner);
-        s->inner = NULL;
-        return 0;
-    }
-    return s->refs;
-}
-
-/* Not const: <windows.h> declares IUnknown::lpVtbl without const. */
-static IUnknownVtbl server_vtbl = {server_qi, server_add_ref, server_release};
 
 static void test_aggregation(void) {
     uint32_t before = OpcObjectCount();
-    Server s;
+    AggregatingServer s;
     Mock sink;
     IConnectionPointContainer *cpc = NULL, *back = NULL;
     IConnectionPoint *cp = NULL;
     IUnknown *identity = NULL;
     DWORD cookie = 0;
     ULONG n, f;
-    memset(&s, 0, sizeof s);
-    s.unk.lpVtbl = &server_vtbl;
-    s.refs = 1;
+    aggregating_server_init(&s, &IID_IConnectionPointContainer);
     mock_init(&sink, 1, S_OK);
 
     CHECK_HR(OpcShutdownCreate(&s.unk, &IID_Unknown_, (void **)&s.inner), S_OK);
@@ -605,7 +559,7 @@ static void test_aggregation(void) {
     CHECK(s.add_refs == 0 && s.releases == 0);
     CHECK(OpcObjectCount() == before + 1);
 
-    CHECK_HR(server_qi(&s.unk, &IID_IConnectionPointContainer, (void **)&cpc), S_OK);
+    CHECK_HR(aggregating_qi(&s.unk, &IID_IConnectionPointContainer, (void **)&cpc), S_OK);
     if (!cpc) return;
     CHECK(s.refs == 2); /* the container's AddRef went to the outer object */
     CHECK_HR(cpc->lpVtbl->QueryInterface(cpc, &IID_Unknown_, (void **)&identity), S_OK);
@@ -629,7 +583,7 @@ static void test_aggregation(void) {
     cp->lpVtbl->Release(cp);
     cpc->lpVtbl->Release(cpc);
     CHECK(s.refs == 1);
-    CHECK(server_release(&s.unk) == 0);
+    CHECK(aggregating_release(&s.unk) == 0);
     CHECK(s.destroyed);
     CHECK(s.add_refs == s.releases - 1); /* balanced: the initial reference was the last Release */
     CHECK(sink.add_refs == sink.releases);
