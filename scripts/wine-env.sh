@@ -2,10 +2,10 @@
 # Sets WINEPREFIX (under the build directory), keeps wineserver running for the caller's lifetime and
 # installs the bcryptprimitives.dll test fixture (see tests/wine/bcryptprimitives.c).
 # Usage: . scripts/wine-env.sh BUILD_DIR
-wine_build_dir=$1
+# Wine wants an absolute prefix path; accept a relative build directory.
+wine_build_dir=$(mkdir -p "$1" && cd "$1" && pwd)
 export WINEPREFIX="$wine_build_dir/wineprefix" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=;winemenubuilder.exe=d"
 unset DISPLAY
-mkdir -p "$wine_build_dir"
 if [ ! -f "$WINEPREFIX/system.reg" ]; then
     echo "== creating Wine prefix $WINEPREFIX"
     wine wineboot -i >/dev/null 2>&1 || true
