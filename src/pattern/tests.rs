@@ -557,3 +557,120 @@ fn adversarial_patterns_finish_quickly() {
     // seconds for a single one of these.
     assert!(elapsed < std::time::Duration::from_secs(1), "{elapsed:?}");
 }
+
+/// Memory whose last bytes sit right before an inaccessible page: a string copied to the end, NUL
+/// included, makes any read past its terminator a crash instead of a silent over-read.
+#[cfg(unix)]
+struct GuardedTail {
+    base: *mut u8,
+    page: usize,
+}
+
+#[cfg(unix)]
+impl GuardedTail {
+    fn new() -> GuardedTail {
+        // SAFETY: sysconf has no preconditions.
+        let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) } as usize;
+        // SAFETY: an anonymous private mapping of two pages; the second is made inaccessible.
+        let base = unsafe {
+            let p = libc::mmap(
+                ptr::null_mut(),
+                2 * page,
+                libc::PROT_READ | libc::PROT_WRITE,
+                libc::MAP_PRIVATE | libc::MAP_ANONYMOUS,
+                -1,
+                0,
+            );
+            assert_ne!(p, libc::MAP_FAILED);
+            assert_eq!(
+                libc::mprotect(p.cast::<u8>().add(page).cast(), page, libc::PROT_NONE),
+                0
+            );
+            p.cast::<u8>()
+        };
+        GuardedTail { base, page }
+    }
+
+    /// Copies `units` (without a NUL) plus a NUL so that the NUL is the last element before the guard.
+    fn place<T: Copy + Default>(&mut self, units: &[T]) -> *const T {
+        let size = core::mem::size_of::<T>();
+        let len = units.len() + 1;
+        assert!(len * size <= self.page, "too long for one page");
+        // SAFETY: the destination lies inside the accessible first page, aligned for T (the page end
+        // is aligned for any T of size 1 or 2).
+        unsafe {
+            let dst = self.base.add(self.page - len * size).cast::<T>();
+            ptr::copy_nonoverlapping(units.as_ptr(), dst, units.len());
+            *dst.add(units.len()) = T::default();
+            dst
+        }
+    }
+}
+
+#[cfg(unix)]
+impl Drop for GuardedTail {
+    fn drop(&mut self) {
+        // SAFETY: unmaps exactly the mapping made in `new`.
+        unsafe { libc::munmap(self.base.cast(), 2 * self.page) };
+    }
+}
+
+/// Every entry point reads its string and pattern only up to their NUL: each is placed right before an
+/// inaccessible page, for the published vectors, malformed patterns and random input.
+#[cfg(unix)]
+#[test]
+fn no_entry_point_reads_past_a_terminator() {
+    let mut s_tail = GuardedTail::new();
+    let mut p_tail = GuardedTail::new();
+    let mut cases: Vec<(Vec<u16>, Vec<u16>)> = Vec::new();
+    for line in include_str!("like-vectors.tsv").lines().skip(1) {
+        let f: Vec<&str> = line.split('\t').collect();
+        cases.push((f[0].encode_utf16().collect(), f[1].encode_utf16().collect()));
+    }
+    for p in [
+        "[", "a[b", "[!", "[a-", "[a-]", "*[", "[]*[", "[Z-A]", "*#[!", "[[", "-", "[-",
+    ] {
+        for s in ["", "a", "abc", "[", "a-"] {
+            cases.push((s.encode_utf16().collect(), p.encode_utf16().collect()));
+        }
+    }
+    let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
+    for _ in 0..20_000 {
+        cases.push((random_wide(&mut rng, 12), random_wide(&mut rng, 8)));
+    }
+    // Long patterns take the compiled path inside MatchPatternW/A.
+    cases.push((vec![b'a' as u16; 300], [b'*' as u16, b'a' as u16].repeat(150)));
+    cases.push((vec![b'a' as u16; 300], [b'*' as u16, b'[' as u16].repeat(150)));
+    for (s, p) in &cases {
+        for cs in [FALSE, TRUE] {
+            let sp = s_tail.place(s);
+            let pp = p_tail.place(p);
+            // SAFETY: both are NUL-terminated; reading past the NUL faults.
+            unsafe {
+                MatchPatternW(sp, pp, cs);
+                let mut f = ptr::null_mut();
+                if OpcPatternCompileW(pp, cs, &mut f) == S_OK {
+                    OpcPatternMatchW(f, sp);
+                    OpcPatternFree(f);
+                }
+            }
+            // The same text as UTF-8 (unpaired surrogates become U+FFFD) through the narrow functions.
+            let sa: Vec<u8> = String::from_utf16_lossy(s).into_bytes();
+            let pa: Vec<u8> = String::from_utf16_lossy(p).into_bytes();
+            if sa.contains(&0) || pa.contains(&0) {
+                continue;
+            }
+            let sp = s_tail.place(&sa).cast::<core::ffi::c_char>();
+            let pp = p_tail.place(&pa).cast::<core::ffi::c_char>();
+            // SAFETY: as above.
+            unsafe {
+                MatchPatternA(sp, pp, cs);
+                let mut f = ptr::null_mut();
+                if OpcPatternCompileA(pp, cs, &mut f) == S_OK {
+                    OpcPatternMatchA(f, sp);
+                    OpcPatternFree(f);
+                }
+            }
+        }
+    }
+}
