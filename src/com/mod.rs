@@ -6,6 +6,7 @@ pub mod boundary;
 pub mod hresult;
 pub mod iids;
 pub mod object;
+pub mod options;
 pub mod types;
 pub mod unknown;
 pub mod wstr;

@@ -16,6 +16,7 @@ use crate::com::iids::IID_IOPCCommon;
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
+use crate::com::options::read_sized;
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{
     IUnknown, DWORD, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR,
@@ -56,6 +57,7 @@ pub type OpcClientNameFn = Option<unsafe extern "C" fn(context: *mut c_void, nam
 /// and the library reads only the first `struct_size` bytes, so code built against an older header
 /// keeps working.
 #[repr(C)]
+#[derive(Clone, Copy)]
 pub struct OpcCommonOptions {
     /// `sizeof(OpcCommonOptions)` as the caller's header declares it.
     pub struct_size: u32,
@@ -80,14 +82,13 @@ pub struct OpcCommonOptions {
 /// The most locales a server may declare.
 const MAX_LOCALES: u32 = 4096;
 
-/// True when `size` is what `sizeof(OpcCommonOptions)` is or was in some version: the struct ends
-/// after a whole field (with or without the padding C adds). A size cutting a field in two would
-/// leave half a pointer, and is refused.
-fn valid_options_size(size: usize) -> bool {
+/// Every size `sizeof(OpcCommonOptions)` is or was in some version: the struct ends after a whole
+/// field (with or without the padding C adds).
+fn options_sizes() -> [usize; 9] {
     use core::mem::{offset_of, size_of};
     type O = OpcCommonOptions;
     let ptr = size_of::<*const c_void>();
-    let ends = [
+    [
         offset_of!(O, server_kind),
         offset_of!(O, locales),
         offset_of!(O, locales) + ptr,
@@ -97,8 +98,7 @@ fn valid_options_size(size: usize) -> bool {
         offset_of!(O, client_name_changed),
         offset_of!(O, client_name_context),
         size_of::<O>(),
-    ];
-    ends.contains(&size)
+    ]
 }
 
 /// The options as the object keeps them.
@@ -127,7 +127,7 @@ impl Settings {
     /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcCommonOptions,
     /// with `locales` pointing at `locale_count` readable LCIDs.
     unsafe fn read(options: *const OpcCommonOptions) -> Result<Settings, HRESULT> {
-        let mut o = OpcCommonOptions {
+        let defaults = OpcCommonOptions {
             struct_size: 0,
             server_kind: 0,
             locales: ptr::null(),
@@ -137,15 +137,9 @@ impl Settings {
             client_name_changed: None,
             client_name_context: ptr::null_mut(),
         };
-        if !options.is_null() {
-            // SAFETY: the first field is always present.
-            let size = unsafe { ptr::addr_of!((*options).struct_size).read_unaligned() } as usize;
-            if !valid_options_size(size) {
-                return Err(E_INVALIDARG);
-            }
-            // SAFETY: the caller vouches `size` bytes are readable; `o` has room for them.
-            unsafe { ptr::copy_nonoverlapping(options.cast::<u8>(), ptr::addr_of_mut!(o).cast::<u8>(), size) };
-        }
+        // SAFETY: OpcCommonOptions is repr(C), starts with struct_size and holds integers, raw
+        // pointers and optional function pointers; the caller vouches for `options`.
+        let o = unsafe { read_sized(options, &options_sizes(), defaults) }?;
         let kind = OpcServerKind::from_raw(o.server_kind).ok_or(E_INVALIDARG)?;
         if o.locale_count > MAX_LOCALES || (o.locale_count > 0 && o.locales.is_null()) {
             return Err(E_INVALIDARG);

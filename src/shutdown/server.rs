@@ -24,6 +24,7 @@ use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPO
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
+use crate::com::options::read_sized;
 use crate::com::unknown::{add_ref, query_interface, release};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
@@ -34,6 +35,7 @@ use crate::com::{
 /// `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
 /// `struct_size` bytes, so code built against an older header keeps working.
 #[repr(C)]
+#[derive(Clone, Copy)]
 pub struct OpcShutdownOptions {
     /// `sizeof(OpcShutdownOptions)` as the caller's header declares it.
     pub struct_size: u32,
@@ -459,25 +461,17 @@ unsafe extern "system" fn enum_connections(this: *mut IConnectionPoint, ppEnum: 
 /// # Safety
 /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcShutdownOptions.
 pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<u32, HRESULT> {
-    let mut o = OpcShutdownOptions {
+    let sizes = [
+        core::mem::offset_of!(OpcShutdownOptions, advise_limit),
+        core::mem::size_of::<OpcShutdownOptions>(),
+    ];
+    let defaults = OpcShutdownOptions {
         struct_size: 0,
         advise_limit: 0,
     };
-    if !options.is_null() {
-        // SAFETY: the first field is always present.
-        let size = unsafe { ptr::addr_of!((*options).struct_size).read_unaligned() } as usize;
-        // Only sizes the struct has (had) in some version: ending after a whole field.
-        let ends = [
-            core::mem::offset_of!(OpcShutdownOptions, advise_limit),
-            core::mem::size_of::<OpcShutdownOptions>(),
-        ];
-        if !ends.contains(&size) {
-            return Err(E_INVALIDARG);
-        }
-        // SAFETY: the caller vouches `size` bytes are readable; `o` has room for them.
-        unsafe { ptr::copy_nonoverlapping(options.cast::<u8>(), ptr::addr_of_mut!(o).cast::<u8>(), size) };
-    }
-    Ok(o.advise_limit)
+    // SAFETY: OpcShutdownOptions is repr(C), starts with struct_size and holds only integers; the
+    // caller vouches for `options`.
+    Ok(unsafe { read_sized(options, &sizes, defaults) }?.advise_limit)
 }
 
 /// Finds the shutdown object behind any interface of it (or of a server aggregating it) and runs
