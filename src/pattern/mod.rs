@@ -26,30 +26,11 @@ mod tests;
 use core::ptr;
 
 use crate::com::boundary::catch;
-use crate::com::{BOOL, E_INVALIDARG, E_UNEXPECTED, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK};
+use crate::com::wstr::wstr_units;
+use crate::com::{BOOL, E_INVALIDARG, E_UNEXPECTED, FALSE, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK, TRUE};
 use program::{Malformed, Program};
 use stream::WideCursor;
 use text::Utf16;
-
-/// The code units of the NUL-terminated UTF-16 string at `p`, without the NUL; `None` for NULL.
-///
-/// # Safety
-/// `p` must be NULL or point at a NUL-terminated UTF-16 string.
-unsafe fn wide_units<'a>(p: LPCWSTR) -> Option<&'a [u16]> {
-    if p.is_null() {
-        return None;
-    }
-    let mut len = 0;
-    // SAFETY: every unit up to the NUL is readable (the caller's contract).
-    while unsafe { *p.add(len) } != 0 {
-        len += 1;
-    }
-    // SAFETY: the `len` units before the NUL were just read.
-    Some(unsafe { core::slice::from_raw_parts(p, len) })
-}
-
-const TRUE: BOOL = 1;
-const FALSE: BOOL = 0;
 
 fn to_bool(b: bool) -> BOOL {
     if b {
@@ -94,7 +75,7 @@ pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseS
             .unwrap_or_else(|| {
                 // A long pattern: compile it (on the heap; ordinary patterns never get here).
                 // SAFETY: both are NUL-terminated (the caller's contract).
-                let units = unsafe { wide_units(pattern) }.unwrap_or_default();
+                let units = unsafe { wstr_units(pattern, usize::MAX) }.unwrap_or_default();
                 match Program::compile(&Utf16(units), case_sensitive) {
                     // SAFETY: as above.
                     Ok(program) => unsafe { program.matches_cursor(WideCursor(string)) },
@@ -175,7 +156,7 @@ pub unsafe extern "C" fn OpcPatternCompileW(
     unsafe { *ppPattern = ptr::null_mut() };
     catch(E_UNEXPECTED, || {
         // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
-        let Some(pattern) = (unsafe { wide_units(pattern) }) else {
+        let Some(pattern) = (unsafe { wstr_units(pattern, usize::MAX) }) else {
             return E_INVALIDARG;
         };
         let compiled = Program::compile(&Utf16(pattern), caseSensitive != 0);

@@ -13,7 +13,7 @@
 use super::fold::{fold, for_each_folded_range};
 use super::smallvec::SmallVec;
 use super::stream::Cursor;
-use super::text::Text;
+use super::text::{Text, ANY, BANG, CLOSE, DIGIT, HYPHEN, OPEN, STAR};
 
 /// One pattern element that consumes exactly one character.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,14 +67,6 @@ pub(crate) struct Program {
 /// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt (shorter
 /// runs cost at most this many steps per place tried, and skip to their first character quickly).
 const KMP_MIN_RUN: usize = 16;
-
-const STAR: u32 = '*' as u32;
-const ANY: u32 = '?' as u32;
-const DIGIT: u32 = '#' as u32;
-const OPEN: u32 = '[' as u32;
-const CLOSE: u32 = ']' as u32;
-const BANG: u32 = '!' as u32;
-const HYPHEN: u32 = '-' as u32;
 
 impl Program {
     /// Compiles `pattern`. Matching later is case-insensitive (Unicode simple case folding) unless

@@ -17,7 +17,7 @@
 //! after a unit that cannot be the terminator.
 
 use super::fold::{fold, for_each_folded_range};
-use super::text::{invalid_byte, Text, Utf16, Utf8};
+use super::text::{invalid_byte, utf8_sequence_bounds, Text, Utf16, Utf8, ANY, BANG, CLOSE, DIGIT, HYPHEN, OPEN, STAR};
 
 /// A NUL-terminated string read character by character.
 pub(crate) trait Cursor: Copy {
@@ -105,15 +105,8 @@ impl Cursor for Utf8Cursor {
         if b0 < 0x80 {
             return (b0 as u32, i + 1);
         }
-        let (len, lo, hi) = match b0 {
-            0xC2..=0xDF => (2, 0x80, 0xBF),
-            0xE0 => (3, 0xA0, 0xBF),
-            0xE1..=0xEC | 0xEE..=0xEF => (3, 0x80, 0xBF),
-            0xED => (3, 0x80, 0x9F),
-            0xF0 => (4, 0x90, 0xBF),
-            0xF1..=0xF3 => (4, 0x80, 0xBF),
-            0xF4 => (4, 0x80, 0x8F),
-            _ => return (invalid_byte(b0), i + 1),
+        let Some((len, lo, hi)) = utf8_sequence_bounds(b0) else {
+            return (invalid_byte(b0), i + 1);
         };
         let mut c = (b0 as u32) & (0x7F >> len);
         for k in 1..len {
@@ -189,14 +182,6 @@ impl Cursor for DecodedCursor {
         i
     }
 }
-
-const STAR: u32 = '*' as u32;
-const ANY: u32 = '?' as u32;
-const DIGIT: u32 = '#' as u32;
-const OPEN: u32 = '[' as u32;
-const CLOSE: u32 = ']' as u32;
-const BANG: u32 = '!' as u32;
-const HYPHEN: u32 = '-' as u32;
 
 /// Whether some code point of `lo..=hi` compares equal to a character whose folding is `f`.
 #[inline]

@@ -66,6 +66,32 @@ impl Text for Utf16<'_> {
     }
 }
 
+// The pattern syntax of the specification's Appendix B.
+pub(crate) const STAR: u32 = '*' as u32;
+pub(crate) const ANY: u32 = '?' as u32;
+pub(crate) const DIGIT: u32 = '#' as u32;
+pub(crate) const OPEN: u32 = '[' as u32;
+pub(crate) const CLOSE: u32 = ']' as u32;
+pub(crate) const BANG: u32 = '!' as u32;
+pub(crate) const HYPHEN: u32 = '-' as u32;
+
+/// For a UTF-8 lead byte: the sequence length and the range the second byte must lie in (Unicode
+/// Table 3-7, well-formed UTF-8 byte sequences; later bytes are plain continuation bytes). `None` for
+/// bytes that start no well-formed sequence (ASCII included: callers handle it first).
+#[inline(always)]
+pub(crate) fn utf8_sequence_bounds(b0: u8) -> Option<(usize, u8, u8)> {
+    Some(match b0 {
+        0xC2..=0xDF => (2, 0x80, 0xBF),
+        0xE0 => (3, 0xA0, 0xBF),
+        0xE1..=0xEC | 0xEE..=0xEF => (3, 0x80, 0xBF),
+        0xED => (3, 0x80, 0x9F),
+        0xF0 => (4, 0x90, 0xBF),
+        0xF1..=0xF3 => (4, 0x80, 0xBF),
+        0xF4 => (4, 0x80, 0x8F),
+        _ => return None,
+    })
+}
+
 /// UTF-8 text; every byte that is not part of a well-formed sequence (overlong forms, encoded
 /// surrogates, values above U+10FFFF and truncated sequences included) is a character of its own.
 #[derive(Clone, Copy)]
@@ -77,17 +103,7 @@ impl Utf8<'_> {
     fn sequence(&self, i: usize) -> Option<(u32, usize)> {
         let s = self.0;
         let b0 = s[i];
-        // Second byte bounds per lead byte (Unicode Table 3-7, well-formed UTF-8 byte sequences).
-        let (len, lo, hi) = match b0 {
-            0xC2..=0xDF => (2, 0x80, 0xBF),
-            0xE0 => (3, 0xA0, 0xBF),
-            0xE1..=0xEC | 0xEE..=0xEF => (3, 0x80, 0xBF),
-            0xED => (3, 0x80, 0x9F),
-            0xF0 => (4, 0x90, 0xBF),
-            0xF1..=0xF3 => (4, 0x80, 0xBF),
-            0xF4 => (4, 0x80, 0x8F),
-            _ => return None,
-        };
+        let (len, lo, hi) = utf8_sequence_bounds(b0)?;
         let tail = s.get(i + 1..i + len)?;
         if !(lo..=hi).contains(&tail[0]) || tail[1..].iter().any(|&b| b & 0xC0 != 0x80) {
             return None;
