@@ -35,7 +35,7 @@ mod bench {
     use opccomn::com::{GUID, HRESULT, ULONG};
     use opccomn::registry::windows::WindowsRegistry;
     use opccomn::registry::{RegValue, Registry};
-    use opccomn::serverlist::enumguid::IOPCEnumGUID;
+    use opccomn::serverlist::interfaces::IOPCEnumGUID;
     use opccomn::serverlist::{IOPCServerList2, OpcServerListCreate};
     use windows_sys::Win32::System::Com::{
         CoCreateInstance, CoInitializeEx, CoTaskMemFree, ProgIDFromCLSID, CLSCTX_INPROC_SERVER,

@@ -3,6 +3,7 @@
 
 pub mod alloc;
 pub mod boundary;
+pub mod enumerator;
 pub mod hresult;
 pub mod iids;
 pub mod object;

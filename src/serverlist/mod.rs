@@ -23,7 +23,7 @@
 //! E_INVALIDARG, with every out-parameter NULL. GetClassDetails returns REGDB_E_KEYMISSING for a class
 //! without a ProgID.
 
-pub mod enumguid;
+pub mod interfaces;
 pub mod server;
 
 use core::ffi::c_void;
@@ -33,7 +33,8 @@ use std::sync::Arc;
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
 use crate::com::boundary::catch;
-use crate::com::iids::{IID_IOPCServerList, IID_IOPCServerList2};
+use crate::com::enumerator::{EnumInterface, Enumerator};
+use crate::com::iids::{IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IENUMGUID};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
@@ -44,7 +45,25 @@ use crate::com::{
 };
 use crate::registry::categories::DA10;
 use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
-use enumguid::{new_enum, IEnumGUID, IOPCEnumGUID};
+use interfaces::{IEnumGUID, IOPCEnumGUID, IOPCEnumGUIDVtbl};
+
+/// The enumerator of EnumClassesOfCategories: the core's snapshot enumerator over class identifiers,
+/// presented as IOPCEnumGUID and IEnumGUID (one layout). A NULL fetched-count for more than one element
+/// is E_INVALIDARG, as for every OPC method.
+struct ClassEnum;
+
+static CLASS_ENUM_VTBL: IOPCEnumGUIDVtbl = crate::enum_vtbl!(IOPCEnumGUIDVtbl, ClassEnum);
+
+impl EnumInterface for ClassEnum {
+    type Item = GUID;
+    type Iface = IOPCEnumGUID;
+    type Vtbl = IOPCEnumGUIDVtbl;
+    const IIDS: &'static [GUID] = &[IID_IOPCEnumGUID, IID_IENUMGUID];
+    const NULL_FETCHED: HRESULT = E_INVALIDARG;
+    fn vtbl() -> &'static IOPCEnumGUIDVtbl {
+        &CLASS_ENUM_VTBL
+    }
+}
 
 /// The most categories one EnumClassesOfCategories call may list.
 const MAX_CATEGORIES: ULONG = 4096;
@@ -321,7 +340,7 @@ unsafe fn enum_classes<I>(
         let list = unsafe { object(this) };
         let classes = classes_of_categories(&list.regs, implemented, required);
         // SAFETY: checked non-NULL above.
-        unsafe { *ppenum = new_enum(classes.into(), 0) };
+        unsafe { *ppenum = Enumerator::<ClassEnum>::create(classes.into(), 0) };
         S_OK
     })
 }

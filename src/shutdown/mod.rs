@@ -15,7 +15,6 @@
 mod agile;
 mod apartment;
 pub mod client;
-mod enumerator;
 pub mod interfaces;
 pub mod server;
 

@@ -14,13 +14,17 @@ use core::ptr::{self, NonNull};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::apartment::SinkRef;
-use super::enumerator::{ConnectionSnapshot, Enumerator, PointSnapshot};
 use super::interfaces::{
     IConnectionPoint, IConnectionPointContainer, IConnectionPointContainerVtbl, IConnectionPointVtbl,
-    IEnumConnectionPoints, IEnumConnections, IOPCShutdown, CONNECTDATA,
+    IEnumConnectionPoints, IEnumConnectionPointsVtbl, IEnumConnections, IEnumConnectionsVtbl, IOPCShutdown,
+    CONNECTDATA,
 };
 use crate::com::boundary::catch;
-use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IUNKNOWN};
+use crate::com::enumerator::{Counted, Element, EnumInterface, Enumerator};
+use crate::com::iids::{
+    IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
+    IID_IENUMCONNECTIONS, IID_IUNKNOWN,
+};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
@@ -229,18 +233,59 @@ impl OpcShutdown {
     fn enum_connections(&self) -> Result<*mut IEnumConnections, HRESULT> {
         let mut data = Vec::new();
         for (cookie, sink) in self.snapshot() {
-            match sink.get() {
-                Ok(call) => data.push(CONNECTDATA {
-                    pUnk: call.into_raw().cast(),
-                    dwCookie: cookie,
-                }),
-                Err(hr) => {
-                    drop(ConnectionSnapshot::adopt(data));
-                    return Err(hr);
-                }
-            }
+            // On failure `data` drops, releasing the sinks fetched so far.
+            let call = sink.get()?;
+            // SAFETY: `into_raw` gives up a counted, non-NULL pointer that the element now owns.
+            let sink = unsafe { Counted::adopt(call.into_raw().cast::<IUnknown>()) }.ok_or(E_UNEXPECTED)?;
+            data.push(EnumeratedConnection { sink, cookie });
         }
-        Ok(Enumerator::create(Arc::new(ConnectionSnapshot::adopt(data)), 0))
+        Ok(Enumerator::<ConnectionsEnum>::create(data.into(), 0))
+    }
+}
+
+/// One connection of an IEnumConnections snapshot: the sink (one counted reference) and its cookie.
+pub(crate) struct EnumeratedConnection {
+    sink: Counted<IUnknown>,
+    cookie: DWORD,
+}
+
+impl Element for EnumeratedConnection {
+    type Out = CONNECTDATA;
+    fn hand_out(&self) -> CONNECTDATA {
+        CONNECTDATA {
+            pUnk: self.sink.hand_out(),
+            dwCookie: self.cookie,
+        }
+    }
+}
+
+/// IEnumConnections over the connections of the point, as the core's snapshot enumerator.
+struct ConnectionsEnum;
+
+static ENUM_CONNECTIONS_VTBL: IEnumConnectionsVtbl = crate::enum_vtbl!(IEnumConnectionsVtbl, ConnectionsEnum);
+
+impl EnumInterface for ConnectionsEnum {
+    type Item = EnumeratedConnection;
+    type Iface = IEnumConnections;
+    type Vtbl = IEnumConnectionsVtbl;
+    const IIDS: &'static [GUID] = &[IID_IENUMCONNECTIONS];
+    fn vtbl() -> &'static IEnumConnectionsVtbl {
+        &ENUM_CONNECTIONS_VTBL
+    }
+}
+
+/// IEnumConnectionPoints over the container's one connection point (counted: it keeps the server alive).
+struct ConnectionPointsEnum;
+
+static ENUM_POINTS_VTBL: IEnumConnectionPointsVtbl = crate::enum_vtbl!(IEnumConnectionPointsVtbl, ConnectionPointsEnum);
+
+impl EnumInterface for ConnectionPointsEnum {
+    type Item = Counted<IConnectionPoint>;
+    type Iface = IEnumConnectionPoints;
+    type Vtbl = IEnumConnectionPointsVtbl;
+    const IIDS: &'static [GUID] = &[IID_IENUMCONNECTIONPOINTS];
+    fn vtbl() -> &'static IEnumConnectionPointsVtbl {
+        &ENUM_POINTS_VTBL
     }
 }
 
@@ -292,11 +337,14 @@ unsafe extern "system" fn enum_connection_points(
         // SAFETY: COM calls this only through our vtable.
         let point = unsafe { object(this) }.point_ptr();
         // The snapshot's reference to the point counts on the server, which it keeps alive.
-        // SAFETY: `point` is a slot of the live object.
-        unsafe { add_ref(point.cast()) };
-        let items = PointSnapshot::adopt(vec![NonNull::new(point).expect("slot pointers are never NULL")]);
+        // SAFETY: `point` is a slot of the live object; the element takes over the reference added.
+        let item = unsafe {
+            add_ref(point.cast());
+            Counted::adopt(point)
+        }
+        .expect("slot pointers are never NULL");
         // SAFETY: non-NULL out-parameter.
-        unsafe { *ppEnum = Enumerator::create(Arc::new(items), 0) };
+        unsafe { *ppEnum = Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0) };
         S_OK
     })
 }

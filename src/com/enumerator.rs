@@ -1,0 +1,467 @@
+//! The one snapshot enumerator behind every IEnumXXX interface the library hands out: IEnumGUID and
+//! IOPCEnumGUID (the server list), IEnumConnections and IEnumConnectionPoints (shutdown).
+//!
+//! An enumerator walks a fixed list taken when it was made. The list is shared (`Arc`) between an
+//! enumerator and its clones, so Clone copies nothing and costs no AddRefs; each element owns what it
+//! refers to (a counted interface pointer owns one reference) and lets it go when the last enumerator
+//! sharing the list dies. The methods follow COM's IEnumXXX contract:
+//!
+//! - `Next(celt, rgelt, pceltFetched)` writes up to `celt` elements, every interface pointer AddRef'd
+//!   for the caller, and returns S_OK when it wrote all `celt`, S_FALSE when the list ended first
+//!   (`*pceltFetched` says how many). `celt` 0 is S_OK with nothing written. `pceltFetched` may be
+//!   NULL only when `celt` is 1. A NULL `rgelt` is E_POINTER.
+//! - `Skip(celt)`: S_OK when `celt` elements were skipped, S_FALSE (at the end) when fewer were left.
+//! - `Reset()`: back to the start, S_OK.
+//! - `Clone(ppenum)`: a new enumerator over the same list at the same position.
+//!
+//! Counts are taken as given up to `ULONG::MAX`: only the elements that exist are ever written or
+//! skipped, so a huge `celt` is safe (the caller's array needs room for the elements returned).
+//!
+//! A user of this module names the interface ([`EnumInterface`]) and builds its static vtable with
+//! [`enum_vtbl!`](crate::enum_vtbl); elements implement [`Element`].
+
+use core::ptr::{self, NonNull};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use super::boundary::catch;
+use super::hresult::{E_POINTER, E_UNEXPECTED, S_FALSE, S_OK};
+use super::object::{ComClass, ComObject, Slot};
+use super::types::{GUID, HRESULT, ULONG};
+use super::unknown::{add_ref, release, IUnknown};
+
+/// One element of a snapshot.
+pub(crate) trait Element: Send + Sync + 'static {
+    /// What Next writes into the caller's array.
+    type Out;
+    /// A copy for the caller, carrying its own reference when the element is a counted pointer.
+    fn hand_out(&self) -> Self::Out;
+}
+
+impl Element for GUID {
+    type Out = GUID;
+    fn hand_out(&self) -> GUID {
+        *self
+    }
+}
+
+/// A COM interface pointer owning one reference, released on drop; handed out AddRef'd.
+pub(crate) struct Counted<I>(NonNull<I>);
+
+// SAFETY: a snapshot only holds pointers that may be used from the threads its enumerator is called on:
+// the library's own free-threaded objects, or (connections) sinks fetched for the apartment that made
+// the enumerator, which COM confines the enumerator to.
+unsafe impl<I> Send for Counted<I> {}
+// SAFETY: as above; the pointer itself is never changed after construction.
+unsafe impl<I> Sync for Counted<I> {}
+
+impl<I> Counted<I> {
+    /// Takes over one reference the caller owns; `None` for NULL.
+    ///
+    /// # Safety
+    /// `p` is NULL or a valid COM interface pointer carrying a reference that now belongs to the result.
+    pub(crate) unsafe fn adopt(p: *mut I) -> Option<Counted<I>> {
+        NonNull::new(p).map(Counted)
+    }
+
+    /// The pointer (not AddRef'd).
+    pub(crate) fn as_ptr(&self) -> *mut I {
+        self.0.as_ptr()
+    }
+}
+
+impl<I: 'static> Element for Counted<I> {
+    type Out = *mut I;
+    fn hand_out(&self) -> *mut I {
+        // SAFETY: the pointer is alive while this element holds its reference.
+        unsafe { add_ref(self.as_ptr().cast::<IUnknown>()) };
+        self.as_ptr()
+    }
+}
+
+impl<I> Drop for Counted<I> {
+    fn drop(&mut self) {
+        // SAFETY: this element owns one reference (taken over in `adopt`) and gives it up once.
+        unsafe { release(self.as_ptr().cast::<IUnknown>()) };
+    }
+}
+
+/// An enumerator interface: its element, C types, IIDs and static vtable.
+pub(crate) trait EnumInterface: Send + Sync + Sized + 'static {
+    /// The element of the snapshot.
+    type Item: Element;
+    /// The interface (`IEnumXXX`).
+    type Iface;
+    /// Its vtable type.
+    type Vtbl: 'static;
+    /// The interfaces the enumerator answers QueryInterface for (with the one vtable: they share a
+    /// layout, as IOPCEnumGUID and IEnumGUID do).
+    const IIDS: &'static [GUID];
+    /// Next's result for a NULL `pceltFetched` with `celt` > 1.
+    const NULL_FETCHED: HRESULT = E_POINTER;
+    /// The vtable, built with [`enum_vtbl!`](crate::enum_vtbl).
+    fn vtbl() -> &'static Self::Vtbl;
+}
+
+/// The static vtable of enumerator interface `$kind` (an [`EnumInterface`]) of vtable type `$vtbl`.
+#[macro_export]
+#[doc(hidden)]
+macro_rules! enum_vtbl {
+    ($vtbl:ident, $kind:ty) => {
+        $vtbl {
+            QueryInterface: $crate::com::object::delegating_query_interface::<
+                <$kind as $crate::com::enumerator::EnumInterface>::Iface,
+            >,
+            AddRef: $crate::com::object::delegating_add_ref::<<$kind as $crate::com::enumerator::EnumInterface>::Iface>,
+            Release: $crate::com::object::delegating_release::<
+                <$kind as $crate::com::enumerator::EnumInterface>::Iface,
+            >,
+            Next: $crate::com::enumerator::next::<$kind>,
+            Skip: $crate::com::enumerator::skip::<$kind>,
+            Reset: $crate::com::enumerator::reset::<$kind>,
+            Clone: $crate::com::enumerator::clone::<$kind>,
+        }
+    };
+}
+
+/// The enumerator object: a shared, immutable list and this enumerator's position in it.
+pub(crate) struct Enumerator<K: EnumInterface> {
+    slot: Slot,
+    items: Arc<[K::Item]>,
+    position: Mutex<usize>,
+}
+
+impl<K: EnumInterface> ComClass for Enumerator<K> {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        K::IIDS.contains(iid).then_some(&self.slot)
+    }
+}
+
+impl<K: EnumInterface> Enumerator<K> {
+    /// A new enumerator over `items` at `position`, as an interface pointer carrying one reference.
+    pub(crate) fn create(items: Arc<[K::Item]>, position: usize) -> *mut K::Iface {
+        let obj = ComObject::<Enumerator<K>>::new(ptr::null_mut(), |binder| Enumerator {
+            slot: binder.slot(K::vtbl()),
+            items,
+            position: Mutex::new(position),
+        });
+        // Not aggregated: the slot's reference count is the object's own, so the construction
+        // reference becomes the reference of the returned interface pointer.
+        let p = obj.slot.as_ptr().cast::<K::Iface>();
+        core::mem::forget(obj);
+        p
+    }
+
+    fn position(&self) -> MutexGuard<'_, usize> {
+        self.position.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Advances by up to `celt` elements; returns the first index and how many were passed.
+    fn advance(&self, celt: ULONG) -> (usize, usize) {
+        let mut position = self.position();
+        let start = (*position).min(self.items.len());
+        let count = (self.items.len() - start).min(celt as usize);
+        *position = start + count;
+        (start, count)
+    }
+}
+
+/// # Safety
+/// `this` is an interface pointer of a live `Enumerator<K>`.
+unsafe fn object<'a, K: EnumInterface>(this: *mut K::Iface) -> &'a Enumerator<K> {
+    // SAFETY: only `Enumerator<K>` slots present K's vtable.
+    unsafe { ComObject::<Enumerator<K>>::from_interface(this) }
+}
+
+fn all_or_false(count: usize, celt: ULONG) -> HRESULT {
+    if count == celt as usize {
+        S_OK
+    } else {
+        S_FALSE
+    }
+}
+
+/// IEnumXXX::Next.
+///
+/// # Safety
+/// Called through an enumerator's vtable with COM arguments: `rgelt` has room for `celt` elements (or
+/// for as many as are left), `pceltFetched` is NULL or writable.
+pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
+    this: *mut K::Iface,
+    celt: ULONG,
+    rgelt: *mut <K::Item as Element>::Out,
+    pceltFetched: *mut ULONG,
+) -> HRESULT {
+    if !pceltFetched.is_null() {
+        // SAFETY: non-NULL out-parameter.
+        unsafe { *pceltFetched = 0 };
+    }
+    if celt == 0 {
+        return S_OK;
+    }
+    if pceltFetched.is_null() && celt > 1 {
+        return K::NULL_FETCHED;
+    }
+    if rgelt.is_null() {
+        return E_POINTER;
+    }
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        let e = unsafe { object::<K>(this) };
+        let (start, count) = e.advance(celt);
+        for (i, item) in e.items[start..start + count].iter().enumerate() {
+            // SAFETY: `i < count <= celt`; the caller provides room for the elements returned.
+            unsafe { rgelt.add(i).write(item.hand_out()) };
+        }
+        if !pceltFetched.is_null() {
+            // SAFETY: non-NULL out-parameter; `count <= celt` fits a ULONG.
+            unsafe { *pceltFetched = count as ULONG };
+        }
+        all_or_false(count, celt)
+    })
+}
+
+/// IEnumXXX::Skip.
+///
+/// # Safety
+/// Called through an enumerator's vtable.
+pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface, celt: ULONG) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        let (_, count) = unsafe { object::<K>(this) }.advance(celt);
+        all_or_false(count, celt)
+    })
+}
+
+/// IEnumXXX::Reset.
+///
+/// # Safety
+/// Called through an enumerator's vtable.
+pub(crate) unsafe extern "system" fn reset<K: EnumInterface>(this: *mut K::Iface) -> HRESULT {
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        *unsafe { object::<K>(this) }.position() = 0;
+        S_OK
+    })
+}
+
+/// IEnumXXX::Clone: a new enumerator over the same snapshot, at the same position.
+///
+/// # Safety
+/// Called through an enumerator's vtable; `ppenum` NULL or writable.
+pub(crate) unsafe extern "system" fn clone<K: EnumInterface>(
+    this: *mut K::Iface,
+    ppenum: *mut *mut K::Iface,
+) -> HRESULT {
+    if ppenum.is_null() {
+        return E_POINTER;
+    }
+    // SAFETY: non-NULL out-parameter.
+    unsafe { *ppenum = ptr::null_mut() };
+    catch(E_UNEXPECTED, || {
+        // SAFETY: COM calls this only through our vtable.
+        let e = unsafe { object::<K>(this) };
+        let position = *e.position();
+        // SAFETY: non-NULL out-parameter.
+        unsafe { *ppenum = Enumerator::<K>::create(e.items.clone(), position) };
+        S_OK
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use core::ffi::c_void;
+
+    use super::*;
+    use crate::com::hresult::E_INVALIDARG;
+    use crate::com::iids::IID_IUNKNOWN;
+    use crate::com::types::REFIID;
+    use crate::com::unknown::query_interface;
+
+    /// A test enumerator interface: the layout every IEnumXXX has.
+    #[repr(C)]
+    #[allow(non_snake_case)]
+    struct TestEnumVtbl<E: 'static> {
+        QueryInterface: unsafe extern "system" fn(*mut TestEnum<E>, REFIID, *mut *mut c_void) -> HRESULT,
+        AddRef: unsafe extern "system" fn(*mut TestEnum<E>) -> ULONG,
+        Release: unsafe extern "system" fn(*mut TestEnum<E>) -> ULONG,
+        Next: unsafe extern "system" fn(*mut TestEnum<E>, ULONG, *mut E, *mut ULONG) -> HRESULT,
+        Skip: unsafe extern "system" fn(*mut TestEnum<E>, ULONG) -> HRESULT,
+        Reset: unsafe extern "system" fn(*mut TestEnum<E>) -> HRESULT,
+        Clone: unsafe extern "system" fn(*mut TestEnum<E>, *mut *mut TestEnum<E>) -> HRESULT,
+    }
+    #[repr(C)]
+    struct TestEnum<E: 'static> {
+        lpVtbl: *const TestEnumVtbl<E>,
+    }
+
+    const IID_TEST: GUID = GUID::from_u128(0x1234);
+    const IID_TEST_ALIAS: GUID = GUID::from_u128(0x5678);
+
+    struct Guids;
+    static GUIDS_VTBL: TestEnumVtbl<GUID> = crate::enum_vtbl!(TestEnumVtbl, Guids);
+    impl EnumInterface for Guids {
+        type Item = GUID;
+        type Iface = TestEnum<GUID>;
+        type Vtbl = TestEnumVtbl<GUID>;
+        const IIDS: &'static [GUID] = &[IID_TEST, IID_TEST_ALIAS];
+        const NULL_FETCHED: HRESULT = E_INVALIDARG;
+        fn vtbl() -> &'static TestEnumVtbl<GUID> {
+            &GUIDS_VTBL
+        }
+    }
+
+    struct Pointers;
+    static POINTERS_VTBL: TestEnumVtbl<*mut IUnknown> = crate::enum_vtbl!(TestEnumVtbl, Pointers);
+    impl EnumInterface for Pointers {
+        type Item = Counted<IUnknown>;
+        type Iface = TestEnum<*mut IUnknown>;
+        type Vtbl = TestEnumVtbl<*mut IUnknown>;
+        const IIDS: &'static [GUID] = &[IID_TEST];
+        fn vtbl() -> &'static TestEnumVtbl<*mut IUnknown> {
+            &POINTERS_VTBL
+        }
+    }
+
+    fn g(n: u128) -> GUID {
+        GUID::from_u128(n)
+    }
+
+    /// A plain library object (IUnknown only) whose reference count the tests read.
+    struct Thing;
+    impl ComClass for Thing {
+        fn interface(&self, _: &GUID) -> Option<&Slot> {
+            None
+        }
+    }
+    fn thing() -> *mut IUnknown {
+        ComObject::<Thing>::new(ptr::null_mut(), |_| Thing).into_inner_unknown()
+    }
+    /// The reference count of `p` now.
+    fn refs(p: *mut IUnknown) -> ULONG {
+        // SAFETY: `p` is alive; the AddRef is undone at once.
+        unsafe {
+            add_ref(p);
+            release(p)
+        }
+    }
+
+    #[test]
+    fn next_skip_reset_clone_follow_the_enumerator_rules() {
+        let p = Enumerator::<Guids>::create(vec![g(1), g(2), g(3)].into(), 0);
+        // SAFETY: `p` is a live enumerator; every pointer passed is valid or deliberately NULL.
+        unsafe {
+            let v = &*(*p).lpVtbl;
+            let mut out = [GUID::default(); 4];
+            let mut n = 99;
+            assert_eq!((v.Next)(p, 0, ptr::null_mut(), &mut n), S_OK);
+            assert_eq!(n, 0);
+            assert_eq!((v.Next)(p, 2, out.as_mut_ptr(), &mut n), S_OK);
+            assert_eq!((n, out[0], out[1]), (2, g(1), g(2)));
+            let mut copy = ptr::null_mut();
+            assert_eq!((v.Clone)(p, &mut copy), S_OK);
+            n = 99;
+            assert_eq!((v.Next)(p, 4, out.as_mut_ptr(), &mut n), S_FALSE);
+            assert_eq!((n, out[0]), (1, g(3)));
+            n = 99;
+            assert_eq!((v.Next)(p, 1, out.as_mut_ptr(), &mut n), S_FALSE, "at the end");
+            assert_eq!(n, 0);
+            assert_eq!((v.Next)(p, 1, out.as_mut_ptr(), ptr::null_mut()), S_FALSE);
+            assert_eq!((v.Next)(p, 2, out.as_mut_ptr(), ptr::null_mut()), E_INVALIDARG);
+            assert_eq!((v.Next)(p, 1, ptr::null_mut(), &mut n), E_POINTER);
+            assert_eq!((v.Reset)(p), S_OK);
+            assert_eq!((v.Skip)(p, 0), S_OK);
+            assert_eq!((v.Skip)(p, 2), S_OK);
+            assert_eq!((v.Skip)(p, 5), S_FALSE);
+            assert_eq!((v.Skip)(p, u32::MAX), S_FALSE);
+            assert_eq!((v.Next)(p, 1, out.as_mut_ptr(), ptr::null_mut()), S_FALSE);
+            // The clone kept its own position (after the first two).
+            out = [GUID::default(); 4];
+            assert_eq!((v.Next)(copy, 1, out.as_mut_ptr(), ptr::null_mut()), S_OK);
+            assert_eq!(out[0], g(3));
+            assert_eq!((v.Clone)(p, ptr::null_mut()), E_POINTER);
+            // One vtable answers for every IID of the interface, and for IUnknown.
+            for iid in [IID_TEST_ALIAS, IID_TEST, IID_IUNKNOWN] {
+                let mut other = ptr::null_mut();
+                assert_eq!(query_interface(p.cast::<IUnknown>(), &iid, &mut other), S_OK);
+                assert!(!other.is_null());
+                release(other.cast());
+            }
+            assert_eq!(release(copy.cast()), 0);
+            assert_eq!(release(p.cast()), 0);
+        }
+    }
+
+    #[test]
+    fn huge_counts_write_only_what_exists() {
+        let p = Enumerator::<Guids>::create(vec![g(7), g(8)].into(), 0);
+        // SAFETY: `p` is a live enumerator; `out` has room for every element the list holds, which is
+        // all Next may write whatever `celt` says.
+        unsafe {
+            let v = &*(*p).lpVtbl;
+            let mut out = [GUID::default(); 3];
+            let mut n = 0;
+            assert_eq!((v.Next)(p, u32::MAX, out.as_mut_ptr(), &mut n), S_FALSE);
+            assert_eq!((n, out[0], out[1], out[2]), (2, g(7), g(8), GUID::default()));
+            assert_eq!((v.Skip)(p, u32::MAX), S_FALSE);
+            assert_eq!((v.Reset)(p), S_OK);
+            assert_eq!((v.Skip)(p, u32::MAX), S_FALSE);
+            assert_eq!((v.Next)(p, u32::MAX, out.as_mut_ptr(), &mut n), S_FALSE);
+            assert_eq!(n, 0);
+            release(p.cast());
+        }
+        // An empty list, and a clone made past the end.
+        let e = Enumerator::<Guids>::create(Vec::new().into(), 5);
+        // SAFETY: as above.
+        unsafe {
+            let v = &*(*e).lpVtbl;
+            let mut out = GUID::default();
+            let mut n = 9;
+            assert_eq!((v.Next)(e, 1, &mut out, &mut n), S_FALSE);
+            assert_eq!(n, 0);
+            let mut copy = ptr::null_mut();
+            assert_eq!((v.Clone)(e, &mut copy), S_OK);
+            assert_eq!((v.Next)(copy, 1, &mut out, ptr::null_mut()), S_FALSE);
+            assert_eq!((v.Reset)(copy), S_OK);
+            assert_eq!((v.Skip)(copy, 0), S_OK);
+            assert_eq!(release(copy.cast()), 0);
+            assert_eq!(release(e.cast()), 0);
+        }
+    }
+
+    #[test]
+    fn counted_elements_are_handed_out_addrefd_and_released_with_the_last_enumerator() {
+        let (a, b) = (thing(), thing());
+        // SAFETY: the snapshot takes over one reference to each (AddRef'd for it here).
+        let items: Arc<[Counted<IUnknown>]> = unsafe {
+            add_ref(a);
+            add_ref(b);
+            vec![Counted::adopt(a).unwrap(), Counted::adopt(b).unwrap()].into()
+        };
+        assert_eq!((refs(a), refs(b)), (2, 2));
+        let p = Enumerator::<Pointers>::create(items, 0);
+        // SAFETY: `p` is a live enumerator; the pointers Next hands out are released once each.
+        unsafe {
+            let v = &*(*p).lpVtbl;
+            let mut copy = ptr::null_mut();
+            assert_eq!((v.Clone)(p, &mut copy), S_OK);
+            assert_eq!((refs(a), refs(b)), (2, 2), "Clone shares the snapshot");
+            let mut out = [ptr::null_mut(); 3];
+            let mut n = 0;
+            assert_eq!((v.Next)(p, 3, out.as_mut_ptr(), &mut n), S_FALSE);
+            assert_eq!((n, out[0], out[1]), (2, a, b));
+            assert!(out[2].is_null());
+            assert_eq!((refs(a), refs(b)), (3, 3), "every pointer handed out is AddRef'd");
+            release(out[0]);
+            release(out[1]);
+            assert_eq!((v.Next)(copy, 1, out.as_mut_ptr(), ptr::null_mut()), S_OK);
+            assert_eq!(out[0], a);
+            release(out[0]);
+            assert_eq!(release(p.cast()), 0);
+            assert_eq!((refs(a), refs(b)), (2, 2), "the clone still holds the snapshot");
+            assert_eq!(release(copy.cast()), 0);
+            assert_eq!((refs(a), refs(b)), (1, 1), "the last enumerator released the snapshot");
+            assert_eq!(release(a), 0);
+            assert_eq!(release(b), 0);
+        }
+    }
+}
