@@ -3,7 +3,9 @@
 //! IOPCCommon and the error texts instead of writing their own.
 //!
 //! Layout, by specification chapter:
-//! - `com`: the COM core (types, IUnknown, reference counting, aggregation, allocator, panic boundary)
+//! - `com`: the COM core (types, IUnknown, reference counting, aggregation, the snapshot enumerator,
+//!   allocator, panic boundary)
+//! - `locale`: locale identifiers and how they resolve, shared by `common` and `errors`
 //! - `common`: IOPCCommon (chapter 5)
 //! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)
 //! - `shutdown`: the IOPCShutdown connection point for servers and a shutdown sink for clients (chapter 4)
@@ -17,6 +19,7 @@
 pub mod com;
 pub mod common;
 pub mod errors;
+pub mod locale;
 pub mod pattern;
 pub mod registry;
 pub mod serverlist;

@@ -4,8 +4,6 @@
 //! share them. A server creates one per client connection with `OpcCommonCreate`, usually aggregated
 //! into its server object.
 
-pub mod locale;
-
 use core::ffi::c_void;
 use core::ptr;
 use std::sync::{Mutex, MutexGuard};
@@ -21,8 +19,8 @@ use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{
     IUnknown, DWORD, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR,
 };
-use crate::errors::{error_string, OpcServerKind, OpcVendorErrorStringFn, VendorTexts};
-use locale::{DEFAULT_LOCALES, LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
+use crate::errors::{error_string, OpcServerKind, OpcVendorErrorStringFn, VendorTexts, CATALOG_LOCALES};
+use crate::locale::{LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
 
 /// The methods of IOPCCommon, in the order of the specification's IDL.
 #[repr(C)]
@@ -145,7 +143,7 @@ impl Settings {
             return Err(E_INVALIDARG);
         }
         let declared: &[LCID] = if o.locale_count == 0 {
-            &DEFAULT_LOCALES
+            &CATALOG_LOCALES
         } else {
             // SAFETY: checked non-NULL; the caller vouches for `locale_count` readable entries.
             unsafe { core::slice::from_raw_parts(o.locales, o.locale_count as usize) }

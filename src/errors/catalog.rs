@@ -3,24 +3,18 @@
 //! The texts live in `catalog/<language>.txt` (one line per code, reviewed and extended as text); the
 //! build script turns each file into a table of this module, sorted by code, with the UTF-16 form of
 //! every text ready to copy. The same files feed the message table of the Windows DLL.
+//!
+//! Which specifications and languages there are, and the hash of the code index, is said once, in
+//! `catalog/tables.rs`, which the build script compiles too.
 
-use crate::common::locale::Language;
+use crate::com::LCID;
+use crate::locale::Language;
 
-/// The specification that defines a code (the SPEC column of the catalog files).
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Debug)]
-pub(crate) enum Spec {
-    DataAccess,
-    AlarmsEvents,
-    HistoricalData,
-    Security,
-    Batch,
-    DataExchange,
-    CommandExecution,
-    /// COM codes of the OPC Common interfaces that the system has no (or a misleading) text for.
-    Connection,
-    /// COM, RPC and Win32 codes; on Windows the system's own text is preferred.
-    System,
-}
+mod tables;
+
+pub use tables::OpcServerKind;
+pub(crate) use tables::Spec;
+use tables::{primary_language, slot_of, INDEX_BITS, LANGUAGES};
 
 /// A text in UTF-8 (for tests and debuggers) and in UTF-16 with its terminating NUL (to copy).
 #[derive(Debug)]
@@ -43,9 +37,24 @@ pub(crate) struct Entry {
 
 include!(concat!(env!("OUT_DIR"), "/catalog.rs"));
 
-/// The translations the library ships, each parallel to ENGLISH; English is complete and every other
-/// language falls back to it text by text.
-static TRANSLATIONS: &[(Language, &[Option<Text>])] = &[(Language::GERMAN, GERMAN)];
+/// The locales a server supports when it declares none: one per language of the catalog.
+pub(crate) const CATALOG_LOCALES: [LCID; LANGUAGES.len()] = {
+    let mut locales = [0; LANGUAGES.len()];
+    let mut i = 0;
+    while i < LANGUAGES.len() {
+        locales[i] = LANGUAGES[i].lcid;
+        i += 1;
+    }
+    locales
+};
+
+/// The translation table of `language` (parallel to ENGLISH), if the catalog has that language.
+fn translation(language: Language) -> Option<&'static [Option<Text>]> {
+    let position = LANGUAGES[1..]
+        .iter()
+        .position(|l| primary_language(l.lcid) == language.0)?;
+    Some(TRANSLATIONS[position])
+}
 
 /// A code's catalog entry as one kind of server means it (an index into ENGLISH).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -68,10 +77,7 @@ impl Found {
         if language == Language::ENGLISH {
             return Some(&ENGLISH[self.0].text);
         }
-        TRANSLATIONS
-            .iter()
-            .find(|(l, _)| *l == language)
-            .and_then(|(_, table)| table[self.0].as_ref())
+        translation(language).and_then(|table| table[self.0].as_ref())
     }
 }
 
@@ -79,7 +85,7 @@ impl Found {
 /// otherwise the first in specification order (Data Access first). One hash probe, usually.
 pub(crate) fn lookup(code: u32, preferred: Spec) -> Option<Found> {
     let mask = (1usize << INDEX_BITS) - 1;
-    let mut slot = (code.wrapping_mul(0x9E37_79B1) >> (32 - INDEX_BITS)) as usize;
+    let mut slot = slot_of(code);
     let first = loop {
         match INDEX[slot] {
             0 => return None,
@@ -104,7 +110,7 @@ mod tests {
         let texts = ENGLISH
             .iter()
             .map(|e| &e.text)
-            .chain(TRANSLATIONS.iter().flat_map(|(_, t)| t.iter().flatten()));
+            .chain(TRANSLATIONS.iter().flat_map(|t| t.iter().flatten()));
         for t in texts {
             let units: Vec<u16> = t.text.encode_utf16().chain([0]).collect();
             assert_eq!(t.wide, &units[..], "{}", t.text);
@@ -121,14 +127,47 @@ mod tests {
         assert_eq!(lookup(0xC0040002, Spec::DataAccess), None);
     }
 
+    const GERMAN: Language = Language(0x07);
+
     #[test]
     fn german_translates_every_english_text() {
+        let german = translation(GERMAN).expect("German is a catalog language");
         for (i, e) in ENGLISH.iter().enumerate() {
-            let de = GERMAN[i]
+            let de = german[i]
                 .as_ref()
                 .unwrap_or_else(|| panic!("{} untranslated", e.symbol));
             assert_ne!(de.text, e.text.text, "{} is not German", e.symbol);
-            assert_eq!(Found(i).text(Language::GERMAN).text, de.text);
+            assert_eq!(Found(i).text(GERMAN).text, de.text);
+        }
+    }
+
+    #[test]
+    fn the_tables_derive_from_one_list() {
+        // Every catalog language has a translation table (English is ENGLISH) and a default locale.
+        assert_eq!(TRANSLATIONS.len() + 1, LANGUAGES.len());
+        assert_eq!(CATALOG_LOCALES, [0x0409, 0x0407]);
+        assert_eq!(primary_language(LANGUAGES[0].lcid), Language::ENGLISH.0);
+        assert!(translation(Language::ENGLISH).is_none() && translation(Language(0x0C)).is_none());
+        // Every server kind, and no other value, selects the specification of the same name.
+        let kinds: Vec<(u32, Spec)> = (0..64)
+            .filter_map(|v| OpcServerKind::from_raw(v).map(|k| (k as u32, k.spec())))
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                (0, Spec::DataAccess),
+                (1, Spec::AlarmsEvents),
+                (2, Spec::HistoricalData),
+                (3, Spec::Batch),
+                (4, Spec::DataExchange),
+                (5, Spec::CommandExecution),
+            ]
+        );
+        for (v, spec) in kinds {
+            assert_eq!(
+                format!("{:?}", OpcServerKind::from_raw(v).unwrap()),
+                format!("{spec:?}")
+            );
         }
     }
 
@@ -146,7 +185,7 @@ mod tests {
     fn missing_languages_fall_back_to_english() {
         let found = lookup(0xC0040001, Spec::DataAccess).unwrap();
         assert_eq!(found.text(Language(0x0C)).text, "The value of the handle is invalid.");
-        assert_eq!(found.text(Language::GERMAN).text, "Der Wert des Handles ist ungültig.");
+        assert_eq!(found.text(GERMAN).text, "Der Wert des Handles ist ungültig.");
         assert!(found.text_in(Language(0x0C)).is_none());
         assert_eq!(
             found.text_in(Language::ENGLISH).map(|t| t.text),

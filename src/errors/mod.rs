@@ -21,61 +21,18 @@ use crate::com::alloc::alloc_wstr;
 use crate::com::boundary::catch;
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{E_INVALIDARG, E_UNEXPECTED, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
-use crate::common::locale::resolve_locale;
+use crate::locale::resolve_locale;
 #[cfg(test)]
-use crate::common::locale::Language;
+use crate::locale::Language;
 
 mod catalog;
 #[cfg(windows)]
 mod system;
 
+pub use catalog::OpcServerKind;
+#[cfg(windows)]
 use catalog::Spec;
-
-/// The kind of OPC server asking for a text; it decides which specification's text a colliding code
-/// gets (other codes get their text whatever the kind).
-#[repr(u32)]
-#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
-pub enum OpcServerKind {
-    /// Data Access (and Complex Data): the default.
-    #[default]
-    DataAccess = 0,
-    /// Alarms & Events.
-    AlarmsEvents = 1,
-    /// Historical Data Access.
-    HistoricalData = 2,
-    /// Batch.
-    Batch = 3,
-    /// Data eXchange.
-    DataExchange = 4,
-    /// Command Execution.
-    CommandExecution = 5,
-}
-
-impl OpcServerKind {
-    /// The kind for a raw value from C; `None` for values this version does not know.
-    pub fn from_raw(v: u32) -> Option<OpcServerKind> {
-        match v {
-            0 => Some(OpcServerKind::DataAccess),
-            1 => Some(OpcServerKind::AlarmsEvents),
-            2 => Some(OpcServerKind::HistoricalData),
-            3 => Some(OpcServerKind::Batch),
-            4 => Some(OpcServerKind::DataExchange),
-            5 => Some(OpcServerKind::CommandExecution),
-            _ => None,
-        }
-    }
-
-    fn spec(self) -> Spec {
-        match self {
-            OpcServerKind::DataAccess => Spec::DataAccess,
-            OpcServerKind::AlarmsEvents => Spec::AlarmsEvents,
-            OpcServerKind::HistoricalData => Spec::HistoricalData,
-            OpcServerKind::Batch => Spec::Batch,
-            OpcServerKind::DataExchange => Spec::DataExchange,
-            OpcServerKind::CommandExecution => Spec::CommandExecution,
-        }
-    }
-}
+pub(crate) use catalog::CATALOG_LOCALES;
 
 /// A server's own texts for its vendor-specific codes, asked before the catalog.
 ///
@@ -296,7 +253,7 @@ mod tests {
             Some("The requested object (e.g. a public group) was not found.")
         );
         assert_eq!(
-            catalog_text(0x80040200_u32 as HRESULT, OpcServerKind::DataAccess, Language::GERMAN),
+            catalog_text(0x80040200_u32 as HRESULT, OpcServerKind::DataAccess, Language(0x07)),
             Some("Für diese Verbindungs-ID besteht keine Verbindung.")
         );
     }

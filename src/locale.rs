@@ -1,4 +1,6 @@
 //! Locale identifiers: the special values every OPC client uses and how the library resolves them.
+//! Shared infrastructure: IOPCCommon (`common`) keeps a session's locale with it, the error texts
+//! (`errors`) resolve it to the language they answer in; neither depends on the other for it.
 //!
 //! | LCID | name | meaning in this library |
 //! |---|---|---|
@@ -28,8 +30,6 @@ pub const LOCALE_NEUTRAL: LCID = 0x0000;
 pub const LOCALE_INVARIANT: LCID = 0x007F;
 /// English (United States).
 pub(crate) const LOCALE_EN_US: LCID = 0x0409;
-/// German (Germany).
-pub(crate) const LOCALE_DE_DE: LCID = 0x0407;
 
 /// The special locale IDs every session accepts, in the order QueryAvailableLocaleIDs reports them.
 pub(crate) const SPECIAL_LOCALES: [LCID; 4] = [
@@ -39,16 +39,13 @@ pub(crate) const SPECIAL_LOCALES: [LCID; 4] = [
     LOCALE_INVARIANT,
 ];
 
-/// The locales a server supports when it declares none: the languages the catalog ships.
-pub(crate) const DEFAULT_LOCALES: [LCID; 2] = [LOCALE_EN_US, LOCALE_DE_DE];
-
-/// A language of the error catalog, by Windows primary language ID.
+/// A language, by Windows primary language ID.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(crate) struct Language(pub u16);
 
 impl Language {
+    /// The language texts fall back to.
     pub(crate) const ENGLISH: Language = Language(0x09);
-    pub(crate) const GERMAN: Language = Language(0x07);
 
     /// The primary language of a concrete locale (`PRIMARYLANGID(LANGIDFROMLCID(lcid))`).
     pub fn of(lcid: LCID) -> Language {
@@ -184,10 +181,10 @@ mod tests {
         assert_eq!(resolve_locale(LOCALE_NEUTRAL).language, Language::ENGLISH);
         assert_eq!(resolve_locale(LOCALE_NEUTRAL).lcid, LOCALE_EN_US);
         assert_eq!(resolve_locale(LOCALE_INVARIANT).language, Language::ENGLISH);
-        assert_eq!(resolve_locale(0x0407).language, Language::GERMAN);
-        assert_eq!(resolve_locale(0x0C07).language, Language::GERMAN);
+        assert_eq!(resolve_locale(0x0407).language, Language(0x07));
+        assert_eq!(resolve_locale(0x0C07).language, Language(0x07));
         assert_eq!(resolve_locale(0x0407).lcid, 0x0407);
-        assert_eq!(resolve_locale(0x10407).language, Language::GERMAN); // German, phone book sort
+        assert_eq!(resolve_locale(0x10407).language, Language(0x07)); // German, phone book sort
         assert_eq!(resolve_locale(0x0C00).lcid, LOCALE_EN_US);
     }
 
