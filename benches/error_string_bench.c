@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "opccomn.h"
+#include <opccomn/opccomn.h>
 
 #if defined(_WIN32)
 static double now_ns(void)

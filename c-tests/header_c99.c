@@ -1,5 +1,5 @@
 /* opccomn.h compiles alone as strict C99 (-pedantic-errors), and its declarations link. */
-#include "opccomn.h"
+#include <opccomn/opccomn.h>
 
 int main(void) {
     LPWSTR text = 0;

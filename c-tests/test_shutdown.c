@@ -87,7 +87,7 @@ static HRESULT mock_shutdown_request(IOPCShutdown *This, LPCWSTR reason) {
     return m->result;
 }
 
-static const IOPCShutdownVtbl mock_vtbl = {mock_qi, mock_add_ref, mock_release, mock_shutdown_request};
+static IOPCShutdownVtbl mock_vtbl = {mock_qi, mock_add_ref, mock_release, mock_shutdown_request};
 
 static void mock_init(Mock *m, int has_shutdown, HRESULT result) {
     memset(m, 0, sizeof *m);

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "opccomn.h"
+#include <opccomn/opccomn.h>
 
 static int test_passed;
 static int test_failed;

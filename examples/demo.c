@@ -5,7 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "opccomn.h"
+#include <opccomn/opccomn.h>
 
 /* Prints a UTF-16 string as UTF-8. */
 static void print_utf16(const WCHAR *s) {

@@ -15,6 +15,12 @@ need_windows_tools() {
     command -v x86_64-w64-mingw32-g++ >/dev/null || missing+=(g++-mingw-w64-x86-64)
     command -v x86_64-w64-mingw32-windres >/dev/null || missing+=(binutils-mingw-w64-x86-64)
     command -v x86_64-w64-mingw32-widl >/dev/null || missing+=(mingw-w64-tools)
+    # The header's coexistence and calling-convention checks: i686 compilers (compile only), the system
+    # IDL files widl needs for the stand-in OPC Foundation headers, clang.
+    command -v i686-w64-mingw32-gcc >/dev/null || missing+=(gcc-mingw-w64-i686)
+    command -v i686-w64-mingw32-g++ >/dev/null || missing+=(g++-mingw-w64-i686)
+    [ -f /usr/include/wine/wine/windows/unknwn.idl ] || missing+=(libwine-dev)
+    command -v clang >/dev/null || missing+=(clang)
     command -v wine >/dev/null || missing+=(wine wine64)
     install_packages "${missing[@]}"
     if ! rustup target list --installed | grep -qx x86_64-pc-windows-gnu; then

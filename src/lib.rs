@@ -12,7 +12,7 @@
 //! - `registry`: the registry abstraction and the registration helpers (chapter 6)
 //! - `serverlist`: the server browser OPCServerList and the COM server entry points (chapter 7)
 //!
-//! The C API is declared in `include/opccomn.h`, generated from these sources by cbindgen.
+//! The C API is declared in `include/opccomn/opccomn.h`, generated from these sources (cbindgen) and the IDL in `idl/` by tools/gen-header.
 
 #![allow(non_snake_case)] // COM and OPC names are kept as the specification spells them
 

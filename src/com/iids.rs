@@ -1,40 +1,11 @@
-//! Interface and class identifiers, exported as data (as `opccomn_i.c` provides them to OPC programs).
-//!
-//! Identifiers of the standard COM interfaces are only used inside the library (Windows' `uuid.lib`
-//! provides them to C programs); the OPC ones are exported so a C program needs nothing but this library.
+//! Interface and class identifiers under the names the library's code uses. The values are written once,
+//! in the IDL (`idl/opccomn.idl`, `idl/combase.idl`) and `idl/opcguids.txt`; `guids.rs` is generated from
+//! them by tools/gen-header, together with the exported data symbols.
 
-use super::types::{GUID, IID};
-
-/// `IID_IUnknown` {00000000-0000-0000-C000-000000000046}.
-pub const IID_IUNKNOWN: GUID = GUID::from_u128(0x00000000_0000_0000_C000_000000000046);
-/// `IID_IClassFactory` {00000001-0000-0000-C000-000000000046}.
-pub const IID_ICLASSFACTORY: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
-/// `IID_IEnumGUID` {0002E000-0000-0000-C000-000000000046}.
-pub const IID_IENUMGUID: GUID = GUID::from_u128(0x0002E000_0000_0000_C000_000000000046);
-/// `IID_IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07}.
-pub const IID_ICONNECTIONPOINTCONTAINER: GUID = GUID::from_u128(0xB196B284_BAB4_101A_B69C_00AA00341D07);
-/// `IID_IEnumConnectionPoints` {B196B285-BAB4-101A-B69C-00AA00341D07}.
-pub const IID_IENUMCONNECTIONPOINTS: GUID = GUID::from_u128(0xB196B285_BAB4_101A_B69C_00AA00341D07);
-/// `IID_IConnectionPoint` {B196B286-BAB4-101A-B69C-00AA00341D07}.
-pub const IID_ICONNECTIONPOINT: GUID = GUID::from_u128(0xB196B286_BAB4_101A_B69C_00AA00341D07);
-/// `IID_IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07}.
-pub const IID_IENUMCONNECTIONS: GUID = GUID::from_u128(0xB196B287_BAB4_101A_B69C_00AA00341D07);
-
-/// IID of `IOPCShutdown` {F31DFDE1-07B6-11d2-B2D8-0060083BA1FB}.
-#[no_mangle]
-pub static IID_IOPCShutdown: IID = GUID::from_u128(0xF31DFDE1_07B6_11D2_B2D8_0060083BA1FB);
-/// IID of `IOPCCommon` {F31DFDE2-07B6-11d2-B2D8-0060083BA1FB}.
-#[no_mangle]
-pub static IID_IOPCCommon: IID = GUID::from_u128(0xF31DFDE2_07B6_11D2_B2D8_0060083BA1FB);
-/// IID of `IOPCServerList` {13486D50-4821-11D2-A494-3CB306C10000}.
-#[no_mangle]
-pub static IID_IOPCServerList: IID = GUID::from_u128(0x13486D50_4821_11D2_A494_3CB306C10000);
-/// IID of `IOPCEnumGUID` (OPC Common 1.10) {55C382C8-21C7-4e88-96C1-BECFB1E3F483}.
-#[no_mangle]
-pub static IID_IOPCEnumGUID: IID = GUID::from_u128(0x55C382C8_21C7_4E88_96C1_BECFB1E3F483);
-/// IID of `IOPCServerList2` (OPC Common 1.10) {9DD0B56C-AD9E-43ee-8305-487F3188BF7A}.
-#[no_mangle]
-pub static IID_IOPCServerList2: IID = GUID::from_u128(0x9DD0B56C_AD9E_43EE_8305_487F3188BF7A);
-/// CLSID of the OPC server browser `OPC.ServerList.1` {13486D51-4821-11D2-A494-3CB306C10000}.
-#[no_mangle]
-pub static CLSID_OPCServerList: IID = GUID::from_u128(0x13486D51_4821_11D2_A494_3CB306C10000);
+pub use super::guids::{
+    CLSID_OPCServerList, IID_IClassFactory as IID_ICLASSFACTORY, IID_IConnectionPoint as IID_ICONNECTIONPOINT,
+    IID_IConnectionPointContainer as IID_ICONNECTIONPOINTCONTAINER,
+    IID_IEnumConnectionPoints as IID_IENUMCONNECTIONPOINTS, IID_IEnumConnections as IID_IENUMCONNECTIONS,
+    IID_IEnumGUID as IID_IENUMGUID, IID_IOPCCommon, IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2,
+    IID_IOPCShutdown, IID_IUnknown as IID_IUNKNOWN,
+};

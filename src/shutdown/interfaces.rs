@@ -156,24 +156,3 @@ pub struct IEnumConnectionsVtbl {
 pub struct IEnumConnections {
     pub lpVtbl: *const IEnumConnectionsVtbl,
 }
-
-// Off Windows no `uuid` library provides the identifiers of the standard interfaces, so the library
-// exports them under their Windows names. On Windows they come from the system (uuid.lib / libuuid.a)
-// and the library does not export them, so the two can never clash at link time.
-
-/// `IID_IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-#[cfg(all(not(system_com_headers), not(windows)))]
-#[no_mangle]
-pub static IID_IConnectionPointContainer: IID = crate::com::iids::IID_ICONNECTIONPOINTCONTAINER;
-/// `IID_IEnumConnectionPoints` {B196B285-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-#[cfg(all(not(system_com_headers), not(windows)))]
-#[no_mangle]
-pub static IID_IEnumConnectionPoints: IID = crate::com::iids::IID_IENUMCONNECTIONPOINTS;
-/// `IID_IConnectionPoint` {B196B286-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-#[cfg(all(not(system_com_headers), not(windows)))]
-#[no_mangle]
-pub static IID_IConnectionPoint: IID = crate::com::iids::IID_ICONNECTIONPOINT;
-/// `IID_IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07} (not exported on Windows).
-#[cfg(all(not(system_com_headers), not(windows)))]
-#[no_mangle]
-pub static IID_IEnumConnections: IID = crate::com::iids::IID_IENUMCONNECTIONS;

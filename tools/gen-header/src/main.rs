@@ -1,53 +1,320 @@
-//! Generates `include/opccomn.h` with cbindgen, using `cbindgen.toml` at the crate root.
+//! Generates include/opccomn/opccomn.h and the identifier tables derived from the IDL.
 //!
-//! `gen-header` writes the header; `gen-header --check` exits 1 when the committed header differs from
-//! what the sources generate now (CI runs this, so the header cannot drift).
+//! - The C API (functions, option structs, constants, the portable COM base types) comes from the Rust
+//!   sources through cbindgen (`cbindgen.toml`).
+//! - The interfaces come from `idl/opccomn.idl` (the five OPC Common interfaces) and `idl/combase.idl`
+//!   (the standard COM interfaces, declared only off Windows), written in MIDL's shape (see `emit`).
+//! - The identifiers: `src/com/guids.rs` (Rust constants and the DLL's data exports) and
+//!   `src/c/opccomn_guids.c` (the same data for per-symbol objects) from the IDL and idl/opcguids.txt.
+//! - `c-tests/abi_i686.c`: compile-time checks (for i686-w64-mingw32-gcc) that every vtable entry is
+//!   `__stdcall` and every exported function and callback has the convention of its Rust definition.
+//!
+//! Before writing anything it checks that every Rust vtable struct has its IDL interface's methods in
+//! the IDL's order, with the IDL's parameters and `extern "system"`.
+//!
+//! `gen-header` writes the files; `gen-header --check` exits 1 when a committed file differs from what
+//! the sources generate now (CI runs this), or when the Rust vtables disagree with the IDL.
 
-use std::path::PathBuf;
+mod emit;
+mod guids;
+mod idl;
+mod rustcheck;
+
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+const HEADER: &str = "include/opccomn/opccomn.h";
 
 fn main() -> ExitCode {
     let check = std::env::args().skip(1).any(|a| a == "--check");
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let root = root.canonicalize().expect("crate root");
+
+    let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+    let opc = idl::parse("idl/opccomn.idl", &read("idl/opccomn.idl")).unwrap_or_else(|e| panic!("{e}"));
+    let base = idl::parse("idl/combase.idl", &read("idl/combase.idl")).unwrap_or_else(|e| panic!("{e}"));
+    let table = guids::parse_table(&read("idl/opcguids.txt")).unwrap_or_else(|e| panic!("{e}"));
+    let catalog = emit::Catalog::new(opc.iter().chain(&base));
+
+    // The Rust vtables must be the IDL's.
+    let sources = rustcheck::read(&root);
+    let all: Vec<&idl::Interface> = base.iter().chain(&opc).collect();
+    let problems = rustcheck::check_vtables(&catalog, &all, &sources);
+    if !problems.is_empty() {
+        for p in &problems {
+            eprintln!("vtable mismatch: {p}");
+        }
+        eprintln!(
+            "the Rust vtable structs disagree with idl/*.idl: {} problem(s)",
+            problems.len()
+        );
+        return ExitCode::FAILURE;
+    }
+
+    let header = match generate_header(&root, &opc, &base, &table, &catalog, &sources) {
+        Ok(h) => h,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let abi_check = abi_checks(&header, &opc, &catalog, &sources);
+    let outputs = [
+        (HEADER, header),
+        ("src/com/guids.rs", guids::rust_module(&opc, &base, &table)),
+        ("src/c/opccomn_guids.c", guids::c_data(&opc, &base, &table)),
+        ("c-tests/abi_i686.c", abi_check),
+    ];
+    let mut stale = 0;
+    for (path, text) in &outputs {
+        let full = root.join(path);
+        if std::fs::read(&full).unwrap_or_default() == text.as_bytes() {
+            println!("{path} is up to date");
+            continue;
+        }
+        if check {
+            eprintln!("{path} differs from what the sources generate: run `cargo run -p gen-header` and commit it");
+            stale += 1;
+        } else {
+            std::fs::create_dir_all(full.parent().unwrap()).expect("create the directory");
+            std::fs::write(&full, text).unwrap_or_else(|e| panic!("write {path}: {e}"));
+            println!("wrote {path}");
+        }
+    }
+    if stale > 0 {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
+}
+
+fn generate_header(
+    root: &Path,
+    opc: &[idl::Interface],
+    base: &[idl::Interface],
+    table: &[guids::Entry],
+    catalog: &emit::Catalog,
+    sources: &rustcheck::Sources,
+) -> Result<String, String> {
     let mut config = cbindgen::Config::from_file(root.join("cbindgen.toml")).expect("cbindgen.toml");
     // The version macros come from Cargo.toml, never from a hand-kept copy.
-    let version = package_version(&root);
+    let version = package_version(root);
     let mut parts = version.split(['.', '-', '+']);
     let mut next = || parts.next().unwrap_or("0").to_string();
     let (major, minor, patch) = (next(), next(), next());
+    let opc_refs: Vec<&idl::Interface> = opc.iter().collect();
+    let base_refs: Vec<&idl::Interface> = base.iter().collect();
+    let forwards = format!(
+        "#if !defined(_WIN32)\n{}#endif\n\n{}",
+        emit::forwards(&base_refs),
+        emit::forwards(&opc_refs)
+    );
     config.after_includes = config.after_includes.map(|text| {
         text.replace("@MAJOR@", &major)
             .replace("@MINOR@", &minor)
             .replace("@PATCH@", &patch)
             .replace("@VERSION@", &version)
+            .replace("@FORWARDS@\n", &forwards)
     });
+    // The interfaces (and their vtables) are declared from the IDL, not from the Rust structs.
+    for i in opc.iter().chain(base) {
+        config.export.exclude.push(i.name.clone());
+        config.export.exclude.push(format!("{}Vtbl", i.name));
+    }
     let bindings = cbindgen::Builder::new()
-        .with_crate(&root)
+        .with_crate(root)
         .with_config(config)
         .generate()
-        .expect("cbindgen could not generate the header");
+        .map_err(|e| format!("cbindgen could not generate the header: {e}"))?;
     let mut generated = Vec::new();
     bindings.write(&mut generated);
-    let header = root.join("include/opccomn.h");
-    let current = std::fs::read(&header).unwrap_or_default();
-    if current == generated {
-        println!("include/opccomn.h is up to date");
-        return ExitCode::SUCCESS;
-    }
-    if check {
-        eprintln!(
-            "include/opccomn.h differs from what the sources generate: run `cargo run -p gen-header` and commit it"
+    let text = String::from_utf8(generated).expect("UTF-8 header");
+
+    // The interface section goes after the types cbindgen declares and before the functions.
+    let mut section = String::from(
+        "/* ---- The interfaces, from idl/combase.idl (off Windows) and idl/opccomn.idl, in MIDL's shape: a\n\
+         \x20  MIDL-generated header (the OPC Foundation's opccomn.h) and this one skip each other's\n\
+         \x20  declarations whichever comes first. ---- */\n\n\
+         #ifdef __cplusplus\nextern \"C\" {\n#endif\n\n#if !defined(_WIN32)\n\n",
+    );
+    for i in base {
+        section += &emit::interface(
+            catalog,
+            i,
+            " (the standard COM interface; <windows.h> declares it on Windows)",
         );
-        return ExitCode::FAILURE;
     }
-    std::fs::write(&header, generated).expect("write include/opccomn.h");
-    println!("wrote include/opccomn.h");
-    ExitCode::SUCCESS
+    section += "#endif /* !defined(_WIN32) */\n\n";
+    for i in opc {
+        section += &emit::interface(catalog, i, " (OPC Common, idl/opccomn.idl)");
+    }
+    section += "/* ---- The component categories and classes (idl/opcguids.txt). ---- */\n\n";
+    section += &emit::table_declarations(table);
+    section += "#ifdef __cplusplus\n}  /* extern \"C\" */\n#endif\n\n";
+
+    let marker = "#ifdef __cplusplus\nextern \"C\" {\n#endif // __cplusplus\n";
+    let at = text.find(marker).ok_or("no extern \"C\" block in cbindgen's output")?;
+    let (head, tail) = text.split_at(at);
+    let mut out = String::new();
+    for line in head.lines() {
+        out += &rewrite_type_line(line, sources)?;
+        out.push('\n');
+    }
+    out += &section;
+    for line in tail.lines() {
+        out += &rewrite_function_line(line, sources)?;
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// Before the functions: HRESULT macros in the Windows SDK's spelling, so a redefinition by opcerror.h
+/// or winerror.h is token for token the same; REFIID and REFCLSID references in C++ (as Windows'
+/// guiddef.h has them); callback typedefs with their calling convention.
+fn rewrite_type_line(line: &str, sources: &rustcheck::Sources) -> Result<String, String> {
+    if let Some(rest) = line.strip_prefix("#define ") {
+        if let Some((name, value)) = rest.split_once(" (HRESULT)") {
+            let v: u32 = value
+                .trim_end_matches('u')
+                .parse()
+                .map_err(|_| format!("bad HRESULT {line}"))?;
+            return Ok(format!("#define {name} ((HRESULT)0x{v:08X}L)"));
+        }
+    }
+    for (alias, target) in [("REFIID", "IID"), ("REFCLSID", "CLSID")] {
+        if line == format!("typedef const {target} *{alias};") {
+            return Ok(format!(
+                "#if defined(__cplusplus)\ntypedef const {target} &{alias};\n#else\ntypedef const {target} *{alias};\n#endif"
+            ));
+        }
+    }
+    if let Some(rest) = line.strip_prefix("typedef ") {
+        if let Some(open) = rest.find("(*") {
+            let name: String = rest[open + 2..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            let abi = sources
+                .callbacks
+                .get(&name)
+                .ok_or(format!("no Rust type for the callback {name}"))?;
+            return Ok(format!(
+                "typedef {}({} *{}",
+                &rest[..open],
+                convention(abi)?,
+                &rest[open + 2..]
+            ));
+        }
+    }
+    Ok(line.to_string())
+}
+
+fn convention(abi: &str) -> Result<&'static str, String> {
+    match abi {
+        "C" => Ok("OPCCOMN_CDECL"),
+        "system" => Ok("OPCCOMN_STDCALL"),
+        other => Err(format!("an exported function or callback has the ABI \"{other}\"")),
+    }
+}
+
+/// A function declaration (`HRESULT OpcCommonCreate(...);`) gets the calling convention of the Rust
+/// function it declares.
+fn rewrite_function_line(line: &str, sources: &rustcheck::Sources) -> Result<String, String> {
+    if line.starts_with(|c: char| c.is_ascii_alphabetic()) && line.ends_with(");") && !line.starts_with("typedef") {
+        if let Some(open) = line.find('(') {
+            let before = &line[..open];
+            let split = before.rfind([' ', '*']).ok_or(format!("cannot read {line}"))? + 1;
+            let name = &before[split..];
+            let abi = sources
+                .functions
+                .get(name)
+                .ok_or(format!("{name} is declared but not a Rust export"))?;
+            return Ok(format!("{}{} {}", &before[..split], convention(abi)?, &line[split..]));
+        }
+    }
+    Ok(line.to_string())
+}
+
+/// `c-tests/abi_i686.c`: on i686, `__stdcall` and `__cdecl` function pointer types are different types,
+/// so `__builtin_types_compatible_p` proves each declaration's convention at compile time.
+fn abi_checks(header: &str, opc: &[idl::Interface], catalog: &emit::Catalog, sources: &rustcheck::Sources) -> String {
+    let mut s = String::from(
+        "/* Generated by tools/gen-header: do not edit. Run `cargo run -p gen-header`.\n\
+         \n\
+         Compile-time proof that include/opccomn/opccomn.h states the calling conventions of the library:\n\
+         every vtable entry is __stdcall (STDMETHODCALLTYPE, Rust's extern \"system\"), every exported\n\
+         function and callback type has the convention of its Rust definition (extern \"C\": __cdecl).\n\
+         Meaningful on 32-bit x86, where the conventions differ:\n\
+         \x20   i686-w64-mingw32-gcc -std=c11 -fsyntax-only -Iinclude c-tests/abi_i686.c            (must pass)\n\
+         \x20   i686-w64-mingw32-gcc -std=c11 -fsyntax-only -Iinclude -DOPCCOMN_ABI_EXPECT_FAILURE ... (must fail)\n\
+         */\n\
+         #include <opccomn/opccomn.h>\n\n\
+         #if !defined(__i386__)\n#error \"the calling convention checks are only meaningful on 32-bit x86\"\n#endif\n\n\
+         #define OPCCOMN_STDCALL_ENTRY(iface, method, type) \\\n\
+         \x20   _Static_assert(__builtin_types_compatible_p(__typeof__(((iface##Vtbl *)0)->method), type), \\\n\
+         \x20                  #iface \"::\" #method \" must be __stdcall\")\n\
+         #define OPCCOMN_CONVENTION(expr, type, what) \\\n\
+         \x20   _Static_assert(__builtin_types_compatible_p(__typeof__(expr), type), what)\n\n\
+         /* Vtable entries, from the IDL. */\n",
+    );
+    // (The category interfaces are not checked: their names are macros for their IIDs once declared,
+    // as in opcda.h, so they cannot be used as types.)
+    for i in opc {
+        let vt = catalog.vtable(i);
+        for (_, m) in vt {
+            let params: Vec<String> = std::iter::once(format!("{} *", i.name))
+                .chain(m.params.iter().map(|p| p.declaration()))
+                .collect();
+            s += &format!(
+                "OPCCOMN_STDCALL_ENTRY({}, {}, {} (__attribute__((stdcall)) *)({}));\n",
+                i.name,
+                m.name,
+                m.ret,
+                params.join(", ")
+            );
+        }
+    }
+    s += "\n/* Exported functions, with the convention of their Rust definition. */\n";
+    for line in header.lines() {
+        for (mac, attr) in [("OPCCOMN_CDECL ", "cdecl"), ("OPCCOMN_STDCALL ", "stdcall")] {
+            if line.starts_with("typedef") || !line.ends_with(");") {
+                continue;
+            }
+            if let Some((ret, rest)) = line.split_once(mac) {
+                let (name, params) = rest.split_once('(').expect("a declaration");
+                let abi = &sources.functions[name];
+                let want = if abi == "system" { "stdcall" } else { "cdecl" };
+                assert_eq!(want, attr, "{name}");
+                s += &format!(
+                    "OPCCOMN_CONVENTION(&{name}, {}(__attribute__(({want})) *)({}, \"{name} must be {want}\");\n",
+                    ret,
+                    params.trim_end_matches(';').trim_end_matches(')').to_string() + ")"
+                );
+            }
+        }
+    }
+    s += "\n/* Callback types. */\n";
+    for line in header.lines() {
+        if let Some(rest) = line.strip_prefix("typedef ") {
+            if let Some((ret, after)) = rest.split_once("(OPCCOMN_CDECL *") {
+                let (name, params) = after.split_once(")(").expect("a callback typedef");
+                s += &format!(
+                    "OPCCOMN_CONVENTION(({name})0, {ret}(__attribute__((cdecl)) *)({}, \"{name} must be cdecl\");\n",
+                    params.trim_end_matches(';')
+                );
+            }
+        }
+    }
+    s += "\n/* The check can fail: a vtable entry is not __cdecl. */\n\
+          #ifdef OPCCOMN_ABI_EXPECT_FAILURE\n\
+          OPCCOMN_CONVENTION(((IOPCCommonVtbl *)0)->GetErrorString, HRESULT (__attribute__((cdecl)) *)(IOPCCommon *, HRESULT, LPWSTR *), \"expected to fail\");\n\
+          #endif\n\n\
+          int opccomn_abi_i686_checked;\n";
+    s
 }
 
 /// The `version` of the `[package]` table in the crate's Cargo.toml.
-fn package_version(root: &std::path::Path) -> String {
+fn package_version(root: &Path) -> String {
     let manifest = std::fs::read_to_string(root.join("Cargo.toml")).expect("Cargo.toml");
     let mut in_package = false;
     for line in manifest.lines() {

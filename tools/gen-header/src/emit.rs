@@ -1,0 +1,219 @@
+//! The interface section of include/opccomn/opccomn.h, written from the IDL in the shape MIDL (and
+//! widl) give their headers, so that this header and a MIDL-generated one skip each other's
+//! declarations: `__IOPCCommon_FWD_DEFINED__` and `__IOPCCommon_INTERFACE_DEFINED__` guards, IIDs
+//! declared `EXTERN_C const IID`, C++ abstract classes unless `CINTERFACE`, C `lpVtbl` structs with
+//! `STDMETHODCALLTYPE` on every entry, and `COBJMACROS` call macros.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+use crate::guids::{crt_uuid_args, Entry, Form};
+use crate::idl::{Interface, Method, Param};
+
+/// All interfaces by name, to walk base interfaces.
+pub struct Catalog<'a> {
+    by_name: HashMap<&'a str, &'a Interface>,
+}
+
+impl<'a> Catalog<'a> {
+    pub fn new(all: impl IntoIterator<Item = &'a Interface>) -> Self {
+        Catalog {
+            by_name: all.into_iter().map(|i| (i.name.as_str(), i)).collect(),
+        }
+    }
+
+    /// The methods of `i` with those of its bases first, each with the interface that declares it.
+    pub fn vtable(&self, i: &'a Interface) -> Vec<(&'a str, &'a Method)> {
+        let mut chain = vec![i];
+        let mut cur = i;
+        while let Some(base) = &cur.base {
+            cur = self
+                .by_name
+                .get(base.as_str())
+                .unwrap_or_else(|| panic!("{}: unknown base {base}", i.name));
+            chain.push(cur);
+        }
+        chain
+            .iter()
+            .rev()
+            .flat_map(|c| c.methods.iter().map(move |m| (c.name.as_str(), m)))
+            .collect()
+    }
+}
+
+/// The forward declarations, before anything else in the header.
+pub fn forwards(interfaces: &[&Interface]) -> String {
+    let mut s = String::new();
+    for i in interfaces {
+        let n = &i.name;
+        let _ = write!(
+            s,
+            "#ifndef __{n}_FWD_DEFINED__\n#define __{n}_FWD_DEFINED__\ntypedef struct {n} {n};\n#endif\n\n"
+        );
+    }
+    s
+}
+
+fn comment_attributes(p: &Param) -> String {
+    if p.attributes.is_empty() {
+        String::new()
+    } else {
+        format!("/* [{}] */ ", p.attributes)
+    }
+}
+
+fn param_list(this: Option<&str>, params: &[Param], indent: &str) -> String {
+    let mut parts = Vec::new();
+    if let Some(t) = this {
+        parts.push(format!("{t} *This"));
+    }
+    for p in params {
+        parts.push(format!("{}{}", comment_attributes(p), p.declaration()));
+    }
+    if parts.is_empty() {
+        return "void".to_string();
+    }
+    format!("\n{indent}{}", parts.join(&format!(",\n{indent}")))
+}
+
+/// One interface's definition block.
+pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
+    let n = &i.name;
+    let mut s = String::new();
+    let _ = writeln!(s, "/* {n}{note} */");
+    let _ = writeln!(
+        s,
+        "#ifndef __{n}_INTERFACE_DEFINED__\n#define __{n}_INTERFACE_DEFINED__\n"
+    );
+    for t in &i.typedefs {
+        let _ = writeln!(s, "typedef {t};");
+    }
+    let _ = writeln!(s, "EXTERN_C const IID IID_{n};\n");
+    // C++
+    let _ = writeln!(s, "#if defined(__cplusplus) && !defined(CINTERFACE)\n");
+    match &i.base {
+        Some(b) => {
+            let _ = writeln!(
+                s,
+                "MIDL_INTERFACE(\"{}\")\n{n} : public {b}\n{{\npublic:",
+                i.uuid.to_lowercase()
+            );
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "MIDL_INTERFACE(\"{}\")\n{n}\n{{\npublic:\n    BEGIN_INTERFACE",
+                i.uuid.to_lowercase()
+            );
+        }
+    }
+    for m in &i.methods {
+        let _ = writeln!(
+            s,
+            "    virtual {} STDMETHODCALLTYPE {}({}) = 0;\n",
+            m.ret,
+            m.name,
+            param_list(None, &m.params, "        ")
+        );
+    }
+    if i.base.is_none() {
+        let _ = writeln!(s, "    END_INTERFACE");
+    }
+    let _ = writeln!(s, "}};\n");
+    let _ = writeln!(
+        s,
+        "#ifdef __CRT_UUID_DECL\n__CRT_UUID_DECL({n}, {})\n#endif\n",
+        crt_uuid_args(&i.uuid)
+    );
+    // C
+    let _ = writeln!(s, "#else /* C style interface */\n");
+    let _ = writeln!(s, "typedef struct {n}Vtbl\n{{\n    BEGIN_INTERFACE\n");
+    let vtable = catalog.vtable(i);
+    let mut last_owner = "";
+    for (owner, m) in &vtable {
+        if *owner != last_owner {
+            let _ = writeln!(s, "    /* {owner} methods */");
+            last_owner = owner;
+        }
+        let _ = writeln!(
+            s,
+            "    {} (STDMETHODCALLTYPE *{})({});\n",
+            m.ret,
+            m.name,
+            param_list(Some(n), &m.params, "        ")
+        );
+    }
+    let _ = writeln!(s, "    END_INTERFACE\n}} {n}Vtbl;\n");
+    let _ = writeln!(s, "struct {n}\n{{\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n");
+    let _ = writeln!(s, "#ifdef COBJMACROS");
+    for (_, m) in &vtable {
+        let args: Vec<&str> = std::iter::once("This")
+            .chain(m.params.iter().map(|p| p.name.as_str()))
+            .collect();
+        let _ = writeln!(
+            s,
+            "#define {n}_{}({}) \\\n    ( (This)->lpVtbl->{}({}) )",
+            m.name,
+            args.join(","),
+            m.name,
+            args.join(",")
+        );
+    }
+    let _ = writeln!(s, "#endif /* COBJMACROS */\n");
+    let _ = writeln!(s, "#endif /* C style interface */\n");
+    let _ = writeln!(s, "#endif /* __{n}_INTERFACE_DEFINED__ */\n");
+    s
+}
+
+/// A category of the interface form: an interface without methods (opcda.h's declaration).
+fn category_interface(e: &Entry) -> String {
+    let n = &e.name;
+    format!(
+        "/* {n} {{{g}}}: {d} */\n\
+         #ifndef __{n}_FWD_DEFINED__\n#define __{n}_FWD_DEFINED__\ntypedef struct {n} {n};\n#endif\n\
+         #ifndef __{n}_INTERFACE_DEFINED__\n#define __{n}_INTERFACE_DEFINED__\n\
+         EXTERN_C const IID IID_{n};\n\
+         #if defined(__cplusplus) && !defined(CINTERFACE)\n\
+         MIDL_INTERFACE(\"{gl}\")\n{n} : public IUnknown\n{{\npublic:\n}};\n\
+         #ifdef __CRT_UUID_DECL\n__CRT_UUID_DECL({n}, {crt})\n#endif\n\
+         #else\n\
+         typedef struct {n}Vtbl\n{{\n    BEGIN_INTERFACE\n\
+         \x20   HRESULT (STDMETHODCALLTYPE *QueryInterface)({n} *This, REFIID riid, void **ppvObject);\n\
+         \x20   ULONG (STDMETHODCALLTYPE *AddRef)({n} *This);\n\
+         \x20   ULONG (STDMETHODCALLTYPE *Release)({n} *This);\n\
+         \x20   END_INTERFACE\n}} {n}Vtbl;\n\
+         struct {n}\n{{\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n\
+         #endif\n#endif /* __{n}_INTERFACE_DEFINED__ */\n\
+         #ifndef {n}\n#define {n} IID_{n}\n#endif\n\n",
+        g = e.guid,
+        gl = e.guid.to_lowercase(),
+        d = e.note,
+        crt = crt_uuid_args(&e.guid),
+    )
+}
+
+/// The declarations of the table's categories and classes.
+pub fn table_declarations(table: &[Entry]) -> String {
+    let mut s = String::new();
+    for e in table {
+        match e.form {
+            Form::Interface => s += &category_interface(e),
+            Form::Constant => {
+                let ty = if e.kind == "category" { "CATID" } else { "CLSID" };
+                let what = if e.kind == "category" {
+                    e.note.clone()
+                } else {
+                    format!("the class {}", e.note)
+                };
+                let _ = write!(
+                    s,
+                    "/* {n} {{{g}}}: {what} */\n#ifndef {n}\nEXTERN_C const {ty} {n};\n#endif\n\n",
+                    n = e.name,
+                    g = e.guid
+                );
+            }
+            Form::Internal => {}
+        }
+    }
+    s
+}
