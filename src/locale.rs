@@ -61,6 +61,7 @@ pub(crate) struct Resolved {
 }
 
 /// Resolves the special locale IDs to concrete ones (see the module table).
+#[inline]
 pub(crate) fn resolve_locale(lcid: LCID) -> Resolved {
     let concrete = match lcid {
         LOCALE_SYSTEM_DEFAULT => system_default_locale(),

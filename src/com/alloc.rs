@@ -12,6 +12,7 @@ use super::types::{HRESULT, LPWSTR, WCHAR};
 
 /// Allocates `size` bytes from the task allocator; NULL when out of memory. A size of 0 still
 /// returns a unique pointer that must be freed.
+#[inline]
 pub fn task_alloc(size: usize) -> *mut c_void {
     #[cfg(windows)]
     {
@@ -70,6 +71,19 @@ pub fn alloc_wstr(units: &[WCHAR]) -> Result<LPWSTR, HRESULT> {
         ptr::copy_nonoverlapping(units.as_ptr(), p, units.len());
         *p.add(units.len()) = 0;
     }
+    Ok(p)
+}
+
+/// Copies `units`, which end with their NUL, into a new task-allocated string (one copy).
+#[inline]
+pub fn alloc_wstr_terminated(units: &[WCHAR]) -> Result<LPWSTR, HRESULT> {
+    debug_assert_eq!(units.last(), Some(&0));
+    let p = task_alloc(core::mem::size_of_val(units)) as LPWSTR;
+    if p.is_null() {
+        return Err(E_OUTOFMEMORY);
+    }
+    // SAFETY: `p` has room for `units.len()` code units.
+    unsafe { ptr::copy_nonoverlapping(units.as_ptr(), p, units.len()) };
     Ok(p)
 }
 

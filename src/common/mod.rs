@@ -6,6 +6,7 @@
 
 use core::ffi::c_void;
 use core::ptr;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::com::alloc::{alloc_array, alloc_wstr};
@@ -169,9 +170,8 @@ impl Settings {
     }
 }
 
-/// What one client session has set.
+/// The client name one session has set.
 struct Session {
-    locale: LCID,
     /// The client name as given (invalid UTF-16 kept), without a NUL; `None` until set.
     client_name: Option<Vec<WCHAR>>,
 }
@@ -180,6 +180,9 @@ struct Session {
 pub struct OpcCommon {
     common: Slot,
     settings: Settings,
+    /// The session's locale (SetLocaleID). Apart from the lock: GetErrorString reads it on every call,
+    /// and a lone LCID needs no more than an atomic to be read whole.
+    locale: AtomicU32,
     session: Mutex<Session>,
 }
 
@@ -199,12 +202,12 @@ impl OpcCommon {
         if !self.settings.available.contains(&lcid) {
             return E_INVALIDARG;
         }
-        self.session().locale = lcid;
+        self.locale.store(lcid, Ordering::Relaxed);
         S_OK
     }
 
     fn error_string(&self, code: HRESULT) -> Result<LPWSTR, HRESULT> {
-        let locale = self.session().locale;
+        let locale = self.locale.load(Ordering::Relaxed);
         error_string(code, locale, self.settings.kind, self.settings.vendor.as_ref())
     }
 
@@ -255,7 +258,7 @@ unsafe extern "system" fn get_locale_id(this: *mut IOPCCommon, pdwLcid: *mut LCI
     unsafe { *pdwLcid = 0 };
     catch(E_UNEXPECTED, || {
         // SAFETY: as above.
-        unsafe { *pdwLcid = object(this).session().locale };
+        unsafe { *pdwLcid = object(this).locale.load(Ordering::Relaxed) };
         S_OK
     })
 }
@@ -357,10 +360,8 @@ pub unsafe extern "C" fn OpcCommonCreate(
                 Ok(OpcCommon {
                     common: binder.slot(&IOPCCOMMON_VTBL),
                     settings,
-                    session: Mutex::new(Session {
-                        locale: LOCALE_SYSTEM_DEFAULT,
-                        client_name: None,
-                    }),
+                    locale: AtomicU32::new(LOCALE_SYSTEM_DEFAULT),
+                    session: Mutex::new(Session { client_name: None }),
                 })
             })
         }

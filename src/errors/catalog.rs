@@ -83,6 +83,7 @@ impl Found {
 
 /// The entry `code` gets for a server of specification `preferred`: its own where it defines the code,
 /// otherwise the first in specification order (Data Access first). One hash probe, usually.
+#[inline]
 pub(crate) fn lookup(code: u32, preferred: Spec) -> Option<Found> {
     let mask = (1usize << INDEX_BITS) - 1;
     let mut slot = slot_of(code);

@@ -17,7 +17,7 @@
 use core::ffi::c_void;
 use core::ptr;
 
-use crate::com::alloc::alloc_wstr;
+use crate::com::alloc::{alloc_wstr, alloc_wstr_terminated};
 use crate::com::boundary::catch;
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{E_INVALIDARG, E_UNEXPECTED, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
@@ -73,6 +73,10 @@ impl VendorTexts {
 }
 
 /// The text for `code` as a new task-allocated string, for a session in `locale`.
+///
+/// Inlined into GetErrorString: a catalog answer is a hash probe, one allocation and one copy, and the
+/// calls between them would cost as much as the lookup.
+#[inline(always)]
 pub(crate) fn error_string(
     code: HRESULT,
     locale: LCID,
@@ -106,10 +110,10 @@ pub(crate) fn error_string(
     }
 }
 
-/// A catalog text as a new task-allocated string.
+/// A catalog text as a new task-allocated string: the table holds it with its NUL, copied in one go.
+#[inline(always)]
 fn copy(text: &catalog::Text) -> Result<LPWSTR, HRESULT> {
-    // The table holds the text with its NUL; alloc_wstr adds its own.
-    alloc_wstr(&text.wide[..text.wide.len() - 1])
+    alloc_wstr_terminated(text.wide)
 }
 
 /// The catalog text for `code` as a server of `kind` means it, in `language` (English where the
