@@ -3,14 +3,14 @@
 //! allocates nothing, and stops at the first character that rules a match out. (Patterns longer than
 //! [`LONG_PATTERN`] units with a `*` are handed back to be compiled: see [`matches`].)
 //!
-//! It is the classic two-cursor scheme: tokens (each consumes exactly one character) are matched left
-//! to right; on a mismatch the pattern restarts just after the last `*`, one character further into the
-//! string (skipping straight to the next place the literal after that `*` occurs). Because every token
-//! is one character, this is exact, and it costs at most O(len(string) x len(pattern)) token steps
-//! without recursion. When the last `*` is reached, the tokens after it can only match the last
-//! characters of the string, so they are tried there and nowhere else. A malformed pattern (an unclosed
-//! `[`, a reversed range) never matches: the first `*` triggers one pass over the rest of the pattern
-//! that finds the last `*` and checks every list, a match needs every token before it to have been
+//! The pattern is a sequence of segments separated by `*`; every token of a segment consumes exactly
+//! one character (`[]` none). The first segment is anchored at the start of the string and read side by
+//! side with it, so a literal prefix costs what it costs the specification's sample: one comparison per
+//! character up to the first difference. Each later segment is searched for at its leftmost place after
+//! the previous one (taking the leftmost place never hurts the segments after it, because each has a
+//! fixed length), and the last one must end at the end of the string. That is exact, uses no recursion
+//! and costs at most O(len(string) x len(pattern)) token steps. A malformed pattern (an unclosed `[`, a
+//! reversed range) never matches: a match is only reported once every token of the pattern has been
 //! read, and reading a malformed list ends the call with FALSE.
 //!
 //! Strings are read through NUL-terminated pointers and never past the NUL: a lookahead only happens
@@ -284,255 +284,253 @@ unsafe fn list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> List {
 /// patterns the compiled form's precomputed lists pay for the compilation (see `matches`).
 pub(crate) const LONG_PATTERN: usize = 128;
 
-/// Where the last `*` of a pattern is, how many characters the tokens after it consume, and where the
-/// pattern ends; `None` when the pattern (from `i` on) is malformed.
-///
-/// # Safety
-/// `i` must be a character boundary of `pattern`.
-unsafe fn last_star(pattern: impl Cursor, mut i: usize) -> Option<(usize, usize, usize)> {
-    let mut last = (usize::MAX, 0);
-    loop {
-        // SAFETY: units before `i` were not NUL, so unit `i` is at or before the terminator.
-        let u = unsafe { pattern.unit(i) };
-        if (u < 0x80 && PLAIN_ASCII & (1 << u) != 0) || u == ANY || u == DIGIT {
-            last.1 += 1; // a one-unit token
-            i += 1;
-            continue;
-        }
-        // SAFETY: an index from an earlier character; walks stop at the terminator.
-        let (c, next) = unsafe { pattern.at(i) };
-        match c {
-            0 => return Some((last.0, last.1, i)),
-            _ => i = next,
-        }
-        match c {
-            STAR => last = (next, 0),
-            // SAFETY: an index from an earlier character; walks stop at the terminator.
-            OPEN => match unsafe { list(pattern, next, 0, true) } {
-                List::Empty(after) => i = after,
-                List::Match(_, after) => {
-                    i = after;
-                    last.1 += 1;
-                }
-                List::Malformed => return None,
-            },
-            _ => last.1 += 1,
-        }
-    }
-}
-
-/// The character a `*` at `star_end` is followed by, when it is a plain literal (folded when
-/// case-insensitive): the string can skip straight to the next place that character occurs.
-///
-/// # Safety
-/// `star_end` must be the index right after a `*` of `pattern`.
-#[inline(always)]
-unsafe fn literal_after(pattern: impl Cursor, star_end: usize, case_sensitive: bool) -> Option<u32> {
-    // SAFETY: the index after a `*` is a character boundary at or before the terminator.
-    match unsafe { pattern.at(star_end) }.0 {
-        0 | STAR | ANY | DIGIT | OPEN => None,
-        c if case_sensitive => Some(c),
-        c => Some(fold(c)),
-    }
-}
-
-/// The first position at or after `i` where `lit` (if any) can match; `None` at the end of the string.
-///
-/// # Safety
-/// `i` must be a character boundary of `string`.
-#[inline(always)]
-unsafe fn skip_to(string: impl Cursor, mut i: usize, lit: Option<u32>, case_sensitive: bool) -> Option<usize> {
-    let Some(lit) = lit else {
-        return Some(i);
-    };
-    // An ASCII literal is found a code unit at a time: an ASCII unit always starts a character, and
-    // no other character equals it, or folds to it unless it is `k` or `s` (KELVIN SIGN, LONG S).
-    if lit < 0x80 && (case_sensitive || (lit != 'k' as u32 && lit != 's' as u32)) {
-        loop {
-            // SAFETY: units before `i` were not NUL, so unit `i` is at or before the terminator.
-            let u = unsafe { string.unit(i) };
-            if u == lit || (!case_sensitive && u.wrapping_sub('A' as u32) < 26 && u + 32 == lit) {
-                return Some(i);
-            }
-            if u == 0 {
-                return None;
-            }
-            i += 1;
-        }
-    }
-    loop {
-        // SAFETY: `i` is a boundary; the walk stops at the terminator.
-        let (c, next) = unsafe { string.at(i) };
-        if c == 0 {
-            return None;
-        }
-        if c == lit || (!case_sensitive && fold(c) == lit) {
-            return Some(i);
-        }
-        i = next;
-    }
-}
-
 /// Whether the NUL-terminated `string` matches the NUL-terminated `pattern`; `None` when the pattern
 /// is longer than [`LONG_PATTERN`] and has a `*`: the caller then compiles it, because matching a long
 /// pattern can take up to len(string) x len(pattern) steps, and a compiled step is cheaper (lists are
 /// precomputed bitmaps instead of being read again at every step).
 ///
+/// Up to the first `*` the pattern is anchored at the start of the string: both are read side by side,
+/// ASCII a code unit at a time, and the first character that differs ends the call, with no setup
+/// before it (as in the specification's sample). From there on the pattern is taken a segment (the
+/// tokens up to the next `*`) at a time, each searched for at its leftmost place: by its first two
+/// literals a code unit at a time when it starts with ASCII literals, then token by token. The last
+/// segment must match at the end of the string: once a place matches it entirely, only the end is tried.
+///
 /// # Safety
 /// Both cursors must point at NUL-terminated strings.
+#[inline(always)]
 pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sensitive: bool) -> Option<bool> {
-    let (mut pi, mut si) = (0usize, 0usize);
-    // After the last `*` the rest of the pattern is anchored at the end of the string; found (and the
-    // whole pattern checked) when the first `*` is reached.
-    let mut last_star_at: Option<(usize, usize)> = None;
-    // Where the pattern resumes after the current `*`, where the string resumes on the next retry, and
-    // the literal that must come next.
-    let mut star: Option<(usize, usize, Option<u32>)> = None;
+    // SAFETY: both start at their first character.
+    let (pi, si) = match unsafe { match_here(string, pattern, 0, 0, case_sensitive) } {
+        Step::Star(pi, si) => (pi, si),
+        // SAFETY: `si` is at or before the terminator.
+        Step::End(si, _) => return Some(unsafe { string.unit(si) } == 0),
+        Step::Fail | Step::Malformed => return Some(false),
+    };
+    // SAFETY: `pi` is at a `*`, so `pi + 1` is at or before the terminator.
+    if unsafe { pattern.unit(pi + 1) } == 0 {
+        return Some(true); // a final `*`: everything before it matched, and nothing is left to check
+    }
+    // SAFETY: as above.
+    if unsafe { pattern.end_from(pi) } > LONG_PATTERN {
+        return None;
+    }
+    // SAFETY: `pi` is at a `*`; `si` is a character boundary.
+    unsafe { match_segments(string, pattern, pi, si, case_sensitive) }
+}
+
+/// How far [`match_here`] got.
+enum Step {
+    /// Every token up to a `*` matched: the `*`'s index and the string's index after the tokens.
+    Star(usize, usize),
+    /// Every token up to the end of the pattern matched: the string's index after them and how many
+    /// characters they consumed.
+    End(usize, usize),
+    /// A token did not match (or the string ended first).
+    Fail,
+    /// A malformed list: the pattern never matches.
+    Malformed,
+}
+
+/// Matches the tokens of `pattern` from `pi` against `string` from `si`, up to the next `*` or the end
+/// of the pattern. ASCII literals are compared a code unit at a time.
+///
+/// # Safety
+/// `pi` and `si` must be character boundaries of the NUL-terminated `pattern` and `string`.
+#[inline(always)]
+unsafe fn match_here(
+    string: impl Cursor,
+    pattern: impl Cursor,
+    mut pi: usize,
+    mut si: usize,
+    case_sensitive: bool,
+) -> Step {
+    let mut count = 0;
     loop {
-        // Fast path: an ASCII literal, `?` or `#` of the pattern against an ASCII unit of the string
-        // (every ASCII unit is a whole character); anything else takes the general path below.
         // SAFETY: units before `pi` and `si` were not NUL, so both are at or before their terminators.
         let (p, u) = unsafe { (pattern.unit(pi), string.unit(si)) };
-        if p < 0x80 && u < 0x80 && (PLAIN_ASCII & (1 << p) != 0 || p == ANY || p == DIGIT) {
-            let hit = match p {
-                ANY => u != 0,
-                DIGIT => u.wrapping_sub('0' as u32) < 10,
-                _ => u == p || (!case_sensitive && ascii_fold(u) == ascii_fold(p)),
-            };
-            if hit {
+        if p < 0x80 && PLAIN_ASCII[p as usize] {
+            if u == p || (!case_sensitive && u != 0 && ascii_fold(u) == ascii_fold(p)) {
                 pi += 1;
                 si += 1;
+                count += 1;
                 continue;
             }
-            // SAFETY: `star` only holds indices from earlier characters.
-            if let Some(next) = unsafe { retry(string, &mut star, case_sensitive) } {
-                (pi, si) = next;
-                continue;
-            }
-            return Some(false);
-        }
-        // SAFETY: an index from an earlier character; walks stop at the terminator.
-        let (pc, pn) = unsafe { pattern.at(pi) };
-        match pc {
-            STAR => {
-                // SAFETY: `pn` follows a character that was not the terminator.
-                if last_star_at.is_none() && unsafe { pattern.unit(pn) } == 0 {
-                    return Some(true); // a final `*`, and the only one: everything before it matched
-                }
-                let (last, tail) = match last_star_at {
-                    Some(l) => l,
-                    // SAFETY: an index from an earlier character; walks stop at the terminator.
-                    None => match unsafe { last_star(pattern, pi) } {
-                        Some((_, _, end)) if end > LONG_PATTERN => return None,
-                        Some((last, tail, _)) => {
-                            last_star_at = Some((last, tail));
-                            (last, tail)
-                        }
-                        None => return Some(false),
-                    },
-                };
-                if pn == last {
-                    // The tail must match the last `tail` characters.
-                    if tail == 0 {
-                        return Some(true);
-                    }
-                    // SAFETY: an index from an earlier character; walks stop at the terminator.
-                    let end = unsafe { string.end_from(si) };
-                    // SAFETY: `end` is the index of the terminator.
-                    let text = unsafe { string.slice(end) };
-                    let mut q = end;
-                    for _ in 0..tail {
-                        if q <= si {
-                            return Some(false);
-                        }
-                        q = text.prev(q).1;
-                    }
-                    star = None;
-                    pi = pn;
-                    si = q;
+            // A non-ASCII character may still fold to an ASCII letter (KELVIN SIGN is a `k`, LONG S
+            // an `s`); otherwise the characters differ.
+            if !case_sensitive && u >= 0x80 && matches!(ascii_fold(p), 0x6B | 0x73) {
+                // SAFETY: unit `si` is not the NUL.
+                let (sc, sn) = unsafe { string.at(si) };
+                if fold(sc) == ascii_fold(p) {
+                    pi += 1;
+                    si = sn;
+                    count += 1;
                     continue;
                 }
-                // SAFETY: an index from an earlier character; walks stop at the terminator.
-                let lit = unsafe { literal_after(pattern, pn, case_sensitive) };
-                // SAFETY: an index from an earlier character; walks stop at the terminator.
-                let Some(from) = (unsafe { skip_to(string, si, lit, case_sensitive) }) else {
-                    return Some(false);
-                };
-                star = Some((pn, from, lit));
-                pi = pn;
-                si = from;
-                continue;
             }
-            0 => {
+            return Step::Fail;
+        }
+        match p {
+            0 => return Step::End(si, count),
+            STAR => return Step::Star(pi, si),
+            ANY => {
+                if u == 0 {
+                    return Step::Fail;
+                }
+                pi += 1;
+                // SAFETY: unit `si` is not the NUL.
+                si = if u < 0x80 { si + 1 } else { unsafe { string.at(si) }.1 };
+            }
+            DIGIT => {
+                if u.wrapping_sub('0' as u32) >= 10 {
+                    return Step::Fail;
+                }
+                pi += 1;
+                si += 1;
+            }
+            OPEN => {
                 // SAFETY: an index from an earlier character; walks stop at the terminator.
-                if unsafe { string.at(si) }.0 == 0 {
-                    return Some(true);
+                let (sc, sn) = unsafe { string.at(si) };
+                // SAFETY: `pi + 1` follows the `[`.
+                match unsafe { list(pattern, pi + 1, sc, case_sensitive) } {
+                    List::Empty(next) => {
+                        pi = next;
+                        continue; // `[]` consumes nothing
+                    }
+                    List::Match(true, next) if sc != 0 => {
+                        pi = next;
+                        si = sn;
+                    }
+                    List::Malformed => return Step::Malformed,
+                    List::Match(..) => return Step::Fail,
                 }
             }
             _ => {
-                // SAFETY: an index from an earlier character; walks stop at the terminator.
-                let (sc, sn) = unsafe { string.at(si) };
-                let hit = match pc {
-                    ANY => sc != 0,
-                    DIGIT => sc.wrapping_sub('0' as u32) < 10,
-                    // SAFETY: an index from an earlier character; walks stop at the terminator.
-                    OPEN => match unsafe { list(pattern, pn, sc, case_sensitive) } {
-                        List::Empty(next) => {
-                            pi = next;
-                            continue;
-                        }
-                        List::Match(hit, next) => {
-                            if hit && sc != 0 {
-                                pi = next;
-                                si = sn;
-                                continue;
-                            }
-                            false
-                        }
-                        List::Malformed => return Some(false),
-                    },
-                    _ => sc == pc || (!case_sensitive && sc != 0 && fold(sc) == fold(pc)),
+                // A non-ASCII pattern character.
+                // SAFETY: indices from earlier characters; walks stop at the terminators.
+                let ((pc, pn), (sc, sn)) = unsafe { (pattern.at(pi), string.at(si)) };
+                if sc == 0 || !(sc == pc || (!case_sensitive && fold(sc) == fold(pc))) {
+                    return Step::Fail;
+                }
+                pi = pn;
+                si = sn;
+            }
+        }
+        count += 1;
+    }
+}
+
+/// The segments after the `*` at `pi`, against the string from `si`.
+///
+/// # Safety
+/// `pi` must be the index of a `*` of the NUL-terminated `pattern`; `si` a character boundary of the
+/// NUL-terminated `string`.
+#[inline(never)]
+unsafe fn match_segments(
+    string: impl Cursor,
+    pattern: impl Cursor,
+    mut pi: usize,
+    mut si: usize,
+    case_sensitive: bool,
+) -> Option<bool> {
+    loop {
+        // Skip the `*` and any `*` or `[]` right after it.
+        loop {
+            // SAFETY: `pi` is at or before the terminator (it only moves past non-NUL units).
+            match unsafe { pattern.unit(pi) } {
+                STAR => pi += 1,
+                // SAFETY: as above; `[` is not the terminator.
+                OPEN if unsafe { pattern.unit(pi + 1) } == CLOSE => pi += 2,
+                0 => return Some(true), // the pattern ends with `*`
+                _ => break,
+            }
+        }
+        // The segment's first two tokens when they are ASCII literals found a code unit at a time (an
+        // ASCII unit always starts a character; only `k` and `s` have non-ASCII characters folding to
+        // them).
+        let literal = |u: u32| {
+            (u < 0x80 && PLAIN_ASCII[u as usize] && (case_sensitive || !matches!(ascii_fold(u), 0x6B | 0x73)))
+                .then(|| if case_sensitive { u } else { ascii_fold(u) })
+        };
+        // SAFETY: `pi` is at or before the terminator.
+        let first = literal(unsafe { pattern.unit(pi) });
+        // SAFETY: unit `pi` is a literal when `first` is set, so `pi + 1` is at or before the terminator.
+        let second = first.and_then(|_| literal(unsafe { pattern.unit(pi + 1) }));
+        let mut from = si;
+        loop {
+            if let Some(l) = first {
+                let upper = if !case_sensitive && l.wrapping_sub('a' as u32) < 26 {
+                    l - 32
+                } else {
+                    l
                 };
-                if hit {
-                    pi = pn;
-                    si = sn;
-                    continue;
+                loop {
+                    // SAFETY: units before `from` were not NUL.
+                    let u = unsafe { string.unit(from) };
+                    if u == l || u == upper {
+                        // SAFETY: unit `from` is not the NUL.
+                        let v = unsafe { string.unit(from + 1) };
+                        match second {
+                            Some(m) if !(v == m || (!case_sensitive && ascii_fold(v) == m)) => {}
+                            _ => break,
+                        }
+                    } else if u == 0 {
+                        return Some(false);
+                    }
+                    from += 1;
+                }
+            }
+            // SAFETY: `pi` and `from` are character boundaries.
+            match unsafe { match_here(string, pattern, pi, from, case_sensitive) } {
+                Step::Star(next_pi, after) => {
+                    (pi, si) = (next_pi, after);
+                    break;
+                }
+                Step::End(after, count) => {
+                    // SAFETY: `after` is at or before the terminator.
+                    if unsafe { string.unit(after) } == 0 {
+                        return Some(true);
+                    }
+                    // The last segment: only its place at the end of the string can match.
+                    // SAFETY: `after` is a character boundary at or before the terminator.
+                    let end = unsafe { string.end_from(after) };
+                    // SAFETY: `end` is the index of the terminator.
+                    let text = unsafe { string.slice(end) };
+                    let mut q = end;
+                    for _ in 0..count {
+                        q = text.prev(q).1;
+                    }
+                    // `q` is at or after `from`: the segment matched `count` characters there.
+                    // SAFETY: `q` is a character boundary (walked back from the end).
+                    return Some(matches!(
+                        unsafe { match_here(string, pattern, pi, q, case_sensitive) },
+                        Step::End(e, _) if e == end
+                    ));
+                }
+                Step::Malformed => return Some(false),
+                Step::Fail => {
+                    // SAFETY: `from` is a boundary at or before the terminator.
+                    let (c, next) = unsafe { string.at(from) };
+                    if c == 0 {
+                        return Some(false);
+                    }
+                    from = next;
                 }
             }
         }
-        // SAFETY: `star` only holds indices from earlier characters.
-        match unsafe { retry(string, &mut star, case_sensitive) } {
-            Some(next) => (pi, si) = next,
-            None => return Some(false),
-        }
     }
-}
-
-/// After a mismatch: the pattern and string positions to retry from, just after the last `*` and at
-/// the next place in the string its literal occurs; `None` when there is no `*` or no place left.
-///
-/// # Safety
-/// `star` must hold indices of `string` reached by earlier characters.
-#[inline(always)]
-unsafe fn retry(
-    string: impl Cursor,
-    star: &mut Option<(usize, usize, Option<u32>)>,
-    case_sensitive: bool,
-) -> Option<(usize, usize)> {
-    let (resume, from, lit) = (*star)?;
-    // SAFETY: `from` is a character boundary at or before the terminator.
-    let (c, next) = unsafe { string.at(from) };
-    if c == 0 {
-        return None;
-    }
-    // SAFETY: `next` follows a character that was not the terminator.
-    let next = unsafe { skip_to(string, next, lit, case_sensitive) }?;
-    *star = Some((resume, next, lit));
-    Some((resume, next))
 }
 
 /// ASCII characters that stand for themselves in a pattern: all but NUL, `*`, `?`, `#` and `[`.
-const PLAIN_ASCII: u128 = !(1 | 1 << STAR | 1 << ANY | 1 << DIGIT | 1 << OPEN);
+const PLAIN_ASCII: [bool; 128] = {
+    let mut t = [true; 128];
+    t[0] = false;
+    t[STAR as usize] = false;
+    t[ANY as usize] = false;
+    t[DIGIT as usize] = false;
+    t[OPEN as usize] = false;
+    t
+};
 
 #[inline(always)]
 fn ascii_fold(c: u32) -> u32 {
