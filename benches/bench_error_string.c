@@ -2,37 +2,11 @@
    allocation of the returned string and its free, against the plainest C implementation measured in
    the same run: a switch returning a literal, copied into OpcTaskMem memory and freed.
 
-   Run: scripts/bench-error-strings.sh [--wine] (builds the release library and this program, prints
-   the ratio; the goal is at most 1.5x the baseline). Only the public header is used, as a server
-   would. */
-#if !defined(_WIN32)
-#define _POSIX_C_SOURCE 200809L /* clock_gettime */
-#endif
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
+   Run: scripts/bench.sh error-string [--wine]. Goal: at most 1.5x the baseline, in the session's
+   default locale (LOCALE_SYSTEM_DEFAULT) and in an explicit one (de-DE). */
+#include "bench.h"
 
 #include <opccomn/opccomn.h>
-
-#if defined(_WIN32)
-static double now_ns(void)
-{
-    static LARGE_INTEGER frequency;
-    LARGE_INTEGER t;
-    if (!frequency.QuadPart)
-        QueryPerformanceFrequency(&frequency);
-    QueryPerformanceCounter(&t);
-    return (double)t.QuadPart * 1e9 / (double)frequency.QuadPart;
-}
-#else
-#include <time.h>
-static double now_ns(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
-}
-#endif
 
 /* The codes asked for, a mix of Data Access texts of different lengths. */
 static const HRESULT CODES[8] = {
@@ -84,63 +58,65 @@ static HRESULT (*volatile baseline)(HRESULT, LPWSTR *) = baseline_get_error_stri
 
 static volatile unsigned long sink;
 
-static double run_library(IOPCCommon *common, long calls)
+typedef struct {
+    IOPCCommon *common;
+} Library;
+
+static void run_library(void *context, long reps)
 {
-    double start = now_ns();
-    for (long i = 0; i < calls; i++) {
+    IOPCCommon *common = ((Library *)context)->common;
+    for (long i = 0; i < reps; i++) {
         LPWSTR s;
         if (common->lpVtbl->GetErrorString(common, CODES[i & 7], &s) == S_OK) {
             sink += s[0];
             OpcTaskMemFree(s);
         }
     }
-    return (now_ns() - start) / (double)calls;
 }
 
-static double run_baseline(long calls)
+static void run_baseline(void *context, long reps)
 {
-    double start = now_ns();
-    for (long i = 0; i < calls; i++) {
+    (void)context;
+    for (long i = 0; i < reps; i++) {
         LPWSTR s;
         if (baseline(CODES[i & 7], &s) == S_OK) {
             sink += s[0];
             OpcTaskMemFree(s);
         }
     }
-    return (now_ns() - start) / (double)calls;
 }
 
-int main(int argc, char **argv)
+int main(void)
 {
-    long calls = argc > 1 ? atol(argv[1]) : 2000000;
-    if (calls < 1000)
-        calls = 1000;
+    bench_init();
     void *p = NULL;
     if (OpcCommonCreate(NULL, NULL, &IID_IOPCCommon, &p) != S_OK) {
         fprintf(stderr, "OpcCommonCreate failed\n");
-        return 1;
+        return 2;
     }
-    IOPCCommon *common = p;
-    /* Best of several alternating rounds, so both sides see the same machine state. */
+    Library library = {p};
+    printf("GetErrorString through the IOPCCommon vtable (string allocated and freed) against a C switch\n"
+           "copying a literal into OpcTaskMemAlloc memory; ns per call, median (lowest-highest round)\n\n");
     const LCID locales[2] = {LOCALE_SYSTEM_DEFAULT, 0x0407};
-    const char *names[2] = {"session locale LOCALE_SYSTEM_DEFAULT", "session locale de-DE (0x0407)"};
-    double worst_ratio = 0;
+    const char *names[2] = {"LOCALE_SYSTEM_DEFAULT", "de-DE (0x0407)"};
     for (int l = 0; l < 2; l++) {
-        common->lpVtbl->SetLocaleID(common, locales[l]);
-        double lib = 1e30, base = 1e30;
-        run_library(common, calls / 10); /* warm up */
-        run_baseline(calls / 10);
-        for (int round = 0; round < 7; round++) {
-            double b = run_baseline(calls), t = run_library(common, calls);
-            base = b < base ? b : base;
-            lib = t < lib ? t : lib;
+        if (library.common->lpVtbl->SetLocaleID(library.common, locales[l]) != S_OK) {
+            fprintf(stderr, "SetLocaleID failed\n");
+            return 2;
         }
-        double ratio = lib / base;
-        worst_ratio = ratio > worst_ratio ? ratio : worst_ratio;
-        printf("%s: GetErrorString %.1f ns/call, C baseline %.1f ns/call, ratio %.2fx\n", names[l], lib, base,
-               ratio);
+        BenchContender c[2] = {
+            {"C baseline", run_baseline, NULL, 1},
+            {"GetErrorString", run_library, &library, 1},
+        };
+        BenchResult r = bench_case(c, 2);
+        char base[96], lib[96], what[128];
+        bench_format_time(base, sizeof base, &r, 0);
+        bench_format_time(lib, sizeof lib, &r, 1);
+        printf("session locale %-22s  C baseline %-28s GetErrorString %s\n", names[l], base, lib);
+        double lo, hi, ratio = bench_ratio(&r, 1, 0, &lo, &hi);
+        snprintf(what, sizeof what, "GetErrorString / C baseline, %s", names[l]);
+        bench_goal(what, ratio, lo, hi, 0, 1.5, "x");
     }
-    printf("ratio %.2fx (goal <= 1.50x: %s)\n", worst_ratio, worst_ratio <= 1.5 ? "met" : "NOT met");
-    common->lpVtbl->Release(common);
-    return 0;
+    library.common->lpVtbl->Release(library.common);
+    return bench_finish("bench_error_string");
 }

@@ -1,0 +1,200 @@
+/* The benchmark harness shared by benches/bench_*.c (benchmarks, not tests: scripts/bench.sh runs them).
+
+   Rules that make a figure trustworthy on a shared machine:
+   - every contender of a case runs in the same process, in interleaved rounds (round r runs the
+     contenders in an order rotated by r), each round long enough to dwarf the clock's resolution and
+     short enough to fit in a scheduler time slice;
+   - a contender's figure is the median of its rounds, with the spread (lowest and highest round) beside
+     it; a ratio is the median over rounds of the ratio measured within the round (neighbours in time
+     see the same machine), with its spread too;
+   - every goal is printed with its threshold and "met" or "NOT MET", and the program exits with 1 when
+     any goal is not met, so nobody has to compute anything from the table.
+
+   Only the public header is used, as a server would. */
+#ifndef OPCCOMN_BENCH_H
+#define OPCCOMN_BENCH_H
+
+#if !defined(_WIN32) && !defined(_POSIX_C_SOURCE)
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#endif
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(_WIN32)
+#include <windows.h>
+static double bench_now_ns(void)
+{
+    static LARGE_INTEGER frequency;
+    LARGE_INTEGER t;
+    if (!frequency.QuadPart)
+        QueryPerformanceFrequency(&frequency);
+    QueryPerformanceCounter(&t);
+    return (double)t.QuadPart * 1e9 / (double)frequency.QuadPart;
+}
+#define BENCH_CLOCK "wall clock (QueryPerformanceCounter)"
+#else
+#include <time.h>
+/* The thread's CPU time: the time it ran, not the time other processes ran on its core. */
+static double bench_now_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
+}
+#define BENCH_CLOCK "thread CPU time (CLOCK_THREAD_CPUTIME_ID)"
+#endif
+
+#define BENCH_MAX_CONTENDERS 8
+#define BENCH_MAX_ROUNDS 101
+
+/* One contender: `run(context, reps)` does `reps` repetitions of the measured work; `per_rep` is how many
+   calls (or items) one repetition is, so figures are per call. */
+typedef struct {
+    const char *name;
+    void (*run)(void *context, long reps);
+    void *context;
+    double per_rep;
+} BenchContender;
+
+/* The result of one case: per contender, its time per call in every round (ns). */
+typedef struct {
+    int contenders;
+    int rounds;
+    double ns[BENCH_MAX_CONTENDERS][BENCH_MAX_ROUNDS];
+} BenchResult;
+
+/* Many short rounds: a round well under a scheduler time slice is rarely interrupted, so on a busy
+   machine most rounds are clean and the median is theirs. */
+static int bench_rounds = 31;        /* BENCH_ROUNDS overrides (3-101) */
+static double bench_round_ms = 2.0;  /* one contender's round; BENCH_ROUND_MS overrides */
+static int bench_failures;            /* goals not met */
+static int bench_goals;
+
+static void bench_init(void)
+{
+    const char *r = getenv("BENCH_ROUNDS"), *ms = getenv("BENCH_ROUND_MS");
+    if (r && atoi(r) >= 3)
+        bench_rounds = atoi(r) > BENCH_MAX_ROUNDS ? BENCH_MAX_ROUNDS : atoi(r);
+    if (ms && atof(ms) > 0)
+        bench_round_ms = atof(ms);
+}
+
+static int bench_cmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median, lowest and highest of `n` values. */
+static void bench_stats(const double *values, int n, double *median, double *lo, double *hi)
+{
+    double sorted[BENCH_MAX_ROUNDS];
+    memcpy(sorted, values, (size_t)n * sizeof *values);
+    qsort(sorted, (size_t)n, sizeof *sorted, bench_cmp);
+    *median = n % 2 ? sorted[n / 2] : (sorted[n / 2 - 1] + sorted[n / 2]) / 2;
+    *lo = sorted[0];
+    *hi = sorted[n - 1];
+}
+
+/* How many repetitions make one round of `c` last about bench_round_ms: grows a trial until it lasts a
+   tenth of a round, then takes the fastest of five such trials (a trial that was interrupted must not
+   make every round of this contender too long). */
+static long bench_calibrate(const BenchContender *c)
+{
+    long reps = 1;
+    double ms;
+    for (;;) {
+        double start = bench_now_ns();
+        c->run(c->context, reps);
+        ms = (bench_now_ns() - start) / 1e6;
+        if (ms >= bench_round_ms / 10 || reps >= (1L << 28))
+            break;
+        reps *= ms < bench_round_ms / 1000 ? 16 : 2;
+    }
+    for (int trial = 0; trial < 4; trial++) {
+        double start = bench_now_ns();
+        c->run(c->context, reps);
+        double t = (bench_now_ns() - start) / 1e6;
+        ms = t < ms ? t : ms;
+    }
+    return ms <= 0 ? reps * 10 : (long)((double)reps * bench_round_ms / ms) + 1;
+}
+
+/* Runs the contenders in interleaved rounds. */
+static BenchResult bench_case(const BenchContender *contenders, int n)
+{
+    BenchResult r;
+    long reps[BENCH_MAX_CONTENDERS];
+    r.contenders = n;
+    r.rounds = bench_rounds;
+    for (int i = 0; i < n; i++) {
+        contenders[i].run(contenders[i].context, 1); /* warm up caches */
+        reps[i] = bench_calibrate(&contenders[i]);
+    }
+    for (int round = 0; round < r.rounds; round++) {
+        for (int k = 0; k < n; k++) {
+            int i = (k + round) % n;
+            double start = bench_now_ns();
+            contenders[i].run(contenders[i].context, reps[i]);
+            r.ns[i][round] = (bench_now_ns() - start) / ((double)reps[i] * contenders[i].per_rep);
+        }
+    }
+    return r;
+}
+
+static void bench_format_ns(char *out, size_t size, double ns)
+{
+    if (ns >= 1e6)
+        snprintf(out, size, "%.2f ms", ns / 1e6);
+    else if (ns >= 1e3)
+        snprintf(out, size, "%.2f us", ns / 1e3);
+    else
+        snprintf(out, size, "%.1f ns", ns);
+}
+
+/* "median (lowest-highest)" of contender `i`. */
+static void bench_format_time(char *out, size_t size, const BenchResult *r, int i)
+{
+    double m, lo, hi;
+    char a[32], b[32], c[32];
+    bench_stats(r->ns[i], r->rounds, &m, &lo, &hi);
+    bench_format_ns(a, sizeof a, m);
+    bench_format_ns(b, sizeof b, lo);
+    bench_format_ns(c, sizeof c, hi);
+    snprintf(out, size, "%s (%s-%s)", a, b, c);
+}
+
+/* The median over rounds of ns[num] / ns[den] within each round, and its spread. */
+static double bench_ratio(const BenchResult *r, int num, int den, double *lo, double *hi)
+{
+    double ratios[BENCH_MAX_ROUNDS], m;
+    for (int k = 0; k < r->rounds; k++)
+        ratios[k] = r->ns[num][k] / r->ns[den][k];
+    bench_stats(ratios, r->rounds, &m, lo, hi);
+    return m;
+}
+
+/* Prints one goal line and counts it. `value` is compared with `goal`: at least when `at_least`,
+   otherwise at most. */
+static int bench_goal(const char *what, double value, double lo, double hi, int at_least, double goal,
+                      const char *unit)
+{
+    int met = at_least ? value >= goal : value <= goal;
+    bench_goals++;
+    if (!met)
+        bench_failures++;
+    printf("GOAL %-64s %7.2f%s (rounds %.2f-%.2f)  goal %s %.2f%s  %s\n", what, value, unit, lo, hi,
+           at_least ? ">=" : "<=", goal, unit, met ? "met" : "NOT MET");
+    return met;
+}
+
+/* The last line of every benchmark, and its exit status. */
+static int bench_finish(const char *name)
+{
+    printf("\n%s: %d goals, %d met, %d NOT MET (%d interleaved rounds of about %.0f ms per contender and case; %s)\n",
+           name, bench_goals, bench_goals - bench_failures, bench_failures, bench_rounds, bench_round_ms, BENCH_CLOCK);
+    return bench_failures ? 1 : 0;
+}
+
+#endif
