@@ -6,6 +6,7 @@ need_linux_tools() {
     command -v cc >/dev/null || missing+=(gcc)
     command -v c++ >/dev/null || missing+=(g++)
     command -v pkg-config >/dev/null || missing+=(pkg-config)
+    command -v llvm-ar >/dev/null || missing+=(llvm)   # rewrites libopccomn.a (CMakeLists.txt)
     install_packages "${missing[@]}"
 }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test of the project: lint and header drift, Rust tests, C tests on Linux under
 # AddressSanitizer and UBSan, the installed package (CMake config and pkg-config), and the Windows DLL
-# with the same C tests under Wine. Installs what is missing on a fresh Debian 12 machine.
+# with the same C tests under Wine, and the header's coexistence with the OPC Foundation's MIDL headers
+# (scripts/test-coexistence.sh). Installs what is missing on a fresh Debian 12 machine.
 #
 # Usage: scripts/test.sh [--no-wine] [--no-lint]     (CI runs it with no options)
 set -euo pipefail
@@ -79,6 +80,11 @@ if [ "$wine_stage" = 1 ]; then
     cmake --build "$build/windows" -j2
     ctest --test-dir "$build/windows" --output-on-failure --timeout 300
     scripts/check-exports.sh "$build/windows/cargo/x86_64-pc-windows-gnu/release/opccomn.dll"
+
+    stage "header and library beside the OPC Foundation's headers and *_i.c (x64, x86 compile-only, Linux)"
+    scripts/test-coexistence.sh "$build/windows" "$build/linux"
+else
+    echo "test.sh: --no-wine: the Windows stages and the header coexistence stage were NOT run" >&2
 fi
 
 # Every stage ran to its end (set -e stops at the first failure).

@@ -1,0 +1,66 @@
+/* Includes opccomn/opccomn.h and the (stand-in) OPC Foundation headers opccomn.h, opcda.h, opcerror.h, in
+   the order OURS_FIRST says, and uses what both declare: the interfaces (C++ classes or C vtables), the
+   IIDs, a category and an error code. Built as C and C++, with and without CINTERFACE / COBJMACROS,
+   with -Wall -Wextra -pedantic-errors -Werror; linked against the static library or the DLL's import
+   library, with and without the Foundation's opccomn_i.c / opcda_i.c; run under Wine it checks the
+   values the linker bound. */
+#if OURS_FIRST
+#include <opccomn/opccomn.h>
+#include <opccomn.h>
+#include <opcda.h>
+#include <opcerror.h>
+#else
+#include <opccomn.h>
+#include <opcda.h>
+#include <opcerror.h>
+#include <opccomn/opccomn.h>
+#endif
+
+#include <stdio.h>
+#include <string.h>
+
+#if defined(__cplusplus) && !defined(CINTERFACE)
+#define CALL0(p, iface, m) (p)->m()
+#define CALL(p, iface, m, ...) (p)->m(__VA_ARGS__)
+#define RIID(x) (x)
+#elif defined(COBJMACROS)
+#define CALL0(p, iface, m) iface##_##m(p)
+#define CALL(p, iface, m, ...) iface##_##m(p, __VA_ARGS__)
+#define RIID(x) OPCCOMN_RIID(x)
+#else
+#define CALL0(p, iface, m) (p)->lpVtbl->m(p)
+#define CALL(p, iface, m, ...) (p)->lpVtbl->m(p, __VA_ARGS__)
+#define RIID(x) OPCCOMN_RIID(x)
+#endif
+
+static int same(const GUID *a, unsigned int d1, unsigned short d2, unsigned short d3) {
+    return a->Data1 == d1 && a->Data2 == d2 && a->Data3 == d3;
+}
+
+int main(void) {
+    int failures = 0;
+    void *p = NULL;
+    IOPCCommon *common = NULL;
+    LPWSTR text = NULL;
+    LCID lcid = 0;
+    const CATID *category = &CATID_OPCDAServer20;
+    HRESULT hr = OpcCommonCreate(NULL, NULL, RIID(IID_IOPCCommon), &p);
+    if (hr != S_OK || p == NULL) {
+        printf("OpcCommonCreate: 0x%08lX\n", (unsigned long)hr);
+        return 1;
+    }
+    common = (IOPCCommon *)p;
+    failures += CALL(common, IOPCCommon, GetLocaleID, &lcid) != S_OK;
+    failures += CALL(common, IOPCCommon, GetErrorString, OPC_E_INVALIDFILTER, &text) != S_OK || text == NULL;
+    OpcTaskMemFree(text);
+    failures += CALL0(common, IOPCCommon, Release) != 0;
+    failures += !same(&IID_IOPCCommon, 0xF31DFDE2, 0x07B6, 0x11D2);
+    failures += !same(&IID_IOPCShutdown, 0xF31DFDE1, 0x07B6, 0x11D2);
+    failures += !same(&IID_IOPCServerList2, 0x9DD0B56C, 0xAD9E, 0x43EE);
+    failures += !same(category, 0x63D5F432, 0xCFE4, 0x11D1);
+    failures += !same(&CATID_OPCDAServer10, 0x63D5F430, 0xCFE4, 0x11D1);
+    failures += !same(&CLSID_OPCServerList, 0x13486D51, 0x4821, 0x11D2);
+    failures += OPC_E_INVALIDFILTER != (HRESULT)0xC0040009L;
+    printf("coexistence program: %d failure(s)\n", failures);
+    return failures != 0;
+}
