@@ -1,0 +1,86 @@
+// A small OPC Data Access-like server object in plain C++ (no ATL), built on opccomn:
+//
+// - IOPCCommon comes from OpcCommonCreate and IConnectionPointContainer (the IOPCShutdown connection
+//   point) from OpcShutdownCreate, both aggregated: QueryInterface forwards those IIDs to the inner
+//   objects, the destructor releases them.
+// - IExampleAddressSpace, the server's own interface, browses a few items with a compiled filter
+//   (OpcPatternCompileW / OpcPatternMatchW) and reads their values.
+// - Registration (OpcRegisterServer / OpcUnregisterServer) is described once, in ExampleRegistration.
+//
+// The same class is served by an EXE (LocalServer32, exe_main.cpp) and by a DLL (InprocServer32,
+// dll_main.cpp) under two class identifiers.
+#ifndef OPCCOMN_EXAMPLE_SERVER_H
+#define OPCCOMN_EXAMPLE_SERVER_H
+
+#include <opccomn/opccomn.h>
+
+// The example's interface, declared as MIDL declares interfaces (what `midl example.idl` would give
+// for `interface IExampleAddressSpace : IUnknown`).
+//
+// [object, uuid(9834816C-39E4-4BB0-81F9-E2B53C38BE33), pointer_default(unique)]
+// interface IExampleAddressSpace : IUnknown {
+//     HRESULT BrowseItemIDs([in, string, unique] LPCWSTR szFilterCriteria, [out] DWORD *pdwCount,
+//                           [out, size_is(,*pdwCount), string] LPWSTR **ppszItemIDs);
+//     HRESULT ReadValue([in, string] LPCWSTR szItemID, [out] double *pdblValue);
+//     HRESULT RequestShutdown([in, string, unique] LPCWSTR szReason);
+// };
+EXTERN_C const IID IID_IExampleAddressSpace;
+MIDL_INTERFACE("9834816C-39E4-4BB0-81F9-E2B53C38BE33")
+IExampleAddressSpace : public IUnknown {
+public:
+    // The item IDs matching `szFilterCriteria` (MatchPattern syntax, case-insensitive; NULL or ""
+    // matches every item), sorted, as a CoTaskMem array of CoTaskMem strings.
+    // OPC_E_INVALIDFILTER for a malformed filter; E_INVALIDARG for NULL out-parameters.
+    virtual HRESULT STDMETHODCALLTYPE BrowseItemIDs(LPCWSTR szFilterCriteria, DWORD *pdwCount, LPWSTR **ppszItemIDs) = 0;
+    // The current value of an item. OPC_E_UNKNOWNITEMID for an item the server does not have,
+    // EXAMPLE_E_DEVICEOFFLINE for an item whose device does not answer.
+    virtual HRESULT STDMETHODCALLTYPE ReadValue(LPCWSTR szItemID, double *pdblValue) = 0;
+    // What the server's operator does when taking the server down: asks every client of every
+    // server object of this module to disconnect (IOPCShutdown::ShutdownRequest, through
+    // OpcShutdownNotify). S_OK when every advised client accepted, S_FALSE when one failed.
+    virtual HRESULT STDMETHODCALLTYPE RequestShutdown(LPCWSTR szReason) = 0;
+};
+#ifdef __CRT_UUID_DECL
+__CRT_UUID_DECL(IExampleAddressSpace, 0x9834816c, 0x39e4, 0x4bb0, 0x81, 0xf9, 0xe2, 0xb5, 0x3c, 0x38, 0xbe, 0x33)
+#endif
+
+// The EXE server (LocalServer32) and the DLL server (InprocServer32): the same class.
+EXTERN_C const CLSID CLSID_ExampleServer;
+EXTERN_C const CLSID CLSID_ExampleServerInProc;
+// The category both are registered in.
+EXTERN_C const CATID CATID_ExampleServers;
+#define EXAMPLE_PROGID L"OpcComn.ExampleServer.1"
+#define EXAMPLE_VERSION_INDEPENDENT_PROGID L"OpcComn.ExampleServer"
+#define EXAMPLE_INPROC_PROGID L"OpcComn.ExampleServerInProc.1"
+#define EXAMPLE_INPROC_VERSION_INDEPENDENT_PROGID L"OpcComn.ExampleServerInProc"
+
+// OPC Data Access codes the example returns (as opcerror.h defines them).
+#ifndef OPC_E_UNKNOWNITEMID
+#define OPC_E_UNKNOWNITEMID ((HRESULT)0xC0040007L)
+#endif
+// The server's own code: vendor codes start at 0x0200 of FACILITY_ITF (OPC Common 1.10, 3.2).
+#define EXAMPLE_E_DEVICEOFFLINE ((HRESULT)0x80040201L)
+
+// The registration of either server, for OpcRegisterServer / OpcUnregisterServer. `module_path`
+// NULL means this EXE; a DLL passes its own path.
+OpcServerRegistration ExampleRegistration(bool inproc, LPCWSTR module_path);
+
+// Creates a server object (one per client connection, as OPC DA servers do) and returns the
+// interface `riid` of it. CLASS_E_NOAGGREGATION when `outer` is not NULL.
+HRESULT ExampleServerCreate(IUnknown *outer, REFIID riid, void **ppv);
+
+// The class factory for ExampleServerCreate (a static object) and the references clients hold on it.
+IClassFactory *ExampleClassFactory();
+LONG ExampleClassFactoryReferences();
+
+// Provided by the EXE and the DLL: the module stays loaded (DLL) or running (EXE) while a server
+// object lives or a client holds a lock on the factory.
+void ExampleModuleLock();
+void ExampleModuleUnlock();
+
+// Asks the clients of every live server object of this module to disconnect (RequestShutdown, and
+// the EXE when its operator stops it). `*servers` (optional) receives the number of server objects.
+// S_OK when every advised client accepted, S_FALSE when one failed. Call it with COM initialised.
+HRESULT ExampleNotifyAllServers(LPCWSTR reason, ULONG *servers);
+
+#endif
