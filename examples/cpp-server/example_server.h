@@ -58,8 +58,9 @@ EXTERN_C const CATID CATID_ExampleServers;
 #ifndef OPC_E_UNKNOWNITEMID
 #define OPC_E_UNKNOWNITEMID ((HRESULT)0xC0040007L)
 #endif
-// The server's own code: vendor codes start at 0x0200 of FACILITY_ITF (OPC Common 1.10, 3.2).
-#define EXAMPLE_E_DEVICEOFFLINE ((HRESULT)0x80040201L)
+// The server's own code: FACILITY_ITF, with a number no OPC specification uses (their codes stay
+// below 0x8000 in the low word).
+#define EXAMPLE_E_DEVICEOFFLINE ((HRESULT)0xC0048001L)
 
 // The registration of either server, for OpcRegisterServer / OpcUnregisterServer. `module_path`
 // NULL means this EXE; a DLL passes its own path.
