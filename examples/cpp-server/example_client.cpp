@@ -14,6 +14,7 @@
 #include "example_server.h"
 
 #include <olectl.h>  // CONNECT_E_NOCONNECTION
+#include <tlhelp32.h>
 
 #include <cstdio>
 #include <cwchar>
@@ -66,6 +67,19 @@ long Run(LPCWSTR command_line) {
     CloseHandle(process.hThread);
     CloseHandle(process.hProcess);
     return static_cast<long>(code);
+}
+
+// Whether a process runs this program (by file name, e.g. the EXE server COM started).
+bool ProcessRunning(LPCWSTR exe_name) {
+    HANDLE snapshot = CreateToolhelp32Snapshot(TH32CS_SNAPPROCESS, 0);
+    if (snapshot == INVALID_HANDLE_VALUE) return false;
+    PROCESSENTRY32W entry = {};
+    entry.dwSize = sizeof entry;
+    bool found = false;
+    for (BOOL more = Process32FirstW(snapshot, &entry); more && !found; more = Process32NextW(snapshot, &entry))
+        found = lstrcmpiW(entry.szExeFile, exe_name) == 0;
+    CloseHandle(snapshot);
+    return found;
 }
 
 // Registry checks, under HKEY_CLASSES_ROOT.
@@ -363,6 +377,7 @@ void TestLocalServer() {
     CheckRegistered(keys, exe, CLSID_ExampleServer);
 
     // COM starts the EXE (-Embedding) and hands out a reference to a server object in it.
+    CHECK(!ProcessRunning(L"opccomn_example_server.exe"));
     IUnknown *server = nullptr;
     CHECK_HR(CoCreateInstance(CLSID_ExampleServer, nullptr, CLSCTX_LOCAL_SERVER, IID_IUnknown, reinterpret_cast<void **>(&server)), S_OK);
     if (server) {
@@ -388,7 +403,14 @@ void TestLocalServer() {
             printf("example_client: no IOPCCommon proxy/stub registered: out-of-process test limited to "
                    "activation and IUnknown (E_NOINTERFACE for IOPCCommon, as COM must answer)\n");
         }
+        CHECK(ProcessRunning(L"opccomn_example_server.exe"));
         server->Release();  // the EXE exits when its last object is gone
+        bool exited = false;
+        for (int i = 0; i < 100 && !exited; i++) {
+            exited = !ProcessRunning(L"opccomn_example_server.exe");
+            if (!exited) Sleep(100);
+        }
+        CHECK(exited);
     }
 
     swprintf(command, 2 * MAX_PATH, L"\"%ls\" /UnregServer", exe);
