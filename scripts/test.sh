@@ -101,7 +101,7 @@ if [ "$wine_stage" = 1 ]; then
     stage "C++ example server and client (x64, under Wine, against the installed package)"
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
 else
-    echo "test.sh: --no-wine: the Windows stages and the header coexistence stage were NOT run" >&2
+    echo "test.sh: --no-wine: the Windows stages, the header coexistence stage and the C++ example were NOT run" >&2
 fi
 
 # Every stage ran to its end (set -e stops at the first failure).
