@@ -4,11 +4,11 @@
 // CoCreateInstance by ProgID, calls IOPCCommon, advises shutdown sinks, browses with filters, reads,
 // has the server shut down, then unregisters it and checks that the registry is clean.
 //
-// Out of process (opccomn_example_server.exe, LocalServer32): registers it with `/RegServer`,
-// activates it with CoCreateInstance(CLSCTX_LOCAL_SERVER), then unregisters it with `/UnregServer`
-// and checks the registry. Calling IOPCCommon across processes needs its proxy/stub: when one is
-// registered the client calls it; otherwise it checks that COM refuses the interface
-// (E_NOINTERFACE) and says so.
+// Out of process (opccomn_example_server.exe, LocalServer32): registers it with `/RegServer` and
+// opccomn.dll's proxy/stub of the OPC Common interfaces, activates the EXE with
+// CoCreateInstance(CLSCTX_LOCAL_SERVER), calls IOPCCommon across processes, advises a shutdown sink
+// that the server calls back when its operator stops it, then unregisters both and checks the
+// registry.
 //
 // Prints "example_client: N passed, M failed"; the exit code is non-zero when a check failed.
 #include "example_server.h"
@@ -376,35 +376,80 @@ void TestLocalServer() {
     CHECK(Run(command) == 0);
     CheckRegistered(keys, exe, CLSID_ExampleServer);
 
+    // IOPCCommon and IOPCShutdown cross processes through opccomn.dll's proxy/stub (registered here
+    // for the test, removed again below); the connection point interfaces through the system's.
+    WCHAR iid[40], proxy_key[96];
+    GuidString(IID_IOPCCommon, iid);
+    swprintf(proxy_key, 96, L"Interface\\%ls\\ProxyStubClsid32", iid);
+    bool had_proxy_stub = KeyExists(proxy_key);  // another product's (or another test's) registration
+    HRESULT proxy_stub = OpcRegisterProxyStub(nullptr, 0);
+    CHECK(KeyExists(proxy_key));
+    CHECK(proxy_stub == S_OK || proxy_stub == S_FALSE);  // S_FALSE: another proxy/stub was kept
+
     // COM starts the EXE (-Embedding) and hands out a reference to a server object in it.
     CHECK(!ProcessRunning(L"opccomn_example_server.exe"));
-    IUnknown *server = nullptr;
-    CHECK_HR(CoCreateInstance(CLSID_ExampleServer, nullptr, CLSCTX_LOCAL_SERVER, IID_IUnknown, reinterpret_cast<void **>(&server)), S_OK);
-    if (server) {
-        WCHAR iid[40], proxy_key[96];
-        GuidString(IID_IOPCCommon, iid);
-        swprintf(proxy_key, 96, L"Interface\\%ls\\ProxyStubClsid32", iid);
-        IOPCCommon *common = nullptr;
-        HRESULT hr = server->QueryInterface(IID_IOPCCommon, reinterpret_cast<void **>(&common));
-        if (KeyExists(proxy_key)) {
-            CHECK_HR(hr, S_OK);
-            if (common) {
-                LCID lcid = 0;
-                CHECK_HR(common->SetLocaleID(MAKELCID(MAKELANGID(LANG_GERMAN, SUBLANG_GERMAN), SORT_DEFAULT)), S_OK);
-                CHECK_HR(common->GetLocaleID(&lcid), S_OK);
-                CHECK(lcid == MAKELCID(MAKELANGID(LANG_GERMAN, SUBLANG_GERMAN), SORT_DEFAULT));
-                common->Release();
-            }
-            printf("example_client: IOPCCommon called across processes through its registered proxy/stub\n");
-        } else {
-            // Without a proxy/stub COM cannot marshal IOPCCommon; the object really is in the EXE.
-            CHECK_HR(hr, E_NOINTERFACE);
-            CHECK(common == nullptr);
-            printf("example_client: no IOPCCommon proxy/stub registered: out-of-process test limited to "
-                   "activation and IUnknown (E_NOINTERFACE for IOPCCommon, as COM must answer)\n");
-        }
+    IOPCCommon *common = nullptr;
+    CHECK_HR(CoCreateInstance(CLSID_ExampleServer, nullptr, CLSCTX_LOCAL_SERVER, IID_IOPCCommon, reinterpret_cast<void **>(&common)), S_OK);
+    if (common) {
         CHECK(ProcessRunning(L"opccomn_example_server.exe"));
-        server->Release();  // the EXE exits when its last object is gone
+        const LCID german = MAKELCID(MAKELANGID(LANG_GERMAN, SUBLANG_GERMAN), SORT_DEFAULT);
+        LCID lcid = 0;
+        CHECK_HR(common->SetLocaleID(german), S_OK);
+        CHECK_HR(common->SetLocaleID(MAKELCID(MAKELANGID(LANG_JAPANESE, SUBLANG_DEFAULT), SORT_DEFAULT)), E_INVALIDARG);
+        CHECK_HR(common->GetLocaleID(&lcid), S_OK);
+        CHECK(lcid == german);
+        DWORD locale_count = 0;
+        LCID *locales = nullptr;
+        CHECK_HR(common->QueryAvailableLocaleIDs(&locale_count, &locales), S_OK);
+        bool has_german = false;
+        for (DWORD i = 0; locales && i < locale_count; i++) has_german |= locales[i] == german;
+        CHECK(has_german);
+        CoTaskMemFree(locales);
+        LPWSTR text = nullptr;
+        CHECK_HR(common->GetErrorString(OPC_E_UNKNOWNITEMID, &text), S_OK);
+        CHECK(Same(text, L"Die Element-ID ist im Adressraum des Servers nicht definiert oder existiert dort nicht mehr."));
+        CoTaskMemFree(text);
+        text = nullptr;
+        CHECK_HR(common->GetErrorString(EXAMPLE_E_DEVICEOFFLINE, &text), S_OK);  // asked in the server process
+        CHECK(Same(text, L"Das Ger\u00e4t antwortet nicht."));
+        CoTaskMemFree(text);
+        CHECK_HR(common->SetClientName(L"opccomn example client"), S_OK);
+
+        // The example's own interface has no proxy/stub (a vendor builds one from its IDL), so COM
+        // cannot hand it out across processes.
+        IExampleAddressSpace *space = nullptr;
+        CHECK_HR(common->QueryInterface(IID_IExampleAddressSpace, reinterpret_cast<void **>(&space)), E_NOINTERFACE);
+
+        // A shutdown sink in this process, called from the server's process when its operator
+        // stops it (the named event stands for the operator's command).
+        ShutdownSink sink;
+        IConnectionPointContainer *container = nullptr;
+        IConnectionPoint *point = nullptr;
+        DWORD cookie = 0;
+        CHECK_HR(common->QueryInterface(IID_IConnectionPointContainer, reinterpret_cast<void **>(&container)), S_OK);
+        if (container) CHECK_HR(container->FindConnectionPoint(IID_IOPCShutdown, &point), S_OK);
+        if (point) CHECK_HR(point->Advise(static_cast<IOPCShutdown *>(&sink), &cookie), S_OK);
+        CHECK(cookie != 0);
+        HANDLE stop = OpenEventW(EVENT_MODIFY_STATE, FALSE, EXAMPLE_STOP_EVENT);
+        CHECK(stop != nullptr);
+        if (stop && cookie) {
+            SetEvent(stop);
+            // An apartment-threaded client receives calls through its message queue.
+            for (DWORD start = GetTickCount(); sink.calls == 0 && GetTickCount() - start < 10000;) {
+                MsgWaitForMultipleObjects(0, nullptr, FALSE, 100, QS_ALLINPUT);
+                MSG msg;
+                while (PeekMessageW(&msg, nullptr, 0, 0, PM_REMOVE)) DispatchMessageW(&msg);
+            }
+            CHECK(sink.calls == 1 && Same(sink.reason, L"The operator stopped the server."));
+        }
+        if (stop) CloseHandle(stop);
+        if (point) {
+            CHECK_HR(point->Unadvise(cookie), S_OK);
+            point->Release();
+        }
+        if (container) container->Release();
+        common->Release();  // the EXE exits when its last object is gone
+        CoDisconnectObject(static_cast<IOPCShutdown *>(&sink), 0);  // no stub may outlive the sink
         bool exited = false;
         for (int i = 0; i < 100 && !exited; i++) {
             exited = !ProcessRunning(L"opccomn_example_server.exe");
@@ -412,6 +457,8 @@ void TestLocalServer() {
         }
         CHECK(exited);
     }
+    CHECK_HR(OpcUnregisterProxyStub(nullptr), S_OK);
+    CHECK(KeyExists(proxy_key) == had_proxy_stub);  // what was there before, nothing more
 
     swprintf(command, 2 * MAX_PATH, L"\"%ls\" /UnregServer", exe);
     CHECK(Run(command) == 0);

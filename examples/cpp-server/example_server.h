@@ -54,6 +54,10 @@ EXTERN_C const CATID CATID_ExampleServers;
 #define EXAMPLE_INPROC_PROGID L"OpcComn.ExampleServerInProc.1"
 #define EXAMPLE_INPROC_VERSION_INDEPENDENT_PROGID L"OpcComn.ExampleServerInProc"
 
+// The EXE server's stop command: a named event its operator's tools (a service manager, an installer)
+// set to take the server down; the server then asks its clients to disconnect. Ctrl+C does the same.
+#define EXAMPLE_STOP_EVENT L"Local\\OpcComnExampleServerStop"
+
 // OPC Data Access codes the example returns (as opcerror.h defines them).
 #ifndef OPC_E_UNKNOWNITEMID
 #define OPC_E_UNKNOWNITEMID ((HRESULT)0xC0040007L)

@@ -1,13 +1,14 @@
 // The example as an EXE server (LocalServer32): `/RegServer` and `/UnregServer` register and
 // unregister it; started by COM (`-Embedding`) it serves until its last client is gone; started by
-// hand it serves until Ctrl+C, and then asks its clients to disconnect.
+// hand it serves until Ctrl+C. Stopped by its operator (EXAMPLE_STOP_EVENT, Ctrl+C) while clients are
+// connected, it asks them to disconnect (IOPCShutdown).
 #include "example_server.h"
 
 #include <cstdio>
 
 namespace {
 HANDLE g_idle;           // set when no server object and no LockServer remain
-HANDLE g_operator_stop;  // set by Ctrl+C or the console closing
+HANDLE g_operator_stop;  // EXAMPLE_STOP_EVENT: set by the operator's tools, Ctrl+C or the console closing
 
 BOOL WINAPI OnConsoleControl(DWORD) {
     SetEvent(g_operator_stop);  // the main thread notifies the clients (it has COM initialised)
@@ -42,7 +43,7 @@ int main() {
     }
 
     g_idle = CreateEventW(nullptr, TRUE, FALSE, nullptr);
-    g_operator_stop = CreateEventW(nullptr, TRUE, FALSE, nullptr);
+    g_operator_stop = CreateEventW(nullptr, TRUE, FALSE, EXAMPLE_STOP_EVENT);
     bool by_hand = command != OPC_SERVER_COMMAND_EMBEDDING;
     if (by_hand) ExampleModuleLock();  // keep serving until the operator stops the server
     SetConsoleCtrlHandler(OnConsoleControl, TRUE);
