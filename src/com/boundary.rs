@@ -8,6 +8,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 ///
 /// Out-parameters must already hold their failure values before `f` runs, so a panic leaves them
 /// well defined (specification section 3.1.3).
+#[inline(always)]
 pub fn catch<R>(fallback: R, f: impl FnOnce() -> R) -> R {
     catch_unwind(AssertUnwindSafe(f)).unwrap_or(fallback)
 }

@@ -64,26 +64,36 @@ fn to_bool(b: bool) -> BOOL {
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
 pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> BOOL {
-    catch(FALSE, || {
+    catch(FALSE, move || {
         if string.is_null() || pattern.is_null() {
             return FALSE;
         }
-        // SAFETY: both are NUL-terminated (the caller's contract).
         let case_sensitive = bCaseSensitive != 0;
         // SAFETY: both are NUL-terminated (the caller's contract).
-        let matched = unsafe { stream::matches(WideCursor(string), WideCursor(pattern), case_sensitive) }
-            .unwrap_or_else(|| {
-                // A long pattern: compile it (on the heap; ordinary patterns never get here).
-                // SAFETY: both are NUL-terminated (the caller's contract).
-                let units = unsafe { wstr_units(pattern, usize::MAX) }.unwrap_or_default();
-                match Program::compile(&Utf16(units), case_sensitive) {
-                    // SAFETY: as above.
-                    Ok(program) => unsafe { program.matches_cursor(WideCursor(string)) },
-                    Err(_) => false,
-                }
-            });
+        let matched = match unsafe { stream::matches(WideCursor(string), WideCursor(pattern), case_sensitive) } {
+            Some(matched) => matched,
+            // SAFETY: as above.
+            None => unsafe { match_long_pattern(string, pattern, case_sensitive) },
+        };
         to_bool(matched)
     })
+}
+
+/// `MatchPatternW` for a pattern longer than `stream::LONG_PATTERN` with a `*`: compiled first (on the
+/// heap; ordinary patterns never get here, and keeping this out of line keeps the common path lean).
+///
+/// # Safety
+/// Both must point at NUL-terminated strings.
+#[cold]
+#[inline(never)]
+unsafe fn match_long_pattern(string: LPCWSTR, pattern: LPCWSTR, case_sensitive: bool) -> bool {
+    // SAFETY: NUL-terminated (the caller's contract).
+    let units = unsafe { wstr_units(pattern, usize::MAX) }.unwrap_or_default();
+    match Program::compile(&Utf16(units), case_sensitive) {
+        // SAFETY: as above.
+        Ok(program) => unsafe { program.matches_cursor(WideCursor(string)) },
+        Err(_) => false,
+    }
 }
 
 /// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
@@ -98,7 +108,7 @@ pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseS
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
 #[no_mangle]
 pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, bCaseSensitive: BOOL) -> BOOL {
-    catch(FALSE, || {
+    catch(FALSE, move || {
         if string.is_null() || pattern.is_null() {
             return FALSE;
         }
@@ -201,7 +211,7 @@ pub unsafe extern "C" fn OpcPatternCompileA(
 /// or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
 pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LPCWSTR) -> BOOL {
-    catch(FALSE, || {
+    catch(FALSE, move || {
         // SAFETY: the caller vouches `pattern` is NULL or a live filter.
         let Some(pattern) = (unsafe { pattern.as_ref() }) else {
             return FALSE;

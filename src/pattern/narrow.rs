@@ -41,16 +41,28 @@ mod imp {
     /// Both must point at NUL-terminated strings.
     pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
         // SAFETY: both are NUL-terminated (the caller's contract).
-        unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) }.unwrap_or_else(|| {
-            // A long pattern: compile it (see `stream::matches`).
+        match unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) } {
+            Some(matched) => matched,
             // SAFETY: as above.
-            let bytes = unsafe { cstr_bytes(pattern.cast()) }.unwrap_or_default();
-            match compile(bytes, case_sensitive) {
-                // SAFETY: as above.
-                Ok(program) => unsafe { matches(&program, string) },
-                Err(_) => false,
-            }
-        })
+            None => unsafe { match_long_pattern(string, pattern, case_sensitive) },
+        }
+    }
+
+    /// A pattern longer than `stream::LONG_PATTERN` with a `*`: compiled first (out of line, so the
+    /// common path stays lean).
+    ///
+    /// # Safety
+    /// Both must point at NUL-terminated strings.
+    #[cold]
+    #[inline(never)]
+    unsafe fn match_long_pattern(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
+        // SAFETY: NUL-terminated (the caller's contract).
+        let bytes = unsafe { cstr_bytes(pattern.cast()) }.unwrap_or_default();
+        match compile(bytes, case_sensitive) {
+            // SAFETY: as above.
+            Ok(program) => unsafe { matches(&program, string) },
+            Err(_) => false,
+        }
     }
 }
 

@@ -51,10 +51,11 @@ pub(crate) enum Malformed {
 /// patterns spill over transparently.
 pub(crate) struct Program {
     case_sensitive: bool,
-    /// The pattern's leading ASCII literals as (unit, mask): a string unit `u` matches when
-    /// `u | mask == unit` (mask 0x20 for letters when case-insensitive), so the common literal prefix
-    /// of a filter is compared a code unit at a time, without decoding.
-    lead: SmallVec<(u16, u16), 16>,
+    /// The pattern's leading ASCII literals, `?` and `#` as (unit, mask): a string unit `u` matches a
+    /// literal when `u | mask == unit` (mask 0x20 for letters when case-insensitive); `LEAD_ANY` and
+    /// `LEAD_DIGIT` stand for `?` and `#`. The common prefix of a filter is compared a code unit at a
+    /// time, without decoding.
+    lead: SmallVec<(u32, u32), 32>,
     /// No segment starts with a literal run long enough for the Knuth-Morris-Pratt search.
     kmp_free: bool,
     tokens: SmallVec<Token, 40>,
@@ -63,6 +64,11 @@ pub(crate) struct Program {
     sets: SmallVec<CharSet, 4>,
     ranges: SmallVec<(u32, u32), 12>,
 }
+
+/// `lead` entries for `?` and `#` (no ASCII literal has these values).
+/// No code unit or character reaches these values, so `u | mask` never equals them.
+const LEAD_ANY: u32 = u32::MAX;
+const LEAD_DIGIT: u32 = u32::MAX - 1;
 
 /// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt (shorter
 /// runs cost at most this many steps per place tried, and skip to their first character quickly).
@@ -122,13 +128,15 @@ impl Program {
         }
         for &t in &p.tokens.as_slice()[..p.segments.as_slice()[0] as usize] {
             match t {
+                Token::Any => p.lead.push((LEAD_ANY, 0)),
+                Token::Digit => p.lead.push((LEAD_DIGIT, 0)),
                 Token::Literal(c) if c < 0x80 => {
                     let mask = if !case_sensitive && c.wrapping_sub('a' as u32) < 26 {
                         0x20
                     } else {
                         0
                     };
-                    p.lead.push((c as u16, mask));
+                    p.lead.push((c, mask));
                 }
                 _ => break,
             }
@@ -322,11 +330,25 @@ impl Program {
         let segments = self.segments.as_slice();
         let mut i = 0;
         for &(unit, mask) in self.lead.as_slice() {
-            // SAFETY: units before `i` were not NUL (they matched ASCII literals), so unit `i` is at or
-            // before the terminator.
+            // SAFETY: units before `i` were not NUL (they matched ASCII literals, `?` or `#`), so unit
+            // `i` is at or before the terminator.
             let u = unsafe { cursor.unit(i) };
-            if u | mask as u32 != unit as u32 {
-                if !self.case_sensitive && u >= 0x80 {
+            if u | mask != unit {
+                let ascii = u != 0 && u < 0x80;
+                match unit {
+                    LEAD_ANY if ascii => {
+                        i += 1;
+                        continue;
+                    }
+                    LEAD_DIGIT if u.wrapping_sub('0' as u32) < 10 => {
+                        i += 1;
+                        continue;
+                    }
+                    _ => {}
+                }
+                // A non-ASCII character for `?`, or one that may fold to an ASCII letter (KELVIN SIGN
+                // is a `k`): the general path decides.
+                if u >= 0x80 && (unit == LEAD_ANY || !self.case_sensitive) {
                     // A non-ASCII character may still fold to an ASCII letter (KELVIN SIGN is a `k`).
                     // SAFETY: NUL-terminated.
                     let end = unsafe { cursor.end_from(0) };

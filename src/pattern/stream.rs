@@ -47,6 +47,31 @@ pub(crate) trait Cursor: Copy {
     /// # Safety
     /// `i` must be at or before the terminator.
     unsafe fn end_from(self, i: usize) -> usize;
+
+    /// The first index in `from..end` whose code unit is `a` or `b` (ASCII; equal when only one is
+    /// wanted), where `end` is the index of the terminator.
+    ///
+    /// # Safety
+    /// `from <= end`, and `end` must be the index of the terminating NUL.
+    unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize>;
+}
+
+/// Word-at-a-time search: the index of the first lane of `words` equal to `a` or `b`, where a lane is
+/// `LANE` bits of a little-endian u64 (8 for bytes, 16 for UTF-16 units). Exact: the lowest lane the
+/// zero test flags is always a real zero (borrows only run towards higher lanes).
+#[inline(always)]
+fn find_in_words<const LANE: u32>(words: impl Iterator<Item = u64>, a: u32, b: u32) -> Option<usize> {
+    let lo = u64::MAX / ((1u64 << LANE) - 1); // 0x0101.. or 0x0001_0001..
+    let hi = lo << (LANE - 1);
+    let (ra, rb) = (lo * a as u64, lo * b as u64);
+    for (k, w) in words.enumerate() {
+        let (x, y) = (w ^ ra, w ^ rb);
+        let zero = (x.wrapping_sub(lo) & !x | y.wrapping_sub(lo) & !y) & hi;
+        if zero != 0 {
+            return Some(k * (64 / LANE as usize) + (zero.trailing_zeros() / LANE) as usize);
+        }
+    }
+    None
 }
 
 /// A NUL-terminated UTF-16 string; unpaired surrogates are characters of their own.
@@ -89,6 +114,22 @@ impl Cursor for WideCursor {
             i += 1;
         }
         i
+    }
+
+    #[inline(always)]
+    unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
+        // SAFETY: units `from..end` lie before the terminator (the caller's contract).
+        let units = unsafe { core::slice::from_raw_parts(self.0.add(from), end - from) };
+        let chunks = units.chunks_exact(4);
+        let tail = chunks.remainder();
+        let words = chunks.map(|c| c[0] as u64 | (c[1] as u64) << 16 | (c[2] as u64) << 32 | (c[3] as u64) << 48);
+        if let Some(k) = find_in_words::<16>(words, a, b) {
+            return Some(from + k);
+        }
+        let done = units.len() - tail.len();
+        tail.iter()
+            .position(|&u| u as u32 == a || u as u32 == b)
+            .map(|k| from + done + k)
     }
 }
 
@@ -145,6 +186,22 @@ impl Cursor for Utf8Cursor {
         // SAFETY: NUL-terminated from `i` on (the caller's contract).
         i + unsafe { core::ffi::CStr::from_ptr(self.0.add(i).cast()) }.count_bytes()
     }
+
+    #[inline(always)]
+    unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
+        // SAFETY: bytes `from..end` lie before the terminator (the caller's contract).
+        let bytes = unsafe { core::slice::from_raw_parts(self.0.add(from), end - from) };
+        let chunks = bytes.chunks_exact(8);
+        let tail = chunks.remainder();
+        let words = chunks.map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
+        if let Some(k) = find_in_words::<8>(words, a, b) {
+            return Some(from + k);
+        }
+        let done = bytes.len() - tail.len();
+        tail.iter()
+            .position(|&u| u as u32 == a || u as u32 == b)
+            .map(|k| from + done + k)
+    }
 }
 
 /// Code points already decoded, ending with a 0.
@@ -180,6 +237,13 @@ impl Cursor for DecodedCursor {
             i += 1;
         }
         i
+    }
+
+    #[inline(always)]
+    unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
+        // SAFETY: values `from..end` lie before the terminator (the caller's contract).
+        let chars = unsafe { core::slice::from_raw_parts(self.0.add(from), end - from) };
+        chars.iter().position(|&c| c == a || c == b).map(|k| from + k)
     }
 }
 
@@ -433,6 +497,9 @@ unsafe fn match_segments(
     mut si: usize,
     case_sensitive: bool,
 ) -> Option<bool> {
+    // The string's end, found once: the searches below go a word at a time up to it.
+    // SAFETY: `si` is a character boundary at or before the terminator.
+    let end = unsafe { string.end_from(si) };
     loop {
         // Skip the `*` and any `*` or `[]` right after it.
         loop {
@@ -465,19 +532,17 @@ unsafe fn match_segments(
                     l
                 };
                 loop {
-                    // SAFETY: units before `from` were not NUL.
-                    let u = unsafe { string.unit(from) };
-                    if u == l || u == upper {
-                        // SAFETY: unit `from` is not the NUL.
-                        let v = unsafe { string.unit(from + 1) };
-                        match second {
-                            Some(m) if !(v == m || (!case_sensitive && ascii_fold(v) == m)) => {}
-                            _ => break,
-                        }
-                    } else if u == 0 {
-                        return Some(false);
+                    // SAFETY: `from` is at or before `end`, the terminator's index.
+                    match unsafe { string.find_ascii(from, end, l, upper) } {
+                        Some(at) => from = at,
+                        None => return Some(false),
                     }
-                    from += 1;
+                    // SAFETY: unit `from` is not the NUL, so `from + 1` is at or before the terminator.
+                    let v = unsafe { string.unit(from + 1) };
+                    match second {
+                        Some(m) if !(v == m || (!case_sensitive && ascii_fold(v) == m)) => from += 1,
+                        _ => break,
+                    }
                 }
             }
             // SAFETY: `pi` and `from` are character boundaries.
@@ -492,8 +557,6 @@ unsafe fn match_segments(
                         return Some(true);
                     }
                     // The last segment: only its place at the end of the string can match.
-                    // SAFETY: `after` is a character boundary at or before the terminator.
-                    let end = unsafe { string.end_from(after) };
                     // SAFETY: `end` is the index of the terminator.
                     let text = unsafe { string.slice(end) };
                     let mut q = end;
