@@ -226,10 +226,15 @@ pub(crate) fn classes_of_categories(
                 let class = class_key(&clsid);
                 let registered = regs.views.iter().find(|v| v.key_exists(&class));
                 if let Some(v) = registered {
-                    let req = v
-                        .key_exists(&format!("{class}\\Required Categories"))
-                        .then(|| v.subkeys(&format!("{class}\\Required Categories")));
-                    if requires_all(req.as_ref()) {
+                    // Without required categories there is nothing to read (one registry call per
+                    // server less on the scan of every ProgID).
+                    let satisfied = required.is_none() || {
+                        let req = v
+                            .key_exists(&format!("{class}\\Required Categories"))
+                            .then(|| v.subkeys(&format!("{class}\\Required Categories")));
+                        requires_all(req.as_ref())
+                    };
+                    if satisfied {
                         found.insert(guid_key(&clsid), clsid);
                     }
                 }
