@@ -71,6 +71,7 @@ static double bench_round_ms = 2.0;  /* one contender's round; BENCH_ROUND_MS ov
 static int bench_failures;            /* goals not met */
 static int bench_goals;
 
+/* Reads BENCH_ROUNDS and BENCH_ROUND_MS; a benchmark may set other defaults before. */
 static void bench_init(void)
 {
     const char *r = getenv("BENCH_ROUNDS"), *ms = getenv("BENCH_ROUND_MS");
@@ -108,6 +109,8 @@ static long bench_calibrate(const BenchContender *c)
         double start = bench_now_ns();
         c->run(c->context, reps);
         ms = (bench_now_ns() - start) / 1e6;
+        if (reps == 1 && ms >= bench_round_ms)
+            return 1; /* one repetition fills a round already */
         if (ms >= bench_round_ms / 10 || reps >= (1L << 28))
             break;
         reps *= ms < bench_round_ms / 1000 ? 16 : 2;
@@ -157,7 +160,7 @@ static void bench_format_ns(char *out, size_t size, double ns)
 static void bench_format_time(char *out, size_t size, const BenchResult *r, int i)
 {
     double m, lo, hi;
-    char a[32], b[32], c[32];
+    char a[24], b[24], c[24];
     bench_stats(r->ns[i], r->rounds, &m, &lo, &hi);
     bench_format_ns(a, sizeof a, m);
     bench_format_ns(b, sizeof b, lo);
