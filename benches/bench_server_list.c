@@ -7,8 +7,14 @@
      whose `Implemented Categories` has the DA 1.0 category, then every key of HKCR (except file
      extensions and CLSID) with an `OPC` subkey whose `CLSID` names a registered class, sorted and
      without duplicates.
-   Goal: the server list at most 1.2x the plain walk. Everything registered is removed at the end.
-   Windows only (run: scripts/bench.sh --wine server-list). */
+   Goal: the server list at most 1.2x the plain walk.
+
+   Second case, the ordinary browse: 2,000 classes implementing a category, found with
+   IOPCServerList2::EnumClassesOfCategories and described with GetClassDetails (ProgID, user type,
+   version-independent ProgID), against the Component Categories Manager (ICatInformation) with
+   ProgIDFromCLSID for each class (less work: one string per class). Goal: at most 1.2x.
+
+   Everything registered is removed at the end. Windows only (run: scripts/bench.sh --wine server-list). */
 #include "bench.h"
 
 #include <opccomn/opccomn.h>
@@ -88,6 +94,131 @@ static void registration(int add)
             RegDeleteTreeW(HKEY_CLASSES_ROOT, path);
         }
     }
+}
+
+/* ---- The ordinary browse: classes of a category ---- */
+
+#define CLASSES 2000
+static const GUID CATID_BENCH = {0xBE0C0000u, 0x0000, 0x4000, {0x80, 0x00, 0x00, 0x00, 0x00, 0x00, 0xCA, 0x70}};
+
+static void class_registration(int add)
+{
+    WCHAR key[128], sub[200], clsid[40], catid[40], text[64];
+    guid_text(&CATID_BENCH, catid);
+    for (unsigned i = 0; i < CLASSES; i++) {
+        GUID g = bench_clsid(0x200000u + i);
+        guid_text(&g, clsid);
+        swprintf(key, 128, L"CLSID\\%ls", clsid);
+        if (!add) {
+            RegDeleteTreeW(HKEY_CLASSES_ROOT, key);
+            continue;
+        }
+        swprintf(text, 64, L"Bench Server %u", i);
+        set_default(key, text);
+        swprintf(sub, 200, L"%ls\\ProgID", key);
+        swprintf(text, 64, L"Bench.Server%u.1", i);
+        set_default(sub, text);
+        swprintf(sub, 200, L"%ls\\VersionIndependentProgID", key);
+        swprintf(text, 64, L"Bench.Server%u", i);
+        set_default(sub, text);
+        swprintf(sub, 200, L"%ls\\Implemented Categories\\%ls", key, catid);
+        set_default(sub, L"");
+    }
+}
+
+static IOPCServerList2 *list2;
+static ICatInformation *cats;
+static int browsed;
+
+static void run_server_list_browse(void *context, long reps)
+{
+    (void)context;
+    for (long r = 0; r < reps; r++) {
+        CATID cat = CATID_BENCH;
+        IOPCEnumGUID *e = NULL;
+        browsed = 0;
+        if (list2->lpVtbl->EnumClassesOfCategories(list2, 1, &cat, 0, NULL, &e) != S_OK)
+            exit(2);
+        for (;;) {
+            ULONG n = 0;
+            GUID buf[256];
+            HRESULT hr = e->lpVtbl->Next(e, 256, buf, &n);
+            for (ULONG i = 0; i < n; i++) {
+                LPOLESTR prog = NULL, user = NULL, vi = NULL;
+                if (list2->lpVtbl->GetClassDetails(list2, &buf[i], &prog, &user, &vi) == S_OK)
+                    browsed++;
+                CoTaskMemFree(prog);
+                CoTaskMemFree(user);
+                CoTaskMemFree(vi);
+            }
+            if (hr != S_OK)
+                break;
+        }
+        e->lpVtbl->Release(e);
+    }
+}
+
+static void run_categories_manager(void *context, long reps)
+{
+    (void)context;
+    for (long r = 0; r < reps; r++) {
+        IEnumGUID *e = NULL;
+        browsed = 0;
+        if (cats->lpVtbl->EnumClassesOfCategories(cats, 1, &CATID_BENCH, (ULONG)-1, NULL, &e) != S_OK)
+            exit(2);
+        for (;;) {
+            ULONG n = 0;
+            GUID buf[256];
+            HRESULT hr = e->lpVtbl->Next(e, 256, buf, &n);
+            for (ULONG i = 0; i < n; i++) {
+                LPOLESTR prog = NULL;
+                if (ProgIDFromCLSID(&buf[i], &prog) == S_OK)
+                    browsed++;
+                CoTaskMemFree(prog);
+            }
+            if (hr != S_OK)
+                break;
+        }
+        e->lpVtbl->Release(e);
+    }
+}
+
+static void browse_case(void)
+{
+    class_registration(0);
+    class_registration(1);
+    void *p = NULL;
+    if (OpcServerListCreate(NULL, &IID_IOPCServerList2, &p) != S_OK ||
+        CoCreateInstance(&CLSID_StdComponentCategoriesMgr, NULL, CLSCTX_INPROC_SERVER, &IID_ICatInformation,
+                         (void **)&cats) != S_OK) {
+        fprintf(stderr, "cannot create the server list or the Component Categories Manager\n");
+        exit(2);
+    }
+    list2 = p;
+    run_server_list_browse(NULL, 1);
+    int ours = browsed;
+    run_categories_manager(NULL, 1);
+    if (ours != CLASSES || browsed != CLASSES) {
+        fprintf(stderr, "browse: server list found %d classes, the Component Categories Manager %d\n", ours,
+                browsed);
+        exit(2);
+    }
+    printf("\nBrowse: %d classes of one category, with their details\n", CLASSES);
+    BenchContender c[2] = {
+        {"ICatInformation + ProgIDFromCLSID", run_categories_manager, NULL, 1},
+        {"EnumClassesOfCategories + GetClassDetails", run_server_list_browse, NULL, 1},
+    };
+    BenchResult r = bench_case(c, 2);
+    char a[96], b[96];
+    bench_format_time(a, sizeof a, &r, 0);
+    bench_format_time(b, sizeof b, &r, 1);
+    printf("time per browse, median (lowest-highest round): Component Categories Manager %s, server list %s\n", a,
+           b);
+    double lo, hi, ratio = bench_ratio(&r, 1, 0, &lo, &hi);
+    bench_goal("server list browse / ICatInformation + ProgIDFromCLSID", ratio, lo, hi, 0, 1.2, "x");
+    list2->lpVtbl->Release(list2);
+    cats->lpVtbl->Release(cats);
+    class_registration(0);
 }
 
 /* ---- The plain C walk ---- */
@@ -224,17 +355,15 @@ static void run_library(void *context, long reps)
         library_walk(list, &library_found);
 }
 
-int main(void)
+/* The DA 1.0 scan case. */
+static void da10_case(void)
 {
-    bench_rounds = 7; /* a round is one whole scan (a large part of a second under Wine) */
-    bench_init();
-    CoInitializeEx(NULL, COINIT_APARTMENTTHREADED);
     registration(0);
     registration(1);
     void *p = NULL;
     if (OpcServerListCreate(NULL, &IID_IOPCServerList, &p) != S_OK) {
         fprintf(stderr, "OpcServerListCreate failed\n");
-        return 2;
+        exit(2);
     }
     list = p;
     plain_walk(&plain_found);
@@ -245,7 +374,7 @@ int main(void)
     if (!same || plain_found.count < SERVERS) {
         fprintf(stderr, "the walks disagree: plain %d classes, server list %d\n", plain_found.count,
                 library_found.count);
-        return 2;
+        exit(2);
     }
     printf("Data Access 1.0 scan: %d servers registered the old way among %d unrelated ProgIDs (%d classes found)\n",
            SERVERS, UNRELATED, plain_found.count);
@@ -262,6 +391,19 @@ int main(void)
     bench_goal("server list DA 1.0 scan / plain C registry walk", ratio, lo, hi, 0, 1.2, "x");
     list->lpVtbl->Release(list);
     registration(0);
+}
+
+/* `bench_server_list da10` or `bench_server_list browse` runs one case. */
+int main(int argc, char **argv)
+{
+    bench_rounds = 7; /* a round is one whole scan (a large part of a second under Wine) */
+    bench_init();
+    CoInitializeEx(NULL, COINIT_APARTMENTTHREADED);
+    const char *only = argc > 1 ? argv[1] : NULL;
+    if (!only || !strcmp(only, "da10"))
+        da10_case();
+    if (!only || !strcmp(only, "browse"))
+        browse_case();
     CoUninitialize();
     return bench_finish("bench_server_list");
 }
