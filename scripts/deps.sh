@@ -7,6 +7,9 @@ need_linux_tools() {
     command -v c++ >/dev/null || missing+=(g++)
     command -v pkg-config >/dev/null || missing+=(pkg-config)
     command -v llvm-ar >/dev/null || missing+=(llvm)   # rewrites libopccomn.a (CMakeLists.txt)
+    command -v python3 >/dev/null || missing+=(python3)
+    # CaseFolding.txt, for the drift check of the case-folding table (scripts/check-generated.sh).
+    [ -f /usr/share/unicode/CaseFolding.txt ] || missing+=(unicode-data)
     install_packages "${missing[@]}"
 }
 
@@ -36,4 +39,11 @@ install_packages() {
     echo "== installing: $*"
     $sudo apt-get -o DPkg::Lock::Timeout=900 update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=900 install -y -qq --no-install-recommends "$@" >/dev/null
+}
+
+# Nightly Rust for the fuzz targets (libFuzzer instrumentation with AddressSanitizer).
+need_fuzz_tools() {
+    if ! rustup toolchain list | grep -q '^nightly'; then
+        rustup toolchain install nightly --profile minimal
+    fi
 }

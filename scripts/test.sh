@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Runs every test of the project: lint and header drift, Rust tests, C tests on Linux under
-# AddressSanitizer and UBSan, the installed package (CMake config and pkg-config), and the Windows DLL
-# with the same C tests under Wine, and the header's coexistence with the OPC Foundation's MIDL headers
-# (scripts/test-coexistence.sh). Installs what is missing on a fresh Debian 12 machine.
+# Runs every test of the project: lint and drift of generated files, Rust tests, C tests on Linux under
+# AddressSanitizer and UBSan, the installed package (CMake config and pkg-config), the fuzz targets for a
+# bounded time, the Windows DLL with the same C tests under Wine, and the header's coexistence with the
+# OPC Foundation's MIDL headers (scripts/test-coexistence.sh). Installs what is missing on a fresh
+# Debian 12 machine.
 #
-# Usage: scripts/test.sh [--no-wine] [--no-lint]     (CI runs it with no options)
+# Usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz]     (CI runs it with no options)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -12,11 +13,13 @@ cd "$root"
 
 wine_stage=1
 lint_stage=1
+fuzz_stage=1
 for arg in "$@"; do
     case "$arg" in
         --no-wine) wine_stage=0 ;;
         --no-lint) lint_stage=0 ;;
-        *) echo "usage: scripts/test.sh [--no-wine] [--no-lint]" >&2; exit 2 ;;
+        --no-fuzz) fuzz_stage=0 ;;
+        *) echo "usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz]" >&2; exit 2 ;;
     esac
 done
 
@@ -31,11 +34,12 @@ need_linux_tools
 [ "$wine_stage" = 1 ] && need_windows_tools
 
 if [ "$lint_stage" = 1 ]; then
-    stage "format, clippy, header drift"
+    stage "format, clippy, drift of generated files (header, C test vectors, case folding)"
     cargo fmt --all -- --check
     cargo clippy --all-targets -- -D warnings
     [ "$wine_stage" = 1 ] && cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
     cargo run -q -p gen-header -- --check
+    scripts/check-generated.sh
 fi
 
 stage "Rust tests (Linux)"
@@ -68,6 +72,13 @@ if grep -qx DllGetClassObject <<<"$no_exports" || ! grep -qx OpcDllGetClassObjec
     exit 1
 fi
 echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
+
+if [ "$fuzz_stage" = 1 ]; then
+    stage "fuzz targets (libFuzzer + AddressSanitizer, ${OPCCOMN_FUZZ_SECONDS:-30} s per target)"
+    scripts/fuzz.sh "${OPCCOMN_FUZZ_SECONDS:-30}"
+else
+    printf '\n==== SKIPPED: fuzz targets (--no-fuzz); not counted as passed\n'
+fi
 
 # The C++ example (examples/cpp-server) built as a user builds it: against a Windows build installed as
 # a package (find_package). Its client registers the example servers, uses them through COM under Wine,

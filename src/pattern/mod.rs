@@ -16,6 +16,9 @@ mod fold;
 mod fold_table;
 mod narrow;
 mod program;
+#[cfg(any(test, feature = "fuzzing"))]
+#[doc(hidden)]
+pub mod reference;
 mod smallvec;
 mod stream;
 mod text;
