@@ -186,7 +186,13 @@ mod tests {
         assert_eq!(reg.create_key("A\\\\B"), Err(E_INVALIDARG));
         assert_eq!(reg.create_key(&"x".repeat(256)), Err(E_INVALIDARG));
         assert!(reg.create_key(&"x".repeat(255)).is_ok());
+        // Malformed spellings of keys that exist find nothing.
+        reg.create_key("A\\B").unwrap();
+        assert!(reg.key_exists("A") && reg.key_exists("A\\B"));
         assert!(!reg.key_exists("A\\"));
+        assert!(!reg.key_exists("A\\\\B"));
         assert!(reg.subkeys("\\").is_empty());
+        assert!(reg.subkeys("A\\").is_empty());
+        assert_eq!(reg.subkeys("A"), vec!["B".to_string()]);
     }
 }

@@ -516,7 +516,9 @@ impl<'a> Recorder<'a> {
 }
 
 /// Registers the server `d` in `regs` (see the module documentation for what is written).
+/// A description that is not valid is refused before anything is written.
 pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
+    d.check()?;
     let reg = &*regs.write;
     let module_key = d.module_key();
     let ledger = read_ledger(reg, &module_key).unwrap_or_default();
@@ -1087,16 +1089,22 @@ pub(crate) mod tests {
     #[test]
     fn bad_descriptions_are_refused() {
         let regs = memory();
+        let empty = dump(&regs);
         for bad in ["", "A\\B", " "] {
             let mut d = server(8);
             d.prog_id = bad.into();
             assert_eq!(d.check(), Err(E_INVALIDARG));
+            assert_eq!(register(&regs, &d), Err(E_INVALIDARG), "ProgID {bad:?}");
         }
         let mut d = server(8);
         d.module_path = Some(String::new());
         assert_eq!(d.check(), Err(E_INVALIDARG));
+        assert_eq!(register(&regs, &d), Err(E_INVALIDARG), "empty module path");
         // SAFETY: NULL is allowed.
         assert_eq!(unsafe { ServerDescription::read(ptr::null()) }.err(), Some(E_POINTER));
-        assert!(dump(&regs).ends_with("5.00\r\n\r\n"));
+        // The refused registrations wrote nothing (the same registry takes a good one).
+        assert_eq!(dump(&regs), empty);
+        register(&regs, &server(8)).unwrap();
+        assert_ne!(dump(&regs), empty);
     }
 }
