@@ -20,6 +20,7 @@ mod program;
 #[doc(hidden)]
 pub mod reference;
 mod smallvec;
+mod steps;
 mod stream;
 mod text;
 

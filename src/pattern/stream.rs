@@ -81,6 +81,7 @@ pub(crate) struct WideCursor(pub *const u16);
 impl Cursor for WideCursor {
     #[inline(always)]
     unsafe fn at(self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         // SAFETY: `i` is at or before the terminator (the caller's contract).
         let u = unsafe { *self.0.add(i) } as u32;
         if u & 0xFC00 == 0xD800 {
@@ -95,6 +96,7 @@ impl Cursor for WideCursor {
 
     #[inline(always)]
     unsafe fn unit(self, i: usize) -> u32 {
+        super::steps::step(1);
         // SAFETY: at or before the terminator (the caller's contract).
         unsafe { *self.0.add(i) as u32 }
     }
@@ -111,6 +113,7 @@ impl Cursor for WideCursor {
     unsafe fn end_from(self, mut i: usize) -> usize {
         // SAFETY: every unit up to the terminator is readable.
         while unsafe { *self.0.add(i) } != 0 {
+            super::steps::step(1);
             i += 1;
         }
         i
@@ -141,6 +144,7 @@ pub(crate) struct Utf8Cursor(pub *const u8);
 impl Cursor for Utf8Cursor {
     #[inline(always)]
     unsafe fn at(self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         // SAFETY: `i` is at or before the terminator (the caller's contract).
         let b0 = unsafe { *self.0.add(i) };
         if b0 < 0x80 {
@@ -169,6 +173,7 @@ impl Cursor for Utf8Cursor {
 
     #[inline(always)]
     unsafe fn unit(self, i: usize) -> u32 {
+        super::steps::step(1);
         // SAFETY: at or before the terminator (the caller's contract).
         unsafe { *self.0.add(i) as u32 }
     }
@@ -184,7 +189,9 @@ impl Cursor for Utf8Cursor {
     #[inline(always)]
     unsafe fn end_from(self, i: usize) -> usize {
         // SAFETY: NUL-terminated from `i` on (the caller's contract).
-        i + unsafe { core::ffi::CStr::from_ptr(self.0.add(i).cast()) }.count_bytes()
+        let len = unsafe { core::ffi::CStr::from_ptr(self.0.add(i).cast()) }.count_bytes();
+        super::steps::step(len);
+        i + len
     }
 
     #[inline(always)]
@@ -212,12 +219,14 @@ pub(crate) struct DecodedCursor(pub *const u32);
 impl Cursor for DecodedCursor {
     #[inline(always)]
     unsafe fn at(self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         // SAFETY: `i` is at or before the terminating 0 (the caller's contract).
         (unsafe { *self.0.add(i) }, i + 1)
     }
 
     #[inline(always)]
     unsafe fn unit(self, i: usize) -> u32 {
+        super::steps::step(1);
         // SAFETY: at or before the terminator (the caller's contract).
         unsafe { *self.0.add(i) }
     }
@@ -234,6 +243,7 @@ impl Cursor for DecodedCursor {
     unsafe fn end_from(self, mut i: usize) -> usize {
         // SAFETY: every value up to the terminating 0 is readable.
         while unsafe { *self.0.add(i) } != 0 {
+            super::steps::step(1);
             i += 1;
         }
         i

@@ -4,6 +4,7 @@
 use std::ffi::CString;
 
 use super::reference::{decode_narrow, decode_wide, ref_match};
+use super::steps;
 use super::*;
 
 /// Whether `MatchPatternA` reads UTF-8 (everywhere but Windows).
@@ -389,7 +390,7 @@ fn differential_against_reference_narrow() {
 }
 
 #[test]
-fn adversarial_patterns_finish_quickly() {
+fn adversarial_patterns_take_bounded_steps() {
     let a100 = "a".repeat(100);
     let mut cases: Vec<(String, String, bool)> = Vec::new();
     for k in 4..=12 {
@@ -406,18 +407,37 @@ fn adversarial_patterns_finish_quickly() {
         true,
     ));
 
-    let start = std::time::Instant::now();
     for (s, p, expected) in &cases {
         let (sw, pw) = (wide(s), wide(p));
         // SAFETY: both are NUL-terminated.
-        let got = unsafe { MatchPatternW(sw.as_ptr(), pw.as_ptr(), 1) } == TRUE;
-        assert_eq!(got, *expected, "{} chars Like {}...", s.len(), &p[..p.len().min(20)]);
+        let (got, steps) = steps::counted(|| unsafe { MatchPatternW(sw.as_ptr(), pw.as_ptr(), 1) } == TRUE);
+        let what = format!(
+            "{} chars Like {}... ({} chars)",
+            s.len(),
+            &p[..p.len().min(20)],
+            p.len()
+        );
+        assert_eq!(got, *expected, "{what}");
+        // Steps are character reads (src/pattern/steps.rs); n and m count the terminators too.
+        let (n, m) = (s.chars().count() as u64 + 1, p.chars().count() as u64 + 1);
+        // The documented bound holds with room to spare: at most len(string) x len(pattern) steps (the
+        // specification's recursive sample needs exponentially many for these, seconds for one call)...
+        assert!(steps <= n * m, "{what}: {steps} steps, more than {}", n * m);
+        // ...and these inputs, built to defeat backtracking, are linear: each character is read a few
+        // times at most.
+        assert!(
+            steps <= READS_PER_CHAR * (n + m),
+            "{what}: {steps} steps for {} characters",
+            n + m
+        );
+        // The count is real: every case reads at least the shorter of its inputs.
+        assert!(steps >= n.min(m) - 1, "{what}: {steps} steps");
     }
-    let elapsed = start.elapsed();
-    // Generous on purpose (the benchmark has the real figures): the specification's sample needs
-    // seconds for a single one of these.
-    assert!(elapsed < std::time::Duration::from_secs(1), "{elapsed:?}");
 }
+
+/// How many times the matcher may read each character of an adversarial case (a development run: at
+/// most 2.5).
+const READS_PER_CHAR: u64 = 4;
 
 /// Memory whose last bytes sit right before an inaccessible page: a string copied to the end, NUL
 /// included, makes any read past its terminator a crash instead of a silent over-read.

@@ -37,6 +37,7 @@ impl Text for Utf16<'_> {
 
     #[inline(always)]
     fn next(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         let u = self.0[i] as u32;
         if u & 0xFC00 == 0xD800 {
             if let Some(&v) = self.0.get(i + 1) {
@@ -50,6 +51,7 @@ impl Text for Utf16<'_> {
 
     #[inline(always)]
     fn prev(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         let v = self.0[i - 1] as u32;
         if v & 0xFC00 == 0xDC00 && i >= 2 {
             let u = self.0[i - 2] as u32;
@@ -62,6 +64,7 @@ impl Text for Utf16<'_> {
 
     #[inline(always)]
     fn unit(&self, i: usize) -> u32 {
+        super::steps::step(1);
         self.0[i] as u32
     }
 }
@@ -124,6 +127,7 @@ impl Text for Utf8<'_> {
 
     #[inline(always)]
     fn next(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         let b = self.0[i];
         if b < 0x80 {
             return (b as u32, i + 1);
@@ -136,6 +140,7 @@ impl Text for Utf8<'_> {
 
     #[inline(always)]
     fn prev(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         let b = self.0[i - 1];
         if b < 0x80 {
             return (b as u32, i - 1);
@@ -156,6 +161,7 @@ impl Text for Utf8<'_> {
 
     #[inline(always)]
     fn unit(&self, i: usize) -> u32 {
+        super::steps::step(1);
         self.0[i] as u32
     }
 }
@@ -173,16 +179,19 @@ impl Text for Chars<'_> {
 
     #[inline(always)]
     fn next(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         (self.0[i], i + 1)
     }
 
     #[inline(always)]
     fn prev(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
         (self.0[i - 1], i - 1)
     }
 
     #[inline(always)]
     fn unit(&self, i: usize) -> u32 {
+        super::steps::step(1);
         self.0[i]
     }
 }
