@@ -543,7 +543,10 @@ unsafe fn match_segments(
                 };
                 loop {
                     // SAFETY: `from` is at or before `end`, the terminator's index.
-                    match unsafe { string.find_ascii(from, end, l, upper) } {
+                    let found = unsafe { string.find_ascii(from, end, l, upper) };
+                    // The units the search passed (read a word at a time) count as steps.
+                    super::steps::step(found.map_or(end, |at| at + 1) - from);
+                    match found {
                         Some(at) => from = at,
                         None => return Some(false),
                     }
