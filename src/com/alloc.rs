@@ -47,14 +47,21 @@ pub unsafe fn task_free(p: *mut c_void) {
 }
 
 /// Copies `items` into a new task-allocated array (a unique non-NULL pointer even when empty).
+///
+/// An empty array still gets a block of at least `align_of::<T>()` bytes, so the pointer is aligned
+/// for `T` (malloc aligns a block only for objects that fit in it: a 1-byte block may be 2-aligned),
+/// and nothing is copied into it.
 pub fn alloc_array<T: Copy>(items: &[T]) -> Result<*mut T, HRESULT> {
-    let bytes = core::mem::size_of_val(items);
+    let bytes = core::mem::size_of_val(items).max(core::mem::align_of::<T>());
     let p = task_alloc(bytes) as *mut T;
     if p.is_null() {
         return Err(E_OUTOFMEMORY);
     }
-    // SAFETY: `p` has room for `items.len()` elements (malloc/CoTaskMemAlloc align for any type).
-    unsafe { ptr::copy_nonoverlapping(items.as_ptr(), p, items.len()) };
+    if !items.is_empty() {
+        // SAFETY: `p` has room for `items.len()` elements and is aligned for `T`: malloc and
+        // CoTaskMemAlloc align a block of `size_of_val(items)` bytes for any type that fits in it.
+        unsafe { ptr::copy_nonoverlapping(items.as_ptr(), p, items.len()) };
+    }
     Ok(p)
 }
 
@@ -129,9 +136,17 @@ mod tests {
     fn empty_allocations_are_unique_and_freeable() {
         let a = alloc_array::<u32>(&[]).unwrap();
         assert!(!a.is_null());
+        assert!(a.is_aligned());
+        let b = alloc_array::<u64>(&[]).unwrap();
+        assert!(b.is_aligned() && b != a.cast());
+        let c = alloc_array(&[7u32, 8]).unwrap();
+        // SAFETY: `c` holds the two elements copied above.
+        assert_eq!(unsafe { core::slice::from_raw_parts(c, 2) }, &[7, 8]);
         // SAFETY: allocated above; NULL is tolerated.
         unsafe {
             OpcTaskMemFree(a.cast());
+            OpcTaskMemFree(b.cast());
+            OpcTaskMemFree(c.cast());
             OpcTaskMemFree(ptr::null_mut());
         }
     }

@@ -14,10 +14,24 @@
 //! Reference counting follows COM aggregation rules: the IUnknown methods of every interface slot
 //! delegate to the controlling unknown (the outer object if there is one, else `header.inner`), and
 //! only `header.inner` counts references of this object itself.
+//!
+//! **Pointers.** The back pointer every slot keeps is the raw pointer of the whole allocation (taken
+//! from `Box::into_raw` before anything else refers to the block), so it may reach the class state
+//! behind the header and free the block. Everything that goes beyond the header or frees it
+//! (`query`, `destroy`, the final Release, [`ComObject::from_interface`], [`ComRef`]) works from that
+//! `NonNull`, never by widening a `&ComHeader` or by freeing memory a live reference points into; a
+//! `&ComHeader` is only used for the header's own fields. Miri checks this under Stacked and Tree
+//! Borrows (`scripts/test.sh`).
+//!
+//! **Reference counts** are 32 bits, as COM's `ULONG` return values are. A count never wraps: when it
+//! reaches [`REFS_SATURATED_FROM`] (2^31, which only a leaking caller gets to) it saturates and the
+//! object becomes immortal. From then on AddRef and Release return [`REFS_SATURATED`] and change
+//! nothing, and the object is never freed: a leak, where wrapping would free a live object. (The
+//! standard library's `Arc` aborts the process instead, which a DLL hosted by an OPC client must not.)
 
 use core::ffi::c_void;
 use core::ptr::{self, NonNull};
-use core::sync::atomic::{fence, AtomicU32, AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::mem::MaybeUninit;
 
 use super::boundary::catch;
@@ -34,6 +48,12 @@ pub fn live_objects() -> usize {
     LIVE_OBJECTS.load(Ordering::Acquire)
 }
 
+/// Counts at or above this value are saturated (the object is immortal).
+pub(crate) const REFS_SATURATED_FROM: u32 = 0x8000_0000;
+/// The value a saturated count is kept at, and what AddRef and Release then return. It lies in the
+/// middle of the saturated range, so racing AddRef/Release calls can never move it out of that range.
+pub(crate) const REFS_SATURATED: u32 = 0xC000_0000;
+
 /// A class implemented in Rust: its state plus the interface slots it hands out.
 pub trait ComClass: Sized + Send + Sync + 'static {
     /// The slot for `iid`, or `None` when the object does not implement it. Never asked for
@@ -45,7 +65,8 @@ pub trait ComClass: Sized + Send + Sync + 'static {
 #[repr(C)]
 pub struct Slot {
     vtbl: *const c_void,
-    header: *const ComHeader,
+    /// The whole object's allocation (see the module documentation), not just its header.
+    header: NonNull<ComHeader>,
 }
 
 // SAFETY: a slot is immutable after construction; the vtable is static and the header outlives it.
@@ -67,7 +88,7 @@ impl Slot {
 
 /// Hands out slots bound to an object under construction.
 pub struct Binder {
-    header: *const ComHeader,
+    header: NonNull<ComHeader>,
 }
 
 impl Binder {
@@ -86,8 +107,8 @@ pub struct ComHeader {
     inner: Slot,
     refs: AtomicU32,
     outer: *mut IUnknown,
-    query: unsafe fn(*const ComHeader, &GUID) -> *mut c_void,
-    destroy: unsafe fn(*const ComHeader),
+    query: unsafe fn(NonNull<ComHeader>, &GUID) -> *mut c_void,
+    destroy: unsafe fn(NonNull<ComHeader>),
 }
 
 impl ComHeader {
@@ -111,11 +132,16 @@ impl ComHeader {
         !self.outer.is_null()
     }
 
+    /// The pointer to the whole object this header heads (with the provenance of its allocation).
+    fn object(&self) -> NonNull<ComHeader> {
+        self.inner.header
+    }
+
     /// Non-delegating QueryInterface.
     ///
     /// # Safety
-    /// `riid` must be NULL or readable; `ppv` must be NULL or writable.
-    unsafe fn inner_query_interface(&self, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    /// `this` must be the header of a live object; `riid` NULL or readable; `ppv` NULL or writable.
+    unsafe fn query_interface(this: NonNull<ComHeader>, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
         if ppv.is_null() {
             return E_POINTER;
         }
@@ -127,10 +153,11 @@ impl ComHeader {
         // SAFETY: checked non-NULL; the caller vouches it is readable.
         let iid = unsafe { &*riid };
         let found = if *iid == IID_IUNKNOWN {
-            self.inner.as_ptr()
+            // SAFETY: the object is live.
+            unsafe { this.as_ref() }.inner.as_ptr()
         } else {
-            // SAFETY: `query` was set for the object type this header belongs to.
-            unsafe { (self.query)(self, iid) }
+            // SAFETY: `query` was set for the object type this header belongs to; `this` reaches it.
+            unsafe { (this.as_ref().query)(this, iid) }
         };
         if found.is_null() {
             return E_NOINTERFACE;
@@ -144,34 +171,59 @@ impl ComHeader {
         S_OK
     }
 
-    fn inner_add_ref(&self) -> ULONG {
-        self.refs.fetch_add(1, Ordering::Relaxed).wrapping_add(1)
+    /// Counts one more reference (see the module documentation for saturation).
+    fn add_ref(&self) -> ULONG {
+        let old = self.refs.fetch_add(1, Ordering::Relaxed);
+        if old >= REFS_SATURATED_FROM - 1 {
+            // This call reached the saturated range (or found it reached): pin the count.
+            self.refs.store(REFS_SATURATED, Ordering::Relaxed);
+            return REFS_SATURATED;
+        }
+        old + 1
     }
 
+    /// Gives up one reference; the last one frees the object.
+    ///
     /// # Safety
-    /// The caller must own a reference; the header may be freed before this returns.
-    unsafe fn inner_release(&self) -> ULONG {
+    /// `this` must be the header of a live object and the caller must own a reference, which it
+    /// gives up: the object may be freed before this returns.
+    unsafe fn release(this: NonNull<ComHeader>) -> ULONG {
+        // SAFETY: the caller's reference keeps the header alive until the decrement below; the
+        // reference to the counter is not used after it.
+        let refs = unsafe { &(*this.as_ptr()).refs };
         // Never go below zero: a Release too many on a still-live object is refused, not a double free.
-        let mut cur = self.refs.load(Ordering::Relaxed);
+        let mut cur = refs.load(Ordering::Relaxed);
         loop {
             if cur == 0 {
                 return 0;
             }
-            match self
-                .refs
-                .compare_exchange_weak(cur, cur - 1, Ordering::Release, Ordering::Relaxed)
-            {
+            if cur >= REFS_SATURATED_FROM {
+                return REFS_SATURATED;
+            }
+            match refs.compare_exchange_weak(cur, cur - 1, Ordering::Release, Ordering::Relaxed) {
                 Ok(_) => break,
                 Err(now) => cur = now,
             }
         }
         if cur == 1 {
-            fence(Ordering::Acquire);
-            // SAFETY: the last reference is gone; `destroy` frees the object this header heads.
-            unsafe { (self.destroy)(self) };
+            // Synchronise with every earlier Release before destroying. An acquire load (rather than
+            // a standalone acquire fence) also lets ThreadSanitizer see the ordering.
+            let _ = refs.load(Ordering::Acquire);
+            // SAFETY: the last reference is gone; `destroy` frees the object through the pointer of
+            // its allocation, and no reference into the object is live here.
+            unsafe {
+                let destroy = (*this.as_ptr()).destroy;
+                destroy(this);
+            }
             return 0;
         }
         cur - 1
+    }
+
+    /// Sets the reference count, for tests that need a count near the top without 2^31 AddRefs.
+    #[cfg(test)]
+    pub(crate) fn set_refs_for_test(&self, refs: u32) {
+        self.refs.store(refs, Ordering::SeqCst);
     }
 }
 
@@ -189,6 +241,16 @@ impl<T> core::ops::Deref for ComObject<T> {
     }
 }
 
+/// Frees a block whose construction did not complete (the class's `build` failed or panicked).
+struct Unbuilt<T>(NonNull<MaybeUninit<ComObject<T>>>);
+
+impl<T> Drop for Unbuilt<T> {
+    fn drop(&mut self) {
+        // SAFETY: the block came from Box::into_raw and holds no initialised value.
+        drop(unsafe { Box::from_raw(self.0.as_ptr()) });
+    }
+}
+
 impl<T: ComClass> ComObject<T> {
     /// Allocates an object with one reference (owned by the caller through its inner IUnknown).
     /// `build` receives a [`Binder`] for making the object's interface slots.
@@ -202,29 +264,30 @@ impl<T: ComClass> ComObject<T> {
 
     /// As [`ComObject::new`], for construction that can fail; nothing is allocated on failure.
     pub fn try_new<E>(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> Result<T, E>) -> Result<ComRef<T>, E> {
-        let mut block: Box<MaybeUninit<ComObject<T>>> = Box::new_uninit();
+        // The raw pointer of the allocation, taken first: every slot keeps a copy of it, and nothing
+        // reborrows the block through a Box or a reference later (that would invalidate the copies).
+        let raw: NonNull<MaybeUninit<ComObject<T>>> = NonNull::from(Box::leak(Box::new_uninit()));
+        let unbuilt = Unbuilt(raw);
         // The header sits at offset 0, so slots can point at it before the object is written.
-        let binder = Binder {
-            header: block.as_mut_ptr() as *const ComHeader,
-        };
+        let binder = Binder { header: raw.cast() };
         let value = build(&binder)?;
-        block.write(ComObject {
-            header: ComHeader {
-                inner: binder.slot(&INNER_VTBL),
-                refs: AtomicU32::new(1),
-                outer,
-                query: query_thunk::<T>,
-                destroy: destroy_thunk::<T>,
-            },
-            state: value,
-        });
+        core::mem::forget(unbuilt);
+        let obj: NonNull<ComObject<T>> = raw.cast();
+        // SAFETY: `obj` is the allocation, valid for writes and not yet initialised.
+        unsafe {
+            obj.as_ptr().write(ComObject {
+                header: ComHeader {
+                    inner: binder.slot(&INNER_VTBL),
+                    refs: AtomicU32::new(1),
+                    outer,
+                    query: query_thunk::<T>,
+                    destroy: destroy_thunk::<T>,
+                },
+                state: value,
+            })
+        };
         LIVE_OBJECTS.fetch_add(1, Ordering::AcqRel);
-        // SAFETY: fully initialised above.
-        let raw = Box::into_raw(unsafe { block.assume_init() });
-        Ok(ComRef {
-            // SAFETY: Box::into_raw never returns NULL.
-            obj: unsafe { NonNull::new_unchecked(raw) },
-        })
+        Ok(ComRef { obj })
     }
 
     /// The standard creation protocol of the library's `...Create` functions (and of
@@ -257,17 +320,19 @@ impl<T: ComClass> ComObject<T> {
             Err(hr) => return hr,
         };
         // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
-        unsafe { obj.header.inner_query_interface(riid, ppv) }
+        unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
         // `obj` drops here, releasing the construction reference.
     }
 
     /// The object behind one of its interface pointers.
     ///
     /// # Safety
-    /// `this` must be an interface pointer handed out by a live `ComObject<T>` (one of its slots).
+    /// `this` must be an interface pointer handed out by a live `ComObject<T>` (one of its slots),
+    /// and the object must outlive `'a`.
     pub unsafe fn from_interface<'a, I>(this: *mut I) -> &'a ComObject<T> {
-        // SAFETY: the caller vouches `this` is a slot of a live ComObject<T>; the header is at offset 0.
-        unsafe { &*((*(this as *const Slot)).header as *const ComObject<T>) }
+        // SAFETY: the caller vouches `this` is a slot of a live ComObject<T>; the slot's back pointer
+        // is the pointer of the whole allocation, and the header is at offset 0.
+        unsafe { header_of(this).cast::<ComObject<T>>().as_ref() }
     }
 
     /// The object behind `this` if it is one of ours presenting `vtbl`, else `None`. Reading the first
@@ -295,15 +360,17 @@ impl<T: ComClass> ComObject<T> {
 
     /// A new counted reference to this object (non-delegating; keeps this object itself alive).
     pub fn to_ref(&self) -> ComRef<T> {
-        self.header.inner_add_ref();
+        self.header.add_ref();
         ComRef {
-            obj: NonNull::from(self),
+            // The allocation's pointer, not one derived from `&self`: the last ComRef frees through it.
+            obj: self.header.object().cast(),
         }
     }
 }
 
 /// An owned reference to a library object (counted on its non-delegating IUnknown).
 pub struct ComRef<T: ComClass> {
+    /// The pointer of the allocation (see the module documentation).
     obj: NonNull<ComObject<T>>,
 }
 
@@ -337,30 +404,36 @@ impl<T: ComClass> Clone for ComRef<T> {
 
 impl<T: ComClass> Drop for ComRef<T> {
     fn drop(&mut self) {
-        // SAFETY: this reference was counted; after the call it is not used again.
-        unsafe { self.header.inner_release() };
+        // SAFETY: this reference was counted; after the call it is not used again. No reference into
+        // the object is live across the call.
+        unsafe { ComHeader::release(self.obj.cast()) };
     }
 }
 
-unsafe fn query_thunk<T: ComClass>(header: *const ComHeader, iid: &GUID) -> *mut c_void {
-    // SAFETY: installed only in headers of ComObject<T>, which starts with the header.
-    let obj = unsafe { &*(header as *const ComObject<T>) };
+/// # Safety
+/// Installed only in headers of ComObject<T>; `header` is the pointer of the live allocation.
+unsafe fn query_thunk<T: ComClass>(header: NonNull<ComHeader>, iid: &GUID) -> *mut c_void {
+    // SAFETY: `header` reaches the whole ComObject<T>, which starts with the header.
+    let obj = unsafe { header.cast::<ComObject<T>>().as_ref() };
     obj.state.interface(iid).map_or(ptr::null_mut(), Slot::as_ptr)
 }
 
-unsafe fn destroy_thunk<T: ComClass>(header: *const ComHeader) {
-    // SAFETY: installed only in headers of ComObject<T>, allocated by `ComObject::new` as a Box.
-    drop(unsafe { Box::from_raw(header as *mut ComObject<T>) });
+/// # Safety
+/// Installed only in headers of ComObject<T>; `header` is the pointer of its allocation (made by
+/// `ComObject::try_new` from a Box), called once, when the last reference is gone.
+unsafe fn destroy_thunk<T: ComClass>(header: NonNull<ComHeader>) {
+    // SAFETY: per the contract above.
+    drop(unsafe { Box::from_raw(header.cast::<ComObject<T>>().as_ptr()) });
     LIVE_OBJECTS.fetch_sub(1, Ordering::AcqRel);
 }
 
-/// The header behind any slot pointer.
+/// The pointer of the object behind any slot pointer (its whole allocation).
 ///
 /// # Safety
 /// `this` must be a slot of a live library object.
-unsafe fn header_of<'a, I>(this: *mut I) -> &'a ComHeader {
-    // SAFETY: the caller vouches for the slot; slots point back at their header.
-    unsafe { &*(*(this as *const Slot)).header }
+unsafe fn header_of<I>(this: *mut I) -> NonNull<ComHeader> {
+    // SAFETY: the caller vouches for the slot; slots point back at their object.
+    unsafe { (*(this as *const Slot)).header }
 }
 
 static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
@@ -372,18 +445,18 @@ static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
 unsafe extern "system" fn inner_query_interface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
     // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
     catch(E_UNEXPECTED, || unsafe {
-        header_of(this).inner_query_interface(riid, ppv)
+        ComHeader::query_interface(header_of(this), riid, ppv)
     })
 }
 
 unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> ULONG {
     // SAFETY: as above.
-    catch(0, || unsafe { header_of(this).inner_add_ref() })
+    catch(0, || unsafe { header_of(this).as_ref().add_ref() })
 }
 
 unsafe extern "system" fn inner_release(this: *mut IUnknown) -> ULONG {
     // SAFETY: as above; the caller gives up its reference.
-    catch(0, || unsafe { header_of(this).inner_release() })
+    catch(0, || unsafe { ComHeader::release(header_of(this)) })
 }
 
 /// `QueryInterface` for the vtable of any interface slot: delegates to the controlling unknown.
@@ -399,15 +472,16 @@ pub unsafe extern "system" fn delegating_query_interface<I>(
         // SAFETY: `this` is a slot of a live object; the controlling unknown is valid while it lives.
         unsafe {
             let header = header_of(this);
-            if header.outer.is_null() {
-                header.inner_query_interface(riid, ppv)
+            let outer = header.as_ref().outer;
+            if outer.is_null() {
+                ComHeader::query_interface(header, riid, ppv)
             } else if ppv.is_null() {
                 E_POINTER
             } else if riid.is_null() {
                 *ppv = ptr::null_mut();
                 E_POINTER
             } else {
-                super::unknown::query_interface(header.outer, &*riid, ppv)
+                super::unknown::query_interface(outer, &*riid, ppv)
             }
         }
     })
@@ -421,9 +495,9 @@ pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> ULONG {
     catch(0, || {
         // SAFETY: as for delegating_query_interface.
         unsafe {
-            let header = header_of(this);
+            let header = header_of(this).as_ref();
             if header.outer.is_null() {
-                header.inner_add_ref()
+                header.add_ref()
             } else {
                 add_ref(header.outer)
             }
@@ -440,10 +514,11 @@ pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> ULONG {
         // SAFETY: as for delegating_query_interface.
         unsafe {
             let header = header_of(this);
-            if header.outer.is_null() {
-                header.inner_release()
+            let outer = header.as_ref().outer;
+            if outer.is_null() {
+                ComHeader::release(header)
             } else {
-                super::unknown::release(header.outer)
+                super::unknown::release(outer)
             }
         }
     })
@@ -598,13 +673,24 @@ mod tests {
 
     #[test]
     fn reference_counts_are_exact_under_concurrency() {
+        /// An interface pointer that may cross threads (the object is free-threaded).
+        #[derive(Clone, Copy)]
+        struct Shared(*mut ITest);
+        // SAFETY: library objects are free-threaded.
+        unsafe impl Send for Shared {}
+        impl Shared {
+            fn get(self) -> *mut ITest {
+                self.0
+            }
+        }
         let died = Arc::new(AtomicBool::new(false));
-        let t = create(&died) as usize;
+        let t = Shared(create(&died));
+        let rounds = if cfg!(miri) { 200 } else { 20_000 };
         let threads: Vec<_> = (0..4)
             .map(|_| {
                 std::thread::spawn(move || {
-                    let t = t as *mut ITest;
-                    for _ in 0..20_000 {
+                    let t = t.get();
+                    for _ in 0..rounds {
                         // SAFETY: the creating reference keeps the object alive meanwhile.
                         unsafe {
                             ((*(*t).lpVtbl).AddRef)(t);
@@ -618,10 +704,67 @@ mod tests {
             th.join().unwrap();
         }
         assert!(!died.load(Ordering::SeqCst));
-        let t = t as *mut ITest;
+        let t = t.get();
         // SAFETY: the last reference.
         assert_eq!(unsafe { ((*(*t).lpVtbl).Release)(t) }, 0);
         assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn reference_counts_saturate_instead_of_wrapping() {
+        let died = Arc::new(AtomicBool::new(false));
+        let t = create(&died);
+        // SAFETY: `t` is live throughout (a saturated object is never freed); the test finally puts
+        // the count back to 1 and releases the object.
+        unsafe {
+            let vt = &*(*t).lpVtbl;
+            let obj = ComObject::<TestObject>::from_interface(t);
+            // The top of the exact range: AddRef and Release still count.
+            obj.header().set_refs_for_test(REFS_SATURATED_FROM - 2);
+            assert_eq!((vt.AddRef)(t), REFS_SATURATED_FROM - 1);
+            assert_eq!((vt.Release)(t), REFS_SATURATED_FROM - 2);
+            assert_eq!((vt.AddRef)(t), REFS_SATURATED_FROM - 1);
+            // One more saturates: from here the count is pinned and the object immortal.
+            assert_eq!((vt.AddRef)(t), REFS_SATURATED);
+            assert_eq!((vt.AddRef)(t), REFS_SATURATED);
+            for _ in 0..1000 {
+                assert_eq!((vt.Release)(t), REFS_SATURATED);
+            }
+            let mut unk: *mut c_void = ptr::null_mut();
+            assert_eq!((vt.QueryInterface)(t, &IID_IUNKNOWN, &mut unk), S_OK);
+            assert_eq!(release(unk.cast()), REFS_SATURATED);
+            // A count set anywhere in the saturated range (as racing AddRefs past the top would leave
+            // it) is pinned too, also through the non-delegating IUnknown and ComRef.
+            obj.header().set_refs_for_test(u32::MAX);
+            assert_eq!(add_ref(unk.cast()), REFS_SATURATED);
+            obj.header().set_refs_for_test(u32::MAX);
+            drop(obj.to_ref());
+            assert_eq!((vt.Release)(t), REFS_SATURATED);
+            let mut v = 0;
+            assert_eq!((vt.Value)(t, &mut v), S_OK);
+            assert_eq!(v, 42);
+            assert!(!died.load(Ordering::SeqCst));
+            obj.header().set_refs_for_test(1);
+            assert_eq!((vt.Release)(t), 0);
+        }
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn a_build_that_panics_frees_its_block_and_counts_no_object() {
+        let mut p: *mut c_void = 1 as *mut c_void;
+        // SAFETY: valid arguments.
+        let hr = unsafe {
+            ComObject::<TestObject>::create(
+                ptr::null_mut(),
+                &IID_ITEST,
+                &mut p,
+                |_| -> Result<TestObject, HRESULT> { panic!("a bug in a constructor") },
+            )
+        };
+        assert_eq!(hr, E_UNEXPECTED);
+        assert!(p.is_null());
+        // The block itself: Miri's leak check fails the run if it was not freed.
     }
 
     #[test]
