@@ -1,8 +1,10 @@
 //! `IUnknown`, the root of every COM interface, in the exact COM layout.
 
 use core::ffi::c_void;
+use core::ptr::NonNull;
 
-use super::types::{HRESULT, REFIID, ULONG};
+use super::hresult::E_POINTER;
+use super::types::{GUID, HRESULT, REFIID, ULONG};
 
 /// The three methods every COM interface starts with.
 #[cfg(not(system_com_headers))]
@@ -27,7 +29,7 @@ pub struct IUnknown {
 ///
 /// # Safety
 /// `unknown` must be a valid COM interface pointer and `ppv` writable.
-pub unsafe fn query_interface(unknown: *mut IUnknown, iid: &super::types::GUID, ppv: *mut *mut c_void) -> HRESULT {
+pub unsafe fn query_interface(unknown: *mut IUnknown, iid: &GUID, ppv: *mut *mut c_void) -> HRESULT {
     // SAFETY: every COM interface starts with the IUnknown methods; the caller vouches for the pointer.
     unsafe { ((*(*unknown).lpVtbl).QueryInterface)(unknown, iid, ppv) }
 }
@@ -48,4 +50,173 @@ pub unsafe fn add_ref(unknown: *mut IUnknown) -> ULONG {
 pub unsafe fn release(unknown: *mut IUnknown) -> ULONG {
     // SAFETY: as for `query_interface`.
     unsafe { ((*(*unknown).lpVtbl).Release)(unknown) }
+}
+
+/// One counted reference to an interface of an object; released when dropped.
+pub struct Counted<I>(NonNull<I>);
+
+impl<I> Counted<I> {
+    /// Takes over a counted reference.
+    ///
+    /// # Safety
+    /// `p` must be a valid COM interface pointer carrying one reference the caller gives up.
+    pub unsafe fn adopt(p: NonNull<I>) -> Self {
+        Counted(p)
+    }
+
+    /// The interface pointer (still owned by `self`).
+    pub fn as_ptr(&self) -> *mut I {
+        self.0.as_ptr()
+    }
+
+    /// Gives up ownership: the caller now owns the reference.
+    pub fn into_raw(self) -> NonNull<I> {
+        let p = self.0;
+        core::mem::forget(self);
+        p
+    }
+}
+
+impl<I> Drop for Counted<I> {
+    fn drop(&mut self) {
+        // SAFETY: `self` owns one reference to a valid COM interface pointer.
+        unsafe { release(self.0.as_ptr().cast()) };
+    }
+}
+
+/// QueryInterface on an object the library does not control (a caller's object, a sink, an outer
+/// object, a system object), checked as a hostile or broken answer requires. Every helper that asks
+/// such an object for an interface goes through this.
+///
+/// - A failure HRESULT is returned as it is. A pointer left in the out-parameter with it is neither
+///   used nor released: COM requires NULL on failure, so anything else may be garbage.
+/// - A success code with a NULL pointer (a broken object) is `Err(E_POINTER)`.
+/// - Otherwise the pointer and its reference are the caller's, as [`Counted`].
+///
+/// # Safety
+/// `unknown` must be a valid COM interface pointer.
+pub unsafe fn query<I>(unknown: *mut IUnknown, iid: &GUID) -> Result<Counted<I>, HRESULT> {
+    let mut p: *mut c_void = core::ptr::null_mut();
+    // SAFETY: the caller vouches for `unknown`; `p` is writable.
+    let hr = unsafe { query_interface(unknown, iid, &mut p) };
+    if hr < 0 {
+        return Err(hr);
+    }
+    match NonNull::new(p.cast::<I>()) {
+        // SAFETY: a successful QueryInterface hands over one reference.
+        Some(p) => Ok(unsafe { Counted::adopt(p) }),
+        None => Err(E_POINTER),
+    }
+}
+
+/// Objects that answer QueryInterface as a broken or hostile caller's might, for tests.
+#[cfg(test)]
+pub(crate) mod hostile {
+    use core::ffi::c_void;
+    use core::sync::atomic::{AtomicU32, Ordering};
+
+    use super::{IUnknown, IUnknownVtbl};
+    use crate::com::hresult::{E_NOINTERFACE, S_OK};
+    use crate::com::types::{HRESULT, REFIID, ULONG};
+
+    /// How the object answers every QueryInterface.
+    #[derive(Clone, Copy)]
+    pub(crate) enum Answer {
+        /// S_OK with a NULL pointer.
+        OkWithNull,
+        /// E_NOINTERFACE with a garbage pointer left in the out-parameter.
+        FailWithGarbage,
+    }
+
+    /// A COM object that counts AddRef/Release and answers QueryInterface with `answer`.
+    #[repr(C)]
+    pub(crate) struct Hostile {
+        vtbl: &'static IUnknownVtbl,
+        answer: Answer,
+        refs: AtomicU32,
+    }
+
+    static VTBL: IUnknownVtbl = IUnknownVtbl {
+        QueryInterface: qi,
+        AddRef: add_ref,
+        Release: release,
+    };
+
+    unsafe extern "system" fn qi(this: *mut IUnknown, _riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+        // SAFETY: only Hostile objects present VTBL; the library passes a writable `ppv`.
+        unsafe {
+            match (*(this as *const Hostile)).answer {
+                Answer::OkWithNull => {
+                    *ppv = core::ptr::null_mut();
+                    S_OK
+                }
+                Answer::FailWithGarbage => {
+                    *ppv = core::ptr::NonNull::<u64>::dangling().as_ptr().cast();
+                    E_NOINTERFACE
+                }
+            }
+        }
+    }
+
+    unsafe extern "system" fn add_ref(this: *mut IUnknown) -> ULONG {
+        // SAFETY: as above.
+        unsafe { &*(this as *const Hostile) }
+            .refs
+            .fetch_add(1, Ordering::SeqCst)
+            + 1
+    }
+
+    unsafe extern "system" fn release(this: *mut IUnknown) -> ULONG {
+        // SAFETY: as above.
+        let before = unsafe { &*(this as *const Hostile) }
+            .refs
+            .fetch_sub(1, Ordering::SeqCst);
+        assert!(before > 1, "released the reference the test holds");
+        before - 1
+    }
+
+    impl Hostile {
+        pub(crate) fn new(answer: Answer) -> Box<Hostile> {
+            Box::new(Hostile {
+                vtbl: &VTBL,
+                answer,
+                refs: AtomicU32::new(1),
+            })
+        }
+
+        pub(crate) fn unk(&self) -> *mut IUnknown {
+            self as *const Hostile as *mut IUnknown
+        }
+
+        /// References held now (the test's own is 1).
+        pub(crate) fn refs(&self) -> u32 {
+            self.refs.load(Ordering::SeqCst)
+        }
+    }
+
+    /// Both kinds.
+    pub(crate) fn all() -> [Box<Hostile>; 2] {
+        [Hostile::new(Answer::OkWithNull), Hostile::new(Answer::FailWithGarbage)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hostile::{Answer, Hostile};
+    use super::*;
+    use crate::com::hresult::E_NOINTERFACE;
+    use crate::com::iids::IID_IUNKNOWN;
+
+    #[test]
+    fn query_refuses_a_null_success_and_ignores_what_a_failure_left_behind() {
+        let h = Hostile::new(Answer::OkWithNull);
+        // SAFETY: a valid COM object.
+        let got = unsafe { query::<IUnknown>(h.unk(), &IID_IUNKNOWN) };
+        assert_eq!(got.err(), Some(E_POINTER));
+        let h2 = Hostile::new(Answer::FailWithGarbage);
+        // SAFETY: as above. The garbage pointer must not be released (that would crash).
+        let got = unsafe { query::<IUnknown>(h2.unk(), &IID_IUNKNOWN) };
+        assert_eq!(got.err(), Some(E_NOINTERFACE));
+        assert_eq!((h.refs(), h2.refs()), (1, 1));
+    }
 }

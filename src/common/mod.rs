@@ -388,19 +388,16 @@ pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *
         return E_INVALIDARG;
     }
     catch(E_UNEXPECTED, || {
-        let mut iface: *mut c_void = ptr::null_mut();
         // SAFETY: `common` is a valid COM pointer per the contract.
-        if unsafe { crate::com::unknown::query_interface(common, &IID_IOPCCommon, &mut iface) } != S_OK {
+        let Ok(iface) = (unsafe { crate::com::unknown::query::<IOPCCommon>(common, &IID_IOPCCommon) }) else {
             return E_INVALIDARG;
-        }
-        // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not.
-        let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.cast::<IOPCCommon>(), &IOPCCOMMON_VTBL) }
-        {
+        };
+        // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not; it stays counted meanwhile.
+        let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.as_ptr(), &IOPCCOMMON_VTBL) } {
             Some(obj) => alloc_wstr(&obj.client_name()),
             None => Err(E_INVALIDARG),
         };
-        // SAFETY: we own the reference QueryInterface returned.
-        unsafe { crate::com::unknown::release(iface.cast()) };
+        drop(iface);
         match result {
             Ok(p) => {
                 // SAFETY: non-NULL out-parameter.
@@ -411,3 +408,6 @@ pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *
         }
     })
 }
+
+#[cfg(test)]
+mod tests;

@@ -18,7 +18,7 @@ use std::sync::OnceLock;
 use windows_sys::Win32::System::Com::CoCreateFreeThreadedMarshaler;
 
 use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject};
-use crate::com::unknown::{query_interface, release};
+use crate::com::unknown::{query, release};
 use crate::com::{IUnknown, DWORD, E_POINTER, E_UNEXPECTED, GUID, HRESULT, REFIID, S_OK, ULONG};
 
 /// `IID_IMarshal` {00000003-0000-0000-C000-000000000046}.
@@ -117,16 +117,14 @@ unsafe fn with_ftm<T: HasFtm>(this: *mut IMarshal, f: impl FnOnce(*mut IMarshal)
             Ok(inner) => inner,
             Err(hr) => return *hr,
         };
-        let mut marshal: *mut c_void = ptr::null_mut();
         // SAFETY: the FTM's inner unknown is alive while the object is.
-        let hr = unsafe { query_interface(inner.0.as_ptr(), &IID_IMARSHAL, &mut marshal) };
-        if hr != S_OK || marshal.is_null() {
-            return if hr == S_OK { E_POINTER } else { hr };
-        }
-        let result = f(marshal.cast());
-        // SAFETY: the reference QueryInterface gave us (counted on this object, the outer).
-        unsafe { release(marshal.cast()) };
-        result
+        let marshal = match unsafe { query::<IMarshal>(inner.0.as_ptr(), &IID_IMARSHAL) } {
+            Ok(m) => m,
+            Err(hr) => return hr,
+        };
+        // The reference QueryInterface gave us (counted on this object, the outer) is released when
+        // `marshal` drops.
+        f(marshal.as_ptr())
     })
 }
 

@@ -10,7 +10,7 @@ use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINTCONTAINER};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
-use crate::com::unknown::{query_interface, release};
+use crate::com::unknown::{query, release};
 use crate::com::{IUnknown, DWORD, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
 
 /// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
@@ -127,25 +127,17 @@ pub unsafe extern "C" fn OpcShutdownSinkCreate(
 /// # Safety
 /// `server` must be a valid COM interface pointer.
 unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint, HRESULT> {
-    let mut container: *mut c_void = ptr::null_mut();
     // SAFETY: valid per the caller.
-    let hr = unsafe { query_interface(server, &IID_ICONNECTIONPOINTCONTAINER, &mut container) };
-    if hr < 0 || container.is_null() {
-        return Err(if hr < 0 { hr } else { E_POINTER });
-    }
-    let container = container.cast::<IConnectionPointContainer>();
+    let container = unsafe { query::<IConnectionPointContainer>(server, &IID_ICONNECTIONPOINTCONTAINER) }?;
     let mut point: *mut IConnectionPoint = ptr::null_mut();
-    // SAFETY: a counted IConnectionPointContainer pointer; we release it right after.
+    // SAFETY: a counted IConnectionPointContainer pointer, released right after.
     let hr = unsafe {
-        let hr = ((*(*container).lpVtbl).FindConnectionPoint)(container, &IID_IOPCShutdown, &mut point);
-        release(container.cast());
-        hr
+        let c = container.as_ptr();
+        ((*(*c).lpVtbl).FindConnectionPoint)(c, &IID_IOPCShutdown, &mut point)
     };
+    drop(container);
     if hr < 0 || point.is_null() {
-        if !point.is_null() {
-            // SAFETY: a misbehaving server returned a reference along with a failure.
-            unsafe { release(point.cast()) };
-        }
+        // As with QueryInterface: a pointer left behind with a failure is not trusted, not released.
         return Err(if hr < 0 { hr } else { E_POINTER });
     }
     Ok(point)

@@ -10,7 +10,7 @@
 //! by the connections; a sink that holds the server is the client's business (it must Unadvise).
 
 use core::ffi::c_void;
-use core::ptr::{self, NonNull};
+use core::ptr;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::apartment::SinkRef;
@@ -29,7 +29,7 @@ use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
 use crate::com::options::read_sized;
-use crate::com::unknown::{add_ref, query_interface, release};
+use crate::com::unknown::{add_ref, query};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
     E_NOINTERFACE, E_POINTER, E_UNEXPECTED, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
@@ -139,19 +139,10 @@ impl OpcShutdown {
     /// # Safety
     /// `sink` must be a valid COM interface pointer.
     unsafe fn advise(&self, sink: *mut IUnknown) -> Result<DWORD, HRESULT> {
-        let mut shutdown: *mut c_void = ptr::null_mut();
         // SAFETY: `sink` is valid per the caller.
-        let hr = unsafe { query_interface(sink, &IID_IOPCShutdown, &mut shutdown) };
-        let shutdown = match NonNull::new(shutdown.cast::<IOPCShutdown>()) {
-            Some(p) if hr >= 0 => p,
-            Some(p) => {
-                // A failing QueryInterface that still returned a pointer: give the reference back.
-                // SAFETY: the sink handed us this reference.
-                unsafe { release(p.as_ptr().cast()) };
-                return Err(CONNECT_E_CANNOTCONNECT);
-            }
-            None => return Err(CONNECT_E_CANNOTCONNECT),
-        };
+        let shutdown = unsafe { query::<IOPCShutdown>(sink, &IID_IOPCShutdown) }
+            .map_err(|_| CONNECT_E_CANNOTCONNECT)?
+            .into_raw();
         // Registering in the GIT may call into the sink, so it happens before the lock is taken.
         // SAFETY: a counted IOPCShutdown pointer of the calling apartment.
         let sink = Arc::new(unsafe { SinkRef::adopt(shutdown) });
@@ -433,13 +424,13 @@ unsafe extern "system" fn get_connection_point_container(
         if header.is_aggregated() {
             // The container is whatever the server object (the controlling unknown) answers for
             // IConnectionPointContainer: usually this object's container slot, forwarded.
-            let mut found: *mut c_void = ptr::null_mut();
-            // SAFETY: the outer unknown is valid while this object lives; `found` is writable.
-            let hr =
-                unsafe { query_interface(header.controlling_unknown(), &IID_ICONNECTIONPOINTCONTAINER, &mut found) };
-            if hr >= 0 && !found.is_null() {
+            // SAFETY: the outer unknown is valid while this object lives.
+            let found = unsafe {
+                query::<IConnectionPointContainer>(header.controlling_unknown(), &IID_ICONNECTIONPOINTCONTAINER)
+            };
+            if let Ok(found) = found {
                 // SAFETY: non-NULL out-parameter; the reference QueryInterface gave us goes to the caller.
-                unsafe { *ppCPC = found.cast() };
+                unsafe { *ppCPC = found.into_raw().as_ptr() };
                 return S_OK;
             }
         }
@@ -534,18 +525,14 @@ pub(crate) unsafe fn with_object<R>(
     if shutdown.is_null() {
         return Err(E_INVALIDARG);
     }
-    let mut container: *mut c_void = ptr::null_mut();
     // SAFETY: valid per the caller.
-    let hr = unsafe { query_interface(shutdown, &IID_ICONNECTIONPOINTCONTAINER, &mut container) };
-    if hr < 0 || container.is_null() {
-        return Err(E_INVALIDARG);
-    }
-    // SAFETY: a valid IConnectionPointContainer pointer, ours or not.
-    let result = match unsafe { from_container(container.cast()) } {
+    let container = unsafe { query::<IConnectionPointContainer>(shutdown, &IID_ICONNECTIONPOINTCONTAINER) }
+        .map_err(|_| E_INVALIDARG)?;
+    // SAFETY: a valid IConnectionPointContainer pointer, ours or not, counted while `f` runs.
+    let result = match unsafe { from_container(container.as_ptr()) } {
         Some(obj) => Ok(f(obj)),
         None => Err(E_INVALIDARG),
     };
-    // SAFETY: the reference QueryInterface gave us.
-    unsafe { release(container.cast()) };
+    drop(container);
     result
 }

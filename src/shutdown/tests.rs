@@ -779,6 +779,38 @@ fn the_helpers_report_servers_without_shutdown_support() {
 }
 
 #[test]
+fn hostile_query_interface_answers_are_refused_without_a_crash() {
+    use crate::com::unknown::hostile;
+    let server = Server::new();
+    let point = server.point();
+    let sink = MockSink::new(true, S_OK);
+    // S_OK with NULL is E_POINTER; a failure passes through (its garbage pointer untouched).
+    for (h, expected) in hostile::all().into_iter().zip([E_POINTER, E_NOINTERFACE]) {
+        let mut cookie: DWORD = 0xDEAD;
+        // SAFETY: valid (if broken) COM objects and writable out-parameters.
+        unsafe {
+            // As a server object: QueryInterface(IID_IConnectionPointContainer) answers badly.
+            assert_eq!(OpcShutdownAdvise(h.unk(), sink.unk(), &mut cookie), expected);
+            assert_eq!(cookie, 0);
+            assert_eq!(OpcShutdownUnadvise(h.unk(), 1), expected);
+            assert_eq!(OpcShutdownNotify(h.unk(), ptr::null()), E_INVALIDARG);
+            let (mut n, mut f) = (7, 7);
+            assert_eq!(OpcShutdownNotifyEx(h.unk(), ptr::null(), &mut n, &mut f), E_INVALIDARG);
+            assert_eq!((n, f), (0, 0));
+            // As a sink: QueryInterface(IID_IOPCShutdown) answers badly.
+            assert_eq!(point.advise(h.unk()), (CONNECT_E_CANNOTCONNECT, 0));
+            assert_eq!(
+                OpcShutdownAdvise(server.unk(), h.unk(), &mut cookie),
+                CONNECT_E_CANNOTCONNECT
+            );
+        }
+        assert_eq!(h.refs(), 1, "nothing released or kept");
+    }
+    assert_eq!(server.connections(), 0);
+    assert_eq!(sink.refs(), 1);
+}
+
+#[test]
 fn concurrent_advise_unadvise_and_notify_stay_consistent() {
     let server = std::sync::Arc::new(Server::with_limit(Some(64)));
     let sinks: Vec<_> = (0..4).map(|_| MockSink::new(true, S_OK)).collect();
