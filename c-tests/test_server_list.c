@@ -1,5 +1,6 @@
 /* The OPC server browser (OPCServerList) through the public header: the enumeration rules over a
- * registry held in memory (any of the implemented categories, all of the required ones, 0 = any,
+ * registry held in memory (any of the implemented categories, every required one supported by the
+ * caller, 0 = any,
  * DA 1.0 servers registered the old way, no duplicates, sorted), GetClassDetails of both interfaces,
  * CLSIDFromProgID, the enumerator, bad input, the class factory and DllCanUnloadNow.
  *
@@ -117,20 +118,37 @@ static void test_enumeration_rules(IOPCServerList *list) {
         three[2] = da20;
         expect_classes(list, 3, three, 0, NULL, w, 3);
     }
+    /* Required categories as ICatInformation defines them: rgcatidReq lists what the caller
+       supports; a class qualifies when all it requires is listed, and a class requiring nothing always
+       does. */
     {
-        static const unsigned w[] = {2, 5}; /* requires A&E */
-        expect_classes(list, 0, NULL, 1, &ae, w, 2);
+        static const unsigned w[] = {1, 2, 3, 4}; /* supports A&E: not 5, which also requires DA 2.0 */
+        expect_classes(list, 0, NULL, 1, &ae, w, 4);
     }
     {
-        static const unsigned w[] = {5}; /* requires both A&E and DA 2.0 */
+        static const unsigned w[] = {1, 2, 3, 4, 5}; /* supports both of 5's requirements */
         two[0] = ae;
         two[1] = da20;
-        expect_classes(list, 0, NULL, 2, two, w, 1);
+        expect_classes(list, 0, NULL, 2, two, w, 5);
     }
     {
-        static const unsigned w[] = {2}; /* implements DA 2.0 and requires A&E */
-        expect_classes(list, 1, &da20, 1, &ae, w, 1);
+        static const unsigned w[] = {1, 3, 4}; /* supports nothing any class requires */
+        CATID unknown = IID_Bogus_;
+        expect_classes(list, 0, NULL, 1, &unknown, w, 3);
     }
+    {
+        static const unsigned w[] = {1, 2}; /* implements DA 2.0, supports A&E */
+        expect_classes(list, 1, &da20, 1, &ae, w, 2);
+    }
+    {
+        static const unsigned w[] = {1}; /* what OPC clients call: DA 2.0, supporting DA 2.0 */
+        expect_classes(list, 1, &da20, 1, &da20, w, 1);
+    }
+    {
+        static const unsigned w[] = {1, 2}; /* (ULONG)-1 is taken as 0: regardless */
+        expect_classes(list, 1, &da20, (ULONG)-1, NULL, w, 2);
+    }
+    expect_classes(list, 1, &da30, 1, &da20, NULL, 0); /* 2 and 5 both require A&E */
     {
         static const unsigned w[] = {4}; /* DA 1.0 the old way; the unregistered ghost is not reported */
         expect_classes(list, 1, &da10, 0, NULL, w, 1);

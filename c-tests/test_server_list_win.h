@@ -1,7 +1,8 @@
 /* The Windows part of test_server_list.c, run under Wine against the real COM runtime and registry:
  * regsvr32 over an OpcEnum-style registration of the same CLSID, CoCreateInstance by CLSID and by
  * ProgID, fake servers registered with the helpers (and one only in the 32-bit registry view) found
- * through IOPCServerList and IOPCServerList2 and through the system's ICatInformation, then
+ * through IOPCServerList and IOPCServerList2 and through the system's ICatInformation (which agrees
+ * with the server list on implemented and required categories), then
  * everything unregistered and the registry compared with what it was. */
 #include <comcat.h>
 
@@ -121,6 +122,31 @@ static int contains(const CLSID *list, ULONG n, const CLSID *c) {
     return 0;
 }
 
+/* Which of the fake classes 1-3 an enumeration returns (bit n-1 for class n); releases it. */
+static unsigned fake_mask(IEnumGUID *e) {
+    static CLSID found[20000];
+    ULONG n = e ? collect(e, found, 20000) : 0;
+    return (contains(found, n, &CLSID_Fake1) ? 1u : 0u) | (contains(found, n, &CLSID_Fake2) ? 2u : 0u) |
+           (contains(found, n, &CLSID_Fake3) ? 4u : 0u);
+}
+
+/* The server list and the system's ICatInformation give the same answer over the same registry, and
+ * it is `want` (fake_mask bits). Both counts at least 1. */
+static void cross_check(IOPCServerList *list, ICatInformation *cats, ULONG ci, CATID *impl, ULONG cr, CATID *req,
+                        unsigned want) {
+    IEnumGUID *e = NULL;
+    unsigned ours, system;
+    CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, ci, impl, cr, req, &e), S_OK);
+    ours = fake_mask(e);
+    e = NULL;
+    CHECK_HR(cats->lpVtbl->EnumClassesOfCategories(cats, ci, impl, cr, req, &e), S_OK);
+    system = fake_mask(e);
+    CHECK(ours == want && system == want);
+    if (ours != want || system != want)
+        fprintf(stderr, "  categories %lu/%lu: opccomn %u, ICatInformation %u, expected %u\n", (unsigned long)ci,
+                (unsigned long)cr, ours, system, want);
+}
+
 static OpcServerRegistration fake(const CLSID *clsid, uint32_t type, const wchar_t *prog, const wchar_t *vi,
                                   const wchar_t *user, const wchar_t *path) {
     OpcServerRegistration r;
@@ -181,6 +207,37 @@ static void test_fake_servers(IOPCServerList *list, IOPCServerList2 *list2, OpcR
         CHECK_HR(cats->lpVtbl->EnumClassesOfCategories(cats, 1, &da20, (ULONG)-1, NULL, &e), S_OK);
         n = e ? collect(e, found, 256) : 0;
         CHECK(contains(found, n, &CLSID_Fake1));
+        /* Required categories as COM defines them: rgcatidReq is what the caller supports, and a
+           class qualifies when everything it requires is listed (Fake2 requires A&E). One implemented
+           category per call: Wine's ICatInformation answers nothing for our classes when given
+           several (the server list answers any of them, as Windows documents; tested above and on
+           Linux). */
+        {
+            CATID two[2];
+            two[0] = da20;
+            two[1] = ae;
+            cross_check(list, cats, 1, &da20, 1, &da20, 1u); /* what OPC clients call */
+            cross_check(list, cats, 1, &da30, 1, &da20, 0u); /* Fake2's A&E is not supported */
+            cross_check(list, cats, 1, &da30, 1, &ae, 2u);
+            cross_check(list, cats, 1, &da30, 2, two, 2u);
+            cross_check(list, cats, 1, &da20, 2, two, 1u);
+            cross_check(list, cats, 1, &ae, 1, &ae, 0u); /* no fake implements A&E */
+            /* No required list: the specification's 0 means regardless of required categories, and
+               the server list takes -1 as 0. ICatInformation's -1 (and 0) means "supports none",
+               which only classes requiring nothing meet. */
+            e = NULL;
+            CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 1, &da30, 0, NULL, &e), S_OK);
+            CHECK(fake_mask(e) == 2u);
+            e = NULL;
+            CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 1, &da30, (ULONG)-1, NULL, &e), S_OK);
+            CHECK(fake_mask(e) == 2u);
+            e = NULL;
+            CHECK_HR(cats->lpVtbl->EnumClassesOfCategories(cats, 1, &da30, (ULONG)-1, NULL, &e), S_OK);
+            CHECK(fake_mask(e) == 0u);
+            e = NULL;
+            CHECK_HR(cats->lpVtbl->EnumClassesOfCategories(cats, 1, &da20, (ULONG)-1, NULL, &e), S_OK);
+            CHECK(fake_mask(e) == 1u);
+        }
     }
 
     /* IOPCServerList: DA 2.0 finds the 64-bit and the 32-bit-only server, not the others. */

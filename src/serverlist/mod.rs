@@ -6,9 +6,16 @@
 //! system's ICatInformation, whose behaviour differs between Windows and Wine:
 //!
 //! - **EnumClassesOfCategories** returns the classes that implement *any* of the listed implemented
-//!   categories and require *all* of the listed required categories (`Required Categories` key). A
-//!   count of 0 means "regardless of category" (the specification; `(ULONG)-1`, what ICatInformation
-//!   uses, is accepted as well): every class registered under `CLSID`, or no requirement. When the Data
+//!   categories and whose required categories are all *supported*, as ICatInformation (and so
+//!   OpcEnum) defines it: `rgcatidReq` lists the categories the caller supports, and a class
+//!   qualifies when every category under its own `Required Categories` key is in that list (subkey
+//!   names that are not CATIDs are ignored); a class that requires nothing always qualifies. So
+//!   `EnumClassesOfCategories(1, &CATID_OPCDAServer20, 1, &CATID_OPCDAServer20, ...)` finds every
+//!   DA 2.0 server that requires nothing else. A count of 0 means "regardless of category" (the
+//!   specification): every class registered under `CLSID`, or no condition on required categories.
+//!   `(ULONG)-1` is taken as 0 for either list. (ICatInformation reads a required count of 0 or -1
+//!   as "the caller supports none": there only classes requiring nothing qualify. The server list
+//!   follows the specification here; with a count of at least 1 both agree.) When the Data
 //!   Access 1.0 category is listed, servers registered the old way (an `OPC` key under their ProgID,
 //!   whose `CLSID` is registered) are reported too. Each class is reported once, ordered by CLSID (as
 //!   a 128-bit number). On 64-bit Windows both registry views are read.
@@ -28,7 +35,7 @@ pub mod server;
 
 use core::ffi::c_void;
 use core::ptr;
-use std::collections::{BTreeMap, HashSet};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
@@ -162,12 +169,8 @@ fn guid_key(g: &GUID) -> u128 {
     (g.Data1 as u128) << 96 | (g.Data2 as u128) << 80 | (g.Data3 as u128) << 64 | u64::from_be_bytes(g.Data4) as u128
 }
 
-fn guids(names: &[String]) -> HashSet<GUID> {
-    names.iter().filter_map(|n| parse_guid(n)).collect()
-}
-
-/// The classes that implement any of `implemented` (`None`: regardless) and require all of `required`
-/// (`None`: no condition), sorted by CLSID, each once.
+/// The classes that implement any of `implemented` (`None`: regardless) and require nothing beyond
+/// `required`, the categories the caller supports (`None`: no condition), sorted by CLSID, each once.
 pub(crate) fn classes_of_categories(
     regs: &Registries,
     implemented: Option<&[CATID]>,
@@ -181,11 +184,15 @@ pub(crate) fn classes_of_categories(
     if required.is_some() {
         children.push("Required Categories");
     }
-    let requires_all = |cats: Option<&Vec<String>>| match required {
+    // `required` lists the categories the caller supports (ICatInformation's rgcatidReq): a class
+    // qualifies when each category it requires is among them; a class requiring nothing always does.
+    let requirements_met = |cats: Option<&Vec<String>>| match required {
         None => true,
-        Some(req) => cats.is_some_and(|names| {
-            let have = guids(names);
-            req.iter().all(|c| have.contains(c))
+        Some(supported) => cats.is_none_or(|names| {
+            names
+                .iter()
+                .filter_map(|n| parse_guid(n))
+                .all(|c| supported.contains(&c))
         }),
     };
     for view in &regs.views {
@@ -199,7 +206,7 @@ pub(crate) fn classes_of_categories(
                     .and_then(Option::as_ref)
                     .is_some_and(|names| names.iter().filter_map(|n| parse_guid(n)).any(|c| wanted.contains(&c))),
             };
-            if implements && requires_all(keys.next().and_then(Option::as_ref)) {
+            if implements && requirements_met(keys.next().and_then(Option::as_ref)) {
                 found.insert(guid_key(&clsid), clsid);
             }
         }
@@ -232,7 +239,7 @@ pub(crate) fn classes_of_categories(
                         let req = v
                             .key_exists(&format!("{class}\\Required Categories"))
                             .then(|| v.subkeys(&format!("{class}\\Required Categories")));
-                        requires_all(req.as_ref())
+                        requirements_met(req.as_ref())
                     };
                     if satisfied {
                         found.insert(guid_key(&clsid), clsid);

@@ -93,19 +93,67 @@ fn a_class_qualifies_by_any_implemented_category() {
 }
 
 #[test]
-fn a_class_qualifies_only_with_all_required_categories() {
+fn required_categories_are_the_ones_the_caller_supports() {
     let regs = sample();
+    // Supporting A&E: every class that requires nothing (1, 3, 4) and class 2 (requires A&E); not 5,
+    // which also requires DA 2.0.
     assert_eq!(
         classes_of_categories(&regs, None, Some(&[CATID_OPCAEServer10])),
-        ids(&[2, 5])
+        ids(&[1, 2, 3, 4])
     );
+    // Supporting both of class 5's requirements admits it too.
     assert_eq!(
         classes_of_categories(&regs, None, Some(&[CATID_OPCAEServer10, CATID_OPCDAServer20])),
-        ids(&[5])
+        ids(&[1, 2, 3, 4, 5])
     );
+    // A list that matches no requirement leaves exactly the classes requiring nothing.
+    assert_eq!(classes_of_categories(&regs, None, Some(&[g(0x99)])), ids(&[1, 3, 4]));
     assert_eq!(
         classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), Some(&[CATID_OPCAEServer10])),
-        ids(&[2])
+        ids(&[1, 2])
+    );
+    // What OPC clients call: DA 2.0 servers, supporting DA 2.0. Class 2 requires A&E, which the
+    // caller does not support.
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), Some(&[CATID_OPCDAServer20])),
+        ids(&[1])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer30]), Some(&[CATID_OPCDAServer20])),
+        ids(&[])
+    );
+    // Names under Required Categories that are not CATIDs are no requirement.
+    regs.write
+        .create_key(&format!("CLSID\\{}\\Required Categories\\not-a-catid", g(1)))
+        .unwrap();
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), Some(&[CATID_OPCDAServer20])),
+        ids(&[1])
+    );
+    // An empty Required Categories key requires nothing.
+    regs.write
+        .create_key(&format!("CLSID\\{}\\Required Categories", g(3)))
+        .unwrap();
+    assert_eq!(classes_of_categories(&regs, None, Some(&[g(0x99)])), ids(&[1, 3, 4]));
+}
+
+#[test]
+fn data_access_1_servers_registered_the_old_way_meet_required_categories_too() {
+    let regs = sample();
+    regs.write
+        .create_key(&format!("CLSID\\{}\\Required Categories\\{CATID_OPCAEServer10}", g(4)))
+        .unwrap();
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer10]), Some(&[CATID_OPCDAServer20])),
+        ids(&[])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer10]), Some(&[CATID_OPCAEServer10])),
+        ids(&[4])
+    );
+    assert_eq!(
+        classes_of_categories(&regs, Some(&[CATID_OPCDAServer10]), None),
+        ids(&[4])
     );
 }
 
