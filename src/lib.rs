@@ -25,6 +25,9 @@ pub mod registry;
 pub mod serverlist;
 pub mod shutdown;
 
+#[cfg(test)]
+mod stress_tests;
+
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.
 #[no_mangle]

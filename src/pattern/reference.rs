@@ -83,7 +83,8 @@ fn case_class(c: u32) -> Vec<u32> {
     static CLASSES: OnceLock<HashMap<u32, Vec<u32>>> = OnceLock::new();
     let classes = CLASSES.get_or_init(|| {
         let mut m: HashMap<u32, Vec<u32>> = HashMap::new();
-        for x in 0..0x11_0000 {
+        // Only code points inside a folding run fold to something else.
+        for x in super::fold_table::FOLD_RUNS.iter().flat_map(|r| r.0..=r.1) {
             let f = fold(x);
             if f != x {
                 m.entry(f).or_insert_with(|| vec![f]).push(x);

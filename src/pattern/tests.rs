@@ -242,12 +242,22 @@ fn differential_wide(seed: u64, cases: usize) {
     }
 }
 
-/// How many random cases the differential test runs: `OPCCOMN_DIFFERENTIAL_CASES`, else 1,000,000.
+/// How many random cases the differential test runs: `OPCCOMN_DIFFERENTIAL_CASES`, else 1,000,000
+/// (300 under Miri, which is some thousand times slower).
 fn differential_cases() -> usize {
     std::env::var("OPCCOMN_DIFFERENTIAL_CASES")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(1_000_000)
+        .unwrap_or(if cfg!(miri) { 300 } else { 1_000_000 })
+}
+
+/// `n` cases, or one in 100 under Miri.
+fn scaled(n: usize) -> usize {
+    if cfg!(miri) {
+        n / 100
+    } else {
+        n
+    }
 }
 
 #[test]
@@ -259,7 +269,7 @@ fn differential_against_reference_wide() {
 fn differential_long_patterns() {
     // Patterns beyond stream::LONG_PATTERN take the compiled path inside MatchPatternW/A.
     let mut rng = XorShift(0xD1B5_4A32_D192_ED03);
-    for case in 0..2_000 {
+    for case in 0..scaled(2_000) {
         let mut p = random_wide(&mut rng, 100);
         while p.len() <= stream::LONG_PATTERN {
             p.push(b'*' as u16);
@@ -289,7 +299,7 @@ fn differential_long_literal_runs() {
             .map(|_| if rng.next() & 1 == 0 { b'a' as u16 } else { b'B' as u16 })
             .collect()
     };
-    for case in 0..20_000 {
+    for case in 0..scaled(20_000) {
         let mut p = vec![b'*' as u16];
         let run = 16 + rng.below(9);
         p.extend(ab(&mut rng, run));
@@ -390,6 +400,7 @@ fn differential_against_reference_narrow() {
 }
 
 #[test]
+#[cfg_attr(miri, ignore)] // cases of millions of steps each: hours under Miri
 fn adversarial_patterns_take_bounded_steps() {
     let a100 = "a".repeat(100);
     let mut cases: Vec<(String, String, bool)> = Vec::new();
@@ -500,6 +511,7 @@ impl Drop for GuardedTail {
 /// inaccessible page, for the published vectors, malformed patterns and random input.
 #[cfg(unix)]
 #[test]
+#[cfg_attr(miri, ignore)] // mmap and mprotect; under Miri every read past an allocation is reported anyway
 fn no_entry_point_reads_past_a_terminator() {
     let mut s_tail = GuardedTail::new();
     let mut p_tail = GuardedTail::new();
@@ -516,7 +528,7 @@ fn no_entry_point_reads_past_a_terminator() {
         }
     }
     let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
-    for _ in 0..20_000 {
+    for _ in 0..scaled(20_000) {
         cases.push((random_wide(&mut rng, 12), random_wide(&mut rng, 8)));
     }
     // Long patterns take the compiled path inside MatchPatternW/A.
