@@ -13,6 +13,17 @@ need_linux_tools() {
     install_packages "${missing[@]}"
 }
 
+# valgrind, and the nightly toolchain with the standard library's sources (ThreadSanitizer needs an
+# instrumented standard library, built with -Zbuild-std).
+need_soundness_tools() {
+    command -v valgrind >/dev/null || install_packages valgrind
+    local installed
+    installed=$(rustup +nightly component list --installed 2>/dev/null || true)
+    if ! grep -q '^rust-src' <<<"$installed"; then
+        rustup toolchain install nightly --profile minimal --component rust-src
+    fi
+}
+
 need_windows_tools() {
     local missing=()
     command -v x86_64-w64-mingw32-gcc >/dev/null || missing+=(gcc-mingw-w64-x86-64)

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs every test of the project: lint and drift of generated files, Rust tests, C tests on Linux under
-# AddressSanitizer and UBSan, the installed package (CMake config and pkg-config), the fuzz targets for a
-# bounded time, the Windows DLL with the same C tests under Wine, and the header's coexistence with the
-# OPC Foundation's MIDL headers (scripts/test-coexistence.sh). Installs what is missing on a fresh
+# AddressSanitizer and UBSan and under valgrind, a thread stress test under ThreadSanitizer, the
+# installed package (CMake config and pkg-config), the fuzz targets for a bounded time, the Windows
+# DLL with the same C tests under Wine, and the header's coexistence with the OPC Foundation's MIDL
+# headers (scripts/test-coexistence.sh). Installs what is missing on a fresh
 # Debian 12 machine.
 #
 # Usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz]     (CI runs it with no options)
@@ -31,6 +32,7 @@ stage() {
 }
 
 need_linux_tools
+need_soundness_tools
 [ "$wine_stage" = 1 ] && need_windows_tools
 
 if [ "$lint_stage" = 1 ]; then
@@ -51,6 +53,17 @@ cmake -S . -B "$build/linux" -DOPCCOMN_SANITIZE=ON >/dev/null
 cmake --build "$build/linux" -j2
 ctest --test-dir "$build/linux" --output-on-failure --timeout 300
 scripts/check-exports.sh "$build/linux/cargo/release/libopccomn.so"
+
+stage "C tests (Linux, valgrind --leak-check=full, no sanitizer)"
+cmake -S . -B "$build/valgrind" -DOPCCOMN_VALGRIND=ON >/dev/null
+cmake --build "$build/valgrind" -j2
+ctest --test-dir "$build/valgrind" --output-on-failure --timeout 900 -R '^c\.'
+
+stage "thread stress test (ThreadSanitizer, instrumented standard library)"
+# 8 threads on one IOPCCommon, one shutdown object whose sinks unadvise themselves during a notify,
+# one compiled pattern (src/stress_tests.rs). Any report fails the run (halt_on_error).
+RUSTFLAGS="-Zsanitizer=thread" TSAN_OPTIONS="halt_on_error=1" CARGO_TARGET_DIR="$root/target/tsan" \
+    cargo +nightly test -Zbuild-std --target x86_64-unknown-linux-gnu --lib stress_tests
 
 stage "installed package: find_package(opccomn CONFIG) and pkg-config"
 rm -rf "$build/install" "$build/consumer"
