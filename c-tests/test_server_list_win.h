@@ -325,6 +325,17 @@ static void test_com_activation(void) {
 
     CHECK(regsvr32(dll, 0) == 0);
     snapshot(sys, &registered);
+    /* regsvr32 writes the registry view of the DLL's bitness: a 32-bit DLL on 64-bit Windows lands in
+       the 32-bit view (HKCR\WOW6432Node\CLSID as the 64-bit view names it), a 64-bit DLL in the 64-bit
+       view. Neither touches the other view. */
+    if (sizeof(void *) == 4) {
+        CHECK(key_exists(KEY_WOW64_32KEY, LIST_KEY L"\\InprocServer32"));
+        CHECK(!key_exists(KEY_WOW64_64KEY, LIST_KEY L"\\InprocServer32"));
+        CHECK(key_exists(KEY_WOW64_64KEY, L"WOW6432Node\\" LIST_KEY L"\\InprocServer32"));
+    } else {
+        CHECK(key_exists(KEY_WOW64_64KEY, LIST_KEY L"\\InprocServer32"));
+        CHECK(!key_exists(KEY_WOW64_32KEY, LIST_KEY L"\\InprocServer32"));
+    }
     CHECK(wcsicmp(get_sz(LIST_KEY L"\\InprocServer32", NULL), dll) == 0);
     CHECK(wcscmp(get_sz(LIST_KEY L"\\InprocServer32", L"ThreadingModel"), L"Both") == 0);
     CHECK(wcscmp(get_sz(LIST_KEY L"\\LocalServer32", NULL), L"C:\\windows\\system32\\OpcEnum.exe") == 0);

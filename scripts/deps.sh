@@ -37,9 +37,62 @@ need_windows_tools() {
     [ -f /usr/include/wine/wine/windows/unknwn.idl ] || missing+=(libwine-dev)
     command -v clang >/dev/null || missing+=(clang)
     command -v wine >/dev/null || missing+=(wine wine64)
+    # 32-bit (x86) builds.
+    command -v i686-w64-mingw32-gcc >/dev/null || missing+=(gcc-mingw-w64-i686)
+    command -v i686-w64-mingw32-g++ >/dev/null || missing+=(g++-mingw-w64-i686)
+    command -v i686-w64-mingw32-windres >/dev/null || missing+=(binutils-mingw-w64-i686)
+    # The MSVC-format import library (llvm-dlltool, llvm-lib) and the MSVC-mode link test (clang, lld-link).
+    command -v clang >/dev/null || missing+=(clang)
+    command -v lld-link >/dev/null || missing+=(lld)
+    { command -v llvm-dlltool && command -v llvm-lib; } >/dev/null || missing+=(llvm)
     install_packages "${missing[@]}"
-    if ! rustup target list --installed | grep -qx x86_64-pc-windows-gnu; then
-        rustup target add x86_64-pc-windows-gnu
+    local target
+    for target in x86_64-pc-windows-gnu i686-pc-windows-gnu; do
+        if ! rustup target list --installed | grep -qx "$target"; then
+            rustup target add "$target"
+        fi
+    done
+}
+
+# 32-bit Wine (Debian's wine32:i386, after `dpkg --add-architecture i386`; about 2 minutes). Returns 1
+# and sets `wine32_missing` to the reason when it cannot be installed (on 2026-12-01 Debian's i386
+# security index failed to download for a while, which made wine32:i386 uninstallable); the caller
+# must then report the 32-bit run as skipped.
+wine32_missing=""
+need_wine32() {
+    dpkg -s wine32:i386 >/dev/null 2>&1 && return 0
+    local sudo="" added=0 log
+    [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    log=$(mktemp)
+    echo "== installing: wine32:i386 (32-bit Wine)"
+    if ! dpkg --print-foreign-architectures | grep -qx i386; then
+        $sudo dpkg --add-architecture i386
+        added=1
+    fi
+    if ! $sudo apt-get -o DPkg::Lock::Timeout=900 update -qq >"$log" 2>&1 || grep -q '^[EW]: ' "$log"; then
+        wine32_missing="apt-get update with i386 failed: $(grep -m2 '^[EW]: ' "$log" | tr '\n' ' ')"
+    fi
+    if ! DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=900 install -y -qq \
+            --no-install-recommends wine32:i386 >>"$log" 2>&1; then
+        wine32_missing="apt-get install wine32:i386 failed: $(grep -m3 '^E: \|Depends:\|Breaks:' "$log" | tr '\n' ' ')${wine32_missing:+ (after: $wine32_missing)}"
+        # Leave no half-usable foreign architecture behind: its broken index would fail every later
+        # `apt-get update` on this machine.
+        [ "$added" = 1 ] && $sudo dpkg --remove-architecture i386 2>/dev/null || true
+        rm -f "$log"
+        return 1
+    fi
+    rm -f "$log"
+    wine32_missing=""
+    dpkg -s wine32:i386 >/dev/null 2>&1 || { wine32_missing="wine32:i386 is not installed after apt-get install"; return 1; }
+}
+
+# The nightly toolchain with the standard library's sources, for the tier-3 Windows 7 targets
+# (x86_64-win7-windows-gnu, i686-win7-windows-gnu are built with -Zbuild-std).
+need_nightly_rust_src() {
+    if ! rustup toolchain list | grep -q '^nightly-'; then
+        rustup toolchain install nightly --profile minimal --component rust-src
+    elif ! rustup +nightly component list --installed 2>/dev/null | grep -q '^rust-src'; then
+        rustup component add rust-src --toolchain nightly
     fi
 }
 
@@ -48,7 +101,9 @@ install_packages() {
     local sudo=""
     [ "$(id -u)" -ne 0 ] && sudo="sudo"
     echo "== installing: $*"
-    $sudo apt-get -o DPkg::Lock::Timeout=900 update -qq
+    # An index that fails to download (it happens, e.g. Debian's i386 security index) must not stop
+    # installs that the other indexes serve.
+    $sudo apt-get -o DPkg::Lock::Timeout=900 update -qq || echo "== warning: apt-get update failed; installing from the lists there are" >&2
     DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=900 install -y -qq --no-install-recommends "$@" >/dev/null
 }
 

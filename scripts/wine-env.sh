@@ -1,6 +1,6 @@
 # Sourced by the test scripts: a Wine prefix for running the Windows build, created on first use.
 # Sets WINEPREFIX (under the build directory), keeps wineserver running for the caller's lifetime and
-# installs the bcryptprimitives.dll test fixture (see tests/wine/bcryptprimitives.c).
+# installs the bcryptprimitives.dll test fixture (see tests/wine/bcryptprimitives.c), 64-bit and 32-bit.
 # Usage: . scripts/wine-env.sh BUILD_DIR
 # Wine wants an absolute prefix path; accept a relative build directory.
 wine_build_dir=$(mkdir -p "$1" && cd "$1" && pwd)
@@ -16,9 +16,15 @@ trap 'wineserver -k 2>/dev/null || true' EXIT
 # Start Wine's services now, with their output going nowhere: a service first started by a test would
 # inherit the test runner's output pipe and keep it open, and ctest would wait for it forever.
 wine cmd.exe /c exit 0 </dev/null >/dev/null 2>&1 || true
-fixture="$WINEPREFIX/drive_c/windows/system32/bcryptprimitives.dll"
 src_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-if [ ! -f "$fixture" ] || [ "$src_dir/tests/wine/bcryptprimitives.c" -nt "$fixture" ]; then
-    x86_64-w64-mingw32-gcc -O2 -shared -o "$fixture" "$src_dir/tests/wine/bcryptprimitives.c" \
-        "$src_dir/tests/wine/bcryptprimitives.def" -ladvapi32
-fi
+# The fixture for 64-bit processes goes into system32, the 32-bit one (when the i686 compiler is there)
+# into syswow64, where WOW64 looks for the DLLs of 32-bit processes.
+for wine_fixture_arch in x86_64:system32 i686:syswow64; do
+    wine_fixture_cc="${wine_fixture_arch%%:*}-w64-mingw32-gcc"
+    fixture="$WINEPREFIX/drive_c/windows/${wine_fixture_arch#*:}/bcryptprimitives.dll"
+    command -v "$wine_fixture_cc" >/dev/null && [ -d "$(dirname "$fixture")" ] || continue
+    if [ ! -f "$fixture" ] || [ "$src_dir/tests/wine/bcryptprimitives.c" -nt "$fixture" ]; then
+        "$wine_fixture_cc" -O2 -shared -o "$fixture" "$src_dir/tests/wine/bcryptprimitives.c" \
+            "$src_dir/tests/wine/bcryptprimitives.def" -ladvapi32 -Wl,--enable-stdcall-fixup
+    fi
+done

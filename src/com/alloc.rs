@@ -17,7 +17,7 @@ pub fn task_alloc(size: usize) -> *mut c_void {
     #[cfg(windows)]
     {
         // SAFETY: CoTaskMemAlloc accepts any size and returns NULL on failure.
-        unsafe { windows_sys::Win32::System::Com::CoTaskMemAlloc(size.max(1)) }
+        unsafe { super::ole32::CoTaskMemAlloc(size.max(1)) }
     }
     #[cfg(not(windows))]
     {
@@ -37,7 +37,7 @@ pub unsafe fn task_free(p: *mut c_void) {
     #[cfg(windows)]
     // SAFETY: the caller vouches `p` came from CoTaskMemAlloc.
     unsafe {
-        windows_sys::Win32::System::Com::CoTaskMemFree(p)
+        super::ole32::CoTaskMemFree(p)
     };
     #[cfg(not(windows))]
     // SAFETY: the caller vouches `p` came from malloc.

@@ -8,6 +8,8 @@ pub mod guids;
 pub mod hresult;
 pub mod iids;
 pub mod object;
+#[cfg(windows)]
+pub mod ole32;
 pub mod options;
 pub mod types;
 pub mod unknown;

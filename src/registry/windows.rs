@@ -549,17 +549,24 @@ mod tests {
     fn the_other_view_is_separate_for_classes() {
         let key = "CLSID\\{C3000000-0000-4000-8000-000000000001}";
         let native = WindowsRegistry::native();
-        let other = WindowsRegistry { view: KEY_WOW64_32KEY };
-        other.set_value(key, "", &RegValue::Sz("32-bit only".into())).unwrap();
+        // The view of the other bitness: the 32-bit view from a 64-bit process, the 64-bit view from a
+        // 32-bit process under WOW64.
+        let (other_view, text) = if cfg!(target_pointer_width = "64") {
+            (KEY_WOW64_32KEY, "32-bit only")
+        } else {
+            (KEY_WOW64_64KEY, "64-bit only")
+        };
+        let other = WindowsRegistry { view: other_view };
+        // What an earlier failed run may have left behind.
+        let _ = native.delete_key(key);
+        let _ = other.delete_key(key);
+        other.set_value(key, "", &RegValue::Sz(text.into())).unwrap();
         assert!(other.key_exists(key));
-        assert!(
-            !native.key_exists(key),
-            "a 64-bit process sees its own view under HKCR\\CLSID"
-        );
+        assert!(!native.key_exists(key), "a process sees its own view under HKCR\\CLSID");
         let regs = system_registries();
         let clsid = super::super::parse_guid(&key[6..]).unwrap();
         let found = regs.views.iter().find_map(|v| v.class_strings(&clsid, false));
-        assert_eq!(found.and_then(|s| s.user_type).as_deref(), Some("32-bit only"));
+        assert_eq!(found.and_then(|s| s.user_type).as_deref(), Some(text));
         other.delete_key(key).unwrap();
         assert!(!other.key_exists(key));
     }

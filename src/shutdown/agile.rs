@@ -15,9 +15,8 @@ use core::ffi::c_void;
 use core::ptr::{self, NonNull};
 use std::sync::OnceLock;
 
-use windows_sys::Win32::System::Com::CoCreateFreeThreadedMarshaler;
-
 use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject};
+use crate::com::ole32::CoCreateFreeThreadedMarshaler;
 use crate::com::unknown::{query, release};
 use crate::com::{IUnknown, DWORD, E_POINTER, E_UNEXPECTED, GUID, HRESULT, REFIID, S_OK, ULONG};
 

@@ -1,0 +1,21 @@
+//! The COM runtime functions the library takes from `ole32.dll`.
+//!
+//! windows-sys links `CoTaskMemAlloc`, `CoTaskMemFree` and `CoCreateFreeThreadedMarshaler` from
+//! `combase.dll`, which exists only from Windows 8 on. `ole32.dll` exports the same functions on every
+//! Windows version (from Windows 8 on it forwards them to combase.dll), so importing them from there
+//! costs nothing on new systems and lets the DLL load on Windows 7 and Server 2008 R2 (the
+//! `*-win7-windows-gnu` builds). Linked through mingw's import library `libole32.a`.
+
+use core::ffi::c_void;
+
+use super::types::HRESULT;
+
+#[link(name = "ole32")]
+extern "system" {
+    /// Allocates from the COM task allocator; NULL when out of memory.
+    pub fn CoTaskMemAlloc(cb: usize) -> *mut c_void;
+    /// Frees task-allocator memory; NULL is ignored.
+    pub fn CoTaskMemFree(pv: *const c_void);
+    /// Creates the free-threaded marshaler aggregated into `outer`.
+    pub fn CoCreateFreeThreadedMarshaler(outer: *mut c_void, marshal: *mut *mut c_void) -> HRESULT;
+}
