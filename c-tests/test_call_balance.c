@@ -7,10 +7,6 @@
  * functions. On x86_64 (and Linux) there is one calling convention and the same loops must hold too. */
 #include "test_util.h"
 
-#ifndef STDMETHODCALLTYPE
-#define STDMETHODCALLTYPE
-#endif
-
 #if defined(__i386__)
 #define READ_STACK_POINTER(v) __asm__ volatile("movl %%esp, %0" : "=r"(v))
 #elif defined(__x86_64__)

@@ -42,7 +42,7 @@ static void test_create_errors(void) {
     CHECK_HR(OpcCommonCreate(&o, NULL, &IID_IOPCCommon, &p), E_INVALIDARG);
     CHECK(p == NULL);
 
-    o.struct_size = (uint32_t)offsetof(OpcCommonOptions, locales) + 4; /* ends inside a pointer */
+    o.struct_size = (uint32_t)(offsetof(OpcCommonOptions, locales) + sizeof o.locales / 2); /* ends inside a pointer */
     p = GARBAGE_PTR;
     CHECK_HR(OpcCommonCreate(&o, NULL, &IID_IOPCCommon, &p), E_INVALIDARG);
     CHECK(p == NULL);

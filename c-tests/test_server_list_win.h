@@ -312,6 +312,14 @@ static void test_com_activation(void) {
     GetModuleFileNameW(GetModuleHandleW(L"opccomn.dll"), dll, MAX_PATH);
     CHECK_HR(CoInitializeEx(NULL, COINIT_APARTMENTTHREADED), S_OK);
     CHECK_HR(OpcRegistryOpenSystem(&sys), S_OK);
+    /* Component categories are shared machine state: registering a server creates them, unregistering
+       leaves them. Create the ones the fake servers use first, so that the comparisons below do not
+       depend on whether an earlier program (of this bitness's registry view) already did. */
+    {
+        const CATID *used[] = {&CATID_OPCDAServer10, &CATID_OPCDAServer20, &CATID_OPCDAServer30};
+        size_t i;
+        for (i = 0; i < sizeof used / sizeof used[0]; i++) CHECK_HR(OpcCreateComponentCategory(sys, used[i], NULL), S_OK);
+    }
     snapshot(sys, &pristine);
 
     /* OpcEnum as the OPC Foundation installs it: an EXE server under the same CLSID. */

@@ -41,7 +41,7 @@ struct Mock {
 #endif
 };
 
-static HRESULT mock_qi(IOPCShutdown *This, REFIID riid, void **ppv) {
+static HRESULT STDMETHODCALLTYPE mock_qi(IOPCShutdown *This, REFIID riid, void **ppv) {
     Mock *m = (Mock *)This;
     if (!ppv) return E_POINTER;
     *ppv = NULL;
@@ -57,20 +57,20 @@ static HRESULT mock_qi(IOPCShutdown *This, REFIID riid, void **ppv) {
     return E_NOINTERFACE;
 }
 
-static ULONG mock_add_ref(IOPCShutdown *This) {
+static ULONG STDMETHODCALLTYPE mock_add_ref(IOPCShutdown *This) {
     Mock *m = (Mock *)This;
     m->add_refs++;
     return (ULONG)++m->refs;
 }
 
-static ULONG mock_release(IOPCShutdown *This) {
+static ULONG STDMETHODCALLTYPE mock_release(IOPCShutdown *This) {
     Mock *m = (Mock *)This;
     m->releases++;
     CHECK(m->refs > 0); /* never released more often than referenced */
     return (ULONG)--m->refs;
 }
 
-static HRESULT mock_shutdown_request(IOPCShutdown *This, LPCWSTR reason) {
+static HRESULT STDMETHODCALLTYPE mock_shutdown_request(IOPCShutdown *This, LPCWSTR reason) {
     Mock *m = (Mock *)This;
     size_t i = 0;
     m->calls++;

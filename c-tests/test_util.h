@@ -145,7 +145,7 @@ typedef struct AggregatingServer {
     const IID *forwarded_iid; /* the interface the library object provides */
 } AggregatingServer;
 
-static HRESULT aggregating_qi(IUnknown *This, REFIID riid, void **ppv) {
+static HRESULT STDMETHODCALLTYPE aggregating_qi(IUnknown *This, REFIID riid, void **ppv) {
     AggregatingServer *s = (AggregatingServer *)This;
     if (!ppv) return E_POINTER;
     *ppv = NULL;
@@ -158,13 +158,13 @@ static HRESULT aggregating_qi(IUnknown *This, REFIID riid, void **ppv) {
     return E_NOINTERFACE;
 }
 
-static ULONG aggregating_add_ref(IUnknown *This) {
+static ULONG STDMETHODCALLTYPE aggregating_add_ref(IUnknown *This) {
     AggregatingServer *s = (AggregatingServer *)This;
     s->add_refs++;
     return ++s->refs;
 }
 
-static ULONG aggregating_release(IUnknown *This) {
+static ULONG STDMETHODCALLTYPE aggregating_release(IUnknown *This) {
     AggregatingServer *s = (AggregatingServer *)This;
     s->releases++;
     if (--s->refs == 0) {

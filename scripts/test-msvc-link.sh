@@ -3,10 +3,13 @@
 # (clang --target=<arch>-pc-windows-msvc, lld-link), no C runtime, linked against opccomn.lib; then runs
 # it under Wine next to opccomn.dll (the caller sets WINEPREFIX; see scripts/wine-env.sh) and requires
 # its closing line. x86 needs 32-bit Wine.
-# Usage: scripts/test-msvc-link.sh x64|x86 DIR_WITH_opccomn.lib_AND_opccomn.dll OUT_DIR
+# Usage: scripts/test-msvc-link.sh [--no-run] x64|x86 DIR_WITH_opccomn.lib_AND_opccomn.dll OUT_DIR
+#        (--no-run: build only, for x86 without 32-bit Wine)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-[ "$#" -eq 3 ] || { echo "usage: $0 x64|x86 LIB_DIR OUT_DIR" >&2; exit 2; }
+run=1
+[ "${1:-}" = --no-run ] && { run=0; shift; }
+[ "$#" -eq 3 ] || { echo "usage: $0 [--no-run] x64|x86 LIB_DIR OUT_DIR" >&2; exit 2; }
 arch=$1 lib_dir=$2 out=$3
 case "$arch" in
     x64) target=x86_64-pc-windows-msvc machine=i386:x86-64 extra=() ;;
@@ -24,6 +27,7 @@ clang --target="$target" -O2 -Wall -Wextra -Werror -nostdlib -fuse-ld=lld -Wl,-e
     -Wl,-subsystem:console "${extra[@]}" -o "$out/link_test.exe" "$root/tests/msvc/link_test.c" \
     "$lib_dir/opccomn.lib" "$out/kernel32.lib"
 cp "$lib_dir/opccomn.dll" "$out/"
+[ "$run" = 1 ] || exit 0
 result=$(cd "$out" && wine link_test.exe) || { echo "$result"; echo "link_test.exe ($arch) failed" >&2; exit 1; }
 echo "$result"
 grep -qE "^msvc link test \($([ "$arch" = x64 ] && echo 64 || echo 32)-bit\): [0-9]+ passed, 0 failed" <<<"$result" || {

@@ -27,9 +27,11 @@ done
 build="$root/build"
 stages=0
 skipped=0
+stage_started=$SECONDS
 stage() {
     stages=$((stages + 1))
-    printf '\n==== %s\n' "$*"
+    printf '\n==== %s   (previous stage: %ds)\n' "$*" $((SECONDS - stage_started))
+    stage_started=$SECONDS
 }
 # A stage that could not run: said loudly, counted as skipped, never as passed.
 skip_stage() {
@@ -135,9 +137,8 @@ if [ "$wine_stage" = 1 ]; then
     stage "C++ example server and client (x64, under Wine, against the installed package)"
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
 
-    stage "Windows x86 (i686-pc-windows-gnu): DLL, static library, opccomn.lib, undecorated exports"
-    cmake -S . -B "$build/windows-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" \
-        -DOPCCOMN_BUILD_TESTS=OFF >/dev/null
+    stage "Windows x86 (i686-pc-windows-gnu): DLL, static library, opccomn.lib, C tests built, undecorated exports"
+    cmake -S . -B "$build/windows-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" >/dev/null
     cmake --build "$build/windows-x86" -j2
     x86_out="$build/windows-x86/cargo/i686-pc-windows-gnu/release"
     scripts/check-exports.sh "$x86_out/opccomn.dll"
@@ -158,6 +159,15 @@ if [ "$wine_stage" = 1 ]; then
     if [ "$wine32_ok" = 1 ]; then
         stage "Rust tests (Windows x86, under 32-bit Wine)"
         CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
+
+        stage "C tests (Windows x86 DLL, under 32-bit Wine)"
+        ctest --test-dir "$build/windows-x86" --output-on-failure --timeout 300
+        # Every C test must have printed its closing line: a 32-bit program that did not run prints nothing.
+        for t in $(ctest --test-dir "$build/windows-x86" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p'); do
+            grep -qE "^$t: [0-9]+ passed, 0 failed" "$build/windows-x86/Testing/Temporary/LastTest.log" ||
+                { echo "$t (x86) printed no result line" >&2; exit 1; }
+        done
+        echo "every x86 C test printed its result line"
     else
         skip_stage "Rust tests and C tests of the x86 DLL under 32-bit Wine" \
             "32-bit Wine is not available: $wine32_missing" \
@@ -210,11 +220,21 @@ if [ "$wine_stage" = 1 ]; then
         (cd "$dir" && wine consumer.exe >consumer.out)
         echo "package consumer ($arch, Windows 7 variant $win7): ran, $(wc -l <"$dir/consumer.out") lines of output"
     done
+
+    stage "MSVC-mode program (clang --target=*-pc-windows-msvc, lld-link, no CRT) linked against the package's opccomn.lib, under Wine"
+    scripts/test-msvc-link.sh x64 "$pkg/x64" "$build/package-test/msvc-x64"
+    if [ "$wine32_ok" = 1 ]; then
+        scripts/test-msvc-link.sh x86 "$pkg/x86" "$build/package-test/msvc-x86"
+    else
+        scripts/test-msvc-link.sh --no-run x86 "$pkg/x86" "$build/package-test/msvc-x86"
+        echo "msvc link test (x86): linked, NOT run (no 32-bit Wine; see the SKIPPED stage)"
+    fi
 else
     echo "test.sh: --no-wine: the Windows stages, the header coexistence stage and the C++ example were NOT run" >&2
 fi
 
 # Every stage ran to its end (set -e stops at the first failure).
+printf '\n(last stage: %ds; all: %ds)\n' $((SECONDS - stage_started)) "$SECONDS"
 if [ "$skipped" -eq 0 ]; then
     printf '\n==== all stages passed\ntest.sh: %d passed, 0 failed\n' "$stages"
 else
