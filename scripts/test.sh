@@ -149,7 +149,7 @@ if [ "$wine_stage" = 1 ]; then
     wine32_ok=0
     if need_wine32; then
         i686-w64-mingw32-gcc -O2 -o "$build/windows-x86/wow64_canary.exe" tests/wine/wow64_canary.c
-        canary=$(wine "$build/windows-x86/wow64_canary.exe" 2>&1) || true
+        canary=$(wine "$build/windows-x86/wow64_canary.exe" 2>&1 | tr -d '\r') || true
         if [ "$canary" = "wow64 canary: 32-bit process, WOW64 yes" ]; then
             wine32_ok=1
         else
@@ -211,7 +211,8 @@ if [ "$wine_stage" = 1 ]; then
             -DCMAKE_PREFIX_PATH="$pkg" -DOPCCOMN_WINDOWS7="$win7" >/dev/null
         cmake --build "$dir" -j2 >/dev/null
         # The program got the package's DLL of its own architecture and variant.
-        want="$pkg/$([ "$win7" = ON ] && echo win7/)$arch/opccomn.dll"
+        want="$pkg/$arch/opccomn.dll"
+        [ "$win7" = ON ] && want="$pkg/win7/$arch/opccomn.dll"
         cmp -s "$want" "$dir/opccomn.dll" || { echo "$dir/opccomn.dll is not $want" >&2; exit 1; }
         if [ "$arch" = x86 ] && [ "$wine32_ok" != 1 ]; then
             echo "package consumer ($arch): built, NOT run (no 32-bit Wine; see the SKIPPED stage)"
