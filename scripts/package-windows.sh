@@ -25,14 +25,15 @@ build_variant() {
     if [ ! -f "$dir/CMakeCache.txt" ]; then
         cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/$toolchain" -DOPCCOMN_BUILD_TESTS=OFF "$@" >/dev/null
     fi
-    cmake --build "$dir" -j2 --target opccomn_msvc_implib
+    cmake --build "$dir" -j2 --target opccomn_msvc_implib opccomn_static_lib
 }
 
-# copy_variant DIR RUST_TARGET DEST
+# copy_variant DIR RUST_TARGET DEST (the static library is the one CMake makes, with one member per
+# exported identifier, as `cmake --install` installs it)
 copy_variant() {
     local rust_out="$1/cargo/$2/release" dest=$3
     mkdir -p "$dest"
-    cp "$rust_out/opccomn.dll" "$rust_out/libopccomn.dll.a" "$rust_out/libopccomn.a" \
+    cp "$rust_out/opccomn.dll" "$rust_out/libopccomn.dll.a" "$1/opccomn/libopccomn.a" \
         "$rust_out/msvc/opccomn.lib" "$rust_out/msvc/opccomn.def" "$dest/"
 }
 

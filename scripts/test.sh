@@ -222,6 +222,20 @@ if [ "$wine_stage" = 1 ]; then
         echo "package consumer ($arch, Windows 7 variant $win7): ran, $(wc -l <"$dir/consumer.out") lines of output"
     done
 
+    stage "C++ example server and client built with CMake against the unpacked package (x64, x86), under Wine"
+    for variant in x64:x86_64 x86:i686; do
+        IFS=: read -r arch toolchain <<<"$variant"
+        dir="$build/package-test/cpp-server-$arch"
+        cmake -S examples/cpp-server -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-$toolchain.cmake" \
+            -DCMAKE_PREFIX_PATH="$pkg" >/dev/null
+        cmake --build "$dir" -j2 >/dev/null
+        if [ "$arch" = x86 ] && [ "$wine32_ok" != 1 ]; then
+            echo "C++ example ($arch): built, NOT run (no 32-bit Wine; see the SKIPPED stage)"
+            continue
+        fi
+        ctest --test-dir "$dir" --output-on-failure --timeout 300
+    done
+
     stage "MSVC-mode program (clang --target=*-pc-windows-msvc, lld-link, no CRT) linked against the package's opccomn.lib, under Wine"
     scripts/test-msvc-link.sh x64 "$pkg/x64" "$build/package-test/msvc-x64"
     if [ "$wine32_ok" = 1 ]; then
