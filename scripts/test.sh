@@ -161,9 +161,11 @@ if [ "$wine_stage" = 1 ]; then
         CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
 
         stage "C tests (Windows x86 DLL, under 32-bit Wine)"
+        # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
+        x86_tests=$(ctest --test-dir "$build/windows-x86" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
         ctest --test-dir "$build/windows-x86" --output-on-failure --timeout 300
         # Every C test must have printed its closing line: a 32-bit program that did not run prints nothing.
-        for t in $(ctest --test-dir "$build/windows-x86" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p'); do
+        for t in $x86_tests; do
             grep -qE "^$t: [0-9]+ passed, 0 failed" "$build/windows-x86/Testing/Temporary/LastTest.log" ||
                 { echo "$t (x86) printed no result line" >&2; exit 1; }
         done
