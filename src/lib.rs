@@ -32,5 +32,5 @@ mod stress_tests;
 /// connection points, enumerators, ...). Meant for leak checks in tests.
 #[no_mangle]
 pub extern "C" fn OpcObjectCount() -> u32 {
-    com::boundary::catch(0, || com::object::live_objects() as u32)
+    com::ffi::guard!(0, { com::object::live_objects() as u32 })
 }

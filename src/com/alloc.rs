@@ -105,7 +105,7 @@ pub fn alloc_wstr_from_str(text: &str) -> Result<LPWSTR, HRESULT> {
 /// a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
 #[no_mangle]
 pub extern "C" fn OpcTaskMemAlloc(size: usize) -> *mut c_void {
-    super::boundary::catch(ptr::null_mut(), || task_alloc(size))
+    super::ffi::guard!(ptr::null_mut(), { task_alloc(size) })
 }
 
 /// Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`. NULL is ignored.
@@ -114,8 +114,10 @@ pub extern "C" fn OpcTaskMemAlloc(size: usize) -> *mut c_void {
 /// `p` must be NULL or memory from the library's task allocator that has not been freed yet.
 #[no_mangle]
 pub unsafe extern "C" fn OpcTaskMemFree(p: *mut c_void) {
-    // SAFETY: forwarded from the caller's contract.
-    super::boundary::catch((), || unsafe { task_free(p) })
+    super::ffi::guard!((), {
+        // SAFETY: forwarded from the caller's contract.
+        unsafe { task_free(p) }
+    })
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 pub mod alloc;
 pub mod boundary;
 pub mod enumerator;
+pub mod ffi;
 pub mod guids;
 pub mod hresult;
 pub mod iids;

@@ -10,16 +10,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::com::alloc::{alloc_array, alloc_wstr};
-use crate::com::boundary::catch;
+use crate::com::ffi;
 use crate::com::iids::IID_IOPCCommon;
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
 use crate::com::options::read_sized;
-use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
-use crate::com::{
-    IUnknown, DWORD, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR,
-};
+use crate::com::{IUnknown, DWORD, E_INVALIDARG, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR};
 use crate::errors::{error_string, OpcServerKind, OpcVendorErrorStringFn, VendorTexts, CATALOG_LOCALES};
 use crate::locale::{LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
 
@@ -198,12 +195,12 @@ impl OpcCommon {
         self.session.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
-    fn set_locale(&self, lcid: LCID) -> HRESULT {
+    fn set_locale(&self, lcid: LCID) -> Result<HRESULT, HRESULT> {
         if !self.settings.available.contains(&lcid) {
-            return E_INVALIDARG;
+            return Err(E_INVALIDARG);
         }
         self.locale.store(lcid, Ordering::Relaxed);
-        S_OK
+        Ok(S_OK)
     }
 
     fn error_string(&self, code: HRESULT) -> Result<LPWSTR, HRESULT> {
@@ -246,20 +243,19 @@ unsafe fn object<'a>(this: *mut IOPCCommon) -> &'a OpcCommon {
 }
 
 unsafe extern "system" fn set_locale_id(this: *mut IOPCCommon, lcid: LCID) -> HRESULT {
-    // SAFETY: COM calls this only through our vtable.
-    catch(E_UNEXPECTED, || unsafe { object(this) }.set_locale(lcid))
+    ffi::boundary!(Opc, [], {
+        // SAFETY: COM calls this only through our vtable.
+        Ok(unsafe { object(this) }.set_locale(lcid)?)
+    })
 }
 
 unsafe extern "system" fn get_locale_id(this: *mut IOPCCommon, pdwLcid: *mut LCID) -> HRESULT {
-    if pdwLcid.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: non-NULL out-parameter; written with a defined value before anything can fail.
-    unsafe { *pdwLcid = 0 };
-    catch(E_UNEXPECTED, || {
-        // SAFETY: as above.
-        unsafe { *pdwLcid = object(this).locale.load(Ordering::Relaxed) };
-        S_OK
+    ffi::boundary!(Opc, [pdwLcid], {
+        // SAFETY: the caller vouches a non-NULL out-parameter is writable.
+        let out = unsafe { ffi::out(pdwLcid) }?;
+        // SAFETY: COM calls this only through our vtable.
+        out.write(unsafe { object(this) }.locale.load(Ordering::Relaxed));
+        Ok(S_OK)
     })
 }
 
@@ -268,63 +264,34 @@ unsafe extern "system" fn query_available_locale_ids(
     pdwCount: *mut DWORD,
     pdwLcid: *mut *mut LCID,
 ) -> HRESULT {
-    // SAFETY: each out-parameter is written only when non-NULL.
-    unsafe {
-        if !pdwCount.is_null() {
-            *pdwCount = 0;
-        }
-        if !pdwLcid.is_null() {
-            *pdwLcid = ptr::null_mut();
-        }
-    }
-    if pdwCount.is_null() || pdwLcid.is_null() {
-        return E_INVALIDARG;
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [pdwCount, pdwLcid], {
+        // SAFETY: the caller vouches non-NULL out-parameters are writable.
+        let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(pdwLcid)?) };
         // SAFETY: COM calls this only through our vtable.
         let available = &unsafe { object(this) }.settings.available;
-        match alloc_array(available) {
-            Ok(array) => {
-                // SAFETY: both out-parameters are non-NULL.
-                unsafe {
-                    *pdwLcid = array;
-                    *pdwCount = available.len() as DWORD;
-                }
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+        array.write(alloc_array(available)?);
+        count.write(available.len() as DWORD);
+        Ok(S_OK)
     })
 }
 
 unsafe extern "system" fn get_error_string(this: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT {
-    if ppString.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppString = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [ppString], {
+        // SAFETY: the caller vouches a non-NULL out-parameter is writable.
+        let out = unsafe { ffi::out(ppString) }?;
         // SAFETY: COM calls this only through our vtable.
-        match unsafe { object(this) }.error_string(dwError) {
-            Ok(text) => {
-                // SAFETY: as above.
-                unsafe { *ppString = text };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+        out.write(unsafe { object(this) }.error_string(dwError)?);
+        Ok(S_OK)
     })
 }
 
 unsafe extern "system" fn set_client_name(this: *mut IOPCCommon, szName: LPCWSTR) -> HRESULT {
-    catch(E_UNEXPECTED, || {
-        // SAFETY: the caller passes a NUL-terminated string (or NULL, refused below).
-        let Some(name) = (unsafe { wstr_units(szName, MAX_STRING_UNITS) }) else {
-            return E_INVALIDARG;
-        };
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller passes NULL or a NUL-terminated string.
+        let name = unsafe { ffi::in_units(szName) }?;
         // SAFETY: COM calls this only through our vtable.
         unsafe { object(this) }.set_client_name(name);
-        S_OK
+        Ok(S_OK)
     })
 }
 
@@ -352,9 +319,9 @@ pub unsafe extern "C" fn OpcCommonCreate(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
-        unsafe {
+        Ok(unsafe {
             ComObject::<OpcCommon>::create(outer, riid, ppv, |binder| {
                 let settings = Settings::read(options)?;
                 Ok(OpcCommon {
@@ -364,7 +331,7 @@ pub unsafe extern "C" fn OpcCommonCreate(
                     session: Mutex::new(Session { client_name: None }),
                 })
             })
-        }
+        })
     })
 }
 
@@ -379,33 +346,21 @@ pub unsafe extern "C" fn OpcCommonCreate(
 /// `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *mut LPWSTR) -> HRESULT {
-    if ppName.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppName = ptr::null_mut() };
-    if common.is_null() {
-        return E_INVALIDARG;
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [ppName], {
+        // SAFETY: the caller vouches a non-NULL out-parameter is writable.
+        let out = unsafe { ffi::out(ppName) }?;
+        let common = ffi::in_ptr(common)?;
         // SAFETY: `common` is a valid COM pointer per the contract.
-        let Ok(iface) = (unsafe { crate::com::unknown::query::<IOPCCommon>(common, &IID_IOPCCommon) }) else {
-            return E_INVALIDARG;
-        };
+        let iface = unsafe { crate::com::unknown::query::<IOPCCommon>(common.as_ptr(), &IID_IOPCCommon) }
+            .map_err(|_| E_INVALIDARG)?;
         // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not; it stays counted meanwhile.
         let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.as_ptr(), &IOPCCOMMON_VTBL) } {
             Some(obj) => alloc_wstr(&obj.client_name()),
             None => Err(E_INVALIDARG),
         };
         drop(iface);
-        match result {
-            Ok(p) => {
-                // SAFETY: non-NULL out-parameter.
-                unsafe { *ppName = p };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+        out.write(result?);
+        Ok(S_OK)
     })
 }
 

@@ -18,9 +18,9 @@ use core::ffi::c_void;
 use core::ptr;
 
 use crate::com::alloc::{alloc_wstr, alloc_wstr_terminated};
-use crate::com::boundary::catch;
+use crate::com::ffi::{self, FfiResult};
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
-use crate::com::{E_INVALIDARG, E_UNEXPECTED, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
+use crate::com::{E_INVALIDARG, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
 use crate::locale::resolve_locale;
 #[cfg(test)]
 use crate::locale::Language;
@@ -123,29 +123,10 @@ fn catalog_text(code: HRESULT, kind: OpcServerKind, language: Language) -> Optio
     catalog::lookup(code as u32, kind.spec()).map(|found| found.text(language).text)
 }
 
-/// Shared body of the exports: writes `*ppString` first, then looks the text up.
-///
-/// # Safety
-/// `ppString` must be NULL or writable.
-unsafe fn export_error_string(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> HRESULT {
-    if ppString.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *ppString = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
-        let Some(kind) = OpcServerKind::from_raw(kind) else {
-            return E_INVALIDARG;
-        };
-        match error_string(code, locale, kind, None) {
-            Ok(p) => {
-                // SAFETY: as above.
-                unsafe { *ppString = p };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
-    })
+/// Shared body of the exports: the text for `code` as a server of the raw `kind` means it.
+fn export_text(code: HRESULT, locale: LCID, kind: u32) -> FfiResult<LPWSTR> {
+    let kind = OpcServerKind::from_raw(kind).ok_or(E_INVALIDARG)?;
+    Ok(error_string(code, locale, kind, None)?)
 }
 
 /// Returns the text for an OPC, COM or system error code in the given locale, for servers that
@@ -160,8 +141,12 @@ unsafe fn export_error_string(code: HRESULT, locale: LCID, kind: u32, ppString: 
 /// `ppString` must be NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString: *mut LPWSTR) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    unsafe { export_error_string(code, locale, OpcServerKind::DataAccess as u32, ppString) }
+    ffi::boundary!(Opc, [ppString], {
+        // SAFETY: the caller vouches a non-NULL `ppString` is writable.
+        let out = unsafe { ffi::out(ppString) }?;
+        out.write(export_text(code, locale, OpcServerKind::DataAccess as u32)?);
+        Ok(S_OK)
+    })
 }
 
 /// `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
@@ -175,8 +160,12 @@ pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString
 /// `ppString` must be NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    unsafe { export_error_string(code, locale, kind, ppString) }
+    ffi::boundary!(Opc, [ppString], {
+        // SAFETY: the caller vouches a non-NULL `ppString` is writable.
+        let out = unsafe { ffi::out(ppString) }?;
+        out.write(export_text(code, locale, kind)?);
+        Ok(S_OK)
+    })
 }
 
 #[cfg(test)]

@@ -27,11 +27,9 @@ mod text;
 #[cfg(test)]
 mod tests;
 
-use core::ptr;
-
-use crate::com::boundary::catch;
+use crate::com::ffi::{self, Fail, FfiResult};
 use crate::com::wstr::wstr_units;
-use crate::com::{BOOL, E_INVALIDARG, E_UNEXPECTED, FALSE, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK, TRUE};
+use crate::com::{BOOL, FALSE, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK, TRUE};
 use program::{Malformed, Program};
 use stream::WideCursor;
 use text::Utf16;
@@ -68,7 +66,7 @@ fn to_bool(b: bool) -> BOOL {
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
 pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> BOOL {
-    catch(FALSE, move || {
+    ffi::guard!(FALSE, {
         if string.is_null() || pattern.is_null() {
             return FALSE;
         }
@@ -112,7 +110,7 @@ unsafe fn match_long_pattern(string: LPCWSTR, pattern: LPCWSTR, case_sensitive: 
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
 #[no_mangle]
 pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, bCaseSensitive: BOOL) -> BOOL {
-    catch(FALSE, move || {
+    ffi::guard!(FALSE, {
         if string.is_null() || pattern.is_null() {
             return FALSE;
         }
@@ -129,20 +127,11 @@ pub struct OpcPattern {
     program: Program,
 }
 
-/// Stores a compiled pattern (or the failure) in `*ppPattern`, which has already been set to NULL.
-///
-/// # Safety
-/// `ppPattern` must be writable.
-unsafe fn deliver(compiled: Result<Program, Malformed>, ppPattern: *mut *mut OpcPattern) -> HRESULT {
-    match compiled {
-        Ok(program) => {
-            let boxed = Box::new(OpcPattern { program });
-            // SAFETY: the caller vouches `ppPattern` is writable.
-            unsafe { *ppPattern = Box::into_raw(boxed) };
-            S_OK
-        }
-        Err(_) => OPC_E_INVALIDFILTER,
-    }
+/// A compiled pattern as the caller's new filter, or OPC_E_INVALIDFILTER.
+fn deliver(compiled: Result<Program, Malformed>, out: ffi::Out<*mut OpcPattern>) -> FfiResult {
+    let program = compiled.map_err(|_| OPC_E_INVALIDFILTER)?;
+    out.write(Box::into_raw(Box::new(OpcPattern { program })));
+    Ok(S_OK)
 }
 
 /// Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
@@ -163,19 +152,12 @@ pub unsafe extern "C" fn OpcPatternCompileW(
     caseSensitive: BOOL,
     ppPattern: *mut *mut OpcPattern,
 ) -> HRESULT {
-    if ppPattern.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *ppPattern = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
-        // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
-        let Some(pattern) = (unsafe { wstr_units(pattern, usize::MAX) }) else {
-            return E_INVALIDARG;
-        };
-        let compiled = Program::compile(&Utf16(pattern), caseSensitive != 0);
-        // SAFETY: `ppPattern` is writable (above).
-        unsafe { deliver(compiled, ppPattern) }
+    ffi::boundary!(Opc, [ppPattern], {
+        // SAFETY: the caller vouches a non-NULL `ppPattern` is writable.
+        let out = unsafe { ffi::out(ppPattern) }?;
+        // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated (no length limit).
+        let pattern = unsafe { wstr_units(pattern, usize::MAX) }.ok_or(Fail::Null)?;
+        deliver(Program::compile(&Utf16(pattern), caseSensitive != 0), out)
     })
 }
 
@@ -190,19 +172,12 @@ pub unsafe extern "C" fn OpcPatternCompileA(
     caseSensitive: BOOL,
     ppPattern: *mut *mut OpcPattern,
 ) -> HRESULT {
-    if ppPattern.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *ppPattern = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [ppPattern], {
+        // SAFETY: the caller vouches a non-NULL `ppPattern` is writable.
+        let out = unsafe { ffi::out(ppPattern) }?;
         // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
-        let Some(pattern) = (unsafe { narrow::cstr_bytes(pattern) }) else {
-            return E_INVALIDARG;
-        };
-        let compiled = narrow::compile(pattern, caseSensitive != 0);
-        // SAFETY: `ppPattern` is writable (above).
-        unsafe { deliver(compiled, ppPattern) }
+        let pattern = unsafe { narrow::cstr_bytes(pattern) }.ok_or(Fail::Null)?;
+        deliver(narrow::compile(pattern, caseSensitive != 0), out)
     })
 }
 
@@ -215,7 +190,7 @@ pub unsafe extern "C" fn OpcPatternCompileA(
 /// or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
 pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LPCWSTR) -> BOOL {
-    catch(FALSE, move || {
+    ffi::guard!(FALSE, {
         // SAFETY: the caller vouches `pattern` is NULL or a live filter.
         let Some(pattern) = (unsafe { pattern.as_ref() }) else {
             return FALSE;
@@ -238,7 +213,7 @@ pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LP
 /// or point at a NUL-terminated string.
 #[no_mangle]
 pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LPCSTR) -> BOOL {
-    catch(FALSE, || {
+    ffi::guard!(FALSE, {
         // SAFETY: the caller vouches `pattern` is NULL or a live filter.
         let Some(pattern) = (unsafe { pattern.as_ref() }) else {
             return FALSE;
@@ -258,7 +233,7 @@ pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LP
 /// other thread may be using it.
 #[no_mangle]
 pub unsafe extern "C" fn OpcPatternFree(pattern: *mut OpcPattern) {
-    catch((), || {
+    ffi::guard!((), {
         if !pattern.is_null() {
             // SAFETY: the caller vouches it came from `Box::into_raw` in `deliver` and is freed once.
             drop(unsafe { Box::from_raw(pattern) });

@@ -6,6 +6,8 @@ use std::ffi::CString;
 use super::reference::{decode_narrow, decode_wide, ref_match};
 use super::steps;
 use super::*;
+use crate::com::E_INVALIDARG;
+use core::ptr;
 
 /// Whether `MatchPatternA` reads UTF-8 (everywhere but Windows).
 const NARROW_IS_UTF8: bool = cfg!(not(windows));
