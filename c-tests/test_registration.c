@@ -255,7 +255,7 @@ static void test_reg_file_round_trip(void) {
     CHECK_HR(OpcRegistryApply(imported, W("Windows Registry Editor Version 5.00\n[HKEY_CURRENT_USER\\A]\n")),
              E_INVALIDARG);
     CHECK_HR(OpcRegistryApply(imported, W("not a registry file")), E_INVALIDARG);
-    CHECK_HR(OpcRegistryApply(imported, NULL), E_POINTER);
+    CHECK_HR(OpcRegistryApply(imported, NULL), E_INVALIDARG);
     b = dump(imported);
     CHECK(wstr_is(b, "Windows Registry Editor Version 5.00\r\n\r\n"));
     OpcTaskMemFree(b);
@@ -276,7 +276,7 @@ static void test_category_helpers(void) {
                  "OPC Alarm & Event Server Version 1.0");
     CHECK_HR(OpcCreateComponentCategory(reg, &bogus, NULL), E_INVALIDARG); /* no standard text */
     CHECK_HR(OpcCreateComponentCategory(reg, &bogus, W("Mine")), S_OK);
-    CHECK_HR(OpcCreateComponentCategory(reg, NULL, W("Mine")), E_POINTER);
+    CHECK_HR(OpcCreateComponentCategory(reg, NULL, W("Mine")), E_INVALIDARG);
     CHECK_HR(OpcRegisterClassInCategory(reg, &CLSID_Test, &CATID_OPCAEServer10), S_OK);
     CHECK_HR(OpcRegistryExport(reg, W("CLSID\\{C1000000-1111-2222-3333-444455556601}\\Implemented Categories\\{58E13251-"
                                       "AC87-11D1-84D5-00608CB8A7E9}"),
@@ -291,7 +291,7 @@ static void test_category_helpers(void) {
              REGDB_E_KEYMISSING);
     CHECK(text == NULL);
     CHECK_HR(OpcUnregisterClassInCategory(reg, &CLSID_Test, &CATID_OPCAEServer10), S_OK); /* not there: fine */
-    CHECK_HR(OpcRegisterClassInCategory(reg, NULL, &CATID_OPCAEServer10), E_POINTER);
+    CHECK_HR(OpcRegisterClassInCategory(reg, NULL, &CATID_OPCAEServer10), E_INVALIDARG);
 
     CHECK_HR(OpcCategoryDescription(&CATID_OPCDAServer30, &text), S_OK);
     CHECK(wstr_is(text, "OPC Data Access Servers Version 3.0"));
@@ -307,13 +307,13 @@ static void test_bad_registrations(void) {
     OpcServerRegistration r;
     LPWSTR text = (LPWSTR)GARBAGE_PTR;
 
-    CHECK_HR(OpcRegisterServer(NULL, reg), E_POINTER);
+    CHECK_HR(OpcRegisterServer(NULL, reg), E_INVALIDARG);
     r = local_server();
     r.struct_size = 8;
     CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
     r = local_server();
     r.prog_id = NULL;
-    CHECK_HR(OpcRegisterServer(&r, reg), E_POINTER);
+    CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
     r = local_server();
     r.prog_id = K("Bad\\ProgID");
     CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
@@ -335,7 +335,7 @@ static void test_bad_registrations(void) {
         r.user_type = lone_surrogate;
         CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
     }
-    CHECK_HR(OpcRegistrationExport(NULL, &text), E_POINTER);
+    CHECK_HR(OpcRegistrationExport(NULL, &text), E_INVALIDARG);
     CHECK(text == NULL);
     /* Nothing was written by any of these. */
     text = dump(reg);
@@ -346,7 +346,7 @@ static void test_bad_registrations(void) {
     CHECK_HR(OpcUnregisterServer(&r, reg), REGDB_E_KEYMISSING);
     OpcRegistryRelease(reg);
     OpcRegistryRelease(NULL);
-    CHECK_HR(OpcRegistryCreateMemory(NULL), E_POINTER);
+    CHECK_HR(OpcRegistryCreateMemory(NULL), E_INVALIDARG);
 }
 
 static void expect_command(const char *line, uint32_t want) {
@@ -370,8 +370,8 @@ static void test_command_line(void) {
     expect_command("/RegServerX RegServer --RegServer", OPC_SERVER_COMMAND_NONE);
     CHECK_HR(OpcParseCommandLine(W("/RegServer /UnregServer"), &got), E_INVALIDARG);
     CHECK(got == OPC_SERVER_COMMAND_NONE);
-    CHECK_HR(OpcParseCommandLine(NULL, &got), E_POINTER);
-    CHECK_HR(OpcParseCommandLine(W("/RegServer"), NULL), E_POINTER);
+    CHECK_HR(OpcParseCommandLine(NULL, &got), E_INVALIDARG);
+    CHECK_HR(OpcParseCommandLine(W("/RegServer"), NULL), E_INVALIDARG);
 }
 
 static void test_versions(void) {
@@ -408,11 +408,11 @@ static void test_versions(void) {
     CHECK_HR(OpcVersionParse(W("5.2.x"), &w), E_INVALIDARG);
     CHECK_HR(OpcVersionParse(W("70000.0.0"), &w), E_INVALIDARG);
     CHECK_HR(OpcVersionParse(W(" 5.2.41"), &w), E_INVALIDARG);
-    CHECK_HR(OpcVersionParse(NULL, &w), E_POINTER);
-    CHECK_HR(OpcVersionParse(W("1.2.3"), NULL), E_POINTER);
-    CHECK_HR(OpcVersionToFileVersion(NULL, &ms, &ls), E_POINTER);
+    CHECK_HR(OpcVersionParse(NULL, &w), E_INVALIDARG);
+    CHECK_HR(OpcVersionParse(W("1.2.3"), NULL), E_INVALIDARG);
+    CHECK_HR(OpcVersionToFileVersion(NULL, &ms, &ls), E_INVALIDARG);
     CHECK(ms == 0 && ls == 0);
-    CHECK_HR(OpcVersionFormat(NULL, &text), E_POINTER);
+    CHECK_HR(OpcVersionFormat(NULL, &text), E_INVALIDARG);
     CHECK(text == NULL);
 }
 

@@ -351,7 +351,7 @@ static void test_class_factory(void) {
     CHECK_HR(OpcDllGetClassObject(&other, &IID_ClassFactory_, &p), CLASS_E_CLASSNOTAVAILABLE);
     CHECK(p == NULL);
     CHECK_HR(OpcDllGetClassObject(&CLSID_OPCServerList, &IID_ClassFactory_, NULL), E_POINTER);
-    CHECK_HR(OpcDllGetClassObject(NULL, &IID_ClassFactory_, &p), E_INVALIDARG);
+    CHECK_HR(OpcDllGetClassObject(NULL, &IID_ClassFactory_, &p), E_POINTER);
     CHECK_HR(OpcDllGetClassObject(&CLSID_OPCServerList, &IID_IOPCServerList, &p), E_NOINTERFACE);
     CHECK(p == NULL);
     CHECK_HR(OpcDllCanUnloadNow(), S_OK);

@@ -624,7 +624,7 @@ static void test_client_sink(void) {
     IUnknown *unk = NULL;
     memset(&r, 0, sizeof r);
 
-    CHECK_HR(OpcShutdownSinkCreate(NULL, &r, &IID_IOPCShutdown, &p), E_INVALIDARG);
+    CHECK_HR(OpcShutdownSinkCreate(NULL, &r, &IID_IOPCShutdown, &p), E_POINTER);
     CHECK(p == NULL);
     p = GARBAGE_PTR;
     CHECK_HR(OpcShutdownSinkCreate(on_shutdown, &r, &IID_Bogus_, &p), E_NOINTERFACE);
@@ -668,11 +668,11 @@ static void test_client_and_server(void) {
     CHECK_HR(OpcShutdownUnadvise(mock_unk(&not_a_server), 1), E_NOINTERFACE);
     CHECK(not_a_server.refs == 1);
     cookie = GARBAGE_U32;
-    CHECK_HR(OpcShutdownAdvise(NULL, sink, &cookie), E_POINTER);
+    CHECK_HR(OpcShutdownAdvise(NULL, sink, &cookie), E_INVALIDARG);
     CHECK(cookie == 0);
-    CHECK_HR(OpcShutdownAdvise((IUnknown *)cpc, NULL, &cookie), E_POINTER);
-    CHECK_HR(OpcShutdownAdvise((IUnknown *)cpc, sink, NULL), E_POINTER);
-    CHECK_HR(OpcShutdownUnadvise(NULL, 1), E_POINTER);
+    CHECK_HR(OpcShutdownAdvise((IUnknown *)cpc, NULL, &cookie), E_INVALIDARG);
+    CHECK_HR(OpcShutdownAdvise((IUnknown *)cpc, sink, NULL), E_INVALIDARG);
+    CHECK_HR(OpcShutdownUnadvise(NULL, 1), E_INVALIDARG);
     CHECK_HR(OpcShutdownAdvise((IUnknown *)cpc, mock_unk(&plain), &cookie), CONNECT_E_CANNOTCONNECT_);
     CHECK_HR(OpcShutdownUnadvise((IUnknown *)cpc, 4242), CONNECT_E_NOCONNECTION_);
 

@@ -311,13 +311,22 @@ typedef const char *LPCSTR;
 #endif
 
 #if !defined(_WIN32)
+// A component category identifier.
+typedef struct GUID CATID;
+#endif
+
+#if !defined(_WIN32)
 // A class identifier.
 typedef struct GUID CLSID;
 #endif
 
 #if !defined(_WIN32)
-// A component category identifier.
-typedef struct GUID CATID;
+// A pointer to a class identifier.
+#if defined(__cplusplus)
+typedef const CLSID &REFCLSID;
+#else
+typedef const CLSID *REFCLSID;
+#endif
 #endif
 
 // A server's registration, described once and passed to `OpcRegisterServer`,
@@ -371,15 +380,6 @@ typedef struct OpcServerRegistration {
   // `OPC_REGISTRATION_KEEP_EXISTING` or 0.
   uint32_t flags;
 } OpcServerRegistration;
-
-#if !defined(_WIN32)
-// A pointer to a class identifier.
-#if defined(__cplusplus)
-typedef const CLSID &REFCLSID;
-#else
-typedef const CLSID *REFCLSID;
-#endif
-#endif
 
 // A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
 typedef struct OpcVersion {
@@ -1938,7 +1938,7 @@ void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *pattern);
 // Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
 // the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
 //
-// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
 //
 // # Safety
 // `out` must be NULL or writable.
@@ -1950,7 +1950,7 @@ HRESULT OPCCOMN_CDECL OpcRegistryCreateMemory(struct OpcRegistry **out);
 // `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
 // the same registry.
 //
-// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
 //
 // # Safety
 // `out` must be NULL or writable.
@@ -1965,7 +1965,7 @@ void OPCCOMN_CDECL OpcRegistryRelease(struct OpcRegistry *reg);
 // Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
 // HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
 //
-// Returns S_OK; E_POINTER for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
+// Returns S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
 // UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
 // is not a string. `*data` is NULL on failure.
 //
@@ -1973,12 +1973,53 @@ void OPCCOMN_CDECL OpcRegistryRelease(struct OpcRegistry *reg);
 // `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.
 HRESULT OPCCOMN_CDECL OpcRegistryGetString(const struct OpcRegistry *reg, LPCWSTR key, LPCWSTR name, LPWSTR *data);
 
+// Creates the component category `catid` with `description` in English (0x409), as the
+// specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
+// `description` uses the standard text of an OPC category. On Windows this goes through the Component
+// Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
+//
+// Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
+// is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
+//
+// # Safety
+// `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
+HRESULT OPCCOMN_CDECL OpcCreateComponentCategory(const struct OpcRegistry *reg, const CATID *catid, LPCWSTR description);
+
+// Registers `clsid` as implementing the category `catid` (the specification's
+// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
+// Categories Manager on Windows.
+//
+// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+//
+// # Safety
+// `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
+HRESULT OPCCOMN_CDECL OpcRegisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
+
+// Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
+// `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
+//
+// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+//
+// # Safety
+// As for `OpcRegisterClassInCategory`.
+HRESULT OPCCOMN_CDECL OpcUnregisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
+
+// The standard English description of an OPC component category (for example "OPC Data Access
+// Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
+//
+// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
+// `*description` is NULL on failure.
+//
+// # Safety
+// `catid` NULL or readable; `description` NULL or writable.
+HRESULT OPCCOMN_CDECL OpcCategoryDescription(const CATID *catid, LPWSTR *description);
+
 // Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
 // program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
 // `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
 // `OpcServerCommand` value: register, unregister, embedding or none.
 //
-// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG when the line both registers and
+// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and
 // unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
 //
 // # Safety
@@ -1991,7 +2032,7 @@ HRESULT OPCCOMN_CDECL OpcParseCommandLine(LPCWSTR command_line, uint32_t *comman
 // registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
 // regedit.
 //
-// Returns S_OK; E_POINTER for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
+// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
 // REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
 //
 // # Safety
@@ -2001,7 +2042,7 @@ HRESULT OPCCOMN_CDECL OpcRegistryExport(const struct OpcRegistry *reg, LPCWSTR k
 // Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
 // and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
 //
-// Returns S_OK; E_POINTER for a NULL `text`; E_INVALIDARG for malformed text or a root other than
+// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
 // HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
 // case the changes before it remain.
 //
@@ -2018,7 +2059,7 @@ HRESULT OPCCOMN_CDECL OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR te
 // that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
 // reports OPC_SERVER_COMMAND_REGISTER.
 //
-// Returns S_OK; E_POINTER for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
+// Returns S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
 // wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
 // categories or a count without an array, strings that are not valid UTF-16; a registry error (for
 // example E_ACCESSDENIED without administrator rights) when a write fails.
@@ -2045,57 +2086,16 @@ HRESULT OPCCOMN_CDECL OpcUnregisterServer(const struct OpcServerRegistration *se
 // record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
 // module.
 //
-// Returns S_OK; E_POINTER for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
+// Returns S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
 // `*text` is NULL on failure.
 //
 // # Safety
 // `server` as for `OpcRegisterServer`; `text` NULL or writable.
 HRESULT OPCCOMN_CDECL OpcRegistrationExport(const struct OpcServerRegistration *server, LPWSTR *text);
 
-// Creates the component category `catid` with `description` in English (0x409), as the
-// specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
-// `description` uses the standard text of an OPC category. On Windows this goes through the Component
-// Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
-//
-// Returns S_OK; E_POINTER for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
-// is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
-//
-// # Safety
-// `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
-HRESULT OPCCOMN_CDECL OpcCreateComponentCategory(const struct OpcRegistry *reg, const CATID *catid, LPCWSTR description);
-
-// Registers `clsid` as implementing the category `catid` (the specification's
-// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
-// Categories Manager on Windows.
-//
-// Returns S_OK; E_POINTER for a NULL argument; registry errors.
-//
-// # Safety
-// `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
-HRESULT OPCCOMN_CDECL OpcRegisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
-
-// Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
-// `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
-//
-// Returns S_OK; E_POINTER for a NULL argument; registry errors.
-//
-// # Safety
-// As for `OpcRegisterClassInCategory`.
-HRESULT OPCCOMN_CDECL OpcUnregisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
-
-// The standard English description of an OPC component category (for example "OPC Data Access
-// Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
-//
-// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
-// `*description` is NULL on failure.
-//
-// # Safety
-// `catid` NULL or readable; `description` NULL or writable.
-HRESULT OPCCOMN_CDECL OpcCategoryDescription(const CATID *catid, LPWSTR *description);
-
 // Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
 //
-// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
+// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
 // failure.
 //
 // # Safety
@@ -2104,7 +2104,7 @@ HRESULT OPCCOMN_CDECL OpcVersionParse(LPCWSTR text, struct OpcVersion *version);
 
 // Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
 //
-// Returns S_OK; E_POINTER for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
+// Returns S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
 //
 // # Safety
 // `version` NULL or readable; `text` NULL or writable.
@@ -2113,7 +2113,7 @@ HRESULT OPCCOMN_CDECL OpcVersionFormat(const struct OpcVersion *version, LPWSTR 
 // The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
 // `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
 //
-// Returns S_OK, or E_POINTER for a NULL argument (the outputs that are not NULL are 0 then).
+// Returns S_OK, or E_INVALIDARG for a NULL argument (the outputs that are not NULL are 0 then).
 //
 // # Safety
 // `version` NULL or readable; `ms` and `ls` NULL or writable.
@@ -2122,7 +2122,7 @@ HRESULT OPCCOMN_CDECL OpcVersionToFileVersion(const struct OpcVersion *version, 
 // The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
 // convention.
 //
-// Returns S_OK; E_POINTER for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
+// Returns S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
 // does not follow the convention). `*version` is 0.0.0 on failure.
 //
 // # Safety
@@ -2168,7 +2168,7 @@ HRESULT OPCCOMN_CDECL OpcServerListCreateOver(const struct OpcRegistry *reg, IUn
 // over the system registry, and which honours LockServer), as DllGetClassObject returns it. For servers
 // that link opccomn statically and have their own DllGetClassObject: forward CLSID_OPCServerList here.
 //
-// Returns S_OK; E_POINTER for a NULL `ppv`; E_INVALIDARG for a NULL `rclsid` or `riid`;
+// Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
 // CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
 // IID_IUnknown. `*ppv` is NULL on failure.
 //
@@ -2254,7 +2254,7 @@ HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, UL
 // client may release its reference at any time. `context` must stay valid until the sink is
 // destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
 //
-// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; E_INVALIDARG for a NULL `callback`;
+// Returns S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`;
 // E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
 //
 // # Safety
@@ -2269,7 +2269,7 @@ HRESULT OPCCOMN_CDECL OpcShutdownSinkCreate(OpcShutdownCallback callback, void *
 // three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
 // IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
 // gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
-// E_POINTER for a NULL argument.
+// E_INVALIDARG for a NULL argument.
 //
 // # Safety
 // `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
@@ -2278,7 +2278,7 @@ HRESULT OPCCOMN_CDECL OpcShutdownAdvise(IUnknown *server, IUnknown *sink, DWORD 
 // Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
 //
 // Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
-// gives CONNECT_E_NOCONNECTION. E_POINTER for a NULL `server`.
+// gives CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
 //
 // # Safety
 // `server` must be NULL or a valid COM interface pointer.

@@ -2,9 +2,8 @@
 //! to register itself, `/UnregServer` or `-UnregServer` to unregister, and COM starts it with
 //! `-Embedding` (or `/Embedding`; `-Automation` for automation servers) to serve its classes.
 
-use super::arg_string;
-use crate::com::boundary::catch;
-use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, HRESULT, LPCWSTR, S_OK};
+use crate::com::ffi;
+use crate::com::{E_INVALIDARG, HRESULT, LPCWSTR, S_OK};
 
 /// What an EXE server's command line asks it to do.
 #[repr(u32)]
@@ -84,29 +83,19 @@ pub fn parse_command_line(line: &str) -> Result<OpcServerCommand, HRESULT> {
 /// `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
 /// `OpcServerCommand` value: register, unregister, embedding or none.
 ///
-/// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG when the line both registers and
+/// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and
 /// unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
 ///
 /// # Safety
 /// `command_line` NULL or NUL-terminated; `command` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcParseCommandLine(command_line: LPCWSTR, command: *mut u32) -> HRESULT {
-    if command.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *command = OpcServerCommand::None as u32 };
-    catch(E_UNEXPECTED, || {
-        // SAFETY: forwarded from the caller's contract.
-        let parsed = unsafe { arg_string(command_line) }.and_then(|line| parse_command_line(&line));
-        match parsed {
-            Ok(c) => {
-                // SAFETY: as above.
-                unsafe { *command = c as u32 };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+    ffi::boundary!(Opc, [command], {
+        // SAFETY: the caller's contract: `command` NULL or writable, `command_line` NULL or
+        // NUL-terminated.
+        let (command, line) = unsafe { (ffi::out(command)?, ffi::in_string(command_line)?) };
+        command.write(parse_command_line(&line)? as u32);
+        Ok(S_OK)
     })
 }
 

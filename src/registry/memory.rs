@@ -35,7 +35,7 @@ fn split(path: &str) -> Option<Vec<&str>> {
 }
 
 fn fold(name: &str) -> String {
-    name.to_lowercase()
+    super::path::folded(name)
 }
 
 impl Node {

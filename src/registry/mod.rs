@@ -11,21 +11,21 @@
 //! takes one (NULL meaning the system registry).
 
 pub mod categories;
+pub mod category_helpers;
 pub mod cmdline;
 pub mod memory;
+pub mod path;
 pub mod regfile;
 pub mod register;
 pub mod version;
 #[cfg(windows)]
 pub mod windows;
 
-use core::ptr;
 use std::sync::{Arc, OnceLock};
 
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::boundary::catch;
-use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
-use crate::com::{E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, LPWSTR, S_OK};
+use crate::com::ffi;
+use crate::com::{GUID, HRESULT, LPCWSTR, LPWSTR, S_OK};
 
 /// `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
 #[cfg(not(system_com_headers))]
@@ -269,70 +269,22 @@ pub(crate) unsafe fn registries(reg: *const OpcRegistry) -> Arc<Registries> {
     }
 }
 
-/// Reads a caller's string argument as UTF-8; `E_POINTER` for NULL, `E_INVALIDARG` when too long or
-/// not valid UTF-16.
-///
-/// # Safety
-/// `p` must be NULL or a NUL-terminated UTF-16 string.
-pub(crate) unsafe fn arg_string(p: LPCWSTR) -> Result<String, HRESULT> {
-    if p.is_null() {
-        return Err(E_POINTER);
-    }
-    // SAFETY: forwarded from the caller.
-    let units = unsafe { wstr_units(p, MAX_STRING_UNITS) }.ok_or(E_INVALIDARG)?;
-    String::from_utf16(units).map_err(|_| E_INVALIDARG)
-}
-
-/// As [`arg_string`], NULL giving `None`.
-///
-/// # Safety
-/// As for [`arg_string`].
-pub(crate) unsafe fn opt_arg_string(p: LPCWSTR) -> Result<Option<String>, HRESULT> {
-    if p.is_null() {
-        Ok(None)
-    } else {
-        // SAFETY: forwarded.
-        unsafe { arg_string(p) }.map(Some)
-    }
-}
-
-/// Writes `*out = NULL` for a non-NULL out-parameter; `E_POINTER` when it is NULL.
-///
-/// # Safety
-/// `out` must be NULL or writable.
-pub(crate) unsafe fn clear_out<T>(out: *mut *mut T) -> Result<(), HRESULT> {
-    if out.is_null() {
-        return Err(E_POINTER);
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *out = ptr::null_mut() };
-    Ok(())
-}
-
-fn into_hr(r: Result<(), HRESULT>) -> HRESULT {
-    r.err().unwrap_or(S_OK)
-}
-
 /// Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
 /// the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
 ///
-/// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+/// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
 ///
 /// # Safety
 /// `out` must be NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    if let Err(hr) = unsafe { clear_out(out) } {
-        return hr;
-    }
-    catch(E_UNEXPECTED, || {
-        let reg = Box::new(OpcRegistry {
+    ffi::boundary!(Opc, [out], {
+        // SAFETY: the caller vouches a non-NULL `out` is writable.
+        let out = unsafe { ffi::out(out) }?;
+        out.write(Box::into_raw(Box::new(OpcRegistry {
             inner: Arc::new(Registries::single(Arc::new(memory::MemoryRegistry::new()))),
-        });
-        // SAFETY: checked writable above.
-        unsafe { *out = Box::into_raw(reg) };
-        S_OK
+        })));
+        Ok(S_OK)
     })
 }
 
@@ -342,23 +294,19 @@ pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> 
 /// `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
 /// the same registry.
 ///
-/// Returns S_OK, or E_POINTER for a NULL `out` (`*out` is NULL on failure).
+/// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
 ///
 /// # Safety
 /// `out` must be NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    if let Err(hr) = unsafe { clear_out(out) } {
-        return hr;
-    }
-    catch(E_UNEXPECTED, || {
-        let reg = Box::new(OpcRegistry {
+    ffi::boundary!(Opc, [out], {
+        // SAFETY: the caller vouches a non-NULL `out` is writable.
+        let out = unsafe { ffi::out(out) }?;
+        out.write(Box::into_raw(Box::new(OpcRegistry {
             inner: Registries::system(),
-        });
-        // SAFETY: checked writable above.
-        unsafe { *out = Box::into_raw(reg) };
-        S_OK
+        })));
+        Ok(S_OK)
     })
 }
 
@@ -368,17 +316,18 @@ pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> HR
 /// `reg` must be NULL or a live handle that is not used again.
 #[no_mangle]
 pub unsafe extern "C" fn OpcRegistryRelease(reg: *mut OpcRegistry) {
-    if reg.is_null() {
-        return;
-    }
-    // SAFETY: the caller gives up a handle made by Box::into_raw.
-    catch((), || drop(unsafe { Box::from_raw(reg) }))
+    ffi::guard!((), {
+        if !reg.is_null() {
+            // SAFETY: the caller gives up a handle made by Box::into_raw.
+            drop(unsafe { Box::from_raw(reg) })
+        }
+    })
 }
 
 /// Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
 /// HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
 ///
-/// Returns S_OK; E_POINTER for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
+/// Returns S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
 /// UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
 /// is not a string. `*data` is NULL on failure.
 ///
@@ -391,24 +340,18 @@ pub unsafe extern "C" fn OpcRegistryGetString(
     name: LPCWSTR,
     data: *mut LPWSTR,
 ) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    if let Err(hr) = unsafe { clear_out(data) } {
-        return hr;
-    }
-    catch(E_UNEXPECTED, || {
-        let run = || -> Result<(), HRESULT> {
-            // SAFETY: forwarded from the caller's contract.
-            let (key, name) = unsafe { (arg_string(key)?, opt_arg_string(name)?.unwrap_or_default()) };
-            // SAFETY: as above.
-            let regs = unsafe { registries(reg) };
-            let value = regs.write.value(&key, &name).ok_or(REGDB_E_KEYMISSING)?;
-            let text = value.as_str().ok_or(REGDB_E_INVALIDVALUE)?;
-            let p = alloc_wstr_from_str(text)?;
-            // SAFETY: checked writable above.
-            unsafe { *data = p };
-            Ok(())
-        };
-        into_hr(run())
+    ffi::boundary!(Opc, [data], {
+        // SAFETY: the caller's contract: `data` NULL or writable, the strings NULL or NUL-terminated.
+        let (data, key, name) = unsafe { (ffi::out(data)?, ffi::in_string(key)?, ffi::in_string_opt(name)?) };
+        // SAFETY: as above.
+        let regs = unsafe { registries(reg) };
+        let value = regs
+            .write
+            .value(&key, &name.unwrap_or_default())
+            .ok_or(REGDB_E_KEYMISSING)?;
+        let text = value.as_str().ok_or(REGDB_E_INVALIDVALUE)?;
+        data.write(alloc_wstr_from_str(text)?);
+        Ok(S_OK)
     })
 }
 

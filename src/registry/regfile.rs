@@ -14,10 +14,10 @@
 
 use core::fmt::Write as _;
 
-use super::{arg_string, clear_out, into_hr, registries, OpcRegistry, RegValue, Registry, REGDB_E_KEYMISSING};
+use super::{registries, OpcRegistry, RegValue, Registry, REGDB_E_KEYMISSING};
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::boundary::catch;
-use crate::com::{E_INVALIDARG, E_UNEXPECTED, HRESULT, LPCWSTR, LPWSTR};
+use crate::com::ffi;
+use crate::com::{E_INVALIDARG, HRESULT, LPCWSTR, LPWSTR, S_OK};
 
 const HEADER: &str = "Windows Registry Editor Version 5.00";
 const ROOT: &str = "HKEY_CLASSES_ROOT";
@@ -276,36 +276,27 @@ pub fn apply(reg: &dyn Registry, text: &str) -> Result<(), HRESULT> {
 /// registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
 /// regedit.
 ///
-/// Returns S_OK; E_POINTER for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
+/// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
 /// REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
 ///
 /// # Safety
 /// `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcRegistryExport(reg: *const OpcRegistry, key: LPCWSTR, text: *mut LPWSTR) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    if let Err(hr) = unsafe { clear_out(text) } {
-        return hr;
-    }
-    catch(E_UNEXPECTED, || {
-        let run = || -> Result<(), HRESULT> {
-            // SAFETY: forwarded from the caller's contract.
-            let key = unsafe { super::opt_arg_string(key)? }.unwrap_or_default();
-            // SAFETY: as above.
-            let regs = unsafe { registries(reg) };
-            let p = alloc_wstr_from_str(&export(&*regs.write, &key)?)?;
-            // SAFETY: checked writable above.
-            unsafe { *text = p };
-            Ok(())
-        };
-        into_hr(run())
+    ffi::boundary!(Opc, [text], {
+        // SAFETY: the caller's contract: `text` NULL or writable, `key` NULL or NUL-terminated.
+        let (text, key) = unsafe { (ffi::out(text)?, ffi::in_string_opt(key)?) };
+        // SAFETY: as above.
+        let regs = unsafe { registries(reg) };
+        text.write(alloc_wstr_from_str(&export(&*regs.write, &key.unwrap_or_default())?)?);
+        Ok(S_OK)
     })
 }
 
 /// Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
 /// and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
 ///
-/// Returns S_OK; E_POINTER for a NULL `text`; E_INVALIDARG for malformed text or a root other than
+/// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
 /// HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
 /// case the changes before it remain.
 ///
@@ -313,15 +304,13 @@ pub unsafe extern "C" fn OpcRegistryExport(reg: *const OpcRegistry, key: LPCWSTR
 /// `reg` NULL or a live handle; `text` NULL or NUL-terminated.
 #[no_mangle]
 pub unsafe extern "C" fn OpcRegistryApply(reg: *const OpcRegistry, text: LPCWSTR) -> HRESULT {
-    catch(E_UNEXPECTED, || {
-        let run = || -> Result<(), HRESULT> {
-            // SAFETY: forwarded from the caller's contract.
-            let text = unsafe { arg_string(text)? };
-            // SAFETY: as above.
-            let regs = unsafe { registries(reg) };
-            apply(&*regs.write, &text)
-        };
-        into_hr(run())
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller's contract: `text` NULL or NUL-terminated.
+        let text = unsafe { ffi::in_string(text) }?;
+        // SAFETY: as above.
+        let regs = unsafe { registries(reg) };
+        apply(&*regs.write, &text)?;
+        Ok(S_OK)
     })
 }
 

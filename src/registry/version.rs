@@ -4,10 +4,9 @@
 
 use core::cmp::Ordering;
 
-use super::arg_string;
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::boundary::catch;
-use crate::com::{BOOL, DWORD, E_INVALIDARG, E_POINTER, E_UNEXPECTED, FALSE, HRESULT, LPCWSTR, LPWSTR, S_OK, TRUE};
+use crate::com::ffi;
+use crate::com::{BOOL, DWORD, E_INVALIDARG, FALSE, HRESULT, LPCWSTR, LPWSTR, S_OK, TRUE};
 
 /// A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
 #[repr(C)]
@@ -17,6 +16,9 @@ pub struct OpcVersion {
     pub minor: u16,
     pub build: u16,
 }
+
+// SAFETY: three u16 fields; all zero is version 0.0.0, the failure value.
+unsafe impl ffi::ZeroIsEmpty for OpcVersion {}
 
 impl OpcVersion {
     /// Parses `MM.mm.bb`: exactly three dot-separated decimal numbers, digits only, each at most 65535.
@@ -62,67 +64,41 @@ impl core::fmt::Display for OpcVersion {
 
 /// Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
 ///
-/// Returns S_OK; E_POINTER for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
+/// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
 /// failure.
 ///
 /// # Safety
 /// `text` NULL or NUL-terminated; `version` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcVersionParse(text: LPCWSTR, version: *mut OpcVersion) -> HRESULT {
-    if version.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *version = OpcVersion::default() };
-    catch(E_UNEXPECTED, || {
-        // SAFETY: forwarded from the caller's contract.
-        let text = match unsafe { arg_string(text) } {
-            Ok(t) => t,
-            Err(hr) => return hr,
-        };
-        match OpcVersion::parse(&text) {
-            Some(v) => {
-                // SAFETY: as above.
-                unsafe { *version = v };
-                S_OK
-            }
-            None => E_INVALIDARG,
-        }
+    ffi::boundary!(Opc, [version], {
+        // SAFETY: the caller's contract: `version` NULL or writable, `text` NULL or NUL-terminated.
+        let (version, text) = unsafe { (ffi::out(version)?, ffi::in_string(text)?) };
+        version.write(OpcVersion::parse(&text).ok_or(E_INVALIDARG)?);
+        Ok(S_OK)
     })
 }
 
 /// Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
 ///
-/// Returns S_OK; E_POINTER for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
+/// Returns S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
 ///
 /// # Safety
 /// `version` NULL or readable; `text` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcVersionFormat(version: *const OpcVersion, text: *mut LPWSTR) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    if let Err(hr) = unsafe { super::clear_out(text) } {
-        return hr;
-    }
-    if version.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: checked non-NULL; the caller vouches it is readable.
-        match alloc_wstr_from_str(&unsafe { *version }.to_string()) {
-            Ok(p) => {
-                // SAFETY: checked writable above.
-                unsafe { *text = p };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+    ffi::boundary!(Opc, [text], {
+        // SAFETY: the caller's contract: `version` NULL or readable, `text` NULL or writable.
+        let (version, text) = unsafe { (ffi::in_ref(version)?, ffi::out(text)?) };
+        text.write(alloc_wstr_from_str(&version.to_string())?);
+        Ok(S_OK)
     })
 }
 
 /// The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
 /// `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
 ///
-/// Returns S_OK, or E_POINTER for a NULL argument (the outputs that are not NULL are 0 then).
+/// Returns S_OK, or E_INVALIDARG for a NULL argument (the outputs that are not NULL are 0 then).
 ///
 /// # Safety
 /// `version` NULL or readable; `ms` and `ls` NULL or writable.
@@ -132,52 +108,32 @@ pub unsafe extern "C" fn OpcVersionToFileVersion(
     ms: *mut DWORD,
     ls: *mut DWORD,
 ) -> HRESULT {
-    // SAFETY: each output is written only when non-NULL.
-    unsafe {
-        if !ms.is_null() {
-            *ms = 0;
-        }
-        if !ls.is_null() {
-            *ls = 0;
-        }
-    }
-    if version.is_null() || ms.is_null() || ls.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: all three checked non-NULL above.
-        unsafe {
-            let (m, l) = (*version).file_version();
-            *ms = m;
-            *ls = l;
-        }
-        S_OK
+    ffi::boundary!(Opc, [ms, ls], {
+        // SAFETY: the caller's contract: `version` NULL or readable, `ms` and `ls` NULL or writable.
+        let (version, ms, ls) = unsafe { (ffi::in_ref(version)?, ffi::out(ms)?, ffi::out(ls)?) };
+        let (m, l) = version.file_version();
+        ms.write(m);
+        ls.write(l);
+        Ok(S_OK)
     })
 }
 
 /// The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
 /// convention.
 ///
-/// Returns S_OK; E_POINTER for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
+/// Returns S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
 /// does not follow the convention). `*version` is 0.0.0 on failure.
 ///
 /// # Safety
 /// `version` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcVersionFromFileVersion(ms: DWORD, ls: DWORD, version: *mut OpcVersion) -> HRESULT {
-    if version.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: checked non-NULL; the caller vouches it is writable.
-    unsafe { *version = OpcVersion::default() };
-    match OpcVersion::from_file_version(ms, ls) {
-        Some(v) => {
-            // SAFETY: as above.
-            unsafe { *version = v };
-            S_OK
-        }
-        None => E_INVALIDARG,
-    }
+    ffi::boundary!(Opc, [version], {
+        // SAFETY: the caller vouches a non-NULL `version` is writable.
+        let version = unsafe { ffi::out(version) }?;
+        version.write(OpcVersion::from_file_version(ms, ls).ok_or(E_INVALIDARG)?);
+        Ok(S_OK)
+    })
 }
 
 /// Compares two versions: negative when `a` is older than `b`, 0 when equal, positive when newer
@@ -187,13 +143,15 @@ pub unsafe extern "C" fn OpcVersionFromFileVersion(ms: DWORD, ls: DWORD, version
 /// `a` and `b` NULL or readable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcVersionCompare(a: *const OpcVersion, b: *const OpcVersion) -> i32 {
-    // SAFETY: each is read only when non-NULL.
-    let (a, b) = unsafe { (a.as_ref(), b.as_ref()) };
-    match a.cmp(&b) {
-        Ordering::Less => -1,
-        Ordering::Equal => 0,
-        Ordering::Greater => 1,
-    }
+    ffi::guard!(0, {
+        // SAFETY: each is read only when non-NULL.
+        let (a, b) = unsafe { (a.as_ref(), b.as_ref()) };
+        match a.cmp(&b) {
+            Ordering::Less => -1,
+            Ordering::Equal => 0,
+            Ordering::Greater => 1,
+        }
+    })
 }
 
 /// TRUE when `candidate` is strictly newer than `installed`, so an installer may replace the installed
@@ -204,12 +162,14 @@ pub unsafe extern "C" fn OpcVersionCompare(a: *const OpcVersion, b: *const OpcVe
 /// `candidate` and `installed` NULL or readable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcVersionIsNewer(candidate: *const OpcVersion, installed: *const OpcVersion) -> BOOL {
-    // SAFETY: forwarded from the caller's contract.
-    if !candidate.is_null() && unsafe { OpcVersionCompare(candidate, installed) } > 0 {
-        TRUE
-    } else {
-        FALSE
-    }
+    ffi::guard!(FALSE, {
+        // SAFETY: forwarded from the caller's contract.
+        if !candidate.is_null() && unsafe { OpcVersionCompare(candidate, installed) } > 0 {
+            TRUE
+        } else {
+            FALSE
+        }
+    })
 }
 
 #[cfg(test)]

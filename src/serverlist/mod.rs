@@ -39,16 +39,15 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
-use crate::com::boundary::catch;
 use crate::com::enumerator::{EnumInterface, Enumerator};
+use crate::com::ffi::{self, Fail, FfiResult};
 use crate::com::iids::{IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IENUMGUID};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
-use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{
-    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR,
-    REFCLSID, REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
+    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, E_INVALIDARG, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR, REFCLSID,
+    REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
 };
 use crate::registry::categories::DA10;
 use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
@@ -303,19 +302,18 @@ pub(crate) fn clsid_from_prog_id(regs: &Registries, prog_id: &str) -> Result<CLS
     value.as_str().and_then(parse_guid).ok_or(CO_E_CLASSSTRING)
 }
 
-/// Reads a category list argument: `None` for "any" (a count of 0 or `(ULONG)-1`).
+/// Reads a category list argument: `None` for "any" (a count of 0 or `(ULONG)-1`, which OPC clients
+/// pass for "no restriction"). NULL with another count gives the NULL rule's code; more than 4096
+/// categories E_INVALIDARG.
 ///
 /// # Safety
 /// `p` must point at `count` readable CATIDs when `count` is neither 0 nor `(ULONG)-1`.
-unsafe fn category_list<'a>(count: ULONG, p: *const CATID) -> Result<Option<&'a [CATID]>, HRESULT> {
+unsafe fn category_list<'a>(count: ULONG, p: *const CATID) -> FfiResult<Option<&'a [CATID]>> {
     if count == 0 || count == ANY_CATEGORY {
         return Ok(None);
     }
-    if p.is_null() || count > MAX_CATEGORIES {
-        return Err(E_INVALIDARG);
-    }
-    // SAFETY: the caller vouches for `count` readable entries.
-    Ok(Some(unsafe { core::slice::from_raw_parts(p, count as usize) }))
+    // SAFETY: forwarded from the caller.
+    unsafe { ffi::in_array(p, count, MAX_CATEGORIES as usize) }.map(Some)
 }
 
 /// # Safety
@@ -336,25 +334,20 @@ unsafe fn enum_classes<I>(
     c_req: ULONG,
     rg_req: *const CATID,
     ppenum: *mut *mut IOPCEnumGUID,
-) -> HRESULT {
-    if ppenum.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppenum = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
-        // SAFETY: forwarded from the caller.
-        let (implemented, required) = match unsafe { (category_list(c_impl, rg_impl), category_list(c_req, rg_req)) } {
-            (Ok(i), Ok(r)) => (i, r),
-            _ => return E_INVALIDARG,
-        };
-        // SAFETY: COM calls this only through our vtables.
-        let list = unsafe { object(this) };
-        let classes = classes_of_categories(&list.regs, implemented, required);
-        // SAFETY: checked non-NULL above.
-        unsafe { *ppenum = Enumerator::<ClassEnum>::create(classes.into(), 0) };
-        S_OK
-    })
+) -> FfiResult {
+    // SAFETY: forwarded from the caller.
+    let (out, implemented, required) = unsafe {
+        (
+            ffi::out(ppenum)?,
+            category_list(c_impl, rg_impl)?,
+            category_list(c_req, rg_req)?,
+        )
+    };
+    // SAFETY: COM calls this only through our vtables.
+    let list = unsafe { object(this) };
+    let classes = classes_of_categories(&list.regs, implemented, required);
+    out.write(Enumerator::<ClassEnum>::create(classes.into(), 0));
+    Ok(S_OK)
 }
 
 /// Strings a call has allocated for its out-parameters; freed unless handed over.
@@ -391,88 +384,55 @@ unsafe fn get_class_details<I>(
     prog_id: *mut LPOLESTR,
     user_type: *mut LPOLESTR,
     vi: Option<*mut LPOLESTR>,
-) -> HRESULT {
-    let outs = [Some(prog_id), Some(user_type), vi];
-    for out in outs.into_iter().flatten() {
-        if !out.is_null() {
-            // SAFETY: non-NULL out-parameter the caller vouches is writable.
-            unsafe { *out = ptr::null_mut() };
-        }
+) -> FfiResult {
+    // SAFETY: forwarded from the caller: out-parameters NULL or writable, `clsid` NULL or readable.
+    let (prog_id, user_type, vi, clsid) = unsafe {
+        (
+            ffi::out(prog_id)?,
+            ffi::out(user_type)?,
+            vi.map(|p| ffi::out(p)).transpose()?,
+            ffi::in_ref(clsid)?,
+        )
+    };
+    // SAFETY: COM calls this only through our vtables.
+    let list = unsafe { object(this) };
+    let details = class_details(&list.regs, clsid, vi.is_some())?;
+    let mut strings = Allocated(Vec::new());
+    let p = strings.string(&details.prog_id)?;
+    let u = strings.string(&details.user_type)?;
+    let v = match vi {
+        Some(_) => strings.string(&details.version_independent_prog_id)?,
+        None => ptr::null_mut(),
+    };
+    strings.hand_over();
+    prog_id.write(p);
+    user_type.write(u);
+    if let Some(vi) = vi {
+        vi.write(v);
     }
-    if outs.iter().flatten().any(|p| p.is_null()) {
-        return E_INVALIDARG;
-    }
-    if clsid.is_null() {
-        return E_INVALIDARG;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: COM calls this only through our vtables; `clsid` checked non-NULL.
-        let (list, clsid) = unsafe { (object(this), *clsid) };
-        let details = match class_details(&list.regs, &clsid, vi.is_some()) {
-            Ok(d) => d,
-            Err(hr) => return hr,
-        };
-        let mut strings = Allocated(Vec::new());
-        let made = (|| -> Result<[LPOLESTR; 3], HRESULT> {
-            Ok([
-                strings.string(&details.prog_id)?,
-                strings.string(&details.user_type)?,
-                if vi.is_some() {
-                    strings.string(&details.version_independent_prog_id)?
-                } else {
-                    ptr::null_mut()
-                },
-            ])
-        })();
-        match made {
-            Ok([p, u, v]) => {
-                strings.hand_over();
-                // SAFETY: all out-parameters checked non-NULL above.
-                unsafe {
-                    *prog_id = p;
-                    *user_type = u;
-                    if let Some(vi) = vi {
-                        *vi = v;
-                    }
-                }
-                S_OK
-            }
-            Err(hr) => hr,
-        }
-    })
+    Ok(S_OK)
 }
 
 /// CLSIDFromProgID of both interfaces.
 ///
 /// # Safety
 /// As the method: COM arguments, `this` one of our slots.
-unsafe fn clsid_from_prog_id_method<I>(this: *mut I, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
-    if clsid.is_null() {
-        return E_INVALIDARG;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *clsid = GUID::default() };
-    if sz_prog_id.is_null() {
-        return E_INVALIDARG;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: the caller passes a NUL-terminated string.
-        let Some(units) = (unsafe { wstr_units(sz_prog_id, MAX_STRING_UNITS) }) else {
-            return CO_E_CLASSSTRING;
-        };
-        let Ok(prog_id) = String::from_utf16(units) else {
-            return CO_E_CLASSSTRING;
-        };
-        // SAFETY: COM calls this only through our vtables.
-        match clsid_from_prog_id(&unsafe { object(this) }.regs, &prog_id) {
-            Ok(found) => {
-                // SAFETY: checked non-NULL above.
-                unsafe { *clsid = found };
-                S_OK
-            }
-            Err(hr) => hr,
+unsafe fn clsid_from_prog_id_method<I>(this: *mut I, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
+    // SAFETY: forwarded from the caller: `clsid` NULL or writable, `sz_prog_id` NULL or
+    // NUL-terminated.
+    let (out, units) = unsafe { (ffi::out(clsid)?, ffi::in_units(sz_prog_id)) };
+    // An over-long string is not a ProgID: CO_E_CLASSSTRING, as for one that is not valid UTF-16.
+    let units = units.map_err(|fail| {
+        if fail == Fail::Null {
+            fail
+        } else {
+            Fail::Code(CO_E_CLASSSTRING)
         }
-    })
+    })?;
+    let prog_id = String::from_utf16(units).map_err(|_| CO_E_CLASSSTRING)?;
+    // SAFETY: COM calls this only through our vtables.
+    out.write(clsid_from_prog_id(&unsafe { object(this) }.regs, &prog_id)?);
+    Ok(S_OK)
 }
 
 unsafe extern "system" fn list_enum(
@@ -483,8 +443,10 @@ unsafe extern "system" fn list_enum(
     rg_req: *mut CATID,
     ppenum: *mut *mut IEnumGUID,
 ) -> HRESULT {
-    // SAFETY: forwarded; the enumerator answers for IEnumGUID with the same layout.
-    unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum.cast()) }
+    ffi::boundary!(Opc, [ppenum], {
+        // SAFETY: forwarded; the enumerator answers for IEnumGUID with the same layout.
+        unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum.cast()) }
+    })
 }
 
 unsafe extern "system" fn list_details(
@@ -493,13 +455,17 @@ unsafe extern "system" fn list_details(
     prog_id: *mut LPOLESTR,
     user_type: *mut LPOLESTR,
 ) -> HRESULT {
-    // SAFETY: forwarded.
-    unsafe { get_class_details(this, clsid, prog_id, user_type, None) }
+    ffi::boundary!(Opc, [prog_id, user_type], {
+        // SAFETY: forwarded.
+        unsafe { get_class_details(this, clsid, prog_id, user_type, None) }
+    })
 }
 
 unsafe extern "system" fn list_clsid(this: *mut IOPCServerList, prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
-    // SAFETY: forwarded.
-    unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+    ffi::boundary!(Opc, [clsid], {
+        // SAFETY: forwarded.
+        unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+    })
 }
 
 unsafe extern "system" fn list2_enum(
@@ -510,8 +476,10 @@ unsafe extern "system" fn list2_enum(
     rg_req: *mut CATID,
     ppenum: *mut *mut IOPCEnumGUID,
 ) -> HRESULT {
-    // SAFETY: forwarded.
-    unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum) }
+    ffi::boundary!(Opc, [ppenum], {
+        // SAFETY: forwarded.
+        unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum) }
+    })
 }
 
 unsafe extern "system" fn list2_details(
@@ -521,13 +489,17 @@ unsafe extern "system" fn list2_details(
     user_type: *mut LPOLESTR,
     vi: *mut LPOLESTR,
 ) -> HRESULT {
-    // SAFETY: forwarded.
-    unsafe { get_class_details(this, clsid, prog_id, user_type, Some(vi)) }
+    ffi::boundary!(Opc, [prog_id, user_type, vi], {
+        // SAFETY: forwarded.
+        unsafe { get_class_details(this, clsid, prog_id, user_type, Some(vi)) }
+    })
 }
 
 unsafe extern "system" fn list2_clsid(this: *mut IOPCServerList2, prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
-    // SAFETY: forwarded.
-    unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+    ffi::boundary!(Opc, [clsid], {
+        // SAFETY: forwarded.
+        unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+    })
 }
 
 static LIST_VTBL: IOPCServerListVtbl = IOPCServerListVtbl {
@@ -583,9 +555,9 @@ pub(crate) unsafe fn create(
 /// writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcServerListCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    catch(E_UNEXPECTED, || unsafe {
-        create(registries(ptr::null()), outer, riid, ppv)
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: forwarded from the caller's contract.
+        Ok(unsafe { create(registries(ptr::null()), outer, riid, ppv) })
     })
 }
 
@@ -601,8 +573,10 @@ pub unsafe extern "C" fn OpcServerListCreateOver(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    catch(E_UNEXPECTED, || unsafe { create(registries(reg), outer, riid, ppv) })
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: forwarded from the caller's contract.
+        Ok(unsafe { create(registries(reg), outer, riid, ppv) })
+    })
 }
 
 #[cfg(test)]

@@ -16,15 +16,12 @@ use core::ffi::c_void;
 use core::ptr;
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use crate::com::boundary::catch;
+use crate::com::ffi;
 use crate::com::iids::{CLSID_OPCServerList, IID_ICLASSFACTORY};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, live_objects, ComClass, ComObject, Slot,
 };
-use crate::com::{
-    IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, REFCLSID, REFIID,
-    S_FALSE, S_OK, ULONG,
-};
+use crate::com::{IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, GUID, HRESULT, REFCLSID, REFIID, S_FALSE, S_OK, ULONG};
 use crate::registry::register::{register, unregister, ServerDescription};
 use crate::registry::{registries, REGDB_E_KEYMISSING};
 
@@ -76,21 +73,21 @@ unsafe extern "system" fn create_instance(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    // SAFETY: forwarded: the standard creation protocol checks every argument.
-    catch(E_UNEXPECTED, || unsafe {
-        super::create(registries(ptr::null()), outer, riid, ppv)
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: forwarded: the standard creation protocol checks every argument.
+        Ok(unsafe { super::create(registries(ptr::null()), outer, riid, ppv) })
     })
 }
 
 unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [], {
         if lock != 0 {
             LOCKS.fetch_add(1, Ordering::AcqRel);
         } else {
             // An unlock without a lock is ignored rather than wrapping around.
             let _ = LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
         }
-        S_OK
+        Ok(S_OK)
     })
 }
 
@@ -98,7 +95,7 @@ unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> 
 /// over the system registry, and which honours LockServer), as DllGetClassObject returns it. For servers
 /// that link opccomn statically and have their own DllGetClassObject: forward CLSID_OPCServerList here.
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv`; E_INVALIDARG for a NULL `rclsid` or `riid`;
+/// Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
 /// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
 /// IID_IUnknown. `*ppv` is NULL on failure.
 ///
@@ -106,24 +103,17 @@ unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> 
 /// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    if ppv.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppv = ptr::null_mut() };
-    if rclsid.is_null() || riid.is_null() {
-        return E_INVALIDARG;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: checked non-NULL.
-        if unsafe { *rclsid } != CLSID_OPCServerList {
-            return CLASS_E_CLASSNOTAVAILABLE;
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: the caller's contract: `ppv` NULL or writable, `rclsid` and `riid` NULL or readable.
+        let (out, rclsid, riid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(rclsid)?, ffi::in_ref(riid)?) };
+        if *rclsid != CLSID_OPCServerList {
+            return Err(CLASS_E_CLASSNOTAVAILABLE.into());
         }
         let factory = ComObject::<Factory>::new(ptr::null_mut(), |b| Factory {
             slot: b.slot(&FACTORY_VTBL),
         });
         // SAFETY: `factory` keeps the object alive; its IUnknown QueryInterface checks `riid`.
-        unsafe { crate::com::unknown::query_interface(factory.header().inner_unknown(), &*riid, ppv) }
+        Ok(unsafe { crate::com::unknown::query_interface(factory.header().inner_unknown(), riid, out.as_ptr()) })
     })
 }
 
@@ -131,7 +121,7 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
 /// S_FALSE otherwise.
 #[no_mangle]
 pub extern "C" fn OpcDllCanUnloadNow() -> HRESULT {
-    catch(S_FALSE, || {
+    ffi::guard!(S_FALSE, {
         if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 {
             S_OK
         } else {
@@ -161,7 +151,7 @@ fn server_list_registration() -> ServerDescription {
 /// changing it. Returns S_OK or SELFREG_E_CLASS.
 #[no_mangle]
 pub extern "C" fn OpcDllRegisterServer() -> HRESULT {
-    catch(SELFREG_E_CLASS, || {
+    ffi::guard!(SELFREG_E_CLASS, {
         // SAFETY: NULL is the system registry.
         match register(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
             Ok(()) => S_OK,
@@ -175,7 +165,7 @@ pub extern "C" fn OpcDllRegisterServer() -> HRESULT {
 /// SELFREG_E_CLASS.
 #[no_mangle]
 pub extern "C" fn OpcDllUnregisterServer() -> HRESULT {
-    catch(SELFREG_E_CLASS, || {
+    ffi::guard!(SELFREG_E_CLASS, {
         // SAFETY: NULL is the system registry.
         match unregister(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
             Ok(()) | Err(REGDB_E_KEYMISSING) => S_OK,
@@ -194,8 +184,10 @@ pub extern "C" fn OpcDllUnregisterServer() -> HRESULT {
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
 pub unsafe extern "system" fn DllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    // SAFETY: forwarded.
-    unsafe { OpcDllGetClassObject(rclsid, riid, ppv) }
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: forwarded.
+        Ok(unsafe { OpcDllGetClassObject(rclsid, riid, ppv) })
+    })
 }
 
 /// The standard COM entry point: `OpcDllCanUnloadNow`.
@@ -204,7 +196,7 @@ pub unsafe extern "system" fn DllGetClassObject(rclsid: REFCLSID, riid: REFIID, 
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
 pub extern "system" fn DllCanUnloadNow() -> HRESULT {
-    OpcDllCanUnloadNow()
+    ffi::guard!(S_FALSE, { OpcDllCanUnloadNow() })
 }
 
 /// The standard self-registration entry point (`regsvr32 opccomn.dll`): `OpcDllRegisterServer`.
@@ -213,7 +205,7 @@ pub extern "system" fn DllCanUnloadNow() -> HRESULT {
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
 pub extern "system" fn DllRegisterServer() -> HRESULT {
-    OpcDllRegisterServer()
+    ffi::guard!(SELFREG_E_CLASS, { OpcDllRegisterServer() })
 }
 
 /// The standard unregistration entry point (`regsvr32 /u opccomn.dll`): `OpcDllUnregisterServer`.
@@ -222,13 +214,14 @@ pub extern "system" fn DllRegisterServer() -> HRESULT {
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
 pub extern "system" fn DllUnregisterServer() -> HRESULT {
-    OpcDllUnregisterServer()
+    ffi::guard!(SELFREG_E_CLASS, { OpcDllUnregisterServer() })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::com::iids::{IID_IOPCServerList, IID_IUNKNOWN};
+    use crate::com::E_POINTER;
 
     #[test]
     fn the_class_object_serves_only_the_server_list() {
@@ -241,10 +234,7 @@ mod tests {
                 CLASS_E_CLASSNOTAVAILABLE
             );
             assert!(p.is_null());
-            assert_eq!(
-                OpcDllGetClassObject(ptr::null(), &IID_ICLASSFACTORY, &mut p),
-                E_INVALIDARG
-            );
+            assert_eq!(OpcDllGetClassObject(ptr::null(), &IID_ICLASSFACTORY, &mut p), E_POINTER);
             assert_eq!(
                 OpcDllGetClassObject(&CLSID_OPCServerList, &IID_IOPCServerList, &mut p),
                 crate::com::E_NOINTERFACE

@@ -15,10 +15,11 @@ use core::ffi::c_void;
 use core::ptr::{self, NonNull};
 use std::sync::OnceLock;
 
+use crate::com::ffi;
 use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject};
 use crate::com::ole32::CoCreateFreeThreadedMarshaler;
 use crate::com::unknown::{query, release};
-use crate::com::{IUnknown, DWORD, E_POINTER, E_UNEXPECTED, GUID, HRESULT, REFIID, S_OK, ULONG};
+use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, REFIID, S_OK, ULONG};
 
 /// `IID_IMarshal` {00000003-0000-0000-C000-000000000046}.
 pub(crate) const IID_IMARSHAL: GUID = GUID::from_u128(0x00000003_0000_0000_C000_000000000046);
@@ -98,7 +99,7 @@ impl<T: HasFtm> MarshalVtbl<T> {
 /// # Safety
 /// `this` must be the IMarshal slot of a live `ComObject<T>`.
 unsafe fn with_ftm<T: HasFtm>(this: *mut IMarshal, f: impl FnOnce(*mut IMarshal) -> HRESULT) -> HRESULT {
-    catch_hr(|| {
+    {
         // SAFETY: per the caller.
         let obj = unsafe { ComObject::<T>::from_interface(this) };
         let inner = obj.ftm().0.get_or_init(|| {
@@ -124,11 +125,7 @@ unsafe fn with_ftm<T: HasFtm>(this: *mut IMarshal, f: impl FnOnce(*mut IMarshal)
         // The reference QueryInterface gave us (counted on this object, the outer) is released when
         // `marshal` drops.
         f(marshal.as_ptr())
-    })
-}
-
-fn catch_hr(f: impl FnOnce() -> HRESULT) -> HRESULT {
-    crate::com::boundary::catch(E_UNEXPECTED, f)
+    }
 }
 
 unsafe extern "system" fn get_unmarshal_class<T: HasFtm>(
@@ -140,12 +137,15 @@ unsafe extern "system" fn get_unmarshal_class<T: HasFtm>(
     flags: DWORD,
     clsid: *mut GUID,
 ) -> HRESULT {
-    // SAFETY: COM calls this only through our vtable; the arguments go to the FTM unchanged.
-    unsafe {
-        with_ftm::<T>(this, |m| {
-            ((*(*m).vtbl).GetUnmarshalClass)(m, riid, pv, ctx, pvctx, flags, clsid)
+    // The free-threaded marshaler checks and writes the arguments itself.
+    ffi::boundary!(Com, [], {
+        // SAFETY: COM calls this only through our vtable; the arguments go to the FTM unchanged.
+        Ok(unsafe {
+            with_ftm::<T>(this, |m| {
+                ((*(*m).vtbl).GetUnmarshalClass)(m, riid, pv, ctx, pvctx, flags, clsid)
+            })
         })
-    }
+    })
 }
 
 unsafe extern "system" fn get_marshal_size_max<T: HasFtm>(
@@ -157,12 +157,15 @@ unsafe extern "system" fn get_marshal_size_max<T: HasFtm>(
     flags: DWORD,
     size: *mut DWORD,
 ) -> HRESULT {
-    // SAFETY: as above.
-    unsafe {
-        with_ftm::<T>(this, |m| {
-            ((*(*m).vtbl).GetMarshalSizeMax)(m, riid, pv, ctx, pvctx, flags, size)
+    // The free-threaded marshaler checks and writes the arguments itself.
+    ffi::boundary!(Com, [], {
+        // SAFETY: as above.
+        Ok(unsafe {
+            with_ftm::<T>(this, |m| {
+                ((*(*m).vtbl).GetMarshalSizeMax)(m, riid, pv, ctx, pvctx, flags, size)
+            })
         })
-    }
+    })
 }
 
 unsafe extern "system" fn marshal_interface<T: HasFtm>(
@@ -174,12 +177,15 @@ unsafe extern "system" fn marshal_interface<T: HasFtm>(
     pvctx: *mut c_void,
     flags: DWORD,
 ) -> HRESULT {
-    // SAFETY: as above.
-    unsafe {
-        with_ftm::<T>(this, |m| {
-            ((*(*m).vtbl).MarshalInterface)(m, stream, riid, pv, ctx, pvctx, flags)
+    // The free-threaded marshaler checks and writes the arguments itself.
+    ffi::boundary!(Com, [], {
+        // SAFETY: as above.
+        Ok(unsafe {
+            with_ftm::<T>(this, |m| {
+                ((*(*m).vtbl).MarshalInterface)(m, stream, riid, pv, ctx, pvctx, flags)
+            })
         })
-    }
+    })
 }
 
 unsafe extern "system" fn unmarshal_interface<T: HasFtm>(
@@ -188,16 +194,25 @@ unsafe extern "system" fn unmarshal_interface<T: HasFtm>(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    // SAFETY: as above.
-    unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).UnmarshalInterface)(m, stream, riid, ppv)) }
+    // The free-threaded marshaler checks and writes the arguments itself.
+    ffi::boundary!(Com, [], {
+        // SAFETY: as above.
+        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).UnmarshalInterface)(m, stream, riid, ppv)) })
+    })
 }
 
 unsafe extern "system" fn release_marshal_data<T: HasFtm>(this: *mut IMarshal, stream: *mut c_void) -> HRESULT {
-    // SAFETY: as above.
-    unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).ReleaseMarshalData)(m, stream)) }
+    // The free-threaded marshaler checks and writes the arguments itself.
+    ffi::boundary!(Com, [], {
+        // SAFETY: as above.
+        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).ReleaseMarshalData)(m, stream)) })
+    })
 }
 
 unsafe extern "system" fn disconnect_object<T: HasFtm>(this: *mut IMarshal, reserved: DWORD) -> HRESULT {
-    // SAFETY: as above.
-    unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).DisconnectObject)(m, reserved)) }
+    // The free-threaded marshaler checks and writes the arguments itself.
+    ffi::boundary!(Com, [], {
+        // SAFETY: as above.
+        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).DisconnectObject)(m, reserved)) })
+    })
 }

@@ -5,13 +5,13 @@ use core::ffi::c_void;
 use core::ptr;
 
 use super::interfaces::{IConnectionPoint, IConnectionPointContainer, IOPCShutdown, IOPCShutdownVtbl};
-use crate::com::boundary::catch;
+use crate::com::ffi::{self, Fail};
 use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINTCONTAINER};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
 use crate::com::unknown::{query, release};
-use crate::com::{IUnknown, DWORD, E_INVALIDARG, E_POINTER, E_UNEXPECTED, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
+use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
 
 /// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
 /// the server gave no reason) and is valid only during the call. Runs on the thread that called
@@ -67,8 +67,8 @@ static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
 };
 
 unsafe extern "system" fn shutdown_request(this: *mut IOPCShutdown, szReason: LPCWSTR) -> HRESULT {
-    // The specification requires S_OK whatever happens.
-    catch(S_OK, || {
+    // The specification requires S_OK whatever happens, a panic included.
+    ffi::guard!(S_OK, {
         // SAFETY: COM calls this only through our vtable.
         let sink = unsafe { ComObject::<ShutdownSink>::from_interface(this) };
         let reason = if szReason.is_null() {
@@ -90,7 +90,7 @@ unsafe extern "system" fn shutdown_request(this: *mut IOPCShutdown, szReason: LP
 /// client may release its reference at any time. `context` must stay valid until the sink is
 /// destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; E_INVALIDARG for a NULL `callback`;
+/// Returns S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`;
 /// E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
 ///
 /// # Safety
@@ -103,11 +103,11 @@ pub unsafe extern "C" fn OpcShutdownSinkCreate(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppv], {
+        let callback = callback.ok_or(Fail::Null)?;
         // SAFETY: forwarded from the caller's contract; not aggregated.
-        unsafe {
+        Ok(unsafe {
             ComObject::<ShutdownSink>::create(ptr::null_mut(), riid, ppv, |binder| {
-                let callback = callback.ok_or(E_INVALIDARG)?;
                 Ok(ShutdownSink {
                     shutdown: binder.slot(&SINK_VTBL),
                     #[cfg(windows)]
@@ -118,7 +118,7 @@ pub unsafe extern "C" fn OpcShutdownSinkCreate(
                     context,
                 })
             })
-        }
+        })
     })
 }
 
@@ -150,7 +150,7 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint,
 /// three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
 /// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
 /// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
-/// E_POINTER for a NULL argument.
+/// E_INVALIDARG for a NULL argument.
 ///
 /// # Safety
 /// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
@@ -160,58 +160,47 @@ pub unsafe extern "C" fn OpcShutdownAdvise(
     sink: *mut IUnknown,
     pdwCookie: *mut DWORD,
 ) -> HRESULT {
-    if pdwCookie.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *pdwCookie = 0 };
-    if server.is_null() || sink.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [pdwCookie], {
+        // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
+        let (out, server, sink) = (
+            unsafe { ffi::out(pdwCookie) }?,
+            ffi::in_ptr(server)?,
+            ffi::in_ptr(sink)?,
+        );
         // SAFETY: valid per the caller.
-        let point = match unsafe { shutdown_point(server) } {
-            Ok(p) => p,
-            Err(hr) => return hr,
-        };
+        let point = unsafe { shutdown_point(server.as_ptr()) }?;
         let mut cookie: DWORD = 0;
         // SAFETY: a counted IConnectionPoint pointer, released right after.
         let hr = unsafe {
-            let hr = ((*(*point).lpVtbl).Advise)(point, sink, &mut cookie);
+            let hr = ((*(*point).lpVtbl).Advise)(point, sink.as_ptr(), &mut cookie);
             release(point.cast());
             hr
         };
         if hr >= 0 {
-            // SAFETY: non-NULL out-parameter.
-            unsafe { *pdwCookie = cookie };
+            out.write(cookie);
         }
-        hr
+        Ok(hr)
     })
 }
 
 /// Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
 ///
 /// Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
-/// gives CONNECT_E_NOCONNECTION. E_POINTER for a NULL `server`.
+/// gives CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
 ///
 /// # Safety
 /// `server` must be NULL or a valid COM interface pointer.
 #[no_mangle]
 pub unsafe extern "C" fn OpcShutdownUnadvise(server: *mut IUnknown, cookie: DWORD) -> HRESULT {
-    if server.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [], {
+        let server = ffi::in_ptr(server)?;
         // SAFETY: valid per the caller.
-        let point = match unsafe { shutdown_point(server) } {
-            Ok(p) => p,
-            Err(hr) => return hr,
-        };
+        let point = unsafe { shutdown_point(server.as_ptr()) }?;
         // SAFETY: a counted IConnectionPoint pointer, released right after.
-        unsafe {
+        Ok(unsafe {
             let hr = ((*(*point).lpVtbl).Unadvise)(point, cookie);
             release(point.cast());
             hr
-        }
+        })
     })
 }

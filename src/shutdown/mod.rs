@@ -24,9 +24,9 @@ mod tests;
 use core::ffi::c_void;
 use core::ptr;
 
-use crate::com::boundary::catch;
+use crate::com::ffi;
 use crate::com::object::ComObject;
-use crate::com::{IUnknown, E_UNEXPECTED, HRESULT, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
+use crate::com::{IUnknown, HRESULT, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
 use client::NUL_STRING;
 use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 
@@ -46,8 +46,10 @@ use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 /// NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcShutdownCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    unsafe { OpcShutdownCreateEx(ptr::null(), outer, riid, ppv) }
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: forwarded from the caller's contract.
+        Ok(unsafe { OpcShutdownCreateEx(ptr::null(), outer, riid, ppv) })
+    })
 }
 
 /// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
@@ -65,14 +67,14 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
-        unsafe {
+        Ok(unsafe {
             ComObject::<OpcShutdown>::create(outer, riid, ppv, |binder| {
                 let limit = read_options(options)?;
                 Ok(OpcShutdown::build(binder, limit))
             })
-        }
+        })
     })
 }
 
@@ -97,8 +99,10 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
 /// UTF-16 string.
 #[no_mangle]
 pub unsafe extern "C" fn OpcShutdownNotify(shutdown: *mut IUnknown, reason: LPCWSTR) -> HRESULT {
-    // SAFETY: forwarded from the caller's contract.
-    unsafe { OpcShutdownNotifyEx(shutdown, reason, ptr::null_mut(), ptr::null_mut()) }
+    ffi::boundary!(Opc, [], {
+        // SAFETY: forwarded from the caller's contract.
+        Ok(unsafe { OpcShutdownNotifyEx(shutdown, reason, ptr::null_mut(), ptr::null_mut()) })
+    })
 }
 
 /// As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
@@ -114,36 +118,18 @@ pub unsafe extern "C" fn OpcShutdownNotifyEx(
     pNotified: *mut ULONG,
     pFailed: *mut ULONG,
 ) -> HRESULT {
-    // SAFETY: each out-parameter is written only when non-NULL.
-    unsafe {
-        if !pNotified.is_null() {
-            *pNotified = 0;
-        }
-        if !pFailed.is_null() {
-            *pFailed = 0;
-        }
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Opc, [pNotified, pFailed], {
+        // SAFETY: the caller's contract: both counts NULL or writable (either may be NULL).
+        let (notified, failed) = unsafe { (ffi::out_opt(pNotified), ffi::out_opt(pFailed)) };
         let reason = if reason.is_null() { NUL_STRING.as_ptr() } else { reason };
         // SAFETY: `shutdown` is valid per the contract; `reason` is a NUL-terminated string.
-        match unsafe { with_object(shutdown, |obj| obj.notify(reason)) } {
-            Ok(done) => {
-                // SAFETY: each out-parameter is written only when non-NULL.
-                unsafe {
-                    if !pNotified.is_null() {
-                        *pNotified = done.notified;
-                    }
-                    if !pFailed.is_null() {
-                        *pFailed = done.failed;
-                    }
-                }
-                if done.failed == 0 {
-                    S_OK
-                } else {
-                    S_FALSE
-                }
-            }
-            Err(hr) => hr,
+        let done = unsafe { with_object(shutdown, |obj| obj.notify(reason)) }?;
+        if let Some(notified) = notified {
+            notified.write(done.notified);
         }
+        if let Some(failed) = failed {
+            failed.write(done.failed);
+        }
+        Ok(if done.failed == 0 { S_OK } else { S_FALSE })
     })
 }

@@ -10,7 +10,6 @@
 //! by the connections; a sink that holds the server is the client's business (it must Unadvise).
 
 use core::ffi::c_void;
-use core::ptr;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::apartment::SinkRef;
@@ -19,8 +18,8 @@ use super::interfaces::{
     IEnumConnectionPoints, IEnumConnectionPointsVtbl, IEnumConnections, IEnumConnectionsVtbl, IOPCShutdown,
     CONNECTDATA,
 };
-use crate::com::boundary::catch;
 use crate::com::enumerator::{Counted, Element, EnumInterface, Enumerator};
+use crate::com::ffi;
 use crate::com::iids::{
     IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
     IID_IENUMCONNECTIONS, IID_IUNKNOWN,
@@ -32,7 +31,7 @@ use crate::com::options::read_sized;
 use crate::com::unknown::{add_ref, query};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
-    E_NOINTERFACE, E_POINTER, E_UNEXPECTED, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
+    E_NOINTERFACE, E_UNEXPECTED, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
 };
 
 /// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
@@ -319,12 +318,9 @@ unsafe extern "system" fn enum_connection_points(
     this: *mut IConnectionPointContainer,
     ppEnum: *mut *mut IEnumConnectionPoints,
 ) -> HRESULT {
-    if ppEnum.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppEnum = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppEnum], {
+        // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
+        let out = unsafe { ffi::out(ppEnum) }?;
         // SAFETY: COM calls this only through our vtable.
         let point = unsafe { object(this) }.point_ptr();
         // The snapshot's reference to the point counts on the server, which it keeps alive.
@@ -334,9 +330,8 @@ unsafe extern "system" fn enum_connection_points(
             Counted::adopt(point)
         }
         .expect("slot pointers are never NULL");
-        // SAFETY: non-NULL out-parameter.
-        unsafe { *ppEnum = Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0) };
-        S_OK
+        out.write(Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0));
+        Ok(S_OK)
     })
 }
 
@@ -345,27 +340,18 @@ unsafe extern "system" fn find_connection_point(
     riid: REFIID,
     ppCP: *mut *mut IConnectionPoint,
 ) -> HRESULT {
-    if ppCP.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppCP = ptr::null_mut() };
-    if riid.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: checked non-NULL; COM callers pass a readable IID.
-        if unsafe { *riid } != IID_IOPCShutdown {
-            return CONNECT_E_NOCONNECTION;
+    ffi::boundary!(Com, [ppCP], {
+        // SAFETY: the caller's contract: `ppCP` NULL or writable, `riid` NULL or readable.
+        let (out, riid) = unsafe { (ffi::out(ppCP)?, ffi::in_ref(riid)?) };
+        if *riid != IID_IOPCShutdown {
+            return Err(CONNECT_E_NOCONNECTION.into());
         }
         // SAFETY: COM calls this only through our vtable.
         let point = unsafe { object(this) }.point_ptr();
         // SAFETY: a slot of the live object; the AddRef counts on the controlling unknown.
-        unsafe {
-            add_ref(point.cast());
-            *ppCP = point;
-        }
-        S_OK
+        unsafe { add_ref(point.cast()) };
+        out.write(point);
+        Ok(S_OK)
     })
 }
 
@@ -376,48 +362,34 @@ unsafe extern "system" fn point_query_interface(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    if ppv.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppv = ptr::null_mut() };
-    if riid.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
-        // SAFETY: checked non-NULL; COM callers pass a readable IID.
-        let iid = unsafe { *riid };
-        if iid != IID_IUNKNOWN && iid != IID_ICONNECTIONPOINT {
-            return E_NOINTERFACE;
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
+        let (out, iid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?) };
+        if *iid != IID_IUNKNOWN && *iid != IID_ICONNECTIONPOINT {
+            return Err(E_NOINTERFACE.into());
         }
         // SAFETY: `this` is the point slot of a live object.
-        unsafe {
-            add_ref(this.cast());
-            *ppv = this.cast();
-        }
-        S_OK
+        unsafe { add_ref(this.cast()) };
+        out.write(this.cast());
+        Ok(S_OK)
     })
 }
 
 unsafe extern "system" fn get_connection_interface(_this: *mut IConnectionPoint, pIID: *mut IID) -> HRESULT {
-    if pIID.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *pIID = IID_IOPCShutdown };
-    S_OK
+    ffi::boundary!(Com, [pIID], {
+        // SAFETY: the caller vouches a non-NULL `pIID` is writable.
+        unsafe { ffi::out(pIID) }?.write(IID_IOPCShutdown);
+        Ok(S_OK)
+    })
 }
 
 unsafe extern "system" fn get_connection_point_container(
     this: *mut IConnectionPoint,
     ppCPC: *mut *mut IConnectionPointContainer,
 ) -> HRESULT {
-    if ppCPC.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppCPC = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppCPC], {
+        // SAFETY: the caller vouches a non-NULL `ppCPC` is writable.
+        let out = unsafe { ffi::out(ppCPC) }?;
         // SAFETY: COM calls this only through our vtable.
         let obj = unsafe { object(this) };
         let header = obj.header();
@@ -429,19 +401,17 @@ unsafe extern "system" fn get_connection_point_container(
                 query::<IConnectionPointContainer>(header.controlling_unknown(), &IID_ICONNECTIONPOINTCONTAINER)
             };
             if let Ok(found) = found {
-                // SAFETY: non-NULL out-parameter; the reference QueryInterface gave us goes to the caller.
-                unsafe { *ppCPC = found.into_raw().as_ptr() };
-                return S_OK;
+                // The reference QueryInterface gave us goes to the caller.
+                out.write(found.into_raw().as_ptr());
+                return Ok(S_OK);
             }
         }
         // Our own container slot; its AddRef counts on the controlling unknown.
         let container = obj.container_ptr();
         // SAFETY: a slot of the live object.
-        unsafe {
-            add_ref(container.cast());
-            *ppCPC = container;
-        }
-        S_OK
+        unsafe { add_ref(container.cast()) };
+        out.write(container);
+        Ok(S_OK)
     })
 }
 
@@ -450,48 +420,29 @@ unsafe extern "system" fn advise(
     pUnkSink: *mut IUnknown,
     pdwCookie: *mut DWORD,
 ) -> HRESULT {
-    if pdwCookie.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *pdwCookie = 0 };
-    if pUnkSink.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [pdwCookie], {
+        // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
+        let (out, sink) = (unsafe { ffi::out(pdwCookie) }?, ffi::in_ptr(pUnkSink)?);
         // SAFETY: COM calls this only through our vtable; the sink is a valid COM pointer.
-        match unsafe { object(this).advise(pUnkSink) } {
-            Ok(cookie) => {
-                // SAFETY: non-NULL out-parameter.
-                unsafe { *pdwCookie = cookie };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+        out.write(unsafe { object(this).advise(sink.as_ptr()) }?);
+        Ok(S_OK)
     })
 }
 
 unsafe extern "system" fn unadvise(this: *mut IConnectionPoint, dwCookie: DWORD) -> HRESULT {
-    // SAFETY: COM calls this only through our vtable.
-    catch(E_UNEXPECTED, || unsafe { object(this) }.unadvise(dwCookie))
+    ffi::boundary!(Com, [], {
+        // SAFETY: COM calls this only through our vtable.
+        Ok(unsafe { object(this) }.unadvise(dwCookie))
+    })
 }
 
 unsafe extern "system" fn enum_connections(this: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> HRESULT {
-    if ppEnum.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppEnum = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppEnum], {
+        // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
+        let out = unsafe { ffi::out(ppEnum) }?;
         // SAFETY: COM calls this only through our vtable.
-        match unsafe { object(this) }.enum_connections() {
-            Ok(e) => {
-                // SAFETY: non-NULL out-parameter.
-                unsafe { *ppEnum = e };
-                S_OK
-            }
-            Err(hr) => hr,
-        }
+        out.write(unsafe { object(this) }.enum_connections()?);
+        Ok(S_OK)
     })
 }
 

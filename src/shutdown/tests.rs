@@ -692,10 +692,7 @@ fn the_client_sink_calls_back_and_always_returns_s_ok() {
     let mut p: *mut c_void = 0x1 as *mut c_void;
     // SAFETY: valid and deliberately invalid arguments.
     unsafe {
-        assert_eq!(
-            OpcShutdownSinkCreate(None, ctx, &IID_IOPCShutdown, &mut p),
-            E_INVALIDARG
-        );
+        assert_eq!(OpcShutdownSinkCreate(None, ctx, &IID_IOPCShutdown, &mut p), E_POINTER);
         assert!(p.is_null());
         assert_eq!(
             OpcShutdownSinkCreate(Some(record), ctx, &IID_IOPCCommon, &mut p),
@@ -762,12 +759,21 @@ fn the_helpers_report_servers_without_shutdown_support() {
         assert_eq!(cookie, 0);
         assert_eq!(OpcShutdownUnadvise(not_a_server.unk(), 1), E_NOINTERFACE);
         cookie = 0xDEAD;
-        assert_eq!(OpcShutdownAdvise(ptr::null_mut(), sink.unk(), &mut cookie), E_POINTER);
+        assert_eq!(
+            OpcShutdownAdvise(ptr::null_mut(), sink.unk(), &mut cookie),
+            E_INVALIDARG
+        );
         assert_eq!(cookie, 0);
         let server = Server::new();
-        assert_eq!(OpcShutdownAdvise(server.unk(), ptr::null_mut(), &mut cookie), E_POINTER);
-        assert_eq!(OpcShutdownAdvise(server.unk(), sink.unk(), ptr::null_mut()), E_POINTER);
-        assert_eq!(OpcShutdownUnadvise(ptr::null_mut(), 1), E_POINTER);
+        assert_eq!(
+            OpcShutdownAdvise(server.unk(), ptr::null_mut(), &mut cookie),
+            E_INVALIDARG
+        );
+        assert_eq!(
+            OpcShutdownAdvise(server.unk(), sink.unk(), ptr::null_mut()),
+            E_INVALIDARG
+        );
+        assert_eq!(OpcShutdownUnadvise(ptr::null_mut(), 1), E_INVALIDARG);
         let plain = MockSink::new(false, S_OK);
         assert_eq!(
             OpcShutdownAdvise(server.unk(), plain.unk(), &mut cookie),

@@ -1,0 +1,148 @@
+//! The register / unregister algorithm: write the key list while recording it, and take back exactly
+//! what the record says (see the module documentation).
+
+use super::description::ServerDescription;
+use super::ledger::{read_ledger, Entry, Recorder, LEDGER};
+use crate::com::{GUID, HRESULT};
+use crate::registry::categories::standard_description;
+use crate::registry::path::RegPath;
+use crate::registry::{
+    category_key, class_categories_key, class_key, parse_guid, RegValue, Registries, Registry, REGDB_E_KEYMISSING,
+};
+
+/// Locale of the category descriptions (English, as the standard texts are).
+pub(crate) const LCID_ENGLISH: u32 = 0x409;
+
+/// Registers the server `d` in `regs` (see the module documentation for what is written).
+/// A description that is not valid is refused before anything is written.
+pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
+    d.check()?;
+    let reg = &*regs.write;
+    let module_key = d.module_key();
+    let ledger = read_ledger(reg, &module_key).unwrap_or_default();
+    let first = ledger.is_empty();
+    let mut rec = Recorder::new(reg, ledger);
+    if first && reg.key_exists(&d.other_module_key()) {
+        rec.ledger.push(Entry::OtherServer);
+    }
+    for (key, name, data, ours) in d.values()? {
+        rec.value(&key, &name, &data, ours || !d.keep_existing)?;
+    }
+    if let Some(vendor_key) = d.da10_vendor.as_ref().map(|_| format!("{}\\OPC", d.prog_id)) {
+        rec.key(&vendor_key)?;
+    }
+    for (catid, given) in &d.implemented {
+        let key = category_key(catid);
+        let name = format!("{LCID_ENGLISH:x}");
+        let description = given.as_deref().or(standard_description(catid));
+        if let (None, Some(text)) = (reg.value(&key, &name), description) {
+            rec.note_missing_keys(&key);
+            rec.values.insert((RegPath::new(&key), RegPath::new(&name)));
+            rec.ledger.push(Entry::Added(key, name));
+            reg.register_category(catid, LCID_ENGLISH, text)?;
+        }
+        rec.note_missing_keys(&format!("{}\\{catid}", class_categories_key(&d.clsid, false)));
+        reg.register_class_category(&d.clsid, catid, false)?;
+    }
+    for catid in &d.required {
+        rec.note_missing_keys(&format!("{}\\{catid}", class_categories_key(&d.clsid, true)));
+        reg.register_class_category(&d.clsid, catid, true)?;
+    }
+    let text: Vec<String> = rec.ledger.iter().map(Entry::encode).collect();
+    reg.set_value(&module_key, LEDGER, &RegValue::Sz(text.join(";")))
+}
+
+/// True when a class other than `except` implements `catid` in `reg`.
+fn category_in_use(reg: &dyn Registry, catid: &GUID, except: &GUID) -> bool {
+    let wanted = RegPath::new(catid.to_string());
+    let except = RegPath::new(except.to_string());
+    reg.scan("CLSID", &["Implemented Categories"])
+        .into_iter()
+        .any(|(clsid, found)| {
+            RegPath::new(clsid) != except
+                && found[0]
+                    .as_ref()
+                    .is_some_and(|cats| cats.iter().any(|c| RegPath::new(c) == wanted))
+        })
+}
+
+fn key_is_empty(reg: &dyn Registry, path: &str) -> bool {
+    reg.subkeys(path).is_empty() && reg.values(path).is_empty()
+}
+
+/// The class and category a key `CLSID\{clsid}\Implemented|Required Categories\{catid}` names.
+fn class_category_of(path: &str, d: &ServerDescription) -> Option<(GUID, bool)> {
+    for required in [false, true] {
+        let prefix = format!("{}\\", class_categories_key(&d.clsid, required));
+        if let Some(rest) = RegPath::new(path).strip_prefix(&prefix) {
+            return parse_guid(rest).map(|catid| (catid, required));
+        }
+    }
+    None
+}
+
+/// Unregisters the server `d` from `regs`, undoing what [`register`] recorded.
+pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
+    let reg = &*regs.write;
+    let module_key = d.module_key();
+    let mut ledger = match read_ledger(reg, &module_key) {
+        Some(ledger) => ledger,
+        None => fallback_ledger(reg, d)?,
+    };
+    // Another server registered the class after this one (OpcEnum installed later, say): the class
+    // key, ProgIDs and categories now serve it too. Take back only the own module key.
+    if !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key()) {
+        let own = RegPath::new(&module_key);
+        ledger.retain(|e| e.key().is_some_and(|k| RegPath::new(k) == own));
+    }
+    for entry in ledger.iter().rev() {
+        match entry {
+            Entry::Added(key, name) => {
+                let category = RegPath::new(key)
+                    .strip_prefix("Component Categories\\")
+                    .and_then(parse_guid);
+                if category.is_some_and(|catid| category_in_use(reg, &catid, &d.clsid)) {
+                    continue;
+                }
+                reg.delete_value(key, name)?
+            }
+            Entry::Replaced(key, name, old) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            Entry::Key(_) | Entry::OtherServer => {}
+        }
+    }
+    reg.delete_value(&module_key, LEDGER)?;
+    let mut keys: Vec<&String> = ledger
+        .iter()
+        .filter_map(|e| match e {
+            Entry::Key(k) => Some(k),
+            _ => None,
+        })
+        .collect();
+    // Deepest first, so children go before their parents.
+    keys.sort_by_key(|k| core::cmp::Reverse(k.matches('\\').count()));
+    for key in keys {
+        if let Some((catid, required)) = class_category_of(key, d) {
+            if reg.key_exists(key) && reg.subkeys(key).is_empty() {
+                reg.unregister_class_category(&d.clsid, &catid, required)?;
+            }
+        } else if reg.key_exists(key) && key_is_empty(reg, key) {
+            reg.delete_key(key)?;
+        }
+    }
+    Ok(())
+}
+
+/// What to undo when no ledger exists: the values that hold what registration would write, and the
+/// server's own keys.
+fn fallback_ledger(reg: &dyn Registry, d: &ServerDescription) -> Result<Vec<Entry>, HRESULT> {
+    if !reg.key_exists(&class_key(&d.clsid)) && !reg.key_exists(&d.prog_id) {
+        return Err(REGDB_E_KEYMISSING);
+    }
+    let mut ledger: Vec<Entry> = d.own_keys().into_iter().map(Entry::Key).collect();
+    for (key, name, data, _) in d.values()? {
+        if reg.value(&key, &name).as_ref().and_then(RegValue::as_str) == Some(data.as_str()) {
+            ledger.push(Entry::Added(key, name));
+        }
+    }
+    Ok(ledger)
+}

@@ -1,0 +1,130 @@
+//! Registration helpers for server authors (specification sections 6.1 and 6.3).
+//!
+//! A server describes itself once in an [`OpcServerRegistration`] and registers or unregisters with one
+//! call. Registration writes what COM and the specification require:
+//!
+//! ```text
+//! CLSID\{clsid}                          @ = user type          [AppID = {appid}]
+//! CLSID\{clsid}\ProgID                   @ = ProgID
+//! CLSID\{clsid}\VersionIndependentProgID @ = version-independent ProgID
+//! CLSID\{clsid}\InprocServer32           @ = module path, ThreadingModel = ...   (in-process server)
+//! CLSID\{clsid}\LocalServer32            @ = module path                         (EXE server)
+//! CLSID\{clsid}\Implemented Categories\{catid}   (through the Component Categories Manager on Windows)
+//! CLSID\{clsid}\Required Categories\{catid}
+//! Component Categories\{catid}           409 = standard description (created when missing)
+//! <ProgID>                               @ = user type
+//! <ProgID>\CLSID                         @ = {clsid}
+//! <ProgID>\OPC\Vendor                    @ = vendor name       (Data Access 1.0 servers only)
+//! <VersionIndependentProgID>             @ = user type
+//! <VersionIndependentProgID>\CLSID       @ = {clsid}
+//! <VersionIndependentProgID>\CurVer      @ = ProgID
+//! AppID\{appid}                          @ = user type, RunAs, LocalService, DllSurrogate (as given)
+//! AppID\<exe file name>                  AppID = {appid}       (EXE servers with an AppID)
+//! ```
+//!
+//! Unregistration removes exactly what registration added, nothing that was there before and nothing
+//! another product wrote. To know what it added, registration keeps a ledger in the value
+//! `OpcComnRegistration` of the server's own module key (`InprocServer32` or `LocalServer32`): the keys
+//! it created, the values it added, and the previous data of values it changed. Unregistration deletes
+//! the added values, restores the changed ones, and deletes the created keys that are then empty. A
+//! category description is left in place while another class still implements the category.
+//! Registering twice is harmless: the ledger keeps what the first registration found. When another
+//! server registered the same class in the other module key *after* this registration (an OpcEnum
+//! installed later next to opccomn's in-process server list), the shared entries serve it too, so
+//! unregistration then takes back only its own module key. Without a
+//! ledger (a registration written by other means) unregistration removes the values whose data is what
+//! this registration would write, and the server's own keys once they are empty.
+//!
+//! Files, one concern each: `description` (the C struct and its validation), `keys` (the key list),
+//! `ledger` (the record format of what was written), `algorithm` (register and unregister); the
+//! category helpers of the specification are in `registry::category_helpers`.
+
+mod algorithm;
+mod description;
+mod keys;
+mod ledger;
+
+pub(crate) use algorithm::{register, unregister, LCID_ENGLISH};
+pub use description::{OpcServerRegistration, OpcServerType, ServerDescription, OPC_REGISTRATION_KEEP_EXISTING};
+
+use crate::com::alloc::alloc_wstr_from_str;
+use crate::com::ffi;
+use crate::com::{HRESULT, LPWSTR, S_OK};
+use crate::registry::{registries, OpcRegistry, Registries};
+
+/// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
+/// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
+/// (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
+/// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
+/// on the calling thread, else by writing the same keys) and, for Data Access
+/// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+/// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
+/// reports OPC_SERVER_COMMAND_REGISTER.
+///
+/// Returns S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
+/// wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
+/// categories or a count without an array, strings that are not valid UTF-16; a registry error (for
+/// example E_ACCESSDENIED without administrator rights) when a write fails.
+///
+/// # Safety
+/// `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration, reg: *const OpcRegistry) -> HRESULT {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller's contract: `server` NULL or valid, `reg` NULL or a live handle.
+        let (d, regs) = unsafe { (ServerDescription::read(server)?, registries(reg)) };
+        register(&regs, &d)?;
+        Ok(S_OK)
+    })
+}
+
+/// Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
+/// values and keys that registration added and restores values it replaced, leaving everything that
+/// was there before and everything other products wrote. A category's description stays while another
+/// class implements the category.
+///
+/// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
+/// `OpcRegisterServer` for a bad description or a failing registry write.
+///
+/// # Safety
+/// As for `OpcRegisterServer`.
+#[no_mangle]
+pub unsafe extern "C" fn OpcUnregisterServer(server: *const OpcServerRegistration, reg: *const OpcRegistry) -> HRESULT {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller's contract: `server` NULL or valid, `reg` NULL or a live handle.
+        let (d, regs) = unsafe { (ServerDescription::read(server)?, registries(reg)) };
+        unregister(&regs, &d)?;
+        Ok(S_OK)
+    })
+}
+
+/// The registration `d` would write into an empty registry, as `.reg` text.
+pub(crate) fn export_registration(d: &ServerDescription) -> Result<String, HRESULT> {
+    let regs = Registries::single(std::sync::Arc::new(crate::registry::memory::MemoryRegistry::new()));
+    register(&regs, d)?;
+    crate::registry::regfile::export(&*regs.write, "")
+}
+
+/// Writes the registration `server` describes as the text of a `.reg` file ("Windows Registry Editor
+/// Version 5.00") into `*text` (free with `OpcTaskMemFree`), for installers that register servers by
+/// importing a file. It holds what `OpcRegisterServer` writes into an empty registry, including the
+/// record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
+/// module.
+///
+/// Returns S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
+/// `*text` is NULL on failure.
+///
+/// # Safety
+/// `server` as for `OpcRegisterServer`; `text` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegistrationExport(server: *const OpcServerRegistration, text: *mut LPWSTR) -> HRESULT {
+    ffi::boundary!(Opc, [text], {
+        // SAFETY: the caller's contract: `text` NULL or writable, `server` NULL or valid.
+        let (text, d) = unsafe { (ffi::out(text)?, ServerDescription::read(server)?) };
+        text.write(alloc_wstr_from_str(&export_registration(&d)?)?);
+        Ok(S_OK)
+    })
+}
+
+#[cfg(test)]
+pub(crate) mod tests;

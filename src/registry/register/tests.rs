@@ -1,0 +1,250 @@
+use super::ledger::{Entry, LEDGER};
+use super::*;
+use crate::com::ffi::Fail;
+use crate::com::{E_INVALIDARG, GUID};
+use crate::registry::categories::{CATID_OPCDAServer10, CATID_OPCDAServer20};
+use crate::registry::memory::MemoryRegistry;
+use crate::registry::{class_key, regfile, RegValue, REGDB_E_KEYMISSING};
+use core::ptr;
+use std::sync::Arc;
+
+pub(crate) fn memory() -> Registries {
+    Registries::single(Arc::new(MemoryRegistry::new()))
+}
+
+pub(crate) fn server(n: u128) -> ServerDescription {
+    ServerDescription {
+        clsid: GUID::from_u128(0x11111111_2222_3333_4444_000000000000 + n),
+        prog_id: format!("Vendor.Server{n}.1"),
+        version_independent_prog_id: Some(format!("Vendor.Server{n}")),
+        user_type: format!("Vendor Server {n}"),
+        module_path: Some("C:\\Program Files\\Vendor\\server.dll".into()),
+        threading_model: Some("Both".into()),
+        implemented: vec![(CATID_OPCDAServer20, None)],
+        ..Default::default()
+    }
+}
+
+fn dump(regs: &Registries) -> String {
+    regfile::export(&*regs.write, "").unwrap()
+}
+
+#[test]
+fn registration_writes_what_com_and_the_specification_require() {
+    let regs = memory();
+    let mut d = server(1);
+    d.da10_vendor = Some("Vendor Inc.".into());
+    d.implemented.push((CATID_OPCDAServer10, None));
+    register(&regs, &d).unwrap();
+    let r = &*regs.write;
+    let s = |k: &str, n: &str| r.value(k, n).and_then(|v| v.as_str().map(str::to_string));
+    let class = format!("CLSID\\{}", d.clsid);
+    assert_eq!(s(&class, "").as_deref(), Some("Vendor Server 1"));
+    assert_eq!(s(&format!("{class}\\ProgID"), "").as_deref(), Some("Vendor.Server1.1"));
+    assert_eq!(
+        s(&format!("{class}\\VersionIndependentProgID"), "").as_deref(),
+        Some("Vendor.Server1")
+    );
+    assert_eq!(
+        s(&format!("{class}\\InprocServer32"), "").as_deref(),
+        Some("C:\\Program Files\\Vendor\\server.dll")
+    );
+    assert_eq!(
+        s(&format!("{class}\\InprocServer32"), "ThreadingModel").as_deref(),
+        Some("Both")
+    );
+    assert!(!r.key_exists(&format!("{class}\\LocalServer32")));
+    assert_eq!(
+        s("Vendor.Server1.1\\CLSID", "").as_deref(),
+        Some(d.clsid.to_string().as_str())
+    );
+    assert_eq!(s("Vendor.Server1\\CurVer", "").as_deref(), Some("Vendor.Server1.1"));
+    assert_eq!(
+        s("Vendor.Server1\\CLSID", "").as_deref(),
+        Some(d.clsid.to_string().as_str())
+    );
+    assert_eq!(s("Vendor.Server1.1\\OPC\\Vendor", "").as_deref(), Some("Vendor Inc."));
+    assert!(r.key_exists(&format!("{class}\\Implemented Categories\\{CATID_OPCDAServer20}")));
+    assert!(r.key_exists(&format!("{class}\\Implemented Categories\\{CATID_OPCDAServer10}")));
+    assert_eq!(
+        s(&format!("Component Categories\\{CATID_OPCDAServer20}"), "409").as_deref(),
+        Some("OPC Data Access Servers Version 2.0")
+    );
+}
+
+#[test]
+fn unregistration_leaves_the_registry_as_it_was() {
+    let regs = memory();
+    regfile::apply(
+        &*regs.write,
+        "REGEDIT4\n[HKCR\\CLSID\\{00000000-0000-0000-0000-000000000001}]\n@=\"someone else\"\n[HKCR\\Other]\n",
+    )
+    .unwrap();
+    let before = dump(&regs);
+    let mut d = server(2);
+    d.da10_vendor = Some("V".into());
+    d.required = vec![CATID_OPCDAServer10];
+    d.app_id = Some(GUID::from_u128(7));
+    d.run_as = Some("Interactive User".into());
+    d.local = true;
+    register(&regs, &d).unwrap();
+    assert_ne!(dump(&regs), before);
+    register(&regs, &d).unwrap();
+    unregister(&regs, &d).unwrap();
+    assert_eq!(dump(&regs), before);
+}
+
+#[test]
+fn coexisting_registrations_keep_what_they_found() {
+    let regs = memory();
+    let d = server(3);
+    let class = format!("CLSID\\{}", d.clsid);
+    // Another product registered the class as an EXE server, with its own description.
+    let other = format!(
+        "REGEDIT4\n[HKCR\\{class}]\n@=\"Other Class\"\n\"AppID\"=\"{{x}}\"\n[HKCR\\{class}\\LocalServer32]\n@=\"C:\\\\other.exe\"\n[HKCR\\{class}\\ProgID]\n@=\"Vendor.Server3.1\"\n[HKCR\\Vendor.Server3.1\\CLSID]\n@=\"{}\"\n",
+        d.clsid
+    );
+    regfile::apply(&*regs.write, &other).unwrap();
+    let before = dump(&regs);
+    let mut keep = d.clone();
+    keep.keep_existing = true;
+    register(&regs, &keep).unwrap();
+    assert_eq!(regs.write.value(&class, ""), Some(RegValue::Sz("Other Class".into())));
+    assert!(regs.write.key_exists(&format!("{class}\\InprocServer32")));
+    unregister(&regs, &keep).unwrap();
+    assert_eq!(dump(&regs), before);
+    // Without the flag the description is replaced, and restored on unregistration.
+    register(&regs, &d).unwrap();
+    assert_eq!(
+        regs.write.value(&class, ""),
+        Some(RegValue::Sz("Vendor Server 3".into()))
+    );
+    unregister(&regs, &d).unwrap();
+    assert_eq!(dump(&regs), before);
+}
+
+#[test]
+fn a_server_registered_later_under_the_same_class_keeps_its_entries() {
+    let regs = memory();
+    let mut d = server(9);
+    d.keep_existing = true;
+    register(&regs, &d).unwrap();
+    // Another product registers the class as an EXE server afterwards, writing the same values.
+    let class = class_key(&d.clsid);
+    regs.write
+        .set_value(
+            &format!("{class}\\LocalServer32"),
+            "",
+            &RegValue::Sz("C:\\other.exe".into()),
+        )
+        .unwrap();
+    let with_other = dump(&regs);
+    unregister(&regs, &d).unwrap();
+    assert!(!regs.write.key_exists(&d.module_key()));
+    let s = |k: &str| regs.write.value(k, "").and_then(|v| v.as_str().map(str::to_string));
+    assert_eq!(s(&class).as_deref(), Some("Vendor Server 9"));
+    assert_eq!(s("Vendor.Server9.1\\CLSID"), Some(d.clsid.to_string()));
+    assert!(regs
+        .write
+        .key_exists(&format!("{class}\\Implemented Categories\\{CATID_OPCDAServer20}")));
+    assert_ne!(dump(&regs), with_other);
+    // Registering again and unregistering keeps it so.
+    register(&regs, &d).unwrap();
+    unregister(&regs, &d).unwrap();
+    assert_eq!(s("Vendor.Server9.1\\CLSID"), Some(d.clsid.to_string()));
+}
+
+#[test]
+fn a_shared_category_keeps_its_description() {
+    let regs = memory();
+    let empty = dump(&regs);
+    let (a, b) = (server(4), server(5));
+    register(&regs, &a).unwrap();
+    let only_a = dump(&regs);
+    register(&regs, &b).unwrap();
+    unregister(&regs, &a).unwrap();
+    let key = format!("Component Categories\\{CATID_OPCDAServer20}");
+    assert!(
+        regs.write.value(&key, "409").is_some(),
+        "b still implements the category"
+    );
+    unregister(&regs, &b).unwrap();
+    // a created the category; with b gone nobody uses it, but a's record was consumed already, so the
+    // description stays: created by a, kept for b.
+    assert!(regs.write.value(&key, "409").is_some());
+    assert_ne!(dump(&regs), empty);
+    // In the order of registration's reverse, everything goes.
+    let regs = memory();
+    register(&regs, &a).unwrap();
+    register(&regs, &b).unwrap();
+    unregister(&regs, &b).unwrap();
+    assert_eq!(dump(&regs), only_a);
+    unregister(&regs, &a).unwrap();
+    assert_eq!(dump(&regs), empty);
+}
+
+#[test]
+fn unregistration_without_a_ledger_removes_only_matching_values() {
+    let regs = memory();
+    let d = server(6);
+    register(&regs, &d).unwrap();
+    regs.write.delete_value(&d.module_key(), LEDGER).unwrap();
+    regs.write
+        .set_value("Vendor.Server6.1", "Extra", &RegValue::Sz("kept".into()))
+        .unwrap();
+    unregister(&regs, &d).unwrap();
+    assert!(!regs.write.key_exists(&class_key(&d.clsid)));
+    assert_eq!(
+        regs.write.values("Vendor.Server6.1"),
+        vec![("Extra".into(), RegValue::Sz("kept".into()))]
+    );
+    assert_eq!(unregister(&memory(), &d), Err(REGDB_E_KEYMISSING));
+}
+
+#[test]
+fn ledger_entries_survive_awkward_names() {
+    for e in [
+        Entry::Key("A;B|C%3B".into()),
+        Entry::Added("K".into(), "".into()),
+        Entry::Replaced("K".into(), "n|;".into(), "old;data%".into()),
+        Entry::OtherServer,
+    ] {
+        assert_eq!(Entry::decode(&e.encode()), Some(e.clone()));
+    }
+}
+
+#[test]
+fn exported_registration_applies_to_the_same_registry() {
+    let d = server(7);
+    let text = export_registration(&d).unwrap();
+    assert!(text.starts_with("Windows Registry Editor Version 5.00\r\n"));
+    let regs = memory();
+    regfile::apply(&*regs.write, &text).unwrap();
+    let direct = memory();
+    register(&direct, &d).unwrap();
+    assert_eq!(dump(&regs), dump(&direct));
+    unregister(&regs, &d).unwrap();
+    assert_eq!(dump(&regs), dump(&memory()));
+}
+
+#[test]
+fn bad_descriptions_are_refused() {
+    let regs = memory();
+    let empty = dump(&regs);
+    for bad in ["", "A\\B", " "] {
+        let mut d = server(8);
+        d.prog_id = bad.into();
+        assert_eq!(d.check(), Err(E_INVALIDARG));
+        assert_eq!(register(&regs, &d), Err(E_INVALIDARG), "ProgID {bad:?}");
+    }
+    let mut d = server(8);
+    d.module_path = Some(String::new());
+    assert_eq!(d.check(), Err(E_INVALIDARG));
+    assert_eq!(register(&regs, &d), Err(E_INVALIDARG), "empty module path");
+    // SAFETY: NULL is allowed.
+    assert_eq!(unsafe { ServerDescription::read(ptr::null()) }.err(), Some(Fail::Null));
+    // The refused registrations wrote nothing (the same registry takes a good one).
+    assert_eq!(dump(&regs), empty);
+    register(&regs, &server(8)).unwrap();
+    assert_ne!(dump(&regs), empty);
+}
