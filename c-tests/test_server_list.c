@@ -182,7 +182,7 @@ static void test_enumerator(IOPCServerList2 *list2) {
     CHECK(n == 1 && same_guid(&got[0], &two));
     CHECK_HR(e->lpVtbl->Next(e, 1, got, &n), S_FALSE);
     CHECK(n == 0);
-    CHECK_HR(e->lpVtbl->Next(e, 2, got, NULL), E_INVALIDARG);
+    CHECK_HR(e->lpVtbl->Next(e, 2, got, NULL), E_POINTER);
     CHECK_HR(e->lpVtbl->Next(e, 1, NULL, &n), E_POINTER);
     CHECK_HR(e->lpVtbl->Next(e, 0, NULL, &n), S_OK);
     CHECK_HR(e->lpVtbl->Reset(e), S_OK);

@@ -23,8 +23,8 @@
 use core::ptr::{self, NonNull};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::boundary::catch;
-use super::hresult::{E_POINTER, E_UNEXPECTED, S_FALSE, S_OK};
+use super::ffi::{self, Fail};
+use super::hresult::{S_FALSE, S_OK};
 use super::object::{ComClass, ComObject, Slot};
 use super::types::{GUID, HRESULT, ULONG};
 use super::unknown::{add_ref, release, IUnknown};
@@ -96,8 +96,6 @@ pub(crate) trait EnumInterface: Send + Sync + Sized + 'static {
     /// The interfaces the enumerator answers QueryInterface for (with the one vtable: they share a
     /// layout, as IOPCEnumGUID and IEnumGUID do).
     const IIDS: &'static [GUID];
-    /// Next's result for a NULL `pceltFetched` with `celt` > 1.
-    const NULL_FETCHED: HRESULT = E_POINTER;
     /// The vtable, built with [`enum_vtbl!`](crate::enum_vtbl).
     fn vtbl() -> &'static Self::Vtbl;
 }
@@ -191,20 +189,17 @@ pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
     rgelt: *mut <K::Item as Element>::Out,
     pceltFetched: *mut ULONG,
 ) -> HRESULT {
-    if !pceltFetched.is_null() {
-        // SAFETY: non-NULL out-parameter.
-        unsafe { *pceltFetched = 0 };
-    }
-    if celt == 0 {
-        return S_OK;
-    }
-    if pceltFetched.is_null() && celt > 1 {
-        return K::NULL_FETCHED;
-    }
-    if rgelt.is_null() {
-        return E_POINTER;
-    }
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [pceltFetched], {
+        // SAFETY: the caller vouches a non-NULL `pceltFetched` is writable.
+        let fetched = unsafe { ffi::out_opt(pceltFetched) };
+        if celt == 0 {
+            return Ok(S_OK);
+        }
+        // COM: the count may be omitted only when asking for one element.
+        if fetched.is_none() && celt > 1 {
+            return Err(Fail::Null);
+        }
+        let rgelt = ffi::in_ptr(rgelt)?.as_ptr();
         // SAFETY: COM calls this only through our vtable.
         let e = unsafe { object::<K>(this) };
         let (start, count) = e.advance(celt);
@@ -212,11 +207,11 @@ pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
             // SAFETY: `i < count <= celt`; the caller provides room for the elements returned.
             unsafe { rgelt.add(i).write(item.hand_out()) };
         }
-        if !pceltFetched.is_null() {
-            // SAFETY: non-NULL out-parameter; `count <= celt` fits a ULONG.
-            unsafe { *pceltFetched = count as ULONG };
+        if let Some(fetched) = fetched {
+            // `count <= celt` fits a ULONG.
+            fetched.write(count as ULONG);
         }
-        all_or_false(count, celt)
+        Ok(all_or_false(count, celt))
     })
 }
 
@@ -225,10 +220,10 @@ pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
 /// # Safety
 /// Called through an enumerator's vtable.
 pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface, celt: ULONG) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [], {
         // SAFETY: COM calls this only through our vtable.
         let (_, count) = unsafe { object::<K>(this) }.advance(celt);
-        all_or_false(count, celt)
+        Ok(all_or_false(count, celt))
     })
 }
 
@@ -237,10 +232,10 @@ pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface,
 /// # Safety
 /// Called through an enumerator's vtable.
 pub(crate) unsafe extern "system" fn reset<K: EnumInterface>(this: *mut K::Iface) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [], {
         // SAFETY: COM calls this only through our vtable.
         *unsafe { object::<K>(this) }.position() = 0;
-        S_OK
+        Ok(S_OK)
     })
 }
 
@@ -252,18 +247,14 @@ pub(crate) unsafe extern "system" fn clone<K: EnumInterface>(
     this: *mut K::Iface,
     ppenum: *mut *mut K::Iface,
 ) -> HRESULT {
-    if ppenum.is_null() {
-        return E_POINTER;
-    }
-    // SAFETY: non-NULL out-parameter.
-    unsafe { *ppenum = ptr::null_mut() };
-    catch(E_UNEXPECTED, || {
+    ffi::boundary!(Com, [ppenum], {
+        // SAFETY: the caller vouches a non-NULL `ppenum` is writable.
+        let out = unsafe { ffi::out(ppenum) }?;
         // SAFETY: COM calls this only through our vtable.
         let e = unsafe { object::<K>(this) };
         let position = *e.position();
-        // SAFETY: non-NULL out-parameter.
-        unsafe { *ppenum = Enumerator::<K>::create(e.items.clone(), position) };
-        S_OK
+        out.write(Enumerator::<K>::create(e.items.clone(), position));
+        Ok(S_OK)
     })
 }
 
@@ -272,7 +263,7 @@ mod tests {
     use core::ffi::c_void;
 
     use super::*;
-    use crate::com::hresult::E_INVALIDARG;
+    use crate::com::hresult::E_POINTER;
     use crate::com::iids::IID_IUNKNOWN;
     use crate::com::types::REFIID;
     use crate::com::unknown::query_interface;
@@ -304,7 +295,6 @@ mod tests {
         type Iface = TestEnum<GUID>;
         type Vtbl = TestEnumVtbl<GUID>;
         const IIDS: &'static [GUID] = &[IID_TEST, IID_TEST_ALIAS];
-        const NULL_FETCHED: HRESULT = E_INVALIDARG;
         fn vtbl() -> &'static TestEnumVtbl<GUID> {
             &GUIDS_VTBL
         }
@@ -366,7 +356,7 @@ mod tests {
             assert_eq!((v.Next)(p, 1, out.as_mut_ptr(), &mut n), S_FALSE, "at the end");
             assert_eq!(n, 0);
             assert_eq!((v.Next)(p, 1, out.as_mut_ptr(), ptr::null_mut()), S_FALSE);
-            assert_eq!((v.Next)(p, 2, out.as_mut_ptr(), ptr::null_mut()), E_INVALIDARG);
+            assert_eq!((v.Next)(p, 2, out.as_mut_ptr(), ptr::null_mut()), E_POINTER);
             assert_eq!((v.Next)(p, 1, ptr::null_mut(), &mut n), E_POINTER);
             assert_eq!((v.Reset)(p), S_OK);
             assert_eq!((v.Skip)(p, 0), S_OK);

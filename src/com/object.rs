@@ -443,20 +443,24 @@ static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
 };
 
 unsafe extern "system" fn inner_query_interface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
-    catch(E_UNEXPECTED, || unsafe {
-        ComHeader::query_interface(header_of(this), riid, ppv)
+    super::ffi::boundary!(Com, [ppv], {
+        // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
+        Ok(unsafe { ComHeader::query_interface(header_of(this), riid, ppv) })
     })
 }
 
 unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> ULONG {
-    // SAFETY: as above.
-    catch(0, || unsafe { header_of(this).as_ref().add_ref() })
+    super::ffi::guard!(0, {
+        // SAFETY: as above.
+        unsafe { header_of(this).as_ref().add_ref() }
+    })
 }
 
 unsafe extern "system" fn inner_release(this: *mut IUnknown) -> ULONG {
-    // SAFETY: as above; the caller gives up its reference.
-    catch(0, || unsafe { ComHeader::release(header_of(this)) })
+    super::ffi::guard!(0, {
+        // SAFETY: as above; the caller gives up its reference.
+        unsafe { ComHeader::release(header_of(this)) }
+    })
 }
 
 /// `QueryInterface` for the vtable of any interface slot: delegates to the controlling unknown.
@@ -468,22 +472,19 @@ pub unsafe extern "system" fn delegating_query_interface<I>(
     riid: REFIID,
     ppv: *mut *mut c_void,
 ) -> HRESULT {
-    catch(E_UNEXPECTED, || {
+    super::ffi::boundary!(Com, [ppv], {
         // SAFETY: `this` is a slot of a live object; the controlling unknown is valid while it lives.
-        unsafe {
-            let header = header_of(this);
-            let outer = header.as_ref().outer;
-            if outer.is_null() {
-                ComHeader::query_interface(header, riid, ppv)
-            } else if ppv.is_null() {
-                E_POINTER
-            } else if riid.is_null() {
-                *ppv = ptr::null_mut();
-                E_POINTER
-            } else {
-                super::unknown::query_interface(outer, &*riid, ppv)
-            }
+        let header = unsafe { header_of(this) };
+        // SAFETY: the header of a live object.
+        let outer = unsafe { header.as_ref() }.outer;
+        if outer.is_null() {
+            // SAFETY: the caller's pointers go to the non-delegating QueryInterface, which checks them.
+            return Ok(unsafe { ComHeader::query_interface(header, riid, ppv) });
         }
+        // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
+        let (out, riid) = unsafe { (super::ffi::out(ppv)?, super::ffi::in_ref(riid)?) };
+        // SAFETY: the outer unknown is valid while this object lives.
+        Ok(unsafe { super::unknown::query_interface(outer, riid, out.as_ptr()) })
     })
 }
 
@@ -492,7 +493,7 @@ pub unsafe extern "system" fn delegating_query_interface<I>(
 /// # Safety
 /// As for [`delegating_query_interface`].
 pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> ULONG {
-    catch(0, || {
+    super::ffi::guard!(0, {
         // SAFETY: as for delegating_query_interface.
         unsafe {
             let header = header_of(this).as_ref();
@@ -510,7 +511,7 @@ pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> ULONG {
 /// # Safety
 /// As for [`delegating_query_interface`]; the caller gives up a reference.
 pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> ULONG {
-    catch(0, || {
+    super::ffi::guard!(0, {
         // SAFETY: as for delegating_query_interface.
         unsafe {
             let header = header_of(this);

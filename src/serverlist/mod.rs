@@ -46,8 +46,8 @@ use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
 };
 use crate::com::{
-    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, E_INVALIDARG, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR, REFCLSID,
-    REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
+    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR, REFCLSID, REFIID,
+    REGDB_E_CLASSNOTREG, S_OK, ULONG,
 };
 use crate::registry::categories::DA10;
 use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
@@ -65,7 +65,6 @@ impl EnumInterface for ClassEnum {
     type Iface = IOPCEnumGUID;
     type Vtbl = IOPCEnumGUIDVtbl;
     const IIDS: &'static [GUID] = &[IID_IOPCEnumGUID, IID_IENUMGUID];
-    const NULL_FETCHED: HRESULT = E_INVALIDARG;
     fn vtbl() -> &'static IOPCEnumGUIDVtbl {
         &CLASS_ENUM_VTBL
     }
