@@ -54,6 +54,7 @@ if [ "$lint_stage" = 1 ]; then
     fi
     cargo run -q -p gen-header -- --check
     scripts/check-generated.sh
+    python3 tools/gen-null-rule-test.py --check
 fi
 
 stage "Rust tests (Linux)"
