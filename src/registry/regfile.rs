@@ -14,6 +14,7 @@
 
 use core::fmt::Write as _;
 
+use super::path::RegPath;
 use super::{registries, OpcRegistry, RegValue, Registry, REGDB_E_KEYMISSING};
 use crate::com::alloc::alloc_wstr_from_str;
 use crate::com::ffi;
@@ -23,7 +24,7 @@ const HEADER: &str = "Windows Registry Editor Version 5.00";
 const ROOT: &str = "HKEY_CLASSES_ROOT";
 
 fn sorted(mut names: Vec<String>) -> Vec<String> {
-    names.sort_by_key(|n| n.to_lowercase());
+    names.sort_by_key(|n| RegPath::new(n.as_str()));
     names
 }
 
@@ -65,7 +66,7 @@ fn format_value(value: &RegValue) -> String {
 
 fn export_key(reg: &dyn Registry, path: &str, out: &mut String) {
     let mut values = reg.values(path);
-    values.sort_by_key(|(name, _)| name.to_lowercase());
+    values.sort_by_key(|(name, _)| RegPath::new(name.as_str()));
     if !path.is_empty() {
         let _ = write!(out, "[{ROOT}\\{path}]\r\n");
     }
