@@ -4,7 +4,7 @@
 //!
 //! Layout, by specification chapter:
 //! - `com`: the COM core (types, IUnknown, reference counting, aggregation, the snapshot enumerator,
-//!   allocator, panic boundary)
+//!   allocator, the FFI boundary)
 //! - `locale`: locale identifiers and how they resolve, shared by `common` and `errors`
 //! - `common`: IOPCCommon (chapter 5)
 //! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)

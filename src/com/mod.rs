@@ -1,8 +1,7 @@
 //! The COM core every interface of the library reuses: base types, IUnknown, the object framework
-//! (reference counting, identity, aggregation), the panic boundary and the task allocator.
+//! (reference counting, identity, aggregation), the one FFI boundary (`ffi`) and the task allocator.
 
 pub mod alloc;
-pub mod boundary;
 pub mod enumerator;
 pub mod ffi;
 pub mod guids;

@@ -34,7 +34,7 @@ use core::ptr::{self, NonNull};
 use core::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::mem::MaybeUninit;
 
-use super::boundary::catch;
+use super::ffi::guard;
 use super::hresult::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, E_UNEXPECTED, S_OK};
 use super::iids::IID_IUNKNOWN;
 use super::types::{GUID, HRESULT, REFIID, ULONG};
@@ -315,7 +315,7 @@ impl<T: ComClass> ComObject<T> {
         if !outer.is_null() && unsafe { *riid } != IID_IUNKNOWN {
             return CLASS_E_NOAGGREGATION;
         }
-        let obj = match catch(Err(E_UNEXPECTED), || Self::try_new(outer, build)) {
+        let obj = match guard(Err(E_UNEXPECTED), || Self::try_new(outer, build)) {
             Ok(obj) => obj,
             Err(hr) => return hr,
         };
@@ -569,13 +569,13 @@ mod tests {
             return E_INVALIDARG;
         }
         // SAFETY: called through TEST_VTBL only, on a live TestObject; `out` checked.
-        catch(E_UNEXPECTED, || unsafe {
+        guard(E_UNEXPECTED, || unsafe {
             *out = ComObject::<TestObject>::from_interface(this).value;
             S_OK
         })
     }
     unsafe extern "system" fn explode(_this: *mut ITest) -> HRESULT {
-        catch(E_UNEXPECTED, || panic!("a bug inside a method"))
+        guard(E_UNEXPECTED, || panic!("a bug inside a method"))
     }
     static TEST_VTBL: ITestVtbl = ITestVtbl {
         QueryInterface: delegating_query_interface::<ITest>,
