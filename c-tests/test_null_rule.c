@@ -25,90 +25,52 @@ static void case_IUnknown__QueryInterface__ppvObject(void) {
     cases++;
 }
 
-static void case_IOPCCommon__QueryInterface__riid(void) {
+static void case_IEnumGUID__QueryInterface__riid(void) {
     nr_setup();
-    IOPCCommon *self = nr_common();
+    IEnumGUID *self = nr_enum_guid();
     void * out_ppvObject;
     memset(&out_ppvObject, 0xA5, sizeof out_ppvObject);
     CHECK_HR(self->lpVtbl->QueryInterface(self, NULL, &out_ppvObject), E_POINTER);
-    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IOPCCommon::QueryInterface(riid = NULL): `ppvObject` not reset\n");
+    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IEnumGUID::QueryInterface(riid = NULL): `ppvObject` not reset\n");
     CHECK(nr_is_zero(&out_ppvObject, sizeof out_ppvObject));
     nr_teardown();
     cases++;
 }
 
-static void case_IOPCCommon__QueryInterface__ppvObject(void) {
+static void case_IEnumGUID__QueryInterface__ppvObject(void) {
     nr_setup();
-    IOPCCommon *self = nr_common();
+    IEnumGUID *self = nr_enum_guid();
     CHECK_HR(self->lpVtbl->QueryInterface(self, &IID_Unknown_, NULL), E_POINTER);
     nr_teardown();
     cases++;
 }
 
-static void case_IOPCCommon__GetLocaleID__pdwLcid(void) {
+static void case_IEnumGUID__Next__rgelt(void) {
     nr_setup();
-    IOPCCommon *self = nr_common();
-    CHECK_HR(self->lpVtbl->GetLocaleID(self, NULL), E_INVALIDARG);
+    IEnumGUID *self = nr_enum_guid();
+    ULONG out_pceltFetched;
+    memset(&out_pceltFetched, 0xA5, sizeof out_pceltFetched);
+    CHECK_HR(self->lpVtbl->Next(self, 2, NULL, &out_pceltFetched), E_POINTER);
+    if (!nr_is_zero(&out_pceltFetched, sizeof out_pceltFetched)) fprintf(stderr, "IEnumGUID::Next(rgelt = NULL): `pceltFetched` not reset\n");
+    CHECK(nr_is_zero(&out_pceltFetched, sizeof out_pceltFetched));
     nr_teardown();
     cases++;
 }
 
-static void case_IOPCCommon__QueryAvailableLocaleIDs__pdwCount(void) {
+static void case_IEnumGUID__Next__pceltFetched(void) {
     nr_setup();
-    IOPCCommon *self = nr_common();
-    LCID * out_pdwLcid;
-    memset(&out_pdwLcid, 0xA5, sizeof out_pdwLcid);
-    CHECK_HR(self->lpVtbl->QueryAvailableLocaleIDs(self, NULL, &out_pdwLcid), E_INVALIDARG);
-    if (!nr_is_zero(&out_pdwLcid, sizeof out_pdwLcid)) fprintf(stderr, "IOPCCommon::QueryAvailableLocaleIDs(pdwCount = NULL): `pdwLcid` not reset\n");
-    CHECK(nr_is_zero(&out_pdwLcid, sizeof out_pdwLcid));
+    IEnumGUID *self = nr_enum_guid();
+    GUID out_rgelt[2];
+    memset(out_rgelt, 0xA5, sizeof out_rgelt);
+    CHECK_HR(self->lpVtbl->Next(self, 2, out_rgelt, NULL), E_POINTER);
     nr_teardown();
     cases++;
 }
 
-static void case_IOPCCommon__QueryAvailableLocaleIDs__pdwLcid(void) {
+static void case_IEnumGUID__Clone__ppenum(void) {
     nr_setup();
-    IOPCCommon *self = nr_common();
-    DWORD out_pdwCount;
-    memset(&out_pdwCount, 0xA5, sizeof out_pdwCount);
-    CHECK_HR(self->lpVtbl->QueryAvailableLocaleIDs(self, &out_pdwCount, NULL), E_INVALIDARG);
-    if (!nr_is_zero(&out_pdwCount, sizeof out_pdwCount)) fprintf(stderr, "IOPCCommon::QueryAvailableLocaleIDs(pdwLcid = NULL): `pdwCount` not reset\n");
-    CHECK(nr_is_zero(&out_pdwCount, sizeof out_pdwCount));
-    nr_teardown();
-    cases++;
-}
-
-static void case_IOPCCommon__GetErrorString__ppString(void) {
-    nr_setup();
-    IOPCCommon *self = nr_common();
-    CHECK_HR(self->lpVtbl->GetErrorString(self, (HRESULT)0x80004005L, NULL), E_INVALIDARG);
-    nr_teardown();
-    cases++;
-}
-
-static void case_IOPCCommon__SetClientName__szName(void) {
-    nr_setup();
-    IOPCCommon *self = nr_common();
-    CHECK_HR(self->lpVtbl->SetClientName(self, NULL), E_INVALIDARG);
-    nr_teardown();
-    cases++;
-}
-
-static void case_IOPCShutdown__QueryInterface__riid(void) {
-    nr_setup();
-    IOPCShutdown *self = nr_sink();
-    void * out_ppvObject;
-    memset(&out_ppvObject, 0xA5, sizeof out_ppvObject);
-    CHECK_HR(self->lpVtbl->QueryInterface(self, NULL, &out_ppvObject), E_POINTER);
-    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IOPCShutdown::QueryInterface(riid = NULL): `ppvObject` not reset\n");
-    CHECK(nr_is_zero(&out_ppvObject, sizeof out_ppvObject));
-    nr_teardown();
-    cases++;
-}
-
-static void case_IOPCShutdown__QueryInterface__ppvObject(void) {
-    nr_setup();
-    IOPCShutdown *self = nr_sink();
-    CHECK_HR(self->lpVtbl->QueryInterface(self, &IID_Unknown_, NULL), E_POINTER);
+    IEnumGUID *self = nr_enum_guid();
+    CHECK_HR(self->lpVtbl->Clone(self, NULL), E_POINTER);
     nr_teardown();
     cases++;
 }
@@ -325,52 +287,90 @@ static void case_IConnectionPointContainer__FindConnectionPoint__ppCP(void) {
     cases++;
 }
 
-static void case_IEnumGUID__QueryInterface__riid(void) {
+static void case_IOPCShutdown__QueryInterface__riid(void) {
     nr_setup();
-    IEnumGUID *self = nr_enum_guid();
+    IOPCShutdown *self = nr_sink();
     void * out_ppvObject;
     memset(&out_ppvObject, 0xA5, sizeof out_ppvObject);
     CHECK_HR(self->lpVtbl->QueryInterface(self, NULL, &out_ppvObject), E_POINTER);
-    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IEnumGUID::QueryInterface(riid = NULL): `ppvObject` not reset\n");
+    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IOPCShutdown::QueryInterface(riid = NULL): `ppvObject` not reset\n");
     CHECK(nr_is_zero(&out_ppvObject, sizeof out_ppvObject));
     nr_teardown();
     cases++;
 }
 
-static void case_IEnumGUID__QueryInterface__ppvObject(void) {
+static void case_IOPCShutdown__QueryInterface__ppvObject(void) {
     nr_setup();
-    IEnumGUID *self = nr_enum_guid();
+    IOPCShutdown *self = nr_sink();
     CHECK_HR(self->lpVtbl->QueryInterface(self, &IID_Unknown_, NULL), E_POINTER);
     nr_teardown();
     cases++;
 }
 
-static void case_IEnumGUID__Next__rgelt(void) {
+static void case_IOPCCommon__QueryInterface__riid(void) {
     nr_setup();
-    IEnumGUID *self = nr_enum_guid();
-    ULONG out_pceltFetched;
-    memset(&out_pceltFetched, 0xA5, sizeof out_pceltFetched);
-    CHECK_HR(self->lpVtbl->Next(self, 2, NULL, &out_pceltFetched), E_POINTER);
-    if (!nr_is_zero(&out_pceltFetched, sizeof out_pceltFetched)) fprintf(stderr, "IEnumGUID::Next(rgelt = NULL): `pceltFetched` not reset\n");
-    CHECK(nr_is_zero(&out_pceltFetched, sizeof out_pceltFetched));
+    IOPCCommon *self = nr_common();
+    void * out_ppvObject;
+    memset(&out_ppvObject, 0xA5, sizeof out_ppvObject);
+    CHECK_HR(self->lpVtbl->QueryInterface(self, NULL, &out_ppvObject), E_POINTER);
+    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IOPCCommon::QueryInterface(riid = NULL): `ppvObject` not reset\n");
+    CHECK(nr_is_zero(&out_ppvObject, sizeof out_ppvObject));
     nr_teardown();
     cases++;
 }
 
-static void case_IEnumGUID__Next__pceltFetched(void) {
+static void case_IOPCCommon__QueryInterface__ppvObject(void) {
     nr_setup();
-    IEnumGUID *self = nr_enum_guid();
-    CLSID out_rgelt[2];
-    memset(out_rgelt, 0xA5, sizeof out_rgelt);
-    CHECK_HR(self->lpVtbl->Next(self, 2, out_rgelt, NULL), E_POINTER);
+    IOPCCommon *self = nr_common();
+    CHECK_HR(self->lpVtbl->QueryInterface(self, &IID_Unknown_, NULL), E_POINTER);
     nr_teardown();
     cases++;
 }
 
-static void case_IEnumGUID__Clone__ppenum(void) {
+static void case_IOPCCommon__GetLocaleID__pdwLcid(void) {
     nr_setup();
-    IEnumGUID *self = nr_enum_guid();
-    CHECK_HR(self->lpVtbl->Clone(self, NULL), E_POINTER);
+    IOPCCommon *self = nr_common();
+    CHECK_HR(self->lpVtbl->GetLocaleID(self, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
+static void case_IOPCCommon__QueryAvailableLocaleIDs__pdwCount(void) {
+    nr_setup();
+    IOPCCommon *self = nr_common();
+    LCID * out_pdwLcid;
+    memset(&out_pdwLcid, 0xA5, sizeof out_pdwLcid);
+    CHECK_HR(self->lpVtbl->QueryAvailableLocaleIDs(self, NULL, &out_pdwLcid), E_INVALIDARG);
+    if (!nr_is_zero(&out_pdwLcid, sizeof out_pdwLcid)) fprintf(stderr, "IOPCCommon::QueryAvailableLocaleIDs(pdwCount = NULL): `pdwLcid` not reset\n");
+    CHECK(nr_is_zero(&out_pdwLcid, sizeof out_pdwLcid));
+    nr_teardown();
+    cases++;
+}
+
+static void case_IOPCCommon__QueryAvailableLocaleIDs__pdwLcid(void) {
+    nr_setup();
+    IOPCCommon *self = nr_common();
+    DWORD out_pdwCount;
+    memset(&out_pdwCount, 0xA5, sizeof out_pdwCount);
+    CHECK_HR(self->lpVtbl->QueryAvailableLocaleIDs(self, &out_pdwCount, NULL), E_INVALIDARG);
+    if (!nr_is_zero(&out_pdwCount, sizeof out_pdwCount)) fprintf(stderr, "IOPCCommon::QueryAvailableLocaleIDs(pdwLcid = NULL): `pdwCount` not reset\n");
+    CHECK(nr_is_zero(&out_pdwCount, sizeof out_pdwCount));
+    nr_teardown();
+    cases++;
+}
+
+static void case_IOPCCommon__GetErrorString__ppString(void) {
+    nr_setup();
+    IOPCCommon *self = nr_common();
+    CHECK_HR(self->lpVtbl->GetErrorString(self, (HRESULT)0x80004005L, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
+static void case_IOPCCommon__SetClientName__szName(void) {
+    nr_setup();
+    IOPCCommon *self = nr_common();
+    CHECK_HR(self->lpVtbl->SetClientName(self, NULL), E_INVALIDARG);
     nr_teardown();
     cases++;
 }
@@ -522,7 +522,7 @@ static void case_IOPCEnumGUID__Next__rgelt(void) {
 static void case_IOPCEnumGUID__Next__pceltFetched(void) {
     nr_setup();
     IOPCEnumGUID *self = nr_enum_opc_guid();
-    CLSID out_rgelt[2];
+    GUID out_rgelt[2];
     memset(out_rgelt, 0xA5, sizeof out_rgelt);
     CHECK_HR(self->lpVtbl->Next(self, 2, out_rgelt, NULL), E_POINTER);
     nr_teardown();
@@ -1283,15 +1283,11 @@ static void case_OpcShutdownUnadvise__server(void) {
 int main(void) {
     case_IUnknown__QueryInterface__riid();
     case_IUnknown__QueryInterface__ppvObject();
-    case_IOPCCommon__QueryInterface__riid();
-    case_IOPCCommon__QueryInterface__ppvObject();
-    case_IOPCCommon__GetLocaleID__pdwLcid();
-    case_IOPCCommon__QueryAvailableLocaleIDs__pdwCount();
-    case_IOPCCommon__QueryAvailableLocaleIDs__pdwLcid();
-    case_IOPCCommon__GetErrorString__ppString();
-    case_IOPCCommon__SetClientName__szName();
-    case_IOPCShutdown__QueryInterface__riid();
-    case_IOPCShutdown__QueryInterface__ppvObject();
+    case_IEnumGUID__QueryInterface__riid();
+    case_IEnumGUID__QueryInterface__ppvObject();
+    case_IEnumGUID__Next__rgelt();
+    case_IEnumGUID__Next__pceltFetched();
+    case_IEnumGUID__Clone__ppenum();
     case_IEnumConnections__QueryInterface__riid();
     case_IEnumConnections__QueryInterface__ppvObject();
     case_IEnumConnections__Next__rgcd();
@@ -1314,11 +1310,15 @@ int main(void) {
     case_IConnectionPointContainer__EnumConnectionPoints__ppEnum();
     case_IConnectionPointContainer__FindConnectionPoint__riid();
     case_IConnectionPointContainer__FindConnectionPoint__ppCP();
-    case_IEnumGUID__QueryInterface__riid();
-    case_IEnumGUID__QueryInterface__ppvObject();
-    case_IEnumGUID__Next__rgelt();
-    case_IEnumGUID__Next__pceltFetched();
-    case_IEnumGUID__Clone__ppenum();
+    case_IOPCShutdown__QueryInterface__riid();
+    case_IOPCShutdown__QueryInterface__ppvObject();
+    case_IOPCCommon__QueryInterface__riid();
+    case_IOPCCommon__QueryInterface__ppvObject();
+    case_IOPCCommon__GetLocaleID__pdwLcid();
+    case_IOPCCommon__QueryAvailableLocaleIDs__pdwCount();
+    case_IOPCCommon__QueryAvailableLocaleIDs__pdwLcid();
+    case_IOPCCommon__GetErrorString__ppString();
+    case_IOPCCommon__SetClientName__szName();
     case_IOPCServerList__QueryInterface__riid();
     case_IOPCServerList__QueryInterface__ppvObject();
     case_IOPCServerList__EnumClassesOfCategories__rgcatidImpl();

@@ -89,6 +89,10 @@ POINTER_TYPEDEFS = {"REFIID": "IID", "REFCLSID": "CLSID", "LPCWSTR": "WCHAR", "L
                     "OpcShutdownCallback": None}
 
 
+# Calling-convention macros between a return type and a name (`void OPCCOMN_CDECL OpcTaskMemFree`).
+CALLING_CONVENTION = re.compile(r"^(STDMETHODCALLTYPE|WINAPI|__stdcall|__cdecl|OPCCOMN_[A-Z]+)$")
+
+
 def parse(text):
     text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
     text = re.sub(r"//[^\n]*", "", text)
@@ -99,7 +103,7 @@ def parse(text):
     vtbls = {}
     for m in re.finditer(r"typedef\s+struct\s+(\w+?)Vtbl\s*\{(.*?)\}\s*\w+\s*;", text, re.S):
         meths = []
-        for mm in re.finditer(r"([\w\s\*]+?)\(\s*(?:STDMETHODCALLTYPE|__stdcall|WINAPI)?\s*\*\s*(\w+)\s*\)\s*\((.*?)\)\s*;",
+        for mm in re.finditer(r"([\w\s\*]+?)\(\s*(?:STDMETHODCALLTYPE|__stdcall|WINAPI|OPCCOMN_[A-Z]+)?\s*\*\s*(\w+)\s*\)\s*\((.*?)\)\s*;",
                               m.group(2), re.S):
             meths.append((mm.group(2), " ".join(mm.group(1).split()), params(mm.group(3))))
         vtbls[m.group(1)] = meths
@@ -117,7 +121,7 @@ def parse(text):
         # MIDL-style headers also declare the proxy/stub and marshalling helpers; they are not exports.
         if re.search(r"_(Proxy|Stub|UserSize|UserMarshal|UserUnmarshal|UserFree)$", m.group(2)):
             continue
-        ret = " ".join(w for w in m.group(1).split() if w not in ("STDMETHODCALLTYPE", "WINAPI", "__stdcall"))
+        ret = " ".join(w for w in m.group(1).split() if not CALLING_CONVENTION.match(w))
         funcs.append((m.group(2), ret, params(m.group(3))))
     return vtbls, funcs
 
