@@ -392,7 +392,9 @@ mod tests {
                 let path = entry.unwrap().path();
                 if path.is_dir() {
                     dirs.push(path);
-                } else if path.extension().is_some_and(|e| e == "rs") && path.file_name().unwrap() != "tests.rs" {
+                } else if path.extension().is_some_and(|e| e == "rs")
+                    && !path.file_name().unwrap().to_string_lossy().ends_with("tests.rs")
+                {
                     files.push(path);
                 }
             }
@@ -402,7 +404,8 @@ mod tests {
         for path in files {
             let text = std::fs::read_to_string(&path).unwrap();
             // Test modules build foreign objects and callbacks; they are not the library's boundary.
-            let text = text.split("#[cfg(test)]\nmod tests").next().unwrap();
+            let text = without_test_modules(&text);
+            let text = text.as_str();
             for (name, body) in extern_functions(text) {
                 checked += 1;
                 let body = strip_comments(body);
@@ -496,6 +499,41 @@ mod tests {
             }
         }
         found
+    }
+
+    /// `text` without its `#[cfg(test)]` modules (each up to its closing brace).
+    fn without_test_modules(text: &str) -> String {
+        let mut out = String::new();
+        let mut rest = text;
+        while let Some(i) = rest.find("#[cfg(test)]\n") {
+            let after = &rest[i..];
+            let line_end = after[13..].find('\n').map_or(after.len(), |j| 13 + j);
+            let next_line = &after[13..line_end];
+            if !next_line.contains("mod ") || !next_line.trim_end().ends_with('{') {
+                out.push_str(&rest[..i + 13]);
+                rest = &rest[i + 13..];
+                continue;
+            }
+            out.push_str(&rest[..i]);
+            let mut depth = 0;
+            let mut end = after.len();
+            for (j, c) in after.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' => {
+                        depth -= 1;
+                        if depth == 0 {
+                            end = j + 1;
+                            break;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            rest = &after[end..];
+        }
+        out.push_str(rest);
+        out
     }
 
     fn strip_comments(body: &str) -> String {

@@ -9,6 +9,7 @@ use crate::com::alloc::task_free;
 use crate::com::iids::IID_IUNKNOWN;
 use crate::com::unknown::hostile;
 use crate::com::unknown::{add_ref, query_interface, release};
+use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER};
 
 const OPC_E_INVALIDHANDLE: HRESULT = 0xC0040001_u32 as HRESULT;
