@@ -126,7 +126,10 @@ if [ -n "$win_build" ]; then
                         x86_64-w64-mingw32-gcc -c -o "$o" "$src" -I"$out/foundation"
                         iobjs+=("$o")
                     done
-                    compile "$cc" "$lang" -DOURS_FIRST=$first -c -o "$name.o" "$root/tests/coexistence/program.c"
+                    # C through the COBJMACROS call macros, C++ through the classes.
+                    macros=()
+                    [ "$lang" = c ] && macros=(-DCOBJMACROS)
+                    compile "$cc" "$lang" "${macros[@]}" -DOURS_FIRST=$first -c -o "$name.o" "$root/tests/coexistence/program.c"
                     "$cc" -o "$name" "$name.o" "${iobjs[@]}" "$libarg" "${deps[@]}" "${extra[@]}" ||
                         fail "link: $lib library, opccomn_i.c=$with_i, ours-first=$first, $lang"
                     result=$(cd "$out/run" && wine "$name" 2>/dev/null | tr -d '\r')
@@ -137,7 +140,7 @@ if [ -n "$win_build" ]; then
             done
         done
     done
-    echo "coexistence: link matrix (static and import library x with/without opccomn_i.c x both orders x C/C++) ran under Wine"
+    echo "coexistence: link matrix (static and import library x with/without opccomn_i.c x both orders x C with COBJMACROS/C++) ran under Wine"
 else
     echo "coexistence: LINK MATRIX SKIPPED (no Windows build directory given)" >&2
 fi

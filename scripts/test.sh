@@ -55,6 +55,9 @@ if [ "$lint_stage" = 1 ]; then
     cargo run -q -p gen-header -- --check
     scripts/check-generated.sh
     python3 tools/gen-null-rule-test.py --check
+    # The generator's own checks (IDL reader, the Rust-vtable comparison catching each kind of mismatch).
+    cargo clippy -q -p gen-header --all-targets -- -D warnings
+    cargo test -q -p gen-header
 fi
 
 stage "Rust tests (Linux)"

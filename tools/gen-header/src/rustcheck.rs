@@ -207,3 +207,84 @@ pub fn check_vtables(catalog: &Catalog, interfaces: &[&Interface], sources: &Sou
     }
     problems
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::idl;
+
+    const IDL: &str = r#"
+        [object, uuid(00000000-0000-0000-C000-000000000046)]
+        interface IUnknown {
+            HRESULT QueryInterface([in] REFIID riid, [out] void **ppvObject);
+            ULONG AddRef();
+            ULONG Release();
+        }
+        [object, uuid(F31DFDE1-07B6-11d2-B2D8-0060083BA1FB)]
+        interface IOPCShutdown : IUnknown { HRESULT ShutdownRequest([in, string] LPCWSTR szReason); }
+    "#;
+
+    fn problems(rust: &str) -> Vec<String> {
+        let ifs = idl::parse("t.idl", IDL).unwrap();
+        let catalog = Catalog::new(ifs.iter());
+        let mut sources = Sources {
+            vtables: BTreeMap::new(),
+            functions: BTreeMap::new(),
+            callbacks: BTreeMap::new(),
+        };
+        visit_items(&syn::parse_file(rust).unwrap().items, "t.rs", &mut sources);
+        let all: Vec<&Interface> = ifs.iter().collect();
+        check_vtables(&catalog, &all, &sources)
+    }
+
+    const GOOD: &str = r#"
+        pub struct IUnknownVtbl {
+            pub QueryInterface: unsafe extern "system" fn(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
+            pub AddRef: unsafe extern "system" fn(This: *mut IUnknown) -> ULONG,
+            pub Release: unsafe extern "system" fn(This: *mut IUnknown) -> ULONG,
+        }
+        pub struct IOPCShutdownVtbl {
+            pub QueryInterface: unsafe extern "system" fn(This: *mut IOPCShutdown, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
+            pub AddRef: unsafe extern "system" fn(This: *mut IOPCShutdown) -> ULONG,
+            pub Release: unsafe extern "system" fn(This: *mut IOPCShutdown) -> ULONG,
+            pub ShutdownRequest: unsafe extern "system" fn(This: *mut IOPCShutdown, szReason: LPCWSTR) -> HRESULT,
+        }
+    "#;
+
+    #[test]
+    fn matching_vtables_pass() {
+        assert_eq!(problems(GOOD), Vec::<String>::new());
+    }
+
+    #[test]
+    fn order_abi_parameters_and_missing_structs_are_reported() {
+        let swapped = GOOD.replace(
+            "pub AddRef: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,\n            pub Release: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,",
+            "pub Release: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,\n            pub AddRef: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,",
+        );
+        assert_ne!(swapped, GOOD);
+        let p = problems(&swapped);
+        assert!(p.len() == 1 && p[0].contains("order must match"), "{p:?}");
+
+        let cdecl = GOOD.replace(
+            "ShutdownRequest: unsafe extern \"system\"",
+            "ShutdownRequest: unsafe extern \"C\"",
+        );
+        let p = problems(&cdecl);
+        assert!(p.len() == 1 && p[0].contains("not `extern \"system\"`"), "{p:?}");
+
+        let wrong_type = GOOD.replace("szReason: LPCWSTR", "szReason: *mut LPCWSTR");
+        let p = problems(&wrong_type);
+        assert!(p.len() == 1 && p[0].contains("the IDL says"), "{p:?}");
+
+        let renamed = GOOD.replace("szReason: LPCWSTR", "reason: LPCWSTR");
+        assert_eq!(problems(&renamed).len(), 1);
+
+        let missing = GOOD.replace("IOPCShutdownVtbl", "SomethingElseVtbl");
+        let p = problems(&missing);
+        assert!(
+            p.len() == 1 && p[0].contains("no Rust struct IOPCShutdownVtbl"),
+            "{p:?}"
+        );
+    }
+}
