@@ -40,6 +40,21 @@ skip_stage() {
     printf '!!!! %s\n' "${@:2}"
 }
 
+# Runs the C tests of a 32-bit Windows build directory under 32-bit Wine and proves they ran: a 32-bit
+# program that did not start prints nothing, so every test must have printed its closing line.
+run_x86_c_tests() {
+    local dir=$1 tests t
+    # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
+    tests=$(ctest --test-dir "$dir" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
+    [ -n "$tests" ] || { echo "no C tests found in $dir" >&2; exit 1; }
+    ctest --test-dir "$dir" --output-on-failure --timeout 300
+    for t in $tests; do
+        grep -qE "^$t: [0-9]+ passed, 0 failed" "$dir/Testing/Temporary/LastTest.log" ||
+            { echo "$t (x86, $dir) printed no result line" >&2; exit 1; }
+    done
+    echo "every x86 C test in $dir printed its result line"
+}
+
 need_linux_tools
 need_soundness_tools
 [ "$wine_stage" = 1 ] && need_windows_tools
@@ -165,15 +180,7 @@ if [ "$wine_stage" = 1 ]; then
         CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
 
         stage "C tests (Windows x86 DLL, under 32-bit Wine)"
-        # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
-        x86_tests=$(ctest --test-dir "$build/windows-x86" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
-        ctest --test-dir "$build/windows-x86" --output-on-failure --timeout 300
-        # Every C test must have printed its closing line: a 32-bit program that did not run prints nothing.
-        for t in $x86_tests; do
-            grep -qE "^$t: [0-9]+ passed, 0 failed" "$build/windows-x86/Testing/Temporary/LastTest.log" ||
-                { echo "$t (x86) printed no result line" >&2; exit 1; }
-        done
-        echo "every x86 C test printed its result line"
+        run_x86_c_tests "$build/windows-x86"
     else
         skip_stage "Rust tests and C tests of the x86 DLL under 32-bit Wine" \
             "32-bit Wine is not available: $wine32_missing" \
@@ -188,7 +195,7 @@ if [ "$wine_stage" = 1 ]; then
         -DOPCCOMN_RUST_TARGET=x86_64-win7-windows-gnu "${win7_args[@]}" >/dev/null
     cmake --build "$build/windows7-x64" -j2
     cmake -S . -B "$build/windows7-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" \
-        -DOPCCOMN_RUST_TARGET=i686-win7-windows-gnu "${win7_args[@]}" -DOPCCOMN_BUILD_TESTS=OFF >/dev/null
+        -DOPCCOMN_RUST_TARGET=i686-win7-windows-gnu "${win7_args[@]}" >/dev/null
     cmake --build "$build/windows7-x86" -j2
     for dll in "$build/windows7-x64/cargo/x86_64-win7-windows-gnu/release/opccomn.dll" \
         "$build/windows7-x86/cargo/i686-win7-windows-gnu/release/opccomn.dll"; do
@@ -203,6 +210,15 @@ if [ "$wine_stage" = 1 ]; then
 
     stage "C tests (Windows 7 x64 DLL, under Wine)"
     ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300
+
+    if [ "$wine32_ok" = 1 ]; then
+        stage "C tests (Windows 7 x86 DLL, under 32-bit Wine)"
+        run_x86_c_tests "$build/windows7-x86"
+    else
+        skip_stage "C tests of the Windows 7 x86 DLL under 32-bit Wine" \
+            "32-bit Wine is not available: $wine32_missing" \
+            "The Windows 7 x86 DLL was built and its import table checked, but it was NOT run."
+    fi
 
     stage "Windows binary package: unpacked, a CMake consumer built against it (x64, x86, Windows 7) and run"
     scripts/package-windows.sh "$build/package" >/dev/null
