@@ -1416,6 +1416,6 @@ int main(void) {
     case_OpcShutdownAdvise__sink();
     case_OpcShutdownAdvise__pdwCookie();
     case_OpcShutdownUnadvise__server();
-    printf("null_rule: %d cases\n", cases);
-    return test_summary("null_rule");
+    printf("test_null_rule: %d cases\n", cases);
+    return test_summary("test_null_rule");
 }

@@ -266,8 +266,8 @@ def emit(items):
     w("int main(void) {")
     for fn in names:
         w(f"    {fn}();")
-    w('    printf("null_rule: %d cases\\n", cases);')
-    w('    return test_summary("null_rule");')
+    w('    printf("test_null_rule: %d cases\\n", cases);')
+    w('    return test_summary("test_null_rule");')
     w("}")
     return "\n".join(out) + "\n", len(names)
 
