@@ -60,6 +60,8 @@ OPCCOMN_CONVENTION(&OpcCommonCreate, HRESULT (__attribute__((cdecl)) *)(const st
 OPCCOMN_CONVENTION(&OpcCommonGetClientName, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LPWSTR *ppName), "OpcCommonGetClientName must be cdecl");
 OPCCOMN_CONVENTION(&OpcGetErrorString, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, LPWSTR *ppString), "OpcGetErrorString must be cdecl");
 OPCCOMN_CONVENTION(&OpcGetErrorStringEx, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString), "OpcGetErrorStringEx must be cdecl");
+OPCCOMN_CONVENTION(&OpcErrorCodesOfKind, HRESULT (__attribute__((cdecl)) *)(uint32_t kind, DWORD *pdwCount, HRESULT **ppCodes), "OpcErrorCodesOfKind must be cdecl");
+OPCCOMN_CONVENTION(&OpcErrorSymbol, HRESULT (__attribute__((cdecl)) *)(HRESULT code, uint32_t kind, LPWSTR *ppSymbol), "OpcErrorSymbol must be cdecl");
 OPCCOMN_CONVENTION(&MatchPatternW, BOOL (__attribute__((cdecl)) *)(LPCWSTR string, LPCWSTR pattern, BOOL bCaseSensitive), "MatchPatternW must be cdecl");
 OPCCOMN_CONVENTION(&MatchPatternA, BOOL (__attribute__((cdecl)) *)(LPCSTR string, LPCSTR pattern, BOOL bCaseSensitive), "MatchPatternA must be cdecl");
 OPCCOMN_CONVENTION(&OpcPatternCompileW, HRESULT (__attribute__((cdecl)) *)(LPCWSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern), "OpcPatternCompileW must be cdecl");

@@ -80,6 +80,56 @@ static void test_every_published_english_text(void)
     }
 }
 
+/* The published entry of `code` for a server of `kind`, or NULL. */
+static const struct published_text *published(uint32_t code, uint32_t kind)
+{
+    for (size_t i = 0; i < PUBLISHED_TEXT_COUNT; i++)
+        if (PUBLISHED_TEXTS[i].code == code && PUBLISHED_TEXTS[i].kind == kind)
+            return &PUBLISHED_TEXTS[i];
+    return NULL;
+}
+
+/* OpcErrorCodesOfKind lists exactly the codes of each kind's own header, each once, with the symbol and
+   text the published list has; the AE and HDA lists are every published entry of their kind. */
+static void test_codes_of_each_kind(void)
+{
+    static const struct { uint32_t kind; DWORD count; } kinds[] = {{K_DA, 28}, {K_AE, 8}, {K_HDA, 15}, {K_BATCH, 1}};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        DWORD count = GARBAGE_U32;
+        HRESULT *codes = (HRESULT *)GARBAGE_PTR;
+        CHECK_HR(OpcErrorCodesOfKind(kinds[k].kind, &count, &codes), S_OK);
+        CHECKF(count == kinds[k].count, "kind %u: %u codes", (unsigned)kinds[k].kind, (unsigned)count);
+        for (DWORD i = 0; i < count; i++) {
+            uint32_t code = (uint32_t)codes[i];
+            const struct published_text *p = published(code, kinds[k].kind);
+            CHECKF(p != NULL, "kind %u: %08X is not a published code of the kind", (unsigned)kinds[k].kind, (unsigned)code);
+            CHECKF(i == 0 || (uint32_t)codes[i - 1] < code, "kind %u: not ascending at %08X", (unsigned)kinds[k].kind, (unsigned)code);
+            LPWSTR symbol = (LPWSTR)GARBAGE_PTR;
+            HRESULT hr = OpcErrorSymbol((HRESULT)code, kinds[k].kind, &symbol);
+            CHECKF(hr == S_OK && p && same(symbol, p->symbol), "%08X: symbol \"%s\"", (unsigned)code, show(symbol));
+            if (hr == S_OK)
+                OpcTaskMemFree(symbol);
+            if (p)
+                expect(code, 0x0409, kinds[k].kind, p->text, p->symbol);
+        }
+        if (kinds[k].kind == K_AE || kinds[k].kind == K_HDA) {
+            size_t listed = 0;
+            for (size_t i = 0; i < PUBLISHED_TEXT_COUNT; i++)
+                listed += PUBLISHED_TEXTS[i].kind == kinds[k].kind;
+            CHECKF(listed == count, "kind %u: %u published, %u listed", (unsigned)kinds[k].kind, (unsigned)listed, (unsigned)count);
+        }
+        if (count)
+            OpcTaskMemFree(codes);
+    }
+    DWORD count = GARBAGE_U32;
+    HRESULT *codes = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(OpcErrorCodesOfKind(77, &count, &codes), E_INVALIDARG);
+    CHECK(count == 0 && codes == NULL);
+    LPWSTR symbol = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(OpcErrorSymbol((HRESULT)0x12345678, K_DA, &symbol), E_INVALIDARG);
+    CHECK(symbol == NULL);
+}
+
 static void test_german_texts(void)
 {
     expect(0xC0040007u, 0x0407, K_DA,
@@ -374,6 +424,7 @@ int main(void)
 #endif
     test_default_locales_resolve();
     test_every_published_english_text();
+    test_codes_of_each_kind();
     test_german_texts();
     test_languages_without_texts_fall_back_to_english();
     test_collision_both_ways();

@@ -735,6 +735,35 @@ static void case_OpcGetErrorStringEx__ppString(void) {
     cases++;
 }
 
+static void case_OpcErrorCodesOfKind__pdwCount(void) {
+    nr_setup();
+    HRESULT * out_ppCodes;
+    memset(&out_ppCodes, 0xA5, sizeof out_ppCodes);
+    CHECK_HR(OpcErrorCodesOfKind(0, NULL, &out_ppCodes), E_INVALIDARG);
+    if (!nr_is_zero(&out_ppCodes, sizeof out_ppCodes)) fprintf(stderr, "OpcErrorCodesOfKind(pdwCount = NULL): `ppCodes` not reset\n");
+    CHECK(nr_is_zero(&out_ppCodes, sizeof out_ppCodes));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcErrorCodesOfKind__ppCodes(void) {
+    nr_setup();
+    DWORD out_pdwCount;
+    memset(&out_pdwCount, 0xA5, sizeof out_pdwCount);
+    CHECK_HR(OpcErrorCodesOfKind(0, &out_pdwCount, NULL), E_INVALIDARG);
+    if (!nr_is_zero(&out_pdwCount, sizeof out_pdwCount)) fprintf(stderr, "OpcErrorCodesOfKind(ppCodes = NULL): `pdwCount` not reset\n");
+    CHECK(nr_is_zero(&out_pdwCount, sizeof out_pdwCount));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcErrorSymbol__ppSymbol(void) {
+    nr_setup();
+    CHECK_HR(OpcErrorSymbol((HRESULT)0x80004005L, 0, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
 static void case_MatchPatternW__string(void) {
     nr_setup();
     CHECK(MatchPatternW(NULL, W("a*"), TRUE) == FALSE);
@@ -1352,6 +1381,9 @@ int main(void) {
     case_OpcCommonGetClientName__ppName();
     case_OpcGetErrorString__ppString();
     case_OpcGetErrorStringEx__ppString();
+    case_OpcErrorCodesOfKind__pdwCount();
+    case_OpcErrorCodesOfKind__ppCodes();
+    case_OpcErrorSymbol__ppSymbol();
     case_MatchPatternW__string();
     case_MatchPatternW__pattern();
     case_MatchPatternA__string();

@@ -301,6 +301,11 @@ typedef WCHAR *LPWSTR;
 #endif
 
 #if !defined(_WIN32)
+// A 32-bit unsigned integer.
+typedef uint32_t DWORD;
+#endif
+
+#if !defined(_WIN32)
 // A Win32 boolean: 0 is FALSE, 1 is TRUE.
 typedef int32_t BOOL;
 #endif
@@ -387,11 +392,6 @@ typedef struct OpcVersion {
   uint16_t minor;
   uint16_t build;
 } OpcVersion;
-
-#if !defined(_WIN32)
-// A 32-bit unsigned integer.
-typedef uint32_t DWORD;
-#endif
 
 // How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
 // `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
@@ -1854,6 +1854,32 @@ HRESULT OPCCOMN_CDECL OpcGetErrorString(HRESULT code, LCID locale, LPWSTR *ppStr
 // # Safety
 // `ppString` must be NULL or writable.
 HRESULT OPCCOMN_CDECL OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString);
+
+// The error codes the specification of a kind of server publishes (an `OpcServerKind` value): the
+// codes whose text that kind of server answers with its own specification's text, in ascending
+// order (as unsigned numbers: success codes first). For a client or a test tool that checks a server's GetErrorString against the published
+// list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind, ...)`, its
+// name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data Access 15.
+//
+// `*ppCodes` receives a new array of `*pdwCount` codes (free it with `OpcTaskMemFree`).
+// Returns S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument (`*pdwCount` 0 and `*ppCodes`
+// NULL on failure).
+//
+// # Safety
+// `pdwCount` and `ppCodes` must be NULL or writable.
+HRESULT OPCCOMN_CDECL OpcErrorCodesOfKind(uint32_t kind, DWORD *pdwCount, HRESULT **ppCodes);
+
+// The name of an error code as the header of its specification spells it (`OPC_E_INVALIDHANDLE`,
+// `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of `kind` (C0040203 is
+// `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events), into
+// `*ppSymbol`, freed with `OpcTaskMemFree`.
+//
+// Returns S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL
+// `ppSymbol` (`*ppSymbol` NULL on failure).
+//
+// # Safety
+// `ppSymbol` must be NULL or writable.
+HRESULT OPCCOMN_CDECL OpcErrorSymbol(HRESULT code, uint32_t kind, LPWSTR *ppSymbol);
 
 // Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
 //

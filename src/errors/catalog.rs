@@ -30,7 +30,6 @@ pub(crate) struct Entry {
     pub code: u32,
     pub spec: Spec,
     /// The name in the specification's header.
-    #[cfg_attr(not(test), allow(dead_code))]
     pub symbol: &'static str,
     pub text: Text,
 }
@@ -67,6 +66,11 @@ impl Found {
         ENGLISH[self.0].spec
     }
 
+    /// The name of the code in its specification's header (`OPC_E_INVALIDHANDLE`).
+    pub fn symbol(self) -> &'static str {
+        ENGLISH[self.0].symbol
+    }
+
     /// The text in `language`, or in English where the language has none.
     pub fn text(self, language: Language) -> &'static Text {
         self.text_in(language).unwrap_or(&ENGLISH[self.0].text)
@@ -97,6 +101,11 @@ pub(crate) fn lookup(code: u32, preferred: Spec) -> Option<Found> {
     let same_code = ENGLISH[first..].iter().take_while(|e| e.code == code);
     let own = same_code.clone().position(|e| e.spec == preferred).unwrap_or(0);
     Some(Found(first + own))
+}
+
+/// The codes `spec` publishes, in ascending order (each once).
+pub(crate) fn codes_of(spec: Spec) -> impl Iterator<Item = u32> {
+    ENGLISH.iter().filter(move |e| e.spec == spec).map(|e| e.code)
 }
 
 #[cfg(test)]
@@ -181,6 +190,25 @@ mod tests {
         assert_eq!(spec(0xC0040203, Spec::HistoricalData), Some(Spec::DataAccess));
         assert_eq!(spec(0x00040200, Spec::DataAccess), Some(Spec::AlarmsEvents));
         assert_eq!(spec(0x12345678, Spec::DataAccess), None);
+    }
+
+    #[test]
+    fn codes_of_a_specification_are_its_own_sorted() {
+        let da: Vec<u32> = codes_of(Spec::DataAccess).collect();
+        assert!(da.windows(2).all(|w| w[0] < w[1]));
+        assert!(da.contains(&0xC0040001) && da.contains(&0xC0040203) && da.contains(&0x0004040B));
+        // The Alarms & Events meaning of C0040203 is not a Data Access code, and vice versa.
+        assert!(!da.contains(&0x00040200));
+        let ae: Vec<u32> = codes_of(Spec::AlarmsEvents).collect();
+        assert!(ae.contains(&0xC0040203) && ae.contains(&0x00040200) && !ae.contains(&0xC0040001));
+        assert_eq!(
+            lookup(0xC0040203, Spec::AlarmsEvents).map(Found::symbol),
+            Some("OPC_E_INVALIDBRANCHNAME")
+        );
+        assert_eq!(
+            lookup(0xC0040203, Spec::DataAccess).map(Found::symbol),
+            Some("OPC_E_INVALID_PID")
+        );
     }
 
     #[test]

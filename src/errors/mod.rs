@@ -17,10 +17,10 @@
 use core::ffi::c_void;
 use core::ptr;
 
-use crate::com::alloc::{alloc_wstr, alloc_wstr_terminated};
+use crate::com::alloc::{alloc_array, alloc_wstr, alloc_wstr_from_str, alloc_wstr_terminated};
 use crate::com::ffi::{self, FfiResult};
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
-use crate::com::{E_INVALIDARG, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
+use crate::com::{DWORD, E_INVALIDARG, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
 use crate::locale::resolve_locale;
 #[cfg(test)]
 use crate::locale::Language;
@@ -168,10 +168,129 @@ pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: 
     })
 }
 
+/// The error codes the specification of a kind of server publishes (an `OpcServerKind` value): the
+/// codes whose text that kind of server answers with its own specification's text, in ascending
+/// order (as unsigned numbers: success codes first). For a client or a test tool that checks a server's GetErrorString against the published
+/// list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind, ...)`, its
+/// name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data Access 15.
+///
+/// `*ppCodes` receives a new array of `*pdwCount` codes (free it with `OpcTaskMemFree`).
+/// Returns S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument (`*pdwCount` 0 and `*ppCodes`
+/// NULL on failure).
+///
+/// # Safety
+/// `pdwCount` and `ppCodes` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcErrorCodesOfKind(kind: u32, pdwCount: *mut DWORD, ppCodes: *mut *mut HRESULT) -> HRESULT {
+    ffi::boundary!(Opc, [pdwCount, ppCodes], {
+        // SAFETY: the caller vouches non-NULL out-parameters are writable.
+        let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(ppCodes)?) };
+        let kind = OpcServerKind::from_raw(kind).ok_or(E_INVALIDARG)?;
+        let codes: Vec<HRESULT> = catalog::codes_of(kind.spec()).map(|c| c as HRESULT).collect();
+        array.write(alloc_array(&codes)?);
+        count.write(codes.len() as DWORD);
+        Ok(S_OK)
+    })
+}
+
+/// The name of an error code as the header of its specification spells it (`OPC_E_INVALIDHANDLE`,
+/// `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of `kind` (C0040203 is
+/// `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events), into
+/// `*ppSymbol`, freed with `OpcTaskMemFree`.
+///
+/// Returns S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL
+/// `ppSymbol` (`*ppSymbol` NULL on failure).
+///
+/// # Safety
+/// `ppSymbol` must be NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcErrorSymbol(code: HRESULT, kind: u32, ppSymbol: *mut LPWSTR) -> HRESULT {
+    ffi::boundary!(Opc, [ppSymbol], {
+        // SAFETY: the caller vouches a non-NULL `ppSymbol` is writable.
+        let out = unsafe { ffi::out(ppSymbol) }?;
+        let kind = OpcServerKind::from_raw(kind).ok_or(E_INVALIDARG)?;
+        let found = catalog::lookup(code as u32, kind.spec()).ok_or(E_INVALIDARG)?;
+        out.write(alloc_wstr_from_str(found.symbol())?);
+        Ok(S_OK)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::com::alloc::task_free;
+
+    /// The codes of `kind` through the export, or its failure (with the out-parameters checked).
+    fn codes(kind: u32) -> Result<Vec<u32>, HRESULT> {
+        let (mut count, mut array): (DWORD, *mut HRESULT) = (7, 1 as *mut HRESULT);
+        // SAFETY: both out-parameters are writable.
+        let hr = unsafe { OpcErrorCodesOfKind(kind, &mut count, &mut array) };
+        if hr != S_OK {
+            assert!(count == 0 && array.is_null());
+            return Err(hr);
+        }
+        // SAFETY: S_OK gives a task array of `count` codes, freed once here.
+        unsafe {
+            let v = core::slice::from_raw_parts(array, count as usize)
+                .iter()
+                .map(|&c| c as u32)
+                .collect();
+            task_free(array.cast());
+            Ok(v)
+        }
+    }
+
+    fn symbol(code: u32, kind: u32) -> Result<String, HRESULT> {
+        let mut p: LPWSTR = 1 as LPWSTR;
+        // SAFETY: `p` is writable.
+        let hr = unsafe { OpcErrorSymbol(code as HRESULT, kind, &mut p) };
+        if hr != S_OK {
+            assert!(p.is_null());
+            return Err(hr);
+        }
+        // SAFETY: S_OK gives a NUL-terminated task string, freed once here.
+        unsafe {
+            let s = String::from_utf16(wstr_units(p, MAX_STRING_UNITS).unwrap()).unwrap();
+            task_free(p.cast());
+            Ok(s)
+        }
+    }
+
+    #[test]
+    fn published_codes_of_each_kind() {
+        let da = codes(OpcServerKind::DataAccess as u32).unwrap();
+        let ae = codes(OpcServerKind::AlarmsEvents as u32).unwrap();
+        let hda = codes(OpcServerKind::HistoricalData as u32).unwrap();
+        assert_eq!((da.len(), ae.len(), hda.len()), (28, 8, 15));
+        // Ascending as unsigned numbers: the success codes (OPC_S_UNSUPPORTEDRATE) come first.
+        assert_eq!((da[0], *da.last().unwrap()), (0x0004000D, 0xC004040A));
+        assert!(da.windows(2).all(|w| w[0] < w[1]));
+        assert!(ae.contains(&0xC0040203) && ae.contains(&0x00040200));
+        assert!(hda.contains(&0x40041002) && hda.contains(&0x80041007));
+        // Every published code has the kind's own text and a symbol; other kinds' codes are absent.
+        for &c in &da {
+            assert!(get(c, 0x0409, 0).is_ok(), "{c:08X}");
+            assert!(symbol(c, 0).unwrap().starts_with("OPC"), "{c:08X}");
+        }
+        assert_eq!(
+            get(0xC0040203, 0x0409, 1).unwrap(),
+            "The string was not recognized as an area name."
+        );
+        assert_eq!(symbol(0xC0040203, 1).unwrap(), "OPC_E_INVALIDBRANCHNAME");
+        assert_eq!(symbol(0xC0040203, 0).unwrap(), "OPC_E_INVALID_PID");
+        assert_eq!(symbol(0x80040200, 0).unwrap(), "CONNECT_E_NOCONNECTION");
+        assert_eq!(codes(99), Err(E_INVALIDARG));
+        assert_eq!(symbol(0xC0040001, 99), Err(E_INVALIDARG));
+        assert_eq!(symbol(0x12345678, 0), Err(E_INVALIDARG));
+        // NULL out-parameters: E_INVALIDARG, the other one still reset.
+        let mut count: DWORD = 5;
+        // SAFETY: `count` is writable; NULL is allowed.
+        let hr = unsafe { OpcErrorCodesOfKind(0, &mut count, ptr::null_mut()) };
+        assert_eq!((hr, count), (E_INVALIDARG, 0));
+        // SAFETY: NULL is allowed.
+        let hr = unsafe { OpcErrorSymbol(0xC0040001u32 as HRESULT, 0, ptr::null_mut()) };
+        assert_eq!(hr, E_INVALIDARG);
+    }
 
     fn get(code: u32, locale: LCID, kind: u32) -> Result<String, HRESULT> {
         let mut p: LPWSTR = 1 as LPWSTR; // garbage: the function must overwrite it
