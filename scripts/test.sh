@@ -156,6 +156,9 @@ if [ "$wine_stage" = 1 ]; then
     stage "C++ example server and client (x64, under Wine, against the installed package)"
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
 
+    stage "conformance checker (opccomn-check): every seeded defect caught by its check, the example server passing (x64, in-process, under Wine)"
+    scripts/test-conformance.sh "$build/windows/bin" "$build/example-x64"
+
     stage "Windows x86 (i686-pc-windows-gnu): DLL, static library, opccomn.lib, C tests built, undecorated exports"
     cmake -S . -B "$build/windows-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" >/dev/null
     cmake --build "$build/windows-x86" -j2
@@ -181,8 +184,11 @@ if [ "$wine_stage" = 1 ]; then
 
         stage "C tests (Windows x86 DLL, under 32-bit Wine)"
         run_x86_c_tests "$build/windows-x86"
+
+        stage "conformance checker (opccomn-check, x86) against the x86 seeded-defect servers, under 32-bit Wine"
+        scripts/test-conformance.sh "$build/windows-x86/bin" -
     else
-        skip_stage "Rust tests and C tests of the x86 DLL under 32-bit Wine" \
+        skip_stage "Rust tests, C tests and the conformance checker of the x86 DLL under 32-bit Wine" \
             "32-bit Wine is not available: $wine32_missing" \
             "The x86 DLL was built and its exports checked, but it was NOT run. This run does not prove x86."
     fi
@@ -256,6 +262,14 @@ if [ "$wine_stage" = 1 ]; then
             continue
         fi
         ctest --test-dir "$dir" --output-on-failure --timeout 300
+        # The package's opccomn-check of the same architecture against this example DLL: all passed.
+        cp "$pkg/$arch/opccomn-check.exe" "$dir/"
+        (cd "$dir" && wine regsvr32 /s opccomn_example_inproc.dll)
+        rc=0
+        (cd "$dir" && wine opccomn-check.exe OpcComn.ExampleServerInProc.1 --format json >check.json 2>check.log) || rc=$?
+        (cd "$dir" && wine regsvr32 /u /s opccomn_example_inproc.dll)
+        tr -d '\r' <"$dir/check.json" >"$dir/check.json.lf"
+        python3 tests/conformance/check_report.py json "$dir/check.json.lf" "$rc"
     done
 
     stage "MSVC-mode program (clang --target=*-pc-windows-msvc, lld-link, no CRT) linked against the package's opccomn.lib, under Wine"

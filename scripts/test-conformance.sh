@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# The conformance checker against servers with known defects and against the example server, under
+# Wine's COM runtime: every seeded defect (tests/conformance/defects.txt) must be reported by exactly
+# the check that names it, and the defect-free test server and the C++ example server must pass every
+# check. The JSON and JUnit reports are validated (tests/conformance/check_report.py).
+#
+# Usage: scripts/test-conformance.sh BIN_DIR EXAMPLE_DIR
+#   BIN_DIR      the Windows build's program directory: opccomn-check.exe, opccomn.dll, the test servers
+#   EXAMPLE_DIR  the built C++ example (opccomn_example_inproc.dll, opccomn_example_server.exe), or -
+#                for the defect servers only
+# Needs WINEPREFIX set up (scripts/wine-env.sh).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+bin=$(cd "$1" && pwd)
+example=$2
+[ "$example" = - ] || example=$(cd "$example" && pwd)
+out="$bin/conformance"
+rm -rf "$out" && mkdir -p "$out"
+check="$bin/opccomn-check.exe"
+report="python3 $root/tests/conformance/check_report.py"
+passed=0
+
+# run_checker NAME FORMAT ARGS...: runs the checker, report in $out/NAME.FORMAT, exit code in $rc.
+run_checker() {
+    local name=$1 format=$2
+    shift 2
+    rc=0
+    (cd "$bin" && timeout 120 wine "$check" "$@" --format "$format" >"$out/$name.$format" 2>"$out/$name.$format.log") || rc=$?
+    tr -d '\r' <"$out/$name.$format" >"$out/$name.$format.tmp" && mv "$out/$name.$format.tmp" "$out/$name.$format"
+    if [ "$rc" -ne 0 ] && [ "$rc" -ne 1 ]; then
+        echo "opccomn-check $* exited $rc" >&2
+        cat "$out/$name.$format.log" >&2
+        exit 1
+    fi
+}
+
+while read -r number name want flag; do
+    case "$number" in '#'* | '') continue ;; esac
+    dll="$bin/opccomn_defect_$name.dll"
+    (cd "$bin" && wine regsvr32 /s "$dll") || { echo "regsvr32 $dll failed" >&2; exit 1; }
+    args=("OpcComnTest.Defect.$name.1" --timeout 3000)
+    [ "$flag" = hostile ] && args+=(--hostile)
+    start=$SECONDS
+    run_checker "defect-$name" json "${args[@]}"
+    $report json "$out/defect-$name.json" "$rc" "$want"
+    [ "$name" = hang-set-client-name ] && echo "  (the hung call was reported after the 3000 ms timeout; the run took $((SECONDS - start)) s)"
+    # The text and JUnit reports of the first defect and of the server without one.
+    if [ "$number" -le 1 ]; then
+        run_checker "defect-$name" junit "${args[@]}"
+        $report junit "$out/defect-$name.junit" "$rc" "$want"
+        run_checker "defect-$name" text "${args[@]}"
+        $report text "$out/defect-$name.text" "$rc" "$want"
+    fi
+    (cd "$bin" && wine regsvr32 /u /s "$dll") || { echo "regsvr32 /u $dll failed" >&2; exit 1; }
+    passed=$((passed + 1))
+done <"$root/tests/conformance/defects.txt"
+# The class is gone with its registration: the checker then says so and exits 2.
+rc=0
+(cd "$bin" && wine "$check" OpcComnTest.Defect.none.1 >/dev/null 2>&1) || rc=$?
+[ "$rc" -eq 2 ] || { echo "opccomn-check of an unregistered ProgID exited $rc, expected 2" >&2; exit 1; }
+
+if [ "$example" = - ]; then
+    echo "test-conformance: $passed passed, 0 failed (defect servers only)"
+    exit 0
+fi
+# The C++ example server, in-process, every check including the hostile ones: nothing may fail.
+(cd "$example" && wine regsvr32 /s opccomn_example_inproc.dll)
+run_checker example-inproc text OpcComn.ExampleServerInProc.1 --hostile
+$report text "$out/example-inproc.text" "$rc"
+run_checker example-inproc json OpcComn.ExampleServerInProc.1 --hostile
+$report json "$out/example-inproc.json" "$rc"
+run_checker example-inproc junit OpcComn.ExampleServerInProc.1 --hostile
+$report junit "$out/example-inproc.junit" "$rc"
+(cd "$example" && wine regsvr32 /u /s opccomn_example_inproc.dll)
+passed=$((passed + 1))
+cat "$out/example-inproc.text"
+
+echo "test-conformance: $passed passed, 0 failed"

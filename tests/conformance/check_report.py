@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Validates one opccomn-check report and checks which checks failed.
+
+Usage: check_report.py FORMAT REPORT EXIT_CODE [EXPECTED_FAILED_CHECK]
+
+FORMAT is json, junit or text. The report must parse (JSON: json.load; JUnit: an XML parser, with
+the structure JUnit consumers read), list every check once with a section of the specification, and
+its failed checks must be exactly EXPECTED_FAILED_CHECK (none when it is absent or "-"). EXIT_CODE is
+the checker's: 1 when a check failed, 0 otherwise. Prints one line saying what was seen.
+"""
+import json
+import re
+import sys
+import xml.etree.ElementTree as ET
+
+fmt, path, code = sys.argv[1], sys.argv[2], int(sys.argv[3])
+want = [] if len(sys.argv) < 5 or sys.argv[4] == "-" else [sys.argv[4]]
+text = open(path, encoding="utf-8").read()
+
+
+def fail(msg):
+    print(f"check_report: {path}: {msg}", file=sys.stderr)
+    sys.exit(1)
+
+
+if fmt == "json":
+    report = json.loads(text)
+    checks = report["checks"]
+    ids = [c["id"] for c in checks]
+    failed = [c["id"] for c in checks if c["status"] == "failed"]
+    for c in checks:
+        if c["status"] not in ("passed", "failed", "warning", "not applicable", "not run"):
+            fail(f"{c['id']}: status {c['status']!r}")
+        if not re.match(r"^[0-9]", c["section"]):
+            fail(f"{c['id']}: no section of the specification: {c['section']!r}")
+        if c["status"] == "failed" and not (c.get("expected") and c.get("got")):
+            fail(f"{c['id']}: failed without expected/got")
+    summary = report["summary"]
+    if summary["failed"] != len(failed) or sum(summary.values()) != len(checks):
+        fail(f"summary {summary} does not match the {len(checks)} checks")
+elif fmt == "junit":
+    root = ET.fromstring(text)
+    if root.tag != "testsuites":
+        fail(f"root element {root.tag}")
+    suites = root.findall("testsuite")
+    if len(suites) != 1:
+        fail(f"{len(suites)} testsuite elements")
+    cases = suites[0].findall("testcase")
+    ids = [c.get("name").split(" ")[0] for c in cases]
+    failed = [c.get("name").split(" ")[0] for c in cases if c.find("failure") is not None]
+    if int(suites[0].get("tests")) != len(cases) or int(suites[0].get("failures")) != len(failed):
+        fail("testsuite counts do not match its testcases")
+    for c in cases:
+        if not re.search(r"\([0-9][0-9., ]*\)$", c.get("name")):
+            fail(f"testcase {c.get('name')!r} names no section")
+else:
+    lines = text.splitlines()
+    rows = [re.match(r"^(PASS|FAIL|WARN|N/A |SKIP)  ([0-9][0-9., ]*?) +([a-z][a-z0-9.-]*) ", l) for l in lines[1:-1]]
+    if not all(rows):
+        fail("a check line without a status, a section and a check name")
+    ids = [m.group(3) for m in rows]
+    failed = [m.group(3) for m in rows if m.group(1) == "FAIL"]
+    if not lines or not re.match(r"^summary: \d+ passed, \d+ failed", lines[-1]):
+        fail("no summary line")
+
+if len(ids) != len(set(ids)) or not ids:
+    fail(f"checks listed {len(ids)} times, {len(set(ids))} distinct")
+if sorted(failed) != sorted(want):
+    fail(f"failed checks {failed}, expected {want or 'none'}")
+if code != (1 if want else 0):
+    fail(f"exit code {code}, expected {1 if want else 0}")
+print(f"{path}: {fmt} valid, {len(ids)} checks, failed: {', '.join(failed) or 'none'} (exit {code})")
