@@ -18,7 +18,7 @@ version=$(sed -nE 's/^version = "([^"]+)"$/\1/p' Cargo.toml | head -1)
 name="opccomn-$version-windows"
 win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind")
 
-# build DIR TARGET TOOLCHAIN_FILE [CMAKE_ARGS...]: the library and opccomn.lib, in DIR.
+# build DIR TOOLCHAIN_FILE [CMAKE_ARGS...]: the library, opccomn.lib and opccomn-check.exe, in DIR.
 build_variant() {
     local dir=$1 toolchain=$2
     shift 2
@@ -26,6 +26,9 @@ build_variant() {
         cmake -S . -B "$dir" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/$toolchain" -DOPCCOMN_BUILD_TESTS=OFF "$@" >/dev/null
     fi
     cmake --build "$dir" -j2 --target opccomn_msvc_implib opccomn_static_lib
+    if [[ "$dir" != */windows7-* ]]; then
+        cmake --build "$dir" -j2 --target opccomn_check
+    fi
 }
 
 # copy_variant DIR RUST_TARGET DEST (the static library is the one CMake makes, with one member per
@@ -48,6 +51,9 @@ mkdir -p "$stage/cmake"
 cp -r include "$stage/"
 copy_variant "$build/windows" x86_64-pc-windows-gnu "$stage/x64"
 copy_variant "$build/windows-x86" i686-pc-windows-gnu "$stage/x86"
+# The conformance checker, beside the DLL it uses (x64 and x86; it runs on Windows 10 and later).
+cp "$build/windows/bin/opccomn-check.exe" "$stage/x64/"
+cp "$build/windows-x86/bin/opccomn-check.exe" "$stage/x86/"
 copy_variant "$build/windows7-x64" x86_64-win7-windows-gnu "$stage/win7/x64"
 copy_variant "$build/windows7-x86" i686-win7-windows-gnu "$stage/win7/x86"
 cp "$build/windows/package/opccomnConfig.cmake" "$build/windows/package/opccomnConfigVersion.cmake" "$stage/cmake/"
