@@ -30,7 +30,8 @@ fn split(path: &str) -> Option<Vec<&str>> {
     let parts: Vec<&str> = path.split('\\').collect();
     parts
         .iter()
-        .all(|p| !p.is_empty() && p.encode_utf16().count() <= MAX_NAME_UNITS)
+        // (A name has at most as many UTF-16 units as UTF-8 bytes: most need no count.)
+        .all(|p| !p.is_empty() && (p.len() <= MAX_NAME_UNITS || p.encode_utf16().count() <= MAX_NAME_UNITS))
         .then_some(parts)
 }
 

@@ -195,20 +195,18 @@ pub fn parse_guid(text: &str) -> Option<GUID> {
     if b.len() != 38 || b[0] != b'{' || b[37] != b'}' {
         return None;
     }
-    let inner = &text[1..37];
-    let mut hex = String::with_capacity(32);
-    for (i, c) in inner.char_indices() {
+    let mut value = 0u128;
+    for (i, &c) in b[1..37].iter().enumerate() {
         if matches!(i, 8 | 13 | 18 | 23) {
-            if c != '-' {
+            if c != b'-' {
                 return None;
             }
-        } else if c.is_ascii_hexdigit() {
-            hex.push(c);
         } else {
-            return None;
+            // (A byte of a multi-byte character is no hex digit either.)
+            value = value << 4 | u128::from(char::from(c).to_digit(16)?);
         }
     }
-    u128::from_str_radix(&hex, 16).ok().map(GUID::from_u128)
+    Some(GUID::from_u128(value))
 }
 
 /// A registry with the views the server list merges.

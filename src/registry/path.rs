@@ -9,9 +9,35 @@ use std::hash::{Hash, Hasher};
 #[derive(Clone, Debug)]
 pub struct RegPath(String);
 
-/// The case-insensitive form of one character.
-fn fold(c: char) -> impl Iterator<Item = char> {
-    c.to_lowercase()
+/// The case-insensitive form of one character: its lower-case mapping. ASCII (every key the library
+/// writes) maps to one character without the general case-mapping tables.
+fn fold(c: char) -> Folded {
+    if c.is_ascii() {
+        Folded::Ascii(Some(c.to_ascii_lowercase()))
+    } else {
+        Folded::Other(c.to_lowercase())
+    }
+}
+
+enum Folded {
+    Ascii(Option<char>),
+    Other(core::char::ToLowercase),
+}
+
+impl Iterator for Folded {
+    type Item = char;
+    fn next(&mut self) -> Option<char> {
+        match self {
+            Folded::Ascii(c) => c.take(),
+            Folded::Other(it) => it.next(),
+        }
+    }
+}
+
+/// Both texts are ASCII: their folded forms are their ASCII lower case, byte by byte (the same
+/// characters in the same order as the general path gives).
+fn both_ascii(a: &str, b: &str) -> bool {
+    a.is_ascii() && b.is_ascii()
 }
 
 impl RegPath {
@@ -44,11 +70,17 @@ impl RegPath {
 
 /// The case-insensitive form of a name, for maps keyed by it (the in-memory registry).
 pub fn folded(name: &str) -> String {
+    if name.is_ascii() {
+        return name.to_ascii_lowercase();
+    }
     name.chars().flat_map(fold).collect()
 }
 
 impl PartialEq for RegPath {
     fn eq(&self, other: &RegPath) -> bool {
+        if both_ascii(&self.0, &other.0) {
+            return self.0.eq_ignore_ascii_case(&other.0);
+        }
         self.folded().eq(other.folded())
     }
 }
@@ -57,9 +89,9 @@ impl Eq for RegPath {}
 
 impl Hash for RegPath {
     fn hash<H: Hasher>(&self, state: &mut H) {
-        for c in self.folded() {
-            c.hash(state);
-        }
+        // The folded text, as `str` hashes (equal paths fold to the same text, "K" and KELVIN SIGN
+        // included), in one write rather than one per character.
+        folded(&self.0).hash(state);
     }
 }
 
@@ -71,6 +103,10 @@ impl PartialOrd for RegPath {
 
 impl Ord for RegPath {
     fn cmp(&self, other: &RegPath) -> core::cmp::Ordering {
+        if both_ascii(&self.0, &other.0) {
+            let (a, b) = (self.0.bytes(), other.0.bytes());
+            return a.map(|c| c.to_ascii_lowercase()).cmp(b.map(|c| c.to_ascii_lowercase()));
+        }
         self.folded().cmp(other.folded())
     }
 }
@@ -94,5 +130,14 @@ mod tests {
         assert_eq!(a.as_str(), "CLSID\\{ABC}\\InprocServer32");
         assert!(RegPath::new("a") < RegPath::new("B"));
         assert_eq!(folded("Grüße ÄB"), "grüße äb");
+        // The ASCII shortcuts give what the general mapping gives, and mixed texts compare alike.
+        for c in (0..128u8).map(char::from) {
+            assert!(fold(c).eq(c.to_lowercase()), "{c:?}");
+        }
+        assert!(RegPath::new("Z") < RegPath::new("ä") && RegPath::new("äa") < RegPath::new("äB"));
+        assert_eq!(RegPath::new("Äb"), RegPath::new("äB"));
+        // An ASCII path and a non-ASCII one that folds to it are equal and hash alike.
+        assert_eq!(RegPath::new("\u{212A}ey"), RegPath::new("KEY"));
+        assert!(HashSet::from([RegPath::new("\u{212A}ey")]).contains(&RegPath::new("KEY")));
     }
 }

@@ -42,12 +42,21 @@ fn quote(text: &str) -> String {
 }
 
 fn hex(kind: u32, bytes: &[u8]) -> String {
-    let list: Vec<String> = bytes.iter().map(|b| format!("{b:02x}")).collect();
-    if kind == 3 {
-        format!("hex:{}", list.join(","))
+    const DIGITS: &[u8; 16] = b"0123456789abcdef";
+    let mut out = if kind == 3 {
+        String::from("hex:")
     } else {
-        format!("hex({kind:x}):{}", list.join(","))
+        format!("hex({kind:x}):")
+    };
+    out.reserve(bytes.len() * 3);
+    for (i, &b) in bytes.iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        out.push(DIGITS[usize::from(b >> 4)] as char);
+        out.push(DIGITS[usize::from(b & 15)] as char);
     }
+    out
 }
 
 fn utf16_bytes(text: &str) -> Vec<u8> {
@@ -56,7 +65,7 @@ fn utf16_bytes(text: &str) -> Vec<u8> {
 
 fn format_value(value: &RegValue) -> String {
     match value {
-        RegValue::Sz(s) if !s.contains(['\r', '\n', '\0']) => quote(s),
+        RegValue::Sz(s) if !s.bytes().any(|b| matches!(b, b'\r' | b'\n' | 0)) => quote(s),
         RegValue::Sz(s) => hex(1, &utf16_bytes(s)),
         RegValue::ExpandSz(s) => hex(2, &utf16_bytes(s)),
         RegValue::Dword(d) => format!("dword:{d:08x}"),

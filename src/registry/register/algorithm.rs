@@ -70,12 +70,13 @@ fn key_is_empty(reg: &dyn Registry, path: &str) -> bool {
     reg.subkeys(path).is_empty() && reg.values(path).is_empty()
 }
 
-/// The class and category a key `CLSID\{clsid}\Implemented|Required Categories\{catid}` names.
-fn class_category_of(path: &str, d: &ServerDescription) -> Option<(GUID, bool)> {
-    for required in [false, true] {
-        let prefix = format!("{}\\", class_categories_key(&d.clsid, required));
-        if let Some(rest) = RegPath::new(path).strip_prefix(&prefix) {
-            return parse_guid(rest).map(|catid| (catid, required));
+/// The category and kind (required or not) a key `CLSID\{clsid}\Implemented|Required
+/// Categories\{catid}` names; `prefixes` are the two category keys of the class, each with a `\`.
+fn class_category_of(path: &str, prefixes: &[(String, bool); 2]) -> Option<(GUID, bool)> {
+    let path = RegPath::new(path);
+    for (prefix, required) in prefixes {
+        if let Some(rest) = path.strip_prefix(prefix) {
+            return parse_guid(rest).map(|catid| (catid, *required));
         }
     }
     None
@@ -119,9 +120,10 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         })
         .collect();
     // Deepest first, so children go before their parents.
-    keys.sort_by_key(|k| core::cmp::Reverse(k.matches('\\').count()));
+    keys.sort_by_cached_key(|k| core::cmp::Reverse(k.matches('\\').count()));
+    let prefixes = [false, true].map(|required| (format!("{}\\", class_categories_key(&d.clsid, required)), required));
     for key in keys {
-        if let Some((catid, required)) = class_category_of(key, d) {
+        if let Some((catid, required)) = class_category_of(key, &prefixes) {
             if reg.key_exists(key) && reg.subkeys(key).is_empty() {
                 reg.unregister_class_category(&d.clsid, &catid, required)?;
             }

@@ -112,6 +112,10 @@ impl<'a> Recorder<'a> {
 
     /// Records every missing key on the way to `path` (parents first); does not create them.
     pub(super) fn note_missing_keys(&mut self, path: &str) {
+        // A key exists only with all its parents: nothing is missing (the common case, one lookup).
+        if self.reg.key_exists(path) {
+            return;
+        }
         let mut prefix = String::new();
         for part in path.split('\\') {
             if !prefix.is_empty() {
