@@ -88,7 +88,7 @@ fn a_session_keeps_its_locale_and_client_name() {
         assert_eq!((v.SetLocaleID)(c, 0x0409), S_OK);
         assert_eq!((v.GetErrorString)(c, OPC_E_INVALIDHANDLE, &mut text), S_OK);
         assert_eq!(take(text), "The value of the handle is invalid.");
-        text = 1 as LPWSTR;
+        text = core::ptr::null_mut::<u16>().wrapping_byte_add(1);
         assert_eq!((v.GetErrorString)(c, 0x1234_5678, &mut text), E_INVALIDARG);
         assert!(text.is_null());
 
@@ -100,7 +100,7 @@ fn a_session_keeps_its_locale_and_client_name() {
         assert_eq!(OpcCommonGetClientName(c.cast(), &mut name), S_OK);
         assert_eq!(take(name), "Client A");
         assert_eq!(OpcCommonGetClientName(c.cast(), ptr::null_mut()), E_INVALIDARG);
-        name = 1 as LPWSTR;
+        name = core::ptr::null_mut::<u16>().wrapping_byte_add(1);
         assert_eq!(OpcCommonGetClientName(ptr::null_mut(), &mut name), E_INVALIDARG);
         assert!(name.is_null());
 
@@ -165,7 +165,7 @@ fn an_aggregated_session_counts_on_its_outer_object() {
     });
     let outer_unk = &*outer as *const Outer as *mut IUnknown;
     let mut inner: *mut c_void = ptr::null_mut();
-    let mut p: *mut c_void = 1 as *mut c_void;
+    let mut p: *mut c_void = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
     // SAFETY: valid arguments; the outer object outlives the inner one.
     unsafe {
         assert_eq!(
@@ -206,13 +206,13 @@ fn an_aggregated_session_counts_on_its_outer_object() {
 #[test]
 fn a_hostile_query_interface_answer_is_refused_without_a_crash() {
     for h in hostile::all() {
-        let mut name: LPWSTR = 1 as LPWSTR;
+        let mut name: LPWSTR = core::ptr::null_mut::<u16>().wrapping_byte_add(1);
         // SAFETY: a valid (if broken) COM object and a writable out-parameter.
         assert_eq!(unsafe { OpcCommonGetClientName(h.unk(), &mut name) }, E_INVALIDARG);
         assert!(name.is_null());
         assert_eq!(h.refs(), 1, "nothing released or kept");
     }
-    let mut p: *mut c_void = 1 as *mut c_void;
+    let mut p: *mut c_void = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
     // SAFETY: NULL arguments are refused before anything is read or written.
     let hr = unsafe { OpcCommonCreate(ptr::null(), ptr::null_mut(), &IID_IOPCCommon, ptr::null_mut()) };
     assert_eq!(hr, E_POINTER);

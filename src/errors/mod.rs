@@ -293,8 +293,8 @@ mod tests {
     }
 
     fn get(code: u32, locale: LCID, kind: u32) -> Result<String, HRESULT> {
-        let mut p: LPWSTR = 1 as LPWSTR; // garbage: the function must overwrite it
-                                         // SAFETY: `p` is writable.
+        let mut p: LPWSTR = core::ptr::null_mut::<u16>().wrapping_byte_add(1); // garbage: the function must overwrite it
+                                                                               // SAFETY: `p` is writable.
         let hr = unsafe { OpcGetErrorStringEx(code as HRESULT, locale, kind, &mut p) };
         if hr != S_OK {
             assert!(p.is_null());
@@ -380,8 +380,10 @@ mod tests {
 
     unsafe extern "C" fn vendor(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT {
         static ANSWER: [u16; 4] = [0x56, 0x31, 0x21, 0]; // "V1!"
-                                                         // SAFETY: the test passes a pointer to an LCID as context.
-        unsafe { *context.cast::<LCID>() = locale };
+                                                         // SAFETY: the test passes a pointer to a live `Cell<LCID>` as context (a shared reference with
+                                                         // interior mutability: the test reads the cell between calls while the library holds the
+                                                         // pointer, which a pointer derived from `&mut` would not allow under Tree Borrows).
+        unsafe { (*context.cast::<core::cell::Cell<LCID>>()).set(locale) };
         if code as u32 == 0xE0000001 {
             // SAFETY: `text` is the library's out-parameter.
             unsafe { *text = ANSWER.as_ptr() };
@@ -392,10 +394,10 @@ mod tests {
 
     #[test]
     fn vendor_callback_is_asked_first_with_the_resolved_locale() {
-        let mut seen: LCID = 0;
+        let seen = core::cell::Cell::new(0 as LCID);
         let texts = VendorTexts {
             callback: vendor,
-            context: (&mut seen as *mut LCID).cast(),
+            context: ptr::from_ref(&seen).cast_mut().cast(),
         };
         let p = error_string(
             0xE0000001_u32 as HRESULT,
@@ -409,7 +411,7 @@ mod tests {
             assert_eq!(wstr_units(p, 10).unwrap(), &[0x56, 0x31, 0x21]);
             task_free(p.cast());
         }
-        assert_eq!(seen, 0x0409);
+        assert_eq!(seen.get(), 0x0409);
         let p = error_string(
             0xC0040001_u32 as HRESULT,
             0x0407,
@@ -417,7 +419,7 @@ mod tests {
             Some(&texts),
         )
         .unwrap();
-        assert_eq!(seen, 0x0407);
+        assert_eq!(seen.get(), 0x0407);
         // SAFETY: as above.
         unsafe { task_free(p.cast()) };
         assert_eq!(

@@ -60,8 +60,8 @@ pub(crate) fn for_each_folded_range(lo: u32, hi: u32, mut add: impl FnMut(u32, u
 }
 
 /// The code points a test walks for "every code point", in order: all of them, or under Miri (which
-/// is some thousand times slower) every code point of a folding run (so every code point that
-/// folds), all of Latin-1, and one in 257 of the rest.
+/// is some ten thousand times slower) all of ASCII, the first and last code point of every folding
+/// run, and one in 16,411 of the rest.
 #[cfg(test)]
 pub(crate) fn test_code_points() -> &'static [u32] {
     static POINTS: std::sync::OnceLock<Vec<u32>> = std::sync::OnceLock::new();
@@ -75,12 +75,18 @@ pub(crate) fn test_code_points() -> &'static [u32] {
             let mut c = from;
             while c < to {
                 v.push(c);
-                c = if c < 0x100 { c + 1 } else { (c / 257 + 1) * 257 };
+                c = if c < 0x80 { c + 1 } else { (c / 16411 + 1) * 16411 };
             }
         };
         for &(first, last, _, _) in &FOLD_RUNS {
             gap(&mut v, next, first);
-            v.extend(first.max(next)..=last);
+            let from = first.max(next);
+            if from <= last {
+                v.push(from);
+            }
+            if last > from {
+                v.push(last);
+            }
             next = next.max(last + 1);
         }
         gap(&mut v, next, 0x11_0000);
@@ -130,7 +136,12 @@ mod tests {
             assert_eq!(fold(f), f, "{c:X}");
             changed += (f != c) as usize;
         }
-        assert_eq!(changed, FOLDING_COUNT);
+        // Every code point that folds was walked (not so under Miri, which samples).
+        if cfg!(miri) {
+            assert!(changed > 0 && changed < FOLDING_COUNT);
+        } else {
+            assert_eq!(changed, FOLDING_COUNT);
+        }
     }
 
     /// Checks every entry against the Unicode data file when the `unicode-data` package provides the

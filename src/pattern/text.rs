@@ -262,7 +262,16 @@ mod tests {
         ];
         let mut s = Vec::new();
         for len in 0..=4u32 {
-            for mut k in 0..alphabet.len().pow(len) {
+            // Under Miri (safe code here; the pointer readers have their own tests) one string in 3
+            // of two bytes, 1 in 97 of three and 1 in 1,999 of four.
+            let stride = match len {
+                _ if !cfg!(miri) => 1,
+                0 | 1 => 1,
+                2 => 3,
+                3 => 97,
+                _ => 1999,
+            };
+            for mut k in (0..alphabet.len().pow(len)).step_by(stride) {
                 s.clear();
                 for _ in 0..len {
                     s.push(alphabet[k % alphabet.len()]);

@@ -225,7 +225,7 @@ mod tests {
 
     #[test]
     fn the_class_object_serves_only_the_server_list() {
-        let mut p = 1 as *mut c_void;
+        let mut p = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
         let other = GUID::from_u128(1);
         // SAFETY: valid pointers or deliberate NULLs.
         unsafe {

@@ -3,6 +3,7 @@
 use std::sync::Arc;
 
 use super::*;
+use crate::com::{LPWSTR, S_FALSE};
 use crate::registry::categories::{CATID_OPCAEServer10, CATID_OPCDAServer10, CATID_OPCDAServer20, CATID_OPCDAServer30};
 use crate::registry::memory::MemoryRegistry;
 use crate::registry::regfile;
@@ -70,6 +71,10 @@ fn zero_means_any_category() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn a_class_qualifies_by_any_implemented_category() {
     let regs = sample();
     assert_eq!(
@@ -138,6 +143,10 @@ fn required_categories_are_the_ones_the_caller_supports() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn data_access_1_servers_registered_the_old_way_meet_required_categories_too() {
     let regs = sample();
     regs.write
@@ -158,6 +167,10 @@ fn data_access_1_servers_registered_the_old_way_meet_required_categories_too() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn data_access_1_servers_registered_the_old_way_are_found() {
     let regs = sample();
     assert_eq!(
@@ -182,6 +195,10 @@ fn data_access_1_servers_registered_the_old_way_are_found() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn every_view_is_read_and_each_class_reported_once() {
     let regs = sample();
     let other = MemoryRegistry::new();
@@ -216,6 +233,10 @@ fn every_view_is_read_and_each_class_reported_once() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn details_come_from_the_class_key() {
     let regs = sample();
     assert_eq!(
@@ -243,6 +264,10 @@ fn details_come_from_the_class_key() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn prog_ids_map_to_their_clsid() {
     let regs = sample();
     assert_eq!(clsid_from_prog_id(&regs, "V.Two.1"), Ok(g(2)));
@@ -255,6 +280,10 @@ fn prog_ids_map_to_their_clsid() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn enumeration_and_registration_may_run_on_several_threads() {
     let regs = Arc::new(sample());
     let workers: Vec<_> = (0..4u128)
@@ -280,4 +309,75 @@ fn enumeration_and_registration_may_run_on_several_threads() {
         classes_of_categories(&regs, Some(&[CATID_OPCAEServer10]), None),
         ids(&[3])
     );
+}
+
+fn read_and_free(p: LPWSTR) -> String {
+    // SAFETY: `p` is a NUL-terminated string the library allocated; freed once here.
+    unsafe {
+        let s = String::from_utf16(crate::com::wstr::wstr_units(p, usize::MAX).unwrap()).unwrap();
+        task_free(p.cast());
+        s
+    }
+}
+
+/// The server list object over an in-memory registry, through its vtables as a C client uses it:
+/// EnumClassesOfCategories and the IOPCEnumGUID it returns (Next, Skip, Reset, Clone), GetClassDetails,
+/// CLSIDFromProgID, and failures that leave every out-parameter NULL.
+#[test]
+fn the_com_object_answers_through_its_vtables() {
+    let handle = OpcRegistry {
+        inner: Arc::new(sample()),
+    };
+    let mut p: *mut c_void = ptr::null_mut();
+    // SAFETY: the object and the enumerators are used while alive and released once; every pointer
+    // passed is valid for what the method writes.
+    unsafe {
+        assert_eq!(
+            OpcServerListCreateOver(&handle, ptr::null_mut(), &IID_IOPCServerList2, &mut p),
+            S_OK
+        );
+        let list = p.cast::<IOPCServerList2>();
+        let vt = &*(*list).lpVtbl;
+        let mut cats = [CATID_OPCDAServer20];
+        let mut e: *mut IOPCEnumGUID = ptr::null_mut();
+        assert_eq!(
+            (vt.EnumClassesOfCategories)(list, 1, cats.as_mut_ptr(), 0, ptr::null_mut(), &mut e),
+            S_OK
+        );
+        let ev = &*(*e).lpVtbl;
+        let mut got = [GUID::default(); 3];
+        let mut n = 7;
+        assert_eq!((ev.Next)(e, 3, got.as_mut_ptr(), &mut n), S_FALSE);
+        assert_eq!((n, &got[..2]), (2, &ids(&[1, 2])[..]));
+        assert_eq!((ev.Reset)(e), S_OK);
+        assert_eq!((ev.Skip)(e, 1), S_OK);
+        let mut c: *mut IOPCEnumGUID = ptr::null_mut();
+        assert_eq!((ev.Clone)(e, &mut c), S_OK);
+        assert_eq!((ev.Release)(e), 0);
+        assert_eq!(((*(*c).lpVtbl).Next)(c, 1, got.as_mut_ptr(), ptr::null_mut()), S_OK);
+        assert_eq!(got[0], g(2));
+        assert_eq!(((*(*c).lpVtbl).Next)(c, 1, got.as_mut_ptr(), &mut n), S_FALSE);
+        assert_eq!(n, 0);
+        assert_eq!(((*(*c).lpVtbl).Release)(c), 0);
+
+        let (mut prog, mut user, mut vi) = (ptr::null_mut(), ptr::null_mut(), ptr::null_mut());
+        assert_eq!((vt.GetClassDetails)(list, &g(1), &mut prog, &mut user, &mut vi), S_OK);
+        assert_eq!(
+            (read_and_free(prog), read_and_free(user), read_and_free(vi)),
+            ("V.One.1".into(), "Server 1".into(), "V.One.1".into())
+        );
+        let garbage = ptr::null_mut::<u16>().wrapping_byte_add(8);
+        let (mut prog, mut user, mut vi) = (garbage, garbage, garbage);
+        assert_eq!(
+            (vt.GetClassDetails)(list, &g(0x99), &mut prog, &mut user, &mut vi),
+            REGDB_E_CLASSNOTREG
+        );
+        assert!(prog.is_null() && user.is_null() && vi.is_null());
+
+        let name: Vec<u16> = "v.two.1".encode_utf16().chain([0]).collect();
+        let mut clsid = GUID::default();
+        assert_eq!((vt.CLSIDFromProgID)(list, name.as_ptr(), &mut clsid), S_OK);
+        assert_eq!(clsid, g(2));
+        assert_eq!((vt.Release)(list), 0);
+    }
 }

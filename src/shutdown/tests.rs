@@ -150,8 +150,8 @@ impl Server {
         self.0.cast()
     }
     fn find(&self, iid: &IID) -> (HRESULT, *mut IConnectionPoint) {
-        let mut cp = 0x1 as *mut IConnectionPoint; // garbage, to prove it is written
-                                                   // SAFETY: a live container.
+        let mut cp = core::ptr::null_mut::<IConnectionPoint>().wrapping_byte_add(1); // garbage, to prove it is written
+                                                                                     // SAFETY: a live container.
         let hr = unsafe { ((*(*self.0).lpVtbl).FindConnectionPoint)(self.0, iid, &mut cp) };
         (hr, cp)
     }
@@ -205,7 +205,7 @@ impl Drop for Point {
 
 #[test]
 fn creation_follows_the_standard_protocol() {
-    let mut p: *mut c_void = 0x1 as *mut c_void;
+    let mut p: *mut c_void = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
     // SAFETY: deliberately bad arguments, all of which the function must reject cleanly.
     unsafe {
         assert_eq!(OpcShutdownCreate(ptr::null_mut(), ptr::null(), &mut p), E_POINTER);
@@ -214,7 +214,7 @@ fn creation_follows_the_standard_protocol() {
             OpcShutdownCreate(ptr::null_mut(), &IID_IUNKNOWN, ptr::null_mut()),
             E_POINTER
         );
-        p = 0x1 as *mut c_void;
+        p = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
         assert_eq!(
             OpcShutdownCreate(ptr::null_mut(), &IID_IOPCCommon, &mut p),
             E_NOINTERFACE
@@ -255,7 +255,7 @@ fn find_connection_point_answers_only_iopcshutdown() {
     assert!(cp.is_null());
     // SAFETY: NULL arguments must be refused without touching anything.
     unsafe {
-        let mut cp = 0x1 as *mut IConnectionPoint;
+        let mut cp = core::ptr::null_mut::<IConnectionPoint>().wrapping_byte_add(1);
         assert_eq!(
             ((*(*server.0).lpVtbl).FindConnectionPoint)(server.0, ptr::null(), &mut cp),
             E_POINTER
@@ -300,14 +300,14 @@ fn the_connection_point_is_its_own_object_and_knows_its_container() {
         assert_eq!(query_interface(point.0.cast(), &IID_ICONNECTIONPOINT, &mut a), S_OK);
         assert_eq!(a, point.0.cast());
         release(a.cast());
-        a = 0x1 as *mut c_void;
+        a = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
         assert_eq!(
             query_interface(point.0.cast(), &IID_ICONNECTIONPOINTCONTAINER, &mut a),
             E_NOINTERFACE
         );
         assert!(a.is_null());
         // The container does not hand out the point through QueryInterface either.
-        a = 0x1 as *mut c_void;
+        a = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
         assert_eq!(
             query_interface(server.unk(), &IID_ICONNECTIONPOINT, &mut a),
             E_NOINTERFACE
@@ -689,7 +689,7 @@ unsafe extern "C" fn record(context: *mut c_void, reason: LPCWSTR) {
 fn the_client_sink_calls_back_and_always_returns_s_ok() {
     let received = Received(Mutex::new(Vec::new()));
     let ctx = &received as *const Received as *mut c_void;
-    let mut p: *mut c_void = 0x1 as *mut c_void;
+    let mut p: *mut c_void = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
     // SAFETY: valid and deliberately invalid arguments.
     unsafe {
         assert_eq!(OpcShutdownSinkCreate(None, ctx, &IID_IOPCShutdown, &mut p), E_POINTER);
@@ -820,14 +820,22 @@ fn hostile_query_interface_answers_are_refused_without_a_crash() {
 fn concurrent_advise_unadvise_and_notify_stay_consistent() {
     let server = std::sync::Arc::new(Server::with_limit(Some(64)));
     let sinks: Vec<_> = (0..4).map(|_| MockSink::new(true, S_OK)).collect();
-    let sink_ptrs: Vec<usize> = sinks.iter().map(|s| s.unk() as usize).collect();
+    /// A sink's pointer, handed to a thread (the mock sinks are thread-safe).
+    #[derive(Clone, Copy)]
+    struct SinkPtr(*mut IUnknown);
+    // SAFETY: the mock sinks count with atomics and outlive the scope.
+    unsafe impl Send for SinkPtr {}
+    let sink_ptrs: Vec<SinkPtr> = sinks.iter().map(|s| SinkPtr(s.unk())).collect();
+    // (20 rounds under Miri, which runs the threads one step at a time.)
+    let rounds = if cfg!(miri) { 20 } else { 200 };
     std::thread::scope(|scope| {
         for &sink in &sink_ptrs {
             let server = server.clone();
             scope.spawn(move || {
+                let sink = sink; // the whole wrapper, not its field (which is not Send)
                 let point = server.point();
-                for _ in 0..200 {
-                    let (hr, cookie) = point.advise(sink as *mut IUnknown);
+                for _ in 0..rounds {
+                    let (hr, cookie) = point.advise(sink.0);
                     assert_eq!(hr, S_OK);
                     let (hr, _, failed) = server.notify(ptr::null());
                     assert_eq!((hr, failed), (S_OK, 0));
@@ -840,7 +848,10 @@ fn concurrent_advise_unadvise_and_notify_stay_consistent() {
     drop(server);
     for s in &sinks {
         assert_eq!(s.refs(), 1, "every reference taken was given back");
-        assert!(s.calls() >= 200, "each sink was advised during its own notifications");
+        assert!(
+            s.calls() >= rounds,
+            "each sink was advised during its own notifications"
+        );
     }
 }
 

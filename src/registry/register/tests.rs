@@ -25,8 +25,27 @@ pub(crate) fn server(n: u128) -> ServerDescription {
     }
 }
 
-fn dump(regs: &Registries) -> String {
-    regfile::export(&*regs.write, "").unwrap()
+/// Every key (as written) with its values, in the registry's order: what two states are compared by.
+/// (The same as comparing `.reg` exports, without formatting the text, which Miri takes long for.)
+fn dump(regs: &Registries) -> Vec<(String, Vec<(String, RegValue)>)> {
+    fn walk(reg: &dyn crate::registry::Registry, path: String, out: &mut Vec<(String, Vec<(String, RegValue)>)>) {
+        let subkeys = reg.subkeys(&path);
+        out.push((path.clone(), reg.values(&path)));
+        for child in subkeys {
+            walk(
+                reg,
+                if path.is_empty() {
+                    child
+                } else {
+                    format!("{path}\\{child}")
+                },
+                out,
+            );
+        }
+    }
+    let mut out = Vec::new();
+    walk(&*regs.write, String::new(), &mut out);
+    out
 }
 
 #[test]
@@ -73,6 +92,10 @@ fn registration_writes_what_com_and_the_specification_require() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn unregistration_leaves_the_registry_as_it_was() {
     let regs = memory();
     regfile::apply(
@@ -95,6 +118,10 @@ fn unregistration_leaves_the_registry_as_it_was() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn coexisting_registrations_keep_what_they_found() {
     let regs = memory();
     let d = server(3);
@@ -124,6 +151,10 @@ fn coexisting_registrations_keep_what_they_found() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn a_server_registered_later_under_the_same_class_keeps_its_entries() {
     let regs = memory();
     let mut d = server(9);
@@ -155,6 +186,10 @@ fn a_server_registered_later_under_the_same_class_keeps_its_entries() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn a_shared_category_keeps_its_description() {
     let regs = memory();
     let empty = dump(&regs);
@@ -184,6 +219,10 @@ fn a_shared_category_keeps_its_description() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn unregistration_without_a_ledger_removes_only_matching_values() {
     let regs = memory();
     let d = server(6);
@@ -214,6 +253,10 @@ fn ledger_entries_survive_awkward_names() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn exported_registration_applies_to_the_same_registry() {
     let d = server(7);
     let text = export_registration(&d).unwrap();
@@ -228,6 +271,10 @@ fn exported_registration_applies_to_the_same_registry() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn bad_descriptions_are_refused() {
     let regs = memory();
     let empty = dump(&regs);
@@ -247,4 +294,126 @@ fn bad_descriptions_are_refused() {
     assert_eq!(dump(&regs), empty);
     register(&regs, &server(8)).unwrap();
     assert_ne!(dump(&regs), empty);
+}
+
+/// Reads the whole registry behind a handle through `OpcRegistryExport`, as C callers do.
+///
+/// # Safety
+/// `reg` is a live handle.
+unsafe fn export_through_the_handle(reg: *const crate::registry::OpcRegistry) -> String {
+    let mut text = ptr::null_mut();
+    // SAFETY: a live handle, a NULL key (the whole registry) and a writable out-pointer.
+    let hr = unsafe { crate::registry::regfile::OpcRegistryExport(reg, ptr::null(), &mut text) };
+    assert_eq!(hr, crate::com::S_OK);
+    // SAFETY: the library returned a NUL-terminated string, freed once here.
+    unsafe {
+        let s = String::from_utf16(crate::com::wstr::wstr_units(text, usize::MAX).unwrap()).unwrap();
+        crate::com::alloc::OpcTaskMemFree(text.cast());
+        s
+    }
+}
+
+/// The C entry points read every field of the caller's structure and its arrays, write through a
+/// registry handle, and refuse a structure of another size after reading only its size (under Miri a
+/// read past the 4-byte allocation given would be reported).
+#[test]
+fn the_c_entry_points_read_the_structure_and_write_through_a_handle() {
+    use crate::registry::{OpcRegistryCreateMemory, OpcRegistryRelease};
+    let w = |s: &str| -> Vec<u16> { s.encode_utf16().chain([0]).collect() };
+    let (prog, vi, user, path) = (
+        w("Vendor.CServer.1"),
+        w("Vendor.CServer"),
+        w("Vendor C Server"),
+        w("C:\\Vendor\\c.exe"),
+    );
+    let (vendor, text, run_as) = (w("Vendor Inc."), w("Vendor Special Servers"), w("Interactive User"));
+    let clsid = GUID::from_u128(0xC1000000_1111_2222_3333_444455556601);
+    let app_id = GUID::from_u128(0xC1000000_1111_2222_3333_444455556602);
+    let cats = [
+        CATID_OPCDAServer20,
+        GUID::from_u128(0xC1000000_1111_2222_3333_444455556603),
+    ];
+    let texts = [ptr::null(), text.as_ptr()];
+    let make = || OpcServerRegistration {
+        struct_size: core::mem::size_of::<OpcServerRegistration>() as u32,
+        server_type: OpcServerType::Local as u32,
+        clsid,
+        prog_id: prog.as_ptr(),
+        version_independent_prog_id: vi.as_ptr(),
+        user_type: user.as_ptr(),
+        module_path: path.as_ptr(),
+        threading_model: ptr::null(),
+        implemented_categories: cats.as_ptr(),
+        implemented_category_count: 2,
+        implemented_category_descriptions: texts.as_ptr(),
+        required_categories: cats[1..].as_ptr(),
+        required_category_count: 1,
+        da10_vendor: vendor.as_ptr(),
+        app_id: &app_id,
+        app_id_run_as: run_as.as_ptr(),
+        app_id_local_service: ptr::null(),
+        app_id_dll_surrogate: ptr::null(),
+        flags: 0,
+    };
+    let r = make();
+    let mut reg = ptr::null_mut();
+    // SAFETY: every pointer in `r` is NULL or points at live, NUL-terminated or counted data; `reg`
+    // is a live handle until released at the end.
+    unsafe {
+        assert_eq!(OpcRegistryCreateMemory(&mut reg), crate::com::S_OK);
+        let empty = export_through_the_handle(reg);
+        assert_eq!(OpcRegisterServer(&r, reg), crate::com::S_OK);
+        let value = |key: &str, name: Option<&str>| {
+            let key = w(key);
+            let name = name.map(w);
+            let mut data = ptr::null_mut();
+            let name_ptr = name.as_ref().map_or(ptr::null(), |n| n.as_ptr());
+            match crate::registry::OpcRegistryGetString(reg, key.as_ptr(), name_ptr, &mut data) {
+                crate::com::S_OK => {
+                    let s = String::from_utf16(crate::com::wstr::wstr_units(data, usize::MAX).unwrap()).unwrap();
+                    crate::com::alloc::OpcTaskMemFree(data.cast());
+                    Some(s)
+                }
+                hr => {
+                    assert!(data.is_null(), "{hr:#x}");
+                    None
+                }
+            }
+        };
+        let class = format!("CLSID\\{clsid}");
+        assert_eq!(
+            value(&format!("{class}\\LocalServer32"), None).as_deref(),
+            Some("C:\\Vendor\\c.exe")
+        );
+        assert_eq!(value(&format!("{class}\\InprocServer32"), None), None);
+        assert_eq!(
+            value(&format!("AppID\\{app_id}"), Some("RunAs")).as_deref(),
+            Some("Interactive User")
+        );
+        assert_eq!(
+            value(&format!("Component Categories\\{}", cats[1]), Some("409")).as_deref(),
+            Some("Vendor Special Servers")
+        );
+        assert_eq!(
+            value("Vendor.CServer.1\\OPC\\Vendor", None).as_deref(),
+            Some("Vendor Inc.")
+        );
+        assert_eq!(
+            value("Vendor.CServer\\CurVer", Some("")).as_deref(),
+            Some("Vendor.CServer.1")
+        );
+        assert_eq!(OpcUnregisterServer(&r, reg), crate::com::S_OK);
+        assert_eq!(export_through_the_handle(reg), empty);
+        // Only the size field of a structure of another size is read, and nothing is written.
+        let size_only: Box<u32> = Box::new(4);
+        let short = (&*size_only as *const u32).cast::<OpcServerRegistration>();
+        assert_eq!(OpcRegisterServer(short, reg), E_INVALIDARG);
+        assert_eq!(OpcRegisterServer(ptr::null(), reg), E_INVALIDARG);
+        // More categories than allowed: refused before the array is read (it holds two).
+        let mut bad = make();
+        bad.implemented_category_count = 257;
+        assert_eq!(OpcRegisterServer(&bad, reg), E_INVALIDARG);
+        assert_eq!(export_through_the_handle(reg), empty);
+        OpcRegistryRelease(reg);
+    }
 }
