@@ -96,6 +96,17 @@ need_nightly_rust_src() {
     fi
 }
 
+# Miri: the nightly toolchain with its miri component and the standard library's sources (Miri builds
+# its own sysroot from them). A component that cannot be installed fails the caller (set -e): the Miri
+# stage never passes without Miri.
+need_miri() {
+    need_nightly_rust_src
+    if ! rustup +nightly component list --installed 2>/dev/null | grep -q '^miri'; then
+        rustup component add miri --toolchain nightly
+    fi
+    cargo +nightly miri --version >/dev/null
+}
+
 install_packages() {
     [ "$#" -eq 0 ] && return 0
     local sudo=""

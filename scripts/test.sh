@@ -6,7 +6,9 @@
 # headers (scripts/test-coexistence.sh). Installs what is missing on a fresh
 # Debian 12 machine.
 #
-# Usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz]     (CI runs it with no options)
+# Also runs the tests that do not call the operating system under Miri (Stacked and Tree Borrows).
+#
+# Usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz] [--no-miri]     (CI runs it with no options)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -15,12 +17,14 @@ cd "$root"
 wine_stage=1
 lint_stage=1
 fuzz_stage=1
+miri_stage=1
 for arg in "$@"; do
     case "$arg" in
         --no-wine) wine_stage=0 ;;
         --no-lint) lint_stage=0 ;;
         --no-fuzz) fuzz_stage=0 ;;
-        *) echo "usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz]" >&2; exit 2 ;;
+        --no-miri) miri_stage=0 ;;
+        *) echo "usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz] [--no-miri]" >&2; exit 2 ;;
     esac
 done
 
@@ -95,6 +99,16 @@ stage "thread stress test (ThreadSanitizer, instrumented standard library)"
 # one compiled pattern (src/stress_tests.rs). Any report fails the run (halt_on_error).
 RUSTFLAGS="-Zsanitizer=thread" TSAN_OPTIONS="halt_on_error=1" CARGO_TARGET_DIR="$root/target/tsan" \
     cargo +nightly test -Zbuild-std --target x86_64-unknown-linux-gnu --lib stress_tests
+
+if [ "$miri_stage" = 1 ]; then
+    # Stacked Borrows and Tree Borrows, one process each, at once (scripts/miri.sh): the COM core,
+    # IOPCCommon, errors, locale, pattern, shutdown with the in-process sink, the server list and the
+    # registry over the in-memory registry, the stress test. Any report fails the stage.
+    stage "Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system"
+    scripts/miri.sh
+else
+    skip_stage "Miri (--no-miri)" "The Miri stage was NOT run: this run does not prove the absence of undefined behaviour."
+fi
 
 stage "installed package: find_package(opccomn CONFIG) and pkg-config"
 rm -rf "$build/install" "$build/consumer"

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Runs the library's tests under Miri, once under Stacked Borrows and once under Tree Borrows
+# (`-Zmiri-tree-borrows`), the two at once (one process each), with isolation on: every test that
+# does not call the operating system (those that do are `#[cfg_attr(miri, ignore)]` with the reason,
+# and fewer cases run under `cfg(miri)`; see README, Tests). Any report of undefined behaviour, a leak,
+# a failed or missing test fails the run. Prints, per model, how many tests ran and how long it took.
+#
+# Usage: scripts/miri.sh [stacked|tree]...     (both when none is given; test.sh runs both)
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+. scripts/deps.sh
+need_miri
+
+models=("$@")
+[ "${#models[@]}" -eq 0 ] && models=(stacked tree)
+declare -A flags=([stacked]="" [tree]="-Zmiri-tree-borrows")
+for m in "${models[@]}"; do
+    [ -n "${flags[$m]+set}" ] || { echo "usage: scripts/miri.sh [stacked|tree]..." >&2; exit 2; }
+done
+
+out="$root/build/miri"
+mkdir -p "$out"
+started=$SECONDS
+# The sysroot and the crate, built once for both runs (at most 2 jobs).
+cargo +nightly miri setup >/dev/null 2>&1 || cargo +nightly miri setup
+cargo +nightly miri test -q --lib -j2 --no-run
+
+declare -A pid
+for m in "${models[@]}"; do
+    rm -f "$out/$m.log" "$out/$m.rc" "$out/$m.seconds"
+    (
+        t=$SECONDS rc=0
+        MIRIFLAGS="${flags[$m]} ${MIRIFLAGS:-}" cargo +nightly miri test --lib -j2 -- --test-threads=1 \
+            >"$out/$m.log" 2>&1 || rc=$?
+        echo "$rc" >"$out/$m.rc"
+        echo $((SECONDS - t)) >"$out/$m.seconds"
+    ) &
+    pid[$m]=$!
+done
+
+failed=0
+for m in "${models[@]}"; do
+    wait "${pid[$m]}" || true
+    rc=$(cat "$out/$m.rc" 2>/dev/null || echo "none")
+    secs=$(cat "$out/$m.seconds" 2>/dev/null || echo "?")
+    result=$(grep -E '^test result: ' "$out/$m.log" | tail -1 || true)
+    # Miri's reports (undefined behaviour, leaks, unsupported operations, deadlocks) are `error:` lines;
+    # cargo's own summary lines are not counted.
+    reports=$(grep -E '^error: ' "$out/$m.log" | grep -cvE '^error: (test failed, to rerun|aborting due to)' || true)
+    # test result: ok. N passed; 0 failed; M ignored; 0 measured; 0 filtered out; ...
+    passed=$(sed -nE 's/^test result: ok\. ([0-9]+) passed; 0 failed; ([0-9]+) ignored; 0 measured; 0 filtered out.*/\1/p' <<<"$result")
+    ignored=$(sed -nE 's/^test result: ok\. ([0-9]+) passed; 0 failed; ([0-9]+) ignored; 0 measured; 0 filtered out.*/\2/p' <<<"$result")
+    if [ "$rc" = 0 ] && [ "$reports" = 0 ] && [ -n "$passed" ] && [ "$passed" -gt 0 ]; then
+        echo "miri ($m borrows): $passed tests passed, $ignored ignored (reasons in the source), 0 reports, ${secs} s"
+    else
+        failed=1
+        echo "miri ($m borrows): FAILED (exit status $rc, $reports reports, result: ${result:-none}); from $out/$m.log:" >&2
+        grep -m1 -B2 -A40 -E '^error|panicked|FAILED' "$out/$m.log" >&2 || tail -n 40 "$out/$m.log" >&2
+    fi
+done
+echo "miri: $((SECONDS - started)) s in all (build and both models)"
+exit "$failed"
