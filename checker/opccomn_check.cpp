@@ -155,25 +155,38 @@ volatile LONG g_call_active;             // 1 while a call into the server runs
 volatile ULONGLONG g_call_started;       // GetTickCount64 at its start
 char g_call_name[160];                   // what it is, for the report
 volatile LONG g_current_check = -1;      // index of the running check
-volatile DWORD g_worker_thread_id;
 volatile LONG g_worker_crashed;
 volatile DWORD g_crash_code;
+
+// Each worker's generation; a worker the watchdog gave up on (its call hung) is stale, and ends as
+// soon as that call returns, before it touches the shared state of the worker that replaced it.
+volatile LONG g_generation;
+thread_local LONG t_generation = -1;
+
+void EndIfStale() {
+    if (t_generation != g_generation) ExitThread(0);
+}
 
 // Brackets one call into the server: `Call c("IOPCCommon::SetLocaleID"); hr = ...;`.
 class Call {
 public:
     explicit Call(const char *name) {
+        EndIfStale();
         snprintf(g_call_name, sizeof g_call_name, "%s", name);
         g_call_started = GetTickCount64();
         InterlockedExchange(&g_call_active, 1);
     }
-    ~Call() { InterlockedExchange(&g_call_active, 0); }
+    ~Call() {
+        EndIfStale();
+        InterlockedExchange(&g_call_active, 0);
+    }
 };
 
 // A crash on the worker thread (an exception nothing in the server handled): recorded, and the
 // worker thread ends; the main thread reports it and goes on with a new worker.
 LONG WINAPI CrashFilter(EXCEPTION_POINTERS *info) {
-    if (GetCurrentThreadId() == g_worker_thread_id) {
+    if (t_generation >= 0 && t_generation != g_generation) ExitThread(0);  // a stale worker: already reported
+    if (t_generation >= 0) {
         g_crash_code = info && info->ExceptionRecord ? info->ExceptionRecord->ExceptionCode : 0;
         InterlockedExchange(&g_worker_crashed, 1);
         ExitThread(3);
@@ -986,8 +999,19 @@ IOPCServerList2 *ServerList(Ctx &x) {
     void *p = nullptr;
     HRESULT hr;
     if (Local()) {
-        hr = OpcServerListCreate(nullptr, IID_IOPCServerList2, &p);
-        g_list_source = "the library's server browser (OpcServerListCreate)";
+        // What clients use: CLSID_OPCServerList as registered (OpcEnum, or opccomn.dll registered
+        // with regsvr32); where none is registered or it cannot be created, the library's own.
+        {
+            Call c("CoCreateInstance(CLSID_OPCServerList)");
+            hr = CoCreateInstance(CLSID_OPCServerList, nullptr, CLSCTX_ALL, IID_IOPCServerList2, &p);
+        }
+        if (SUCCEEDED(hr) && p) {
+            g_list_source = "the registered OPCServerList (CLSID_OPCServerList)";
+        } else {
+            std::string why = Hr(hr);
+            hr = OpcServerListCreate(nullptr, IID_IOPCServerList2, &p);
+            g_list_source = "the library's server browser (OpcServerListCreate; CLSID_OPCServerList: " + why + ")";
+        }
     } else {
         COSERVERINFO info;
         MULTI_QI mqi = {&IID_IOPCServerList2, nullptr, S_OK};
@@ -1289,7 +1313,7 @@ void Record(int index, const Result &r) {
 }
 
 DWORD WINAPI Worker(void *) {
-    g_worker_thread_id = GetCurrentThreadId();
+    t_generation = g_generation;
     CoInitializeEx(nullptr, COINIT_MULTITHREADED);
     Session *session = new Session();  // leaked with the thread if the server crashes or hangs
     int selected_total = 0, position = 0;
@@ -1302,6 +1326,7 @@ DWORD WINAPI Worker(void *) {
         Ctx x(*session);
         x.r.id = kChecks[i].id, x.r.section = kChecks[i].section, x.r.title = kChecks[i].title;
         kChecks[i].fn(x);
+        EndIfStale();
         if (x.r.status == kNotRun) x.Fail("a result", "the check returned none (a bug of opccomn-check)");
         Record(i, x.r);
     }
@@ -1370,6 +1395,7 @@ bool RunAll() {
             r.detail = "an unhandled exception inside the server; the checker goes on with a new server object";
         }
         fprintf(stderr, "opccomn-check: %s: %s\n", r.id.c_str(), r.got.c_str());
+        InterlockedIncrement(&g_generation);  // the old worker, if it ever returns, ends there
         Record(at, r);
         CloseHandle(worker);
         g_next_check = at + 1;

@@ -209,7 +209,8 @@ if [ "$wine_stage" = 1 ]; then
 
     # Windows 7 / Server 2008 R2: Rust's tier-3 *-win7-windows-gnu targets (nightly, -Zbuild-std).
     need_nightly_rust_src
-    win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind")
+    win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind"
+        -DOPCCOMN_BUILD_CHECKER=OFF)   # the checker and its test servers run from the x64 and x86 builds
     stage "Windows 7 builds (x86_64-win7-windows-gnu, i686-win7-windows-gnu): import tables"
     cmake -S . -B "$build/windows7-x64" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" \
         -DOPCCOMN_RUST_TARGET=x86_64-win7-windows-gnu "${win7_args[@]}" >/dev/null

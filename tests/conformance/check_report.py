@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Validates one opccomn-check report and checks which checks failed.
 
-Usage: check_report.py FORMAT REPORT EXIT_CODE [EXPECTED_FAILED_CHECK]
+Usage: check_report.py FORMAT REPORT EXIT_CODE [EXPECTED_FAILED_CHECK [EXPECTED_WARNING]]
 
 FORMAT is json, junit or text. The report must parse (JSON: json.load; JUnit: an XML parser, with
 the structure JUnit consumers read), list every check once with a section of the specification, and
-its failed checks must be exactly EXPECTED_FAILED_CHECK (none when it is absent or "-"). EXIT_CODE is
-the checker's: 1 when a check failed, 0 otherwise. Prints one line saying what was seen.
+its failed checks must be exactly EXPECTED_FAILED_CHECK (none when it is absent or "-"), and its
+warnings exactly EXPECTED_WARNING (likewise). EXIT_CODE is the checker's: 1 when a check failed, 0
+otherwise (warnings do not fail). Prints one line saying what was seen.
 """
 import json
 import re
@@ -15,6 +16,7 @@ import xml.etree.ElementTree as ET
 
 fmt, path, code = sys.argv[1], sys.argv[2], int(sys.argv[3])
 want = [] if len(sys.argv) < 5 or sys.argv[4] == "-" else [sys.argv[4]]
+want_warn = [] if len(sys.argv) < 6 or sys.argv[5] == "-" else [sys.argv[5]]
 text = open(path, encoding="utf-8").read()
 
 
@@ -28,6 +30,7 @@ if fmt == "json":
     checks = report["checks"]
     ids = [c["id"] for c in checks]
     failed = [c["id"] for c in checks if c["status"] == "failed"]
+    warned = [c["id"] for c in checks if c["status"] == "warning"]
     for c in checks:
         if c["status"] not in ("passed", "failed", "warning", "not applicable", "not run"):
             fail(f"{c['id']}: status {c['status']!r}")
@@ -48,6 +51,8 @@ elif fmt == "junit":
     cases = suites[0].findall("testcase")
     ids = [c.get("name").split(" ")[0] for c in cases]
     failed = [c.get("name").split(" ")[0] for c in cases if c.find("failure") is not None]
+    warned = [c.get("name").split(" ")[0] for c in cases
+              if c.find("system-out") is not None and (c.find("system-out").text or "").startswith("warning:")]
     if int(suites[0].get("tests")) != len(cases) or int(suites[0].get("failures")) != len(failed):
         fail("testsuite counts do not match its testcases")
     for c in cases:
@@ -60,6 +65,7 @@ else:
         fail("a check line without a status, a section and a check name")
     ids = [m.group(3) for m in rows]
     failed = [m.group(3) for m in rows if m.group(1) == "FAIL"]
+    warned = [m.group(3) for m in rows if m.group(1) == "WARN"]
     if not lines or not re.match(r"^summary: \d+ passed, \d+ failed", lines[-1]):
         fail("no summary line")
 
@@ -67,6 +73,9 @@ if len(ids) != len(set(ids)) or not ids:
     fail(f"checks listed {len(ids)} times, {len(set(ids))} distinct")
 if sorted(failed) != sorted(want):
     fail(f"failed checks {failed}, expected {want or 'none'}")
+if sorted(warned) != sorted(want_warn):
+    fail(f"warnings {warned}, expected {want_warn or 'none'}")
 if code != (1 if want else 0):
     fail(f"exit code {code}, expected {1 if want else 0}")
-print(f"{path}: {fmt} valid, {len(ids)} checks, failed: {', '.join(failed) or 'none'} (exit {code})")
+print(f"{path}: {fmt} valid, {len(ids)} checks, failed: {', '.join(failed) or 'none'}, "
+      f"warnings: {', '.join(warned) or 'none'} (exit {code})")

@@ -9,7 +9,9 @@
 // EnumConnections that crashes, E_NOINTERFACE where COM says CONNECT_E_NOCONNECTION, S_OK for an
 // unknown cookie, no CurVer, an LCID array not in task memory, the sink's QueryInterface failure
 // passed on raw, no version resource, a category with a non-standard description, a DA 1.0 server
-// without its OPC key, a call that never returns, and a NULL out-pointer written through.
+// without its OPC key, a call that never returns, a NULL out-pointer written through, and an Alarms &
+// Events server answering with Data Access texts (a warning, not a failure); number 16 is an Alarms &
+// Events server without a defect.
 #include <windows.h>
 #include <objbase.h>
 #include <ocidl.h>
@@ -41,6 +43,8 @@ enum Defect {
     kDa10NoOpcKey = 12,
     kHangSetClientName = 13,
     kGetLocaleNullCrash = 14,
+    kAlarmsEventsDaTexts = 15,  // an Alarms & Events server that tells the library it is Data Access
+    kAlarmsEvents = 16,         // an Alarms & Events server without a defect
 };
 const int kDefect = OPCCOMN_DEFECT;
 
@@ -240,7 +244,9 @@ private:
         m_common.outer = m_container.outer = m_point.outer = this;
         OpcCommonOptions options = {};
         options.struct_size = sizeof options;
-        options.server_kind = OPC_SERVER_KIND_DATA_ACCESS;
+        // The kind decides the text of colliding codes: C0040203 is OPC_E_INVALIDBRANCHNAME to an
+        // Alarms & Events server, OPC_E_INVALID_PID to Data Access.
+        options.server_kind = kDefect == kAlarmsEvents ? OPC_SERVER_KIND_ALARMS_EVENTS : OPC_SERVER_KIND_DATA_ACCESS;
         static const LCID locales[] = {0x0409, 0x0407};
         options.locales = locales;
         options.locale_count = 2;
@@ -309,6 +315,7 @@ HRESULT Register(bool add) {
     DWORD length = GetModuleFileNameW(g_module, path, MAX_PATH);
     if (length == 0 || length >= MAX_PATH) return E_FAIL;
     static const CATID da20[] = {CATID_OPCDAServer20};
+    static const CATID ae10[] = {CATID_OPCAEServer10};
     static const CATID da10[] = {CATID_OPCDAServer10, CATID_OPCDAServer20};
     static const CATID with_dx[] = {CATID_OPCDAServer20, kDx10};
     static const LPCWSTR dx_texts[] = {nullptr, L"OPC DX Servers"};
@@ -328,6 +335,7 @@ HRESULT Register(bool add) {
         r.implemented_category_count = 2;
         r.implemented_category_descriptions = dx_texts;
     }
+    if (kDefect == kAlarmsEventsDaTexts || kDefect == kAlarmsEvents) r.implemented_categories = ae10;
     if (kDefect == kDa10NoOpcKey) {
         r.implemented_categories = da10;  // DA 1.0 claimed, but no da10_vendor: no ProgID\OPC key
         r.implemented_category_count = 2;
