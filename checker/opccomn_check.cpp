@@ -129,6 +129,7 @@ struct Facts {
     std::wstring prog_id, vi_prog_id, user_type, module, module_key;
     std::vector<CATID> categories;  // CLSID\{clsid}\Implemented Categories
     bool categories_read = false;
+    bool clsid_key = false;         // HKCR\CLSID\{clsid} exists (reg.clsid)
 } g_facts;
 
 // The objects of one worker; a new worker (after a hang or a crash) starts with a new set.
@@ -297,6 +298,8 @@ IUnknown *NewSink() {
                                                                                      : nullptr;
 }
 
+std::string OtherViewHint();
+
 // ---- creation ----
 
 void CheckCreate(Ctx &x) {
@@ -304,7 +307,7 @@ void CheckCreate(Ctx &x) {
         x.Pass(Format("CoCreateInstanceEx(%s, %s) gave the server object", GuidText(g_facts.clsid).c_str(),
                       Local() ? "local" : Utf8(g_opt.host.c_str()).c_str()));
     } else {
-        x.Fail("S_OK and an object", Hr(x.s.create_hr), "the server could not be created; its other checks cannot run");
+        x.Fail("S_OK and an object", Hr(x.s.create_hr), "the server could not be created; its other checks cannot run" + OtherViewHint());
     }
 }
 
@@ -824,6 +827,25 @@ bool KeyExists(const std::wstring &key) {
     return true;
 }
 
+// Whether the other registry view (32-bit for a 64-bit checker and the other way round) has `key`
+// under HKEY_CLASSES_ROOT: the most common reason a client does not find a server.
+bool OtherViewHas(const std::wstring &key) {
+    BOOL wow64 = FALSE;
+    IsWow64Process(GetCurrentProcess(), &wow64);
+    REGSAM other = sizeof(void *) == 8 ? KEY_WOW64_32KEY : (wow64 ? KEY_WOW64_64KEY : 0);
+    if (!other) return false;
+    HKEY h;
+    if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key.c_str(), 0, KEY_READ | other, &h) != ERROR_SUCCESS) return false;
+    RegCloseKey(h);
+    return true;
+}
+
+std::string OtherViewHint() {
+    if (!Local() || !OtherViewHas(L"CLSID\\" + GuidWide(g_facts.clsid))) return "";
+    return sizeof(void *) == 8 ? "; the class is registered in the 32-bit registry view only: run the x86 opccomn-check"
+                               : "; the class is registered in the 64-bit registry view only: run the x64 opccomn-check";
+}
+
 void ReadCategories() {
     if (g_facts.categories_read) return;
     g_facts.categories_read = true;
@@ -844,7 +866,8 @@ void CheckRegClsid(Ctx &x) {
     if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
     bool ok;
     g_facts.user_type = RegString(ClsidKey(), nullptr, &ok);
-    if (!KeyExists(ClsidKey())) return x.Fail("HKCR\\" + Utf8(ClsidKey().c_str()), "no such key");
+    g_facts.clsid_key = KeyExists(ClsidKey());
+    if (!g_facts.clsid_key) return x.Fail("HKCR\\" + Utf8(ClsidKey().c_str()), "no such key" + OtherViewHint());
     if (!ok || g_facts.user_type.empty())
         return x.Fail("a description (the user type) as the default value of HKCR\\" + Utf8(ClsidKey().c_str()), "none");
     x.Pass("HKCR\\" + Utf8(ClsidKey().c_str()) + " = \"" + Utf8(g_facts.user_type.c_str()) + "\"");
@@ -852,6 +875,7 @@ void CheckRegClsid(Ctx &x) {
 
 void CheckRegProgId(Ctx &x) {
     if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    if (!g_facts.clsid_key) return x.NotApplicable("no CLSID key (see reg.clsid)");
     bool ok;
     std::wstring prog_id = RegString(ClsidKey() + L"\\ProgID", nullptr, &ok);
     if (!ok || prog_id.empty()) return x.Fail("CLSID\\{...}\\ProgID", "none");
@@ -867,6 +891,7 @@ void CheckRegProgId(Ctx &x) {
 
 void CheckRegVersionIndependent(Ctx &x) {
     if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    if (!g_facts.clsid_key) return x.NotApplicable("no CLSID key (see reg.clsid)");
     bool ok;
     std::wstring vi = RegString(ClsidKey() + L"\\VersionIndependentProgID", nullptr, &ok);
     if (!ok || vi.empty()) return x.NotApplicable("no VersionIndependentProgID registered");
@@ -902,6 +927,7 @@ std::wstring ModulePathOf(const std::wstring &value) {
 
 void CheckRegModule(Ctx &x) {
     if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    if (!g_facts.clsid_key) return x.NotApplicable("no CLSID key (see reg.clsid)");
     bool ok;
     LPCWSTR keys[] = {L"InprocServer32", L"LocalServer32"};
     for (LPCWSTR k : keys) {
@@ -921,6 +947,7 @@ void CheckRegModule(Ctx &x) {
 
 void CheckRegCategories(Ctx &x) {
     if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    if (!g_facts.clsid_key) return x.NotApplicable("no CLSID key (see reg.clsid)");
     ReadCategories();
     bool ok;
     if (g_facts.categories.empty()) {
@@ -951,6 +978,7 @@ void CheckRegCategories(Ctx &x) {
 
 void CheckRegDa10(Ctx &x) {
     if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    if (!g_facts.clsid_key) return x.NotApplicable("no CLSID key (see reg.clsid)");
     ReadCategories();
     bool da10 = false;
     for (const CATID &c : g_facts.categories) da10 = da10 || IsEqualGUID(c, CATID_OPCDAServer10);
@@ -1081,7 +1109,7 @@ void CheckBrowseDetails(Ctx &x) {
     CoTaskMemFree(user_type);
     CoTaskMemFree(vi);
     if (FAILED(hr)) return x.Fail("S_OK and the class's details", got);
-    if (Local()) {
+    if (Local() && g_facts.clsid_key && !g_facts.prog_id.empty()) {
         std::string want = "\"" + Utf8(g_facts.prog_id.c_str()) + "\", \"" + Utf8(g_facts.user_type.c_str()) + "\", \"" + Utf8(g_facts.vi_prog_id.c_str()) + "\"";
         if (p != g_facts.prog_id || u != g_facts.user_type || v != g_facts.vi_prog_id)
             return x.Fail("the registry's " + want, got, g_list_source);
@@ -1089,7 +1117,7 @@ void CheckBrowseDetails(Ctx &x) {
     }
     if (p.empty()) return x.Fail("a ProgID", got);
     g_facts.prog_id = p, g_facts.user_type = u, g_facts.vi_prog_id = v;
-    x.Pass("GetClassDetails: " + got);
+    x.Pass("GetClassDetails: " + got + (Local() ? " (nothing to compare: the registry checks found no registration)" : ""));
 }
 
 void CheckBrowseProgId(Ctx &x) {
@@ -1603,12 +1631,16 @@ int wmain(int argc, wchar_t **argv) {
 
     HRESULT hr = Resolve();
     if (FAILED(hr)) {
-        fprintf(stderr, "opccomn-check: %s: no such server (%s)\n", Utf8(g_opt.server.c_str()).c_str(), Hr(hr).c_str());
+        bool other = Local() && g_opt.server[0] != L'{' && OtherViewHas(g_opt.server);
+        fprintf(stderr, "opccomn-check: %s: no such server (%s)%s\n", Utf8(g_opt.server.c_str()).c_str(), Hr(hr).c_str(),
+                other ? (sizeof(void *) == 8 ? "; it is registered in the 32-bit registry view: run the x86 opccomn-check"
+                                             : "; it is registered in the 64-bit registry view: run the x64 opccomn-check")
+                      : "");
         return 2;
     }
     g_facts.clsid_known = true;
     DecideKind();
-    g_server_text = Utf8(g_opt.server.c_str()) + " " + GuidText(g_facts.clsid) + (Local() ? "" : " on " + Utf8(g_opt.host.c_str())) +
+    g_server_text = Utf8(g_opt.server.c_str()) + (g_opt.server[0] == L'{' ? "" : " " + GuidText(g_facts.clsid)) + (Local() ? "" : " on " + Utf8(g_opt.host.c_str())) +
                     ", kind " + KindName() + (g_opt.hostile ? ", hostile checks on" : "");
     fprintf(stderr, "opccomn-check: checking %s (timeout %lu ms per call)\n", g_server_text.c_str(),
             static_cast<unsigned long>(g_opt.timeout_ms));

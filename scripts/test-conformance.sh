@@ -4,10 +4,12 @@
 # the check that names it, and the defect-free test server and the C++ example server must pass every
 # check. The JSON and JUnit reports are validated (tests/conformance/check_report.py).
 #
-# Usage: scripts/test-conformance.sh BIN_DIR EXAMPLE_DIR
+# Usage: scripts/test-conformance.sh BIN_DIR EXAMPLE_DIR [OTHER_CHECKER]
 #   BIN_DIR      the Windows build's program directory: opccomn-check.exe, opccomn.dll, the test servers
 #   EXAMPLE_DIR  the built C++ example (opccomn_example_inproc.dll, opccomn_example_server.exe), or -
 #                for the defect servers only
+#   OTHER_CHECKER  the opccomn-check.exe of the other architecture: run against a server of this one,
+#                it must fail to create it and name the registry view and the checker to use
 # Needs WINEPREFIX set up (scripts/wine-env.sh). Servers are registered one at a time and
 # unregistered after their run, so no test server sees another's registration.
 set -euo pipefail
@@ -63,6 +65,23 @@ while read -r number name want flags; do
     (cd "$bin" && wine regsvr32 /u /s "$dll") || { echo "regsvr32 /u $dll failed" >&2; exit 1; }
     passed=$((passed + 1))
 done <"$root/tests/conformance/defects.txt"
+if [ -n "${3:-}" ]; then
+    (cd "$bin" && wine regsvr32 /s opccomn_defect_none.dll)
+    run_other() { (cd "$bin" && wine "$1" OpcComnTest.Defect.none.1 --format json >"$out/other-view.json" 2>/dev/null) || rc=$?; }
+    rc=0
+    run_other "$(cd "$(dirname "$3")" && pwd)/$(basename "$3")"
+    (cd "$bin" && wine regsvr32 /u /s opccomn_defect_none.dll)
+    tr -d '\r' <"$out/other-view.json" >"$out/other-view.json.lf"
+    python3 - "$out/other-view.json.lf" "$rc" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+create = next(c for c in r["checks"] if c["id"] == "server.create")
+assert sys.argv[2] == "1" and create["status"] == "failed", (sys.argv[2], create)
+assert "registry view only: run the x" in create["detail"], create
+print("the other architecture's checker: server.create failed, naming the view and the checker to use")
+PY
+    passed=$((passed + 1))
+fi
 # The class is gone with its registration: the checker then says so and exits 2.
 rc=0
 (cd "$bin" && wine "$check" OpcComnTest.Defect.none.1 >/dev/null 2>&1) || rc=$?

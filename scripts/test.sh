@@ -200,7 +200,7 @@ if [ "$wine_stage" = 1 ]; then
         run_x86_c_tests "$build/windows-x86"
 
         stage "conformance checker (opccomn-check, x86) against the x86 seeded-defect servers, under 32-bit Wine"
-        scripts/test-conformance.sh "$build/windows-x86/bin" -
+        scripts/test-conformance.sh "$build/windows-x86/bin" - "$build/windows/bin/opccomn-check.exe"
     else
         skip_stage "Rust tests, C tests and the conformance checker of the x86 DLL under 32-bit Wine" \
             "32-bit Wine is not available: $wine32_missing" \
