@@ -88,6 +88,9 @@ std::string Hr(HRESULT hr) {
         OpcTaskMemFree(symbol);
         return s;
     }
+    // What COM's stub answers for an exception inside an out-of-process server it caught.
+    if (hr == HRESULT_FROM_WIN32(ERROR_NOACCESS))
+        return Format("0x%08lX (ERROR_NOACCESS: an access violation inside the server, caught by COM)", static_cast<unsigned long>(hr));
     return Format("0x%08lX", static_cast<unsigned long>(hr));
 }
 
@@ -135,6 +138,7 @@ struct Facts {
 // The objects of one worker; a new worker (after a hang or a crash) starts with a new set.
 struct Session {
     IUnknown *server = nullptr;
+    bool proxy = false;  // the server object is reached through a proxy (out of process)
     HRESULT create_hr = E_FAIL;
     bool create_tried = false;
     IOPCCommon *common = nullptr;
@@ -247,6 +251,12 @@ IUnknown *Server(Session &s) {
         if (SUCCEEDED(s.create_hr)) s.create_hr = mqi.hr;
         if (SUCCEEDED(s.create_hr) && mqi.pItf) {
             s.server = mqi.pItf;
+            // Proxies have IClientSecurity; in-process objects (practically) never.
+            void *security = nullptr;
+            if (SUCCEEDED(s.server->QueryInterface(IID_IClientSecurity, &security)) && security) {
+                s.proxy = true;
+                static_cast<IUnknown *>(security)->Release();
+            }
         } else if (SUCCEEDED(s.create_hr)) {
             s.create_hr = E_POINTER;
         }
@@ -300,6 +310,20 @@ IUnknown *NewSink() {
 
 std::string OtherViewHint();
 
+// Out of process an interface crosses through its proxy/stub, registered on both machines
+// (Interface\{iid}\ProxyStubClsid32). Without one, QueryInterface gives E_NOINTERFACE and the server
+// cannot call the client's sink: say so.
+std::string ProxyHint(const IID &iid, const char *name) {
+    HKEY h;
+    std::wstring key = L"Interface\\" + GuidWide(iid) + L"\\ProxyStubClsid32";
+    if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key.c_str(), 0, KEY_READ, &h) == ERROR_SUCCESS) {
+        RegCloseKey(h);
+        return "";
+    }
+    return std::string("no proxy/stub is registered for ") + name +
+           " on this machine (regsvr32 /n /i:ProxyStub opccomn.dll, or the OPC Foundation's opccomn_ps.dll)";
+}
+
 // ---- creation ----
 
 void CheckCreate(Ctx &x) {
@@ -326,7 +350,7 @@ void CheckCommonInterface(Ctx &x) {
         else static_cast<IUnknown *>(p)->Release();
         x.Pass("QueryInterface(IID_IOPCCommon) succeeded");
     } else {
-        x.Fail("S_OK and an interface", Hr(hr) + (p ? "" : ", NULL"));
+        x.Fail("S_OK and an interface", Hr(hr) + (p ? "" : ", NULL"), hr == E_NOINTERFACE ? ProxyHint(IID_IOPCCommon, "IOPCCommon") : "");
     }
 }
 
@@ -648,7 +672,7 @@ void CheckAdvise(Ctx &x) {
     }
     if (hr != S_OK) {
         sink->Release();
-        return x.Fail("S_OK and a non-zero cookie", Hr(hr));
+        return x.Fail("S_OK and a non-zero cookie", Hr(hr), hr == CONNECT_E_CANNOTCONNECT ? ProxyHint(IID_IOPCShutdown, "IOPCShutdown") : "");
     }
     x.s.sink = sink;  // kept until the connection is gone
     x.s.cookie = cookie;
@@ -767,6 +791,7 @@ void CheckEnumConnections(Ctx &x) {
         return x.Fail("S_OK and an enumerator, or E_NOTIMPL", Hr(hr));
     ULONG seen = 0;
     bool found = false;
+    HRESULT last = S_OK;
     for (int guard = 0; guard < 64; guard++) {
         CONNECTDATA data = {nullptr, 0};
         ULONG fetched = 0;
@@ -774,7 +799,10 @@ void CheckEnumConnections(Ctx &x) {
             Call c("IEnumConnections::Next");
             hr = connections->Next(1, &data, &fetched);
         }
-        if (hr != S_OK || fetched != 1) break;
+        last = hr;
+        // S_OK means all `celt` were fetched (Wine's cross-process IEnumConnections proxy leaves
+        // *pcFetched unwritten, so the count is taken from the code).
+        if (hr != S_OK) break;
         seen++;
         if (data.dwCookie == x.s.cookie && data.pUnk) found = true;
         if (data.pUnk) data.pUnk->Release();
@@ -782,8 +810,8 @@ void CheckEnumConnections(Ctx &x) {
     connections->Release();
     if (x.s.advised && !found)
         return x.Fail(Format("an enumerator listing cookie %lu", static_cast<unsigned long>(x.s.cookie)),
-                      Format("%lu connection(s), not that one", static_cast<unsigned long>(seen)));
-    x.Pass(Format("S_OK; %lu connection(s), the checker's among them", static_cast<unsigned long>(seen)));
+                      Format("%lu connection(s), not that one (Next: ", static_cast<unsigned long>(seen)) + Hr(last) + ")");
+    x.Pass(Format("S_OK; %lu connection(s)", static_cast<unsigned long>(seen)) + (x.s.advised ? ", the checker's among them" : ""));
 }
 
 void CheckUnadvise(Ctx &x) {
@@ -1145,8 +1173,8 @@ void HostileNullLocale(Ctx &x) {
         Call c("IOPCCommon::GetLocaleID(NULL)");
         hr = common->GetLocaleID(nullptr);
     }
-    if (hr != E_INVALIDARG && hr != E_POINTER && hr != RPC_X_NULL_REF_POINTER)
-        return x.Fail("E_INVALIDARG (E_POINTER accepted)", Hr(hr));
+    if (hr != E_INVALIDARG && hr != E_POINTER && hr != HRESULT_FROM_WIN32(RPC_X_NULL_REF_POINTER))
+        return x.Fail("E_INVALIDARG (E_POINTER accepted; through a proxy RPC_X_NULL_REF_POINTER)", Hr(hr));
     x.Pass("GetLocaleID(NULL) = " + Hr(hr));
 }
 
@@ -1166,9 +1194,13 @@ void HostileNullLocaleArray(Ctx &x) {
     }
     if (SUCCEEDED(a) || SUCCEEDED(b))
         return x.Fail("a failure code for each NULL out-parameter", Hr(a) + ", " + Hr(b));
-    if (count != 0 && Local()) return x.Fail("the count set to 0 on failure (3.1.3)", Format("%lu", static_cast<unsigned long>(count)));
-    if (array != nullptr && Local()) return x.Fail("the array set to NULL on failure (3.1.3)", "left as it was");
-    x.Pass("NULL count: " + Hr(b) + "; NULL array: " + Hr(a) + "; the other out-parameter cleared");
+    // Through a proxy the NULL never reaches the server: the proxy refuses the call and leaves the
+    // other out-parameter alone, which says nothing about the server.
+    if (!x.s.proxy) {
+        if (count != 0) return x.Fail("the count set to 0 on failure (3.1.3)", Format("%lu", static_cast<unsigned long>(count)));
+        if (array != nullptr) return x.Fail("the array set to NULL on failure (3.1.3)", "left as it was");
+    }
+    x.Pass("NULL count: " + Hr(b) + "; NULL array: " + Hr(a) + (x.s.proxy ? " (refused by the proxy)" : "; the other out-parameter cleared"));
 }
 
 void HostileNullErrorString(Ctx &x) {
@@ -1237,7 +1269,7 @@ void HostileAdviseNull(Ctx &x) {
     }
     if (sink) sink->Release();
     if (SUCCEEDED(a) || SUCCEEDED(b)) return x.Fail("a failure code for each", Hr(a) + ", " + Hr(b));
-    if (cookie != 0 && Local()) return x.Fail("the cookie set to 0 on failure (3.1.3)", Format("%lu", static_cast<unsigned long>(cookie)));
+    if (cookie != 0 && !x.s.proxy) return x.Fail("the cookie set to 0 on failure (3.1.3)", Format("%lu", static_cast<unsigned long>(cookie)));
     x.Pass("Advise(NULL, &cookie) = " + Hr(a) + " with cookie 0; Advise(sink, NULL) = " + Hr(b));
 }
 
@@ -1268,7 +1300,8 @@ void HostileEnumHuge(Ctx &x) {
     ULONG fetched = 0xDEADBEEF;
     {
         Call c("IEnumConnectionPoints::Next(0xFFFFFFFF, ...)");
-        hr = points->Next(Local() ? 0xFFFFFFFFu : 8u, buf, &fetched);
+        // In-process the absurd count reaches the server; a proxy would make the stub allocate for it.
+        hr = points->Next(x.s.proxy ? 8u : 0xFFFFFFFFu, buf, &fetched);
     }
     ULONG got = fetched;
     for (ULONG i = 0; i < 8; i++)
@@ -1334,6 +1367,8 @@ bool Selected(int i) { return kChecks[i].set == kDefault || g_opt.hostile; }
 
 volatile LONG g_next_check;  // where a (new) worker starts
 
+bool ServerGone(Session &s, HRESULT *why);
+
 void Record(int index, const Result &r) {
     EnterCriticalSection(&g_results_lock);
     g_results[static_cast<size_t>(index)] = r;
@@ -1356,6 +1391,15 @@ DWORD WINAPI Worker(void *) {
         kChecks[i].fn(x);
         EndIfStale();
         if (x.r.status == kNotRun) x.Fail("a result", "the check returned none (a bug of opccomn-check)");
+        HRESULT gone = S_OK;
+        if (x.r.status == kFailed && ServerGone(*session, &gone)) {
+            // An out-of-process server that crashed: the check that made it crash fails, and the
+            // rest runs against a new server process.
+            x.r.got = "the server process ended during the check (" + Hr(gone) + "); the call had returned: " + x.r.got;
+            x.r.detail = "the server crashed; the checker goes on with a new server object";
+            fprintf(stderr, "opccomn-check: %s: %s\n", x.r.id.c_str(), x.r.got.c_str());
+            session = new Session();  // the old one's proxies are dead: leaked, not released
+        }
         Record(i, x.r);
     }
     InterlockedExchange(&g_current_check, -1);
@@ -1373,6 +1417,24 @@ DWORD WINAPI Worker(void *) {
     delete session;
     CoUninitialize();
     return 0;
+}
+
+// Whether the server behind the session's proxy is gone (its process ended): a call the proxy
+// cannot answer by itself (QueryInterface for an interface OPC servers do not have goes to the
+// server) fails with one of the codes COM gives for a vanished server.
+bool ServerGone(Session &s, HRESULT *why) {
+    if (!s.server) return false;
+    void *p = nullptr;
+    HRESULT hr;
+    {
+        Call c("IUnknown::QueryInterface (is the server process still there?)");
+        hr = s.server->QueryInterface(IID_IOPCEnumGUID, &p);
+    }
+    if (SUCCEEDED(hr) && p) static_cast<IUnknown *>(p)->Release();
+    *why = hr;
+    return hr == RPC_E_DISCONNECTED || hr == HRESULT_FROM_WIN32(RPC_S_SERVER_UNAVAILABLE) ||
+           hr == HRESULT_FROM_WIN32(RPC_S_CALL_FAILED) || hr == HRESULT_FROM_WIN32(RPC_S_CALL_FAILED_DNE) ||
+           hr == CO_E_OBJNOTCONNECTED || hr == RPC_E_SERVERFAULT;
 }
 
 // Runs the checks; returns false when a worker had to be abandoned (still stuck in a call).
@@ -1397,8 +1459,8 @@ bool RunAll() {
         }
         int at = g_current_check;
         if (!hung && !g_worker_crashed) {
-            if (at >= 0) {  // the thread ended without a crash report: treat as a crash
-                g_crash_code = 0;
+            if (at >= 0) {  // the thread ended inside the server without a crash report
+                g_crash_code = 0xFFFFFFFF;
             } else {
                 CloseHandle(worker);
                 return !abandoned;
@@ -1419,7 +1481,9 @@ bool RunAll() {
             r.detail = "the server hangs; the checker goes on with a new server object";
             abandoned = true;
         } else {
-            r.got = Format("the server crashed in %s (exception 0x%08lX)", g_call_name, static_cast<unsigned long>(g_crash_code));
+            r.got = g_crash_code == 0xFFFFFFFF
+                        ? Format("the checker's thread ended inside %s (no exception was reported)", g_call_name)
+                        : Format("the server crashed in %s (exception 0x%08lX)", g_call_name, static_cast<unsigned long>(g_crash_code));
             r.detail = "an unhandled exception inside the server; the checker goes on with a new server object";
         }
         fprintf(stderr, "opccomn-check: %s: %s\n", r.id.c_str(), r.got.c_str());

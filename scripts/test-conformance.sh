@@ -8,8 +8,9 @@
 #   BIN_DIR      the Windows build's program directory: opccomn-check.exe, opccomn.dll, the test servers
 #   EXAMPLE_DIR  the built C++ example (opccomn_example_inproc.dll, opccomn_example_server.exe), or -
 #                for the defect servers only
-#   OTHER_CHECKER  the opccomn-check.exe of the other architecture: run against a server of this one,
-#                it must fail to create it and name the registry view and the checker to use
+#   OTHER_CHECKER  the opccomn-check.exe of the other architecture: run in-process (--context inproc)
+#                against a server of this one, it must fail to create it and name the registry view
+#                and the checker to use (CLSCTX_ALL would reach it through the DLL surrogate)
 # Needs WINEPREFIX set up (scripts/wine-env.sh). Servers are registered one at a time and
 # unregistered after their run, so no test server sees another's registration.
 set -euo pipefail
@@ -28,7 +29,7 @@ run_checker() {
     local name=$1 format=$2
     shift 2
     rc=0
-    (cd "$bin" && timeout 120 wine "$check" "$@" --format "$format" >"$out/$name.$format" 2>"$out/$name.$format.log") || rc=$?
+    (cd "$bin" && timeout 120 wine "$check" "$@" --format "$format" </dev/null >"$out/$name.$format" 2>"$out/$name.$format.log") || rc=$?
     tr -d '\r' <"$out/$name.$format" >"$out/$name.$format.tmp" && mv "$out/$name.$format.tmp" "$out/$name.$format"
     if [ "$rc" -ne 0 ] && [ "$rc" -ne 1 ]; then
         echo "opccomn-check $* exited $rc" >&2
@@ -37,16 +38,35 @@ run_checker() {
     fi
 }
 
+# Ends the surrogate processes (dllhost.exe) of a test server class left running in this Wine prefix.
+kill_surrogates() {
+    local pid
+    for pid in $(pgrep -f "dllhost.exe /PROCESSID:$1" || true); do
+        if tr '\0' '\n' <"/proc/$pid/environ" 2>/dev/null | grep -qxF "WINEPREFIX=$WINEPREFIX"; then
+            kill "$pid" 2>/dev/null || true
+        fi
+    done
+}
+
+# Out of process needs the OPC Common proxy/stub (OpcRegisterProxyStub, in opccomn.dll).
+oop_available=1
+if ! grep -q OpcRegisterProxyStub "$bin/opccomn.dll"; then
+    oop_available=0
+    echo "!!!! NOT RUN: the out-of-process checks: $bin/opccomn.dll has no proxy/stub (OpcRegisterProxyStub)"
+fi
+
 while read -r number name want flags; do
     case "$number" in '#'* | '') continue ;; esac
     dll="$bin/opccomn_defect_$name.dll"
     (cd "$bin" && wine regsvr32 /s "$dll") || { echo "regsvr32 $dll failed" >&2; exit 1; }
     args=("OpcComnTest.Defect.$name.1" --timeout 3000)
     warn=-
+    oop=1
     for flag in $flags; do
         case "$flag" in
             hostile) args+=(--hostile) ;;
             warn=*) warn=${flag#warn=} ;;
+            inproc-only) oop=0 ;;
             *) echo "defects.txt: unknown flag $flag" >&2; exit 1 ;;
         esac
     done
@@ -62,12 +82,20 @@ while read -r number name want flags; do
         run_checker "defect-$name" text "${args[@]}"
         $report text "$out/defect-$name.text" "$rc" "$want" "$warn"
     fi
+    # The same server out of process: in the DLL surrogate, through the proxy/stub.
+    if [ "$oop" = 1 ] && [ "$oop_available" = 1 ]; then
+        (cd "$bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll) || { echo "registering the proxy/stub failed" >&2; exit 1; }
+        run_checker "defect-$name-local" json "${args[@]}" --context local
+        $report json "$out/defect-$name-local.json" "$rc" "$want" "$warn"
+        (cd "$bin" && wine regsvr32 /u /s /n /i:ProxyStub opccomn.dll)
+        kill_surrogates "$(printf '{7E57DEF0-C0DE-4C0D-9000-0000000000%02X}' "$number")"
+    fi
     (cd "$bin" && wine regsvr32 /u /s "$dll") || { echo "regsvr32 /u $dll failed" >&2; exit 1; }
     passed=$((passed + 1))
 done <"$root/tests/conformance/defects.txt"
 if [ -n "${3:-}" ]; then
     (cd "$bin" && wine regsvr32 /s opccomn_defect_none.dll)
-    run_other() { (cd "$bin" && wine "$1" OpcComnTest.Defect.none.1 --format json >"$out/other-view.json" 2>/dev/null) || rc=$?; }
+    run_other() { (cd "$bin" && wine "$1" OpcComnTest.Defect.none.1 --context inproc --format json >"$out/other-view.json" 2>/dev/null) || rc=$?; }
     rc=0
     run_other "$(cd "$(dirname "$3")" && pwd)/$(basename "$3")"
     (cd "$bin" && wine regsvr32 /u /s opccomn_defect_none.dll)
@@ -88,7 +116,7 @@ rc=0
 [ "$rc" -eq 2 ] || { echo "opccomn-check of an unregistered ProgID exited $rc, expected 2" >&2; exit 1; }
 
 if [ "$example" = - ]; then
-    echo "test-conformance: $passed passed, 0 failed (defect servers only)"
+    echo "test-conformance: $passed passed, 0 failed (defect servers only)$([ "$oop_available" = 1 ] || echo ', out of process NOT RUN')"
     exit 0
 fi
 # The C++ example server, in-process, every check including the hostile ones: nothing may fail. Its
@@ -108,5 +136,22 @@ grep -q '"listed by the registered OPCServerList' "$out/example-inproc.json" ||
     { echo "the example's browse.listed did not use the registered OPCServerList" >&2; exit 1; }
 passed=$((passed + 1))
 cat "$out/example-inproc.text"
+
+# The example's EXE server (LocalServer32), out of process through the proxy/stub: nothing may fail.
+if [ "$oop_available" = 0 ]; then
+    echo "!!!! NOT RUN: the example's EXE server and the defect servers out of process (no proxy/stub)"
+    echo "test-conformance: $passed passed, 0 failed, out of process NOT RUN"
+    exit 0
+fi
+(cd "$example" && wine opccomn_example_server.exe /RegServer)
+(cd "$bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)
+run_checker example-local text OpcComn.ExampleServer.1 --context local --hostile
+$report text "$out/example-local.text" "$rc"
+run_checker example-local json OpcComn.ExampleServer.1 --context local --hostile
+$report json "$out/example-local.json" "$rc"
+(cd "$bin" && wine regsvr32 /u /s /n /i:ProxyStub opccomn.dll)
+(cd "$example" && wine opccomn_example_server.exe /UnregServer)
+passed=$((passed + 1))
+cat "$out/example-local.text"
 
 echo "test-conformance: $passed passed, 0 failed"

@@ -328,6 +328,18 @@ HRESULT Register(bool add) {
     r.user_type = L"opccomn conformance test server";
     r.module_path = path;
     r.threading_model = L"Both";
+    // An AppID with a DllSurrogate: CLSCTX_LOCAL_SERVER runs the DLL in the system's surrogate
+    // (dllhost.exe), so the same defects are checked out of process, through the proxy/stub. "" means
+    // the system's surrogate of the DLL's bitness; the 64-bit build names the 64-bit dllhost.exe
+    // explicitly, because Wine (8.0) starts the 32-bit one for "" whatever the client's bitness.
+    WCHAR surrogate[MAX_PATH + 16] = L"";
+    if (sizeof(void *) == 8) {
+        UINT n = GetSystemDirectoryW(surrogate, MAX_PATH);
+        if (n == 0 || n >= MAX_PATH) return E_FAIL;
+        wcscat(surrogate, L"\\dllhost.exe");
+    }
+    r.app_id = &kClsid;
+    r.app_id_dll_surrogate = surrogate;
     r.implemented_categories = da20;
     r.implemented_category_count = 1;
     if (kDefect == kCategoryText) {
