@@ -26,7 +26,7 @@ pub fn build(out_dir: &Path, catalogs: &[Vec<Entry>]) {
 }
 
 /// The mingw tool `name` for the target (e.g. x86_64-w64-mingw32-windres), or the override from `var`.
-fn tool(var: &str, name: &str) -> String {
+pub(crate) fn tool(var: &str, name: &str) -> String {
     if let Ok(program) = env::var(var) {
         return program;
     }
@@ -38,7 +38,7 @@ fn tool(var: &str, name: &str) -> String {
     format!("{prefix}-w64-mingw32-{name}")
 }
 
-fn run(mut command: Command) {
+pub(crate) fn run(mut command: Command) {
     let shown = format!("{command:?}");
     match command.status() {
         Ok(status) if status.success() => {}

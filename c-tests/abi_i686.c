@@ -69,6 +69,9 @@ OPCCOMN_CONVENTION(&OpcPatternCompileA, HRESULT (__attribute__((cdecl)) *)(LPCST
 OPCCOMN_CONVENTION(&OpcPatternMatchW, BOOL (__attribute__((cdecl)) *)(const struct OpcPattern *pattern, LPCWSTR string), "OpcPatternMatchW must be cdecl");
 OPCCOMN_CONVENTION(&OpcPatternMatchA, BOOL (__attribute__((cdecl)) *)(const struct OpcPattern *pattern, LPCSTR string), "OpcPatternMatchA must be cdecl");
 OPCCOMN_CONVENTION(&OpcPatternFree, void (__attribute__((cdecl)) *)(struct OpcPattern *pattern), "OpcPatternFree must be cdecl");
+OPCCOMN_CONVENTION(&OpcRegisterProxyStub, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg, uint32_t flags), "OpcRegisterProxyStub must be cdecl");
+OPCCOMN_CONVENTION(&OpcUnregisterProxyStub, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg), "OpcUnregisterProxyStub must be cdecl");
+OPCCOMN_CONVENTION(&OpcDllInstall, HRESULT (__attribute__((cdecl)) *)(BOOL install, LPCWSTR command_line), "OpcDllInstall must be cdecl");
 OPCCOMN_CONVENTION(&OpcRegistryCreateMemory, HRESULT (__attribute__((cdecl)) *)(struct OpcRegistry **out), "OpcRegistryCreateMemory must be cdecl");
 OPCCOMN_CONVENTION(&OpcRegistryOpenSystem, HRESULT (__attribute__((cdecl)) *)(struct OpcRegistry **out), "OpcRegistryOpenSystem must be cdecl");
 OPCCOMN_CONVENTION(&OpcRegistryRelease, void (__attribute__((cdecl)) *)(struct OpcRegistry *reg), "OpcRegistryRelease must be cdecl");

@@ -36,6 +36,7 @@ need_windows_tools() {
     command -v i686-w64-mingw32-g++ >/dev/null || missing+=(g++-mingw-w64-i686)
     [ -f /usr/include/wine/wine/windows/unknwn.idl ] || missing+=(libwine-dev)
     command -v clang >/dev/null || missing+=(clang)
+    command -v python3 >/dev/null || missing+=(python3)
     command -v wine >/dev/null || missing+=(wine wine64)
     # 32-bit (x86) builds.
     command -v i686-w64-mingw32-gcc >/dev/null || missing+=(gcc-mingw-w64-i686)

@@ -77,6 +77,9 @@ if [ "$lint_stage" = 1 ]; then
     # The generator's own checks (IDL reader, the Rust-vtable comparison catching each kind of mismatch).
     cargo clippy -q -p gen-header --all-targets -- -D warnings
     cargo test -q -p gen-header
+    # The proxy/stub's NDR tables are generated from idl/opccomn.idl (widl and the system IDLs come
+    # with the Windows tools).
+    [ "$wine_stage" = 1 ] && python3 tools/gen-proxy.py --check
 fi
 
 stage "Rust tests (Linux)"

@@ -126,6 +126,10 @@ typedef struct IOPCServerList2 IOPCServerList2;
 
 
 
+// `OpcRegisterProxyStub` flag: also take over interfaces another installed proxy/stub serves (the
+// previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
+#define OPC_PROXY_STUB_TAKE_OVER 1
+
 // `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing
 // them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
 // another product registers too (opccomn's own server list under the CLSID of OpcEnum).
@@ -1779,6 +1783,11 @@ EXTERN_C const CATID CATID_OPCCMDServer10;
 EXTERN_C const CLSID CLSID_OPCServerList;
 #endif
 
+/* CLSID_OpcComnProxyStub {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces) */
+#ifndef CLSID_OpcComnProxyStub
+EXTERN_C const CLSID CLSID_OpcComnProxyStub;
+#endif
+
 #ifdef __cplusplus
 }  /* extern "C" */
 #endif
@@ -1960,6 +1969,44 @@ BOOL OPCCOMN_CDECL OpcPatternMatchA(const struct OpcPattern *pattern, LPCSTR str
 // `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
 // other thread may be using it.
 void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *pattern);
+
+// Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
+// IOPCEnumGUID in `reg` (NULL: the system registry; on 64-bit Windows the view of the calling
+// process, so a 32-bit opccomn.dll registers the 32-bit view). Writes `CLSID_OpcComnProxyStub` with
+// this module as its `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}`
+// with `NumMethods` and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another
+// installed proxy/stub (the OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has
+// `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
+// exactly that. Registering twice is harmless.
+//
+// Returns S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with
+// another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+//
+// # Safety
+// `reg` must be NULL or a live registry handle.
+HRESULT OPCCOMN_CDECL OpcRegisterProxyStub(const struct OpcRegistry *reg, uint32_t flags);
+
+// Removes what `OpcRegisterProxyStub` added to `reg` (NULL: the system registry) and restores the
+// `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
+// are left as they are. Unregistering what is not registered succeeds. Returns S_OK or a registry
+// error.
+//
+// # Safety
+// `reg` must be NULL or a live registry handle.
+HRESULT OPCCOMN_CDECL OpcUnregisterProxyStub(const struct OpcRegistry *reg);
+
+// `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
+// registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
+// takes over from another installed proxy/stub; with `install` FALSE (`regsvr32 /u /i:ProxyStub`) it
+// unregisters it. Words are case-insensitive and separated by commas or blanks. regsvr32 also calls
+// DllRegisterServer / DllUnregisterServer unless given `/n`.
+//
+// Returns what the registration function returns; E_INVALIDARG for a NULL, empty or unknown command
+// line.
+//
+// # Safety
+// `command_line` must be NULL or a NUL-terminated UTF-16 string.
+HRESULT OPCCOMN_CDECL OpcDllInstall(BOOL install, LPCWSTR command_line);
 
 // Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
 // the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
@@ -2191,8 +2238,9 @@ HRESULT OPCCOMN_CDECL OpcServerListCreate(IUnknown *outer, REFIID riid, void **p
 HRESULT OPCCOMN_CDECL OpcServerListCreateOver(const struct OpcRegistry *reg, IUnknown *outer, REFIID riid, void **ppv);
 
 // The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
-// over the system registry, and which honours LockServer), as DllGetClassObject returns it. For servers
-// that link opccomn statically and have their own DllGetClassObject: forward CLSID_OPCServerList here.
+// over the system registry, and which honours LockServer), as DllGetClassObject returns it; on
+// Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
+// servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
 //
 // Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
 // CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
@@ -2202,7 +2250,8 @@ HRESULT OPCCOMN_CDECL OpcServerListCreateOver(const struct OpcRegistry *reg, IUn
 // `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
 HRESULT OPCCOMN_CDECL OpcDllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv);
 
-// S_OK when no object of the library is alive and no server lock is held, so COM may unload the DLL;
+// S_OK when no object of the library is alive, no server lock is held and no proxy or stub is in use,
+// so COM may unload the DLL;
 // S_FALSE otherwise.
 HRESULT OPCCOMN_CDECL OpcDllCanUnloadNow(void);
 

@@ -10,7 +10,7 @@ _WIN32") are left out on Windows, where programs get them from uuid.lib.
 
 Self-contained (no system header), so any C compiler for the target builds it, MSVC's included;
 the type has the layout of GUID. */
-#define OPCCOMN_GUID_COUNT 22
+#define OPCCOMN_GUID_COUNT 23
 
 typedef struct opccomn_guid {
     unsigned int Data1;
@@ -106,33 +106,38 @@ const opccomn_guid CATID_OPCCMDServer10 = {0x2D869D5C, 0x3B05, 0x41FB, {0x85, 0x
 const opccomn_guid CLSID_OPCServerList = {0x13486D51, 0x4821, 0x11D2, {0xA4, 0x94, 0x3C, 0xB3, 0x06, 0xC1, 0x00, 0x00}};
 #endif
 
+/* `CLSID_OpcComnProxyStub` {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class `PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces)`. */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 17)
+const opccomn_guid CLSID_OpcComnProxyStub = {0x3D738B71, 0x0B9D, 0x4337, {0xA7, 0x25, 0xE8, 0x54, 0x1A, 0x96, 0xD1, 0xC9}};
+#endif
+
 /* IID of `IUnknown` {00000000-0000-0000-C000-000000000046} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 17) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 18) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IUnknown = {0x00000000, 0x0000, 0x0000, {0xC0, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x46}};
 #endif
 
 /* IID of `IEnumGUID` {0002E000-0000-0000-C000-000000000046} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 18) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 19) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IEnumGUID = {0x0002E000, 0x0000, 0x0000, {0xC0, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x46}};
 #endif
 
 /* IID of `IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 19) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 20) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IEnumConnections = {0xB196B287, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 
 /* IID of `IConnectionPoint` {B196B286-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 20) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 21) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IConnectionPoint = {0xB196B286, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 
 /* IID of `IEnumConnectionPoints` {B196B285-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 21) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 22) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IEnumConnectionPoints = {0xB196B285, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 
 /* IID of `IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 22) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 23) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IConnectionPointContainer = {0xB196B284, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 

@@ -53,6 +53,8 @@ pub const CATID_OPCDXServer10: GUID = GUID::from_u128(0xA0C85BB8_4161_4FD6_8655_
 pub const CATID_OPCCMDServer10: GUID = GUID::from_u128(0x2D869D5C_3B05_41FB_851A_642FB2B801A0);
 /// `CLSID_OPCServerList` {13486D51-4821-11D2-A494-3CB306C10000}: the class `OPC.ServerList.1`.
 pub const CLSID_OPCServerList: GUID = GUID::from_u128(0x13486D51_4821_11D2_A494_3CB306C10000);
+/// `CLSID_OpcComnProxyStub` {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class `PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces)`.
+pub const CLSID_OpcComnProxyStub: GUID = GUID::from_u128(0x3D738B71_0B9D_4337_A725_E8541A96D1C9);
 /// `IID_IClassFactory` {00000001-0000-0000-C000-000000000046}.
 pub const IID_IClassFactory: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
 
@@ -138,6 +140,10 @@ pub mod exported {
     /// `CLSID_OPCServerList` {13486D51-4821-11D2-A494-3CB306C10000}: the class `OPC.ServerList.1`.
     #[export_name = "CLSID_OPCServerList"]
     pub static EXPORTED_CLSID_OPCServerList: GUID = CLSID_OPCServerList;
+
+    /// `CLSID_OpcComnProxyStub` {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class `PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces)`.
+    #[export_name = "CLSID_OpcComnProxyStub"]
+    pub static EXPORTED_CLSID_OpcComnProxyStub: GUID = CLSID_OpcComnProxyStub;
 
     /// IID of `IUnknown` {00000000-0000-0000-C000-000000000046} (exported on systems without uuid.lib).
     #[cfg(not(windows))]

@@ -10,7 +10,8 @@
 //! Registration coexists with the OPC Foundation's OpcEnum, which registers the same CLSID as an EXE
 //! server: opccomn adds `InprocServer32` (ThreadingModel Both) and whatever values are missing, keeps
 //! every value it finds (`LocalServer32`, `AppID`, OpcEnum's description...), and unregistration removes
-//! only what it added. It never registers proxies or stubs for the OPC interfaces (specification 6.3).
+//! only what it added. It never registers proxies or stubs for the OPC interfaces (specification 6.3):
+//! that is a separate step (src/proxy, `OpcRegisterProxyStub` or `regsvr32 /i:ProxyStub`).
 
 use core::ffi::c_void;
 use core::ptr;
@@ -21,7 +22,7 @@ use crate::com::iids::{CLSID_OPCServerList, IID_ICLASSFACTORY};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, live_objects, ComClass, ComObject, Slot,
 };
-use crate::com::{IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, GUID, HRESULT, REFCLSID, REFIID, S_FALSE, S_OK, ULONG};
+use crate::com::{IUnknown, BOOL, GUID, HRESULT, REFCLSID, REFIID, S_FALSE, S_OK, ULONG};
 use crate::registry::register::{register, unregister, ServerDescription};
 use crate::registry::{registries, REGDB_E_KEYMISSING};
 
@@ -92,8 +93,9 @@ unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> 
 }
 
 /// The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
-/// over the system registry, and which honours LockServer), as DllGetClassObject returns it. For servers
-/// that link opccomn statically and have their own DllGetClassObject: forward CLSID_OPCServerList here.
+/// over the system registry, and which honours LockServer), as DllGetClassObject returns it; on
+/// Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
+/// servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
 ///
 /// Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
 /// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
@@ -107,7 +109,9 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
         // SAFETY: the caller's contract: `ppv` NULL or writable, `rclsid` and `riid` NULL or readable.
         let (out, rclsid, riid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(rclsid)?, ffi::in_ref(riid)?) };
         if *rclsid != CLSID_OPCServerList {
-            return Err(CLASS_E_CLASSNOTAVAILABLE.into());
+            // The proxy/stub class on Windows; CLASS_E_CLASSNOTAVAILABLE for any other class.
+            // SAFETY: `rclsid` and `riid` are readable; `out` is the caller's writable out-parameter.
+            return Ok(unsafe { crate::proxy::get_class_object(rclsid, riid, out.as_ptr()) });
         }
         let factory = ComObject::<Factory>::new(ptr::null_mut(), |b| Factory {
             slot: b.slot(&FACTORY_VTBL),
@@ -117,12 +121,13 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
     })
 }
 
-/// S_OK when no object of the library is alive and no server lock is held, so COM may unload the DLL;
+/// S_OK when no object of the library is alive, no server lock is held and no proxy or stub is in use,
+/// so COM may unload the DLL;
 /// S_FALSE otherwise.
 #[no_mangle]
 pub extern "C" fn OpcDllCanUnloadNow() -> HRESULT {
     ffi::guard!(S_FALSE, {
-        if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 {
+        if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 && crate::proxy::can_unload() {
             S_OK
         } else {
             S_FALSE
@@ -221,7 +226,7 @@ pub extern "system" fn DllUnregisterServer() -> HRESULT {
 mod tests {
     use super::*;
     use crate::com::iids::{IID_IOPCServerList, IID_IUNKNOWN};
-    use crate::com::E_POINTER;
+    use crate::com::{CLASS_E_CLASSNOTAVAILABLE, E_POINTER};
 
     #[test]
     fn the_class_object_serves_only_the_server_list() {

@@ -202,7 +202,7 @@ impl ServerDescription {
 
 /// The path of the module registration writes when none is given.
 #[cfg(windows)]
-fn this_module_path(local: bool) -> Result<String, HRESULT> {
+pub(crate) fn this_module_path(local: bool) -> Result<String, HRESULT> {
     if local {
         crate::registry::windows::module_file_name(core::ptr::null_mut())
     } else {
@@ -212,7 +212,7 @@ fn this_module_path(local: bool) -> Result<String, HRESULT> {
 
 /// The path of the module registration writes when none is given.
 #[cfg(not(windows))]
-fn this_module_path(local: bool) -> Result<String, HRESULT> {
+pub(crate) fn this_module_path(local: bool) -> Result<String, HRESULT> {
     use crate::com::E_FAIL;
     if local {
         return std::env::current_exe()

@@ -13,7 +13,7 @@ pub(crate) const LEDGER: &str = "OpcComnRegistration";
 
 /// One thing a registration did, as the ledger records it.
 #[derive(Clone, Debug, PartialEq)]
-pub(super) enum Entry {
+pub(crate) enum Entry {
     /// Created this key.
     Key(String),
     /// Added this value (key, name).
@@ -34,7 +34,7 @@ fn unescape(s: &str) -> String {
 }
 
 impl Entry {
-    pub(super) fn encode(&self) -> String {
+    pub(crate) fn encode(&self) -> String {
         match self {
             Entry::Key(k) => format!("K{}", escape(k)),
             Entry::OtherServer => "O".to_string(),
@@ -73,7 +73,7 @@ impl Entry {
     }
 }
 
-pub(super) fn read_ledger(reg: &dyn Registry, module_key: &str) -> Option<Vec<Entry>> {
+pub(crate) fn read_ledger(reg: &dyn Registry, module_key: &str) -> Option<Vec<Entry>> {
     let text = reg.value(module_key, LEDGER)?;
     let text = text.as_str()?;
     Some(
@@ -85,15 +85,15 @@ pub(super) fn read_ledger(reg: &dyn Registry, module_key: &str) -> Option<Vec<En
 }
 
 /// Writes keys and values while recording what it adds.
-pub(super) struct Recorder<'a> {
+pub(crate) struct Recorder<'a> {
     reg: &'a dyn Registry,
-    pub(super) ledger: Vec<Entry>,
+    pub(crate) ledger: Vec<Entry>,
     keys: HashSet<RegPath>,
     pub(super) values: HashSet<(RegPath, RegPath)>,
 }
 
 impl<'a> Recorder<'a> {
-    pub(super) fn new(reg: &'a dyn Registry, ledger: Vec<Entry>) -> Recorder<'a> {
+    pub(crate) fn new(reg: &'a dyn Registry, ledger: Vec<Entry>) -> Recorder<'a> {
         let keys = ledger
             .iter()
             .filter_map(|e| match e {
@@ -128,12 +128,12 @@ impl<'a> Recorder<'a> {
         }
     }
 
-    pub(super) fn key(&mut self, path: &str) -> Result<(), HRESULT> {
+    pub(crate) fn key(&mut self, path: &str) -> Result<(), HRESULT> {
         self.note_missing_keys(path);
         self.reg.create_key(path)
     }
 
-    pub(super) fn value(&mut self, path: &str, name: &str, data: &str, replace: bool) -> Result<(), HRESULT> {
+    pub(crate) fn value(&mut self, path: &str, name: &str, data: &str, replace: bool) -> Result<(), HRESULT> {
         let id = (RegPath::new(path), RegPath::new(name));
         match self.reg.value(path, name) {
             Some(RegValue::Sz(old)) if old == data => return Ok(()),

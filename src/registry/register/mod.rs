@@ -45,7 +45,9 @@ mod keys;
 mod ledger;
 
 pub(crate) use algorithm::{register, unregister, LCID_ENGLISH};
+pub(crate) use description::this_module_path;
 pub use description::{OpcServerRegistration, OpcServerType, ServerDescription, OPC_REGISTRATION_KEEP_EXISTING};
+pub(crate) use ledger::{read_ledger, Entry, Recorder, LEDGER};
 
 use crate::com::alloc::alloc_wstr_from_str;
 use crate::com::ffi;

@@ -1,0 +1,318 @@
+//! opccomn.dll as the proxy/stub of the OPC Common interfaces (IOPCShutdown, IOPCCommon,
+//! IOPCServerList, IOPCServerList2, IOPCEnumGUID), the way a MIDL "merged proxy/stub" DLL is one:
+//! `DllGetClassObject(CLSID_OpcComnProxyStub)` hands out the system RPC runtime's PSFactoryBuffer over
+//! NDR format strings generated from `idl/opccomn.idl` (`src/proxy/opccomn_ps.c`, built by build.rs
+//! on Windows with mingw; `tools/gen-proxy.py` generates and corrects the tables, CI checks they are
+//! current). The bytes on the wire are therefore the runtime's NDR for the interfaces as the OPC
+//! Foundation's IDL declares them, the same as its `opccomn_ps.dll` produces.
+//!
+//! Registering the proxy/stub is a separate step, never a side effect of `regsvr32 opccomn.dll`:
+//!
+//! ```text
+//! CLSID\{CLSID_OpcComnProxyStub}                  @ = PSFactoryBuffer
+//! CLSID\{CLSID_OpcComnProxyStub}\InprocServer32   @ = opccomn.dll path, ThreadingModel = Both
+//! Interface\{iid}                                 @ = interface name (kept when present)
+//! Interface\{iid}\NumMethods                      @ = method count including IUnknown's
+//! Interface\{iid}\ProxyStubClsid32                @ = {CLSID_OpcComnProxyStub}
+//! ```
+//!
+//! An interface whose `ProxyStubClsid32` already names another installed proxy/stub (the Foundation's
+//! `opccomn_ps.dll`) is left to it unless the caller asks to take over
+//! ([`OPC_PROXY_STUB_TAKE_OVER`]). What registration adds or replaces goes into the same kind of ledger
+//! the server registration keeps (value `OpcComnRegistration` of our `InprocServer32` key), so
+//! unregistration deletes what it added, restores what it replaced (a taken-over `opccomn_ps.dll`
+//! gets its `ProxyStubClsid32` back) and leaves alone every interface that another proxy/stub took
+//! over after us.
+
+use core::ffi::c_void;
+use core::ptr;
+
+use crate::com::ffi;
+pub use crate::com::guids::CLSID_OpcComnProxyStub;
+use crate::com::iids::{IID_IOPCCommon, IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IOPCShutdown};
+use crate::com::{BOOL, E_INVALIDARG, GUID, HRESULT, IID, LPCWSTR, S_FALSE, S_OK};
+use crate::registry::register::{read_ledger, this_module_path, Entry, Recorder, LEDGER};
+use crate::registry::{class_key, parse_guid, registries, OpcRegistry, RegValue, Registry};
+
+/// `OpcRegisterProxyStub` flag: also take over interfaces another installed proxy/stub serves (the
+/// previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
+pub const OPC_PROXY_STUB_TAKE_OVER: u32 = 1;
+
+/// The interfaces the proxy/stub serves: IID, name, `NumMethods` (IUnknown's three included).
+fn interfaces() -> [(&'static IID, &'static str, u32); 5] {
+    [
+        (&IID_IOPCShutdown, "IOPCShutdown", 4),
+        (&IID_IOPCCommon, "IOPCCommon", 8),
+        (&IID_IOPCServerList, "IOPCServerList", 6),
+        (&IID_IOPCEnumGUID, "IOPCEnumGUID", 7),
+        (&IID_IOPCServerList2, "IOPCServerList2", 6),
+    ]
+}
+
+#[cfg(opccomn_proxy_stub)]
+extern "C" {
+    // src/proxy/opccomn_ps.c: NdrDllGetClassObject / NdrDllCanUnloadNow over the generated tables.
+    fn OpcProxyStubGetClassObject(rclsid: *const GUID, riid: *const GUID, ppv: *mut *mut c_void) -> HRESULT;
+    fn OpcProxyStubCanUnloadNow() -> HRESULT;
+}
+
+/// The PSFactoryBuffer for `rclsid` (CLSID_OpcComnProxyStub, or, as with MIDL's proxies, the IID of one
+/// of the five interfaces); CLASS_E_CLASSNOTAVAILABLE otherwise and where the proxy/stub is not built.
+///
+/// # Safety
+/// `rclsid` and `riid` readable; `ppv` writable.
+pub(crate) unsafe fn get_class_object(rclsid: &GUID, riid: &GUID, ppv: *mut *mut c_void) -> HRESULT {
+    #[cfg(opccomn_proxy_stub)]
+    {
+        // SAFETY: valid pointers; the runtime checks `riid` and writes `*ppv` (NULL on failure).
+        let hr = unsafe { OpcProxyStubGetClassObject(rclsid, riid, ppv) };
+        if hr < 0 {
+            // SAFETY: writable, as the caller vouches.
+            unsafe { *ppv = ptr::null_mut() };
+        }
+        hr
+    }
+    #[cfg(not(opccomn_proxy_stub))]
+    {
+        let _ = (rclsid, riid);
+        // SAFETY: writable, as the caller vouches.
+        unsafe { *ppv = ptr::null_mut() };
+        crate::com::CLASS_E_CLASSNOTAVAILABLE
+    }
+}
+
+/// True when no proxy, stub or factory reference of the proxy/stub is alive.
+pub(crate) fn can_unload() -> bool {
+    #[cfg(opccomn_proxy_stub)]
+    {
+        // SAFETY: no arguments; the runtime reads the factory's reference count.
+        unsafe { OpcProxyStubCanUnloadNow() == S_OK }
+    }
+    #[cfg(not(opccomn_proxy_stub))]
+    {
+        true
+    }
+}
+
+fn module_key() -> String {
+    format!("{}\\InprocServer32", class_key(&CLSID_OpcComnProxyStub))
+}
+
+fn interface_key(iid: &GUID) -> String {
+    format!("Interface\\{iid}")
+}
+
+/// The CLSID an interface's `ProxyStubClsid32` names, if any.
+fn proxy_stub_of(reg: &dyn Registry, iid: &GUID) -> Option<GUID> {
+    let value = reg.value(&format!("{}\\ProxyStubClsid32", interface_key(iid)), "")?;
+    parse_guid(value.as_str()?)
+}
+
+/// Registers the proxy/stub (module `module`) in `reg`. Ok(true) when all five interfaces now use it,
+/// Ok(false) when some stay with another installed proxy/stub.
+pub(crate) fn register(reg: &dyn Registry, module: &str, take_over: bool) -> Result<bool, HRESULT> {
+    let module_key = module_key();
+    let ours = CLSID_OpcComnProxyStub.to_string();
+    let mut rec = Recorder::new(reg, read_ledger(reg, &module_key).unwrap_or_default());
+    rec.value(&class_key(&CLSID_OpcComnProxyStub), "", "PSFactoryBuffer", false)?;
+    rec.value(&module_key, "", module, true)?;
+    rec.value(&module_key, "ThreadingModel", "Both", true)?;
+    let mut all = true;
+    for (iid, name, methods) in interfaces() {
+        match proxy_stub_of(reg, iid) {
+            Some(other)
+                if other != CLSID_OpcComnProxyStub
+                    && !take_over
+                    && reg.key_exists(&format!("{}\\InprocServer32", class_key(&other))) =>
+            {
+                all = false;
+                continue;
+            }
+            _ => {}
+        }
+        let key = interface_key(iid);
+        rec.value(&key, "", name, false)?;
+        rec.value(&format!("{key}\\NumMethods"), "", &methods.to_string(), true)?;
+        rec.value(&format!("{key}\\ProxyStubClsid32"), "", &ours, true)?;
+    }
+    let text: Vec<String> = rec.ledger.iter().map(Entry::encode).collect();
+    reg.set_value(&module_key, LEDGER, &RegValue::Sz(text.join(";")))?;
+    Ok(all)
+}
+
+/// Undoes [`register`] in `reg`, leaving interfaces that another proxy/stub serves by now.
+pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
+    let module_key = module_key();
+    let class = class_key(&CLSID_OpcComnProxyStub);
+    let ledger = match read_ledger(reg, &module_key) {
+        Some(ledger) => ledger,
+        // No ledger (written by other means): our own class keys, and ProxyStubClsid32 where it is ours.
+        None => {
+            let mut ledger = vec![
+                Entry::Key(class.clone()),
+                Entry::Key(module_key.clone()),
+                Entry::Added(class.clone(), String::new()),
+                Entry::Added(module_key.clone(), String::new()),
+                Entry::Added(module_key.clone(), "ThreadingModel".into()),
+            ];
+            for (iid, ..) in interfaces() {
+                if proxy_stub_of(reg, iid) == Some(CLSID_OpcComnProxyStub) {
+                    ledger.push(Entry::Added(
+                        format!("{}\\ProxyStubClsid32", interface_key(iid)),
+                        String::new(),
+                    ));
+                }
+            }
+            ledger
+        }
+    };
+    // Interfaces another proxy/stub took over after us are its business now.
+    let foreign: Vec<String> = interfaces()
+        .iter()
+        .filter(|(iid, ..)| proxy_stub_of(reg, iid).is_some_and(|c| c != CLSID_OpcComnProxyStub))
+        .map(|(iid, ..)| interface_key(iid).to_lowercase())
+        .collect();
+    let keep = |key: &str| {
+        let key = key.to_lowercase();
+        foreign
+            .iter()
+            .any(|f| key == *f || key.strip_prefix(f.as_str()).is_some_and(|rest| rest.starts_with('\\')))
+    };
+    for entry in ledger.iter().rev() {
+        match entry {
+            Entry::Added(key, name) if !keep(key) && reg.value(key, name).is_some() => reg.delete_value(key, name)?,
+            Entry::Replaced(key, name, old) if !keep(key) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            _ => {}
+        }
+    }
+    if reg.value(&module_key, LEDGER).is_some() {
+        reg.delete_value(&module_key, LEDGER)?;
+    }
+    let mut keys: Vec<&String> = ledger
+        .iter()
+        .filter_map(|e| match e {
+            Entry::Key(k) if !keep(k) => Some(k),
+            _ => None,
+        })
+        .collect();
+    // Deepest first, so children go before their parents.
+    keys.sort_by_key(|k| core::cmp::Reverse(k.matches('\\').count()));
+    for key in keys {
+        if reg.key_exists(key) && reg.subkeys(key).is_empty() && reg.values(key).is_empty() {
+            reg.delete_key(key)?;
+        }
+    }
+    Ok(())
+}
+
+/// Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
+/// IOPCEnumGUID in `reg` (NULL: the system registry; on 64-bit Windows the view of the calling
+/// process, so a 32-bit opccomn.dll registers the 32-bit view). Writes `CLSID_OpcComnProxyStub` with
+/// this module as its `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}`
+/// with `NumMethods` and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another
+/// installed proxy/stub (the OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has
+/// `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
+/// exactly that. Registering twice is harmless.
+///
+/// Returns S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with
+/// another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+///
+/// # Safety
+/// `reg` must be NULL or a live registry handle.
+#[no_mangle]
+pub unsafe extern "C" fn OpcRegisterProxyStub(reg: *const OpcRegistry, flags: u32) -> HRESULT {
+    ffi::boundary!(Opc, [], {
+        if flags & !OPC_PROXY_STUB_TAKE_OVER != 0 {
+            return Err(E_INVALIDARG.into());
+        }
+        // SAFETY: the caller vouches for the handle.
+        let regs = unsafe { registries(reg) };
+        let module = this_module_path(false)?;
+        Ok(
+            if register(&*regs.write, &module, flags & OPC_PROXY_STUB_TAKE_OVER != 0)? {
+                S_OK
+            } else {
+                S_FALSE
+            },
+        )
+    })
+}
+
+/// Removes what `OpcRegisterProxyStub` added to `reg` (NULL: the system registry) and restores the
+/// `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
+/// are left as they are. Unregistering what is not registered succeeds. Returns S_OK or a registry
+/// error.
+///
+/// # Safety
+/// `reg` must be NULL or a live registry handle.
+#[no_mangle]
+pub unsafe extern "C" fn OpcUnregisterProxyStub(reg: *const OpcRegistry) -> HRESULT {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller vouches for the handle.
+        let regs = unsafe { registries(reg) };
+        unregister(&*regs.write)?;
+        Ok(S_OK)
+    })
+}
+
+/// What a `DllInstall` command line asks for: Some(take_over) for `ProxyStub` (with `TakeOver`).
+fn parse_install_command(text: &str) -> Option<bool> {
+    let mut proxy_stub = false;
+    let mut take_over = false;
+    for word in text.split([',', ' ', ';']).filter(|w| !w.is_empty()) {
+        if word.eq_ignore_ascii_case("ProxyStub") {
+            proxy_stub = true;
+        } else if word.eq_ignore_ascii_case("TakeOver") {
+            take_over = true;
+        } else {
+            return None;
+        }
+    }
+    proxy_stub.then_some(take_over)
+}
+
+/// `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
+/// registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
+/// takes over from another installed proxy/stub; with `install` FALSE (`regsvr32 /u /i:ProxyStub`) it
+/// unregisters it. Words are case-insensitive and separated by commas or blanks. regsvr32 also calls
+/// DllRegisterServer / DllUnregisterServer unless given `/n`.
+///
+/// Returns what the registration function returns; E_INVALIDARG for a NULL, empty or unknown command
+/// line.
+///
+/// # Safety
+/// `command_line` must be NULL or a NUL-terminated UTF-16 string.
+#[no_mangle]
+pub unsafe extern "C" fn OpcDllInstall(install: BOOL, command_line: LPCWSTR) -> HRESULT {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller vouches for NULL or a NUL-terminated string; the reader bounds the read.
+        let text = unsafe { ffi::in_string(command_line)? };
+        let take_over = parse_install_command(&text).ok_or(E_INVALIDARG)?;
+        // SAFETY: NULL is the system registry.
+        Ok(unsafe {
+            if install != 0 {
+                OpcRegisterProxyStub(ptr::null(), u32::from(take_over))
+            } else {
+                OpcUnregisterProxyStub(ptr::null())
+            }
+        })
+    })
+}
+
+/// The standard entry point `regsvr32 /i` calls: `OpcDllInstall`.
+///
+/// cbindgen:ignore
+///
+/// # Safety
+/// As for `OpcDllInstall`.
+#[cfg(feature = "dll-exports")]
+#[no_mangle]
+pub unsafe extern "system" fn DllInstall(install: BOOL, command_line: LPCWSTR) -> HRESULT {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: forwarded under the same contract.
+        Ok(unsafe { OpcDllInstall(install, command_line) })
+    })
+}
+
+#[cfg(test)]
+mod tests;
