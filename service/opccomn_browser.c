@@ -1,0 +1,224 @@
+/* opccomn_browser.exe: the OPC server browser out of process (the job of the Foundation's OpcEnum.exe).
+ * It serves CLSID_OPCServerList (IOPCServerList, IOPCServerList2, IOPCEnumGUID over the system
+ * registry, both views) as a LocalServer32, so other processes and remote clients (DCOM) can find the
+ * OPC servers of this machine. It needs opccomn.dll next to it, and the proxy/stub of the OPC Common
+ * interfaces registered (`regsvr32 /n /i:ProxyStub opccomn.dll`, or the Foundation's opccomn_ps.dll).
+ *
+ *   opccomn_browser /RegServer [/TakeOver]   register (LocalServer32, AppID); exit code 0 when this
+ *                                            browser is active afterwards, 2 when another (OpcEnum)
+ *                                            stays active (printed), 1 on errors
+ *   opccomn_browser /UnregServer             remove what /RegServer wrote, restoring what it replaced
+ *   opccomn_browser /Status                  print which browser is registered as active
+ *   opccomn_browser -Embedding               (COM starts it so) serve until the last client is gone
+ *
+ * Coexistence: CLSID_OPCServerList is OpcEnum's CLSID. When its LocalServer32 names another program,
+ * /RegServer leaves it (and every other value) as it is and says so; /TakeOver makes this browser the
+ * active one, recording what it replaced, and /UnregServer puts it back. Nothing this program did not
+ * write is ever deleted (the registration helpers keep a ledger in the LocalServer32 key).
+ *
+ * DCOM security: CoInitializeSecurity with EOAC_APPID, so the access and launch permissions of the
+ * AppID {CCD63ADF-D02D-46DD-B170-FA6E0F086FE3} decide (AccessPermission / LaunchPermission values,
+ * editable with dcomcnfg); registration writes none, so the machine-wide defaults apply. See the README
+ * section "Out of process and remote clients". */
+#include <stdio.h>
+#include <string.h>
+#include <wchar.h>
+
+#include <opccomn/opccomn.h>
+
+static const CLSID APPID_OpcComnBrowser = {0xCCD63ADF, 0xD02D, 0x46DD, {0xB1, 0x70, 0xFA, 0x6E, 0x0F, 0x08, 0x6F, 0xE3}};
+#define SERVER_LIST_KEY L"CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}\\LocalServer32"
+/* A browser nobody connects to gives up after this long (COM starts it for a client, so one comes). */
+#define IDLE_MS 60000
+
+static HANDLE done;
+static LONG objects;
+
+static DWORD cookie; /* the registered class object */
+static LONG revoked;
+
+/* Stops new activations reaching this process (COM starts a new one for them). */
+static void revoke_class(void) {
+    if (InterlockedExchange(&revoked, 1) == 0) CoRevokeClassObject(cookie);
+}
+
+static void object_created(void) { InterlockedIncrement(&objects); }
+/* The last object gone: revoke the class object at once, so that a client activating now gets a new
+ * browser instead of this exiting one, then let serve() finish. */
+static void object_destroyed(void) {
+    if (InterlockedDecrement(&objects) == 0) {
+        revoke_class();
+        SetEvent(done);
+    }
+}
+
+/* ---- An outer object around each server list, so the process knows when its last client is gone. ---- */
+typedef struct Holder {
+    IUnknown unk;
+    LONG refs;
+    IUnknown *inner;
+} Holder;
+
+static HRESULT STDMETHODCALLTYPE holder_qi(IUnknown *This, REFIID riid, void **ppv) {
+    Holder *h = (Holder *)This;
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown)) {
+        *ppv = This;
+        This->lpVtbl->AddRef(This);
+        return S_OK;
+    }
+    if (IsEqualIID(riid, &IID_IOPCServerList) || IsEqualIID(riid, &IID_IOPCServerList2))
+        return h->inner->lpVtbl->QueryInterface(h->inner, riid, ppv);
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE holder_add_ref(IUnknown *This) { return (ULONG)InterlockedIncrement(&((Holder *)This)->refs); }
+static ULONG STDMETHODCALLTYPE holder_release(IUnknown *This) {
+    Holder *h = (Holder *)This;
+    LONG n = InterlockedDecrement(&h->refs);
+    if (n == 0) {
+        h->refs = 1; /* the inner object's release must not come back here */
+        if (h->inner) h->inner->lpVtbl->Release(h->inner);
+        HeapFree(GetProcessHeap(), 0, h);
+        object_destroyed();
+    }
+    return (ULONG)n;
+}
+static IUnknownVtbl holder_vtbl = {holder_qi, holder_add_ref, holder_release};
+
+static HRESULT STDMETHODCALLTYPE factory_qi(IClassFactory *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IClassFactory)) {
+        *ppv = This;
+        return S_OK;
+    }
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE factory_add_ref(IClassFactory *This) { (void)This; return 2; }
+static ULONG STDMETHODCALLTYPE factory_release(IClassFactory *This) { (void)This; return 1; }
+static HRESULT STDMETHODCALLTYPE factory_create(IClassFactory *This, IUnknown *outer, REFIID riid, void **ppv) {
+    Holder *h;
+    HRESULT hr;
+    (void)This;
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (outer) return CLASS_E_NOAGGREGATION;
+    h = (Holder *)HeapAlloc(GetProcessHeap(), HEAP_ZERO_MEMORY, sizeof *h);
+    if (!h) return E_OUTOFMEMORY;
+    h->unk.lpVtbl = &holder_vtbl;
+    h->refs = 1;
+    object_created();
+    hr = OpcServerListCreate(&h->unk, &IID_IUnknown, (void **)&h->inner);
+    if (SUCCEEDED(hr)) hr = holder_qi(&h->unk, riid, ppv);
+    holder_release(&h->unk);
+    return hr;
+}
+static HRESULT STDMETHODCALLTYPE factory_lock(IClassFactory *This, BOOL lock) {
+    (void)This;
+    if (lock) object_created();
+    else object_destroyed();
+    return S_OK;
+}
+static IClassFactoryVtbl factory_vtbl = {factory_qi, factory_add_ref, factory_release, factory_create, factory_lock};
+static IClassFactory factory = {&factory_vtbl};
+
+static int serve(void) {
+    HRESULT hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
+    done = CreateEventW(NULL, TRUE, FALSE, NULL);
+    /* The AppID's AccessPermission decides who may call (machine defaults when it has none). */
+    if (SUCCEEDED(hr))
+        hr = CoInitializeSecurity((PSECURITY_DESCRIPTOR)&APPID_OpcComnBrowser, -1, NULL, NULL,
+                                  RPC_C_AUTHN_LEVEL_DEFAULT, RPC_C_IMP_LEVEL_IDENTIFY, NULL, EOAC_APPID, NULL);
+    if (SUCCEEDED(hr))
+        hr = CoRegisterClassObject(&CLSID_OPCServerList, (IUnknown *)&factory, CLSCTX_LOCAL_SERVER,
+                                   REGCLS_MULTIPLEUSE, &cookie);
+    if (FAILED(hr)) {
+        fprintf(stderr, "opccomn_browser: cannot serve CLSID_OPCServerList: 0x%08lX\n", (unsigned long)hr);
+        return 1;
+    }
+    /* Until the last object goes (or nobody came). */
+    WaitForSingleObject(done, IDLE_MS);
+    revoke_class();
+    while (InterlockedCompareExchange(&objects, 0, 0) > 0) Sleep(50);
+    CoUninitialize();
+    return 0;
+}
+
+static OpcServerRegistration registration(const WCHAR *self) {
+    OpcServerRegistration r;
+    memset(&r, 0, sizeof r);
+    r.struct_size = sizeof r;
+    r.server_type = OPC_SERVER_TYPE_LOCAL;
+    r.clsid = CLSID_OPCServerList;
+    r.prog_id = L"OPC.ServerList.1";
+    r.version_independent_prog_id = L"OPC.ServerList";
+    r.user_type = L"Opc ServerList Class";
+    r.module_path = self;
+    r.app_id = &APPID_OpcComnBrowser;
+    return r;
+}
+
+/* The program LocalServer32 of CLSID_OPCServerList names, or "" (static buffer). */
+static const WCHAR *active_browser(void) {
+    static WCHAR data[MAX_PATH + 64];
+    DWORD size = sizeof data;
+    data[0] = 0;
+    if (RegGetValueW(HKEY_CLASSES_ROOT, SERVER_LIST_KEY, NULL, RRF_RT_REG_SZ | RRF_RT_REG_EXPAND_SZ | RRF_NOEXPAND,
+                     NULL, data, &size) != ERROR_SUCCESS)
+        data[0] = 0;
+    return data;
+}
+
+static int is_self(const WCHAR *command, const WCHAR *self) {
+    size_t n = wcslen(self);
+    if (command[0] == L'"') command++;
+    return _wcsnicmp(command, self, n) == 0 && (command[n] == 0 || command[n] == L'"' || command[n] == L' ');
+}
+
+static int status(const WCHAR *self) {
+    const WCHAR *active = active_browser();
+    if (!active[0]) printf("no out-of-process server browser is registered\n");
+    else if (is_self(active, self)) printf("active: opccomn_browser (%ls)\n", active);
+    else printf("active: another server browser (OpcEnum?): %ls\n", active);
+    return active[0] && is_self(active, self) ? 0 : 2;
+}
+
+int main(void) {
+    WCHAR self[MAX_PATH];
+    const WCHAR *line = GetCommandLineW();
+    uint32_t command = OPC_SERVER_COMMAND_NONE;
+    OpcServerRegistration r;
+    HRESULT hr;
+    GetModuleFileNameW(NULL, self, MAX_PATH);
+    r = registration(self);
+    if (wcsstr(line, L"/Status") || wcsstr(line, L"-Status")) return status(self);
+    if (FAILED(OpcParseCommandLine(line, &command))) command = OPC_SERVER_COMMAND_NONE;
+    if (command == OPC_SERVER_COMMAND_REGISTER) {
+        const WCHAR *active = active_browser();
+        int take_over = wcsstr(line, L"/TakeOver") || wcsstr(line, L"-TakeOver");
+        if (active[0] && !is_self(active, self) && !take_over) {
+            printf("not registered: another server browser is active (%ls); /TakeOver replaces it until "
+                   "/UnregServer\n", active);
+            return 2;
+        }
+        hr = OpcRegisterServer(&r, NULL);
+        if (FAILED(hr)) {
+            fprintf(stderr, "opccomn_browser: registration failed: 0x%08lX\n", (unsigned long)hr);
+            return 1;
+        }
+        return status(self);
+    }
+    if (command == OPC_SERVER_COMMAND_UNREGISTER) {
+        hr = OpcUnregisterServer(&r, NULL);
+        if (FAILED(hr)) {
+            fprintf(stderr, "opccomn_browser: unregistration failed: 0x%08lX\n", (unsigned long)hr);
+            return 1;
+        }
+        status(self);
+        return 0;
+    }
+    if (command == OPC_SERVER_COMMAND_EMBEDDING) return serve();
+    fprintf(stderr, "usage: opccomn_browser /RegServer [/TakeOver] | /UnregServer | /Status | -Embedding\n");
+    return 1;
+}

@@ -1,0 +1,296 @@
+/* The cross-process tests' EXE server (LocalServer32, started by COM with -Embedding): a server
+ * object written in C that aggregates OpcCommonCreate (IOPCCommon) and OpcShutdownCreate
+ * (IConnectionPointContainer with the IOPCShutdown connection point), as an OPC server does, and a
+ * server list over a registry held in memory with OOP_FAKE_SERVERS classes. Runs in the multithreaded
+ * apartment and exits when its last object is released (or after two minutes without one); the class
+ * objects are revoked the moment the last object goes, so a client activating then gets a new server.
+ *
+ * With "-ps:widl" on its command line it uses the stand-in for the Foundation's proxy/stub
+ * (opccomn_widl_ps.dll) for the five interfaces; otherwise what the registry names (opccomn.dll).
+ *
+ * The server answers the vendor codes of oop.h in GetErrorString, so the client can ask what the
+ * server saw: the client name, the result of a shutdown notification, the proxy/stub in use. */
+#include "oop.h"
+
+static HANDLE done;        /* set when the last object is gone */
+static LONG objects;       /* live server objects and server lists */
+static int widl_mode;
+static OpcRegistry *fake_registry; /* the server list's registry */
+
+static DWORD cookies[2]; /* the registered class objects */
+static LONG revoked;
+
+/* Stops new activations reaching this process (COM starts a new one for them). */
+static void revoke_classes(void) {
+    if (InterlockedExchange(&revoked, 1) == 0) {
+        CoRevokeClassObject(cookies[0]);
+        CoRevokeClassObject(cookies[1]);
+    }
+}
+
+static void object_created(void) { InterlockedIncrement(&objects); }
+/* The last object gone: revoke the class objects at once, so that a client activating now gets a new
+ * server instead of this exiting one, then let main() finish. */
+static void object_destroyed(void) {
+    if (InterlockedDecrement(&objects) == 0) {
+        revoke_classes();
+        SetEvent(done);
+    }
+}
+
+/* ---- The server object ---- */
+typedef struct Server {
+    IUnknown unk;
+    LONG refs;
+    IUnknown *common;   /* inner IUnknown of the IOPCCommon session */
+    IUnknown *shutdown; /* inner IUnknown of the shutdown connection point */
+    CRITICAL_SECTION lock;
+    WCHAR *client_name; /* the last name SetClientName gave, or NULL */
+    WCHAR answer[64];   /* text of the last OOP_CODE_SHUTDOWN / OOP_CODE_PROXY_STUB answer */
+} Server;
+
+static HRESULT STDMETHODCALLTYPE server_qi(IUnknown *This, REFIID riid, void **ppv) {
+    Server *s = (Server *)This;
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown)) {
+        *ppv = This;
+        This->lpVtbl->AddRef(This);
+        return S_OK;
+    }
+    if (IsEqualIID(riid, &IID_IOPCCommon)) return s->common->lpVtbl->QueryInterface(s->common, riid, ppv);
+    if (IsEqualIID(riid, &IID_IConnectionPointContainer))
+        return s->shutdown->lpVtbl->QueryInterface(s->shutdown, riid, ppv);
+    return E_NOINTERFACE;
+}
+
+static ULONG STDMETHODCALLTYPE server_add_ref(IUnknown *This) { return (ULONG)InterlockedIncrement(&((Server *)This)->refs); }
+
+static ULONG STDMETHODCALLTYPE server_release(IUnknown *This) {
+    Server *s = (Server *)This;
+    LONG n = InterlockedDecrement(&s->refs);
+    if (n == 0) {
+        s->refs = 1; /* guard against the inner objects' releases coming back */
+        if (s->common) s->common->lpVtbl->Release(s->common);
+        if (s->shutdown) s->shutdown->lpVtbl->Release(s->shutdown);
+        DeleteCriticalSection(&s->lock);
+        free(s->client_name);
+        free(s);
+        object_destroyed();
+    }
+    return (ULONG)n;
+}
+
+static IUnknownVtbl server_vtbl = {server_qi, server_add_ref, server_release};
+
+static void client_name_changed(void *context, LPCWSTR name) {
+    Server *s = (Server *)context;
+    size_t n = wlen(name);
+    WCHAR *copy = (WCHAR *)malloc((n + 1) * sizeof(WCHAR));
+    if (!copy) return;
+    memcpy(copy, name, (n + 1) * sizeof(WCHAR));
+    EnterCriticalSection(&s->lock);
+    free(s->client_name);
+    s->client_name = copy;
+    LeaveCriticalSection(&s->lock);
+}
+
+static void set_answer(Server *s, const char *text) {
+    size_t i;
+    for (i = 0; text[i] && i + 1 < sizeof s->answer / sizeof s->answer[0]; i++) s->answer[i] = (WCHAR)text[i];
+    s->answer[i] = 0;
+}
+
+static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *text) {
+    Server *s = (Server *)context;
+    char buf[64];
+    (void)locale;
+    if (code == OOP_CODE_CLIENT_NAME) {
+        /* The library copies the text before returning; the test's client sets no name meanwhile. */
+        if (!s->client_name) return S_FALSE;
+        *text = s->client_name;
+        return S_OK;
+    }
+    if (code == OOP_CODE_SHUTDOWN) {
+        ULONG notified = 99, failed = 99;
+        HRESULT hr = OpcShutdownNotifyEx(&s->unk, W(OOP_REASON), &notified, &failed);
+        snprintf(buf, sizeof buf, "hr=%08lX notified=%lu failed=%lu", (unsigned long)hr, (unsigned long)notified,
+                 (unsigned long)failed);
+        set_answer(s, buf);
+        *text = s->answer;
+        return S_OK;
+    }
+    if (code == OOP_CODE_PROXY_STUB) {
+        /* During this call a stub of the serving proxy/stub is alive. */
+        HRESULT in_use = widl_proxy_stub_in_use();
+        set_answer(s, in_use == E_FAIL ? "opccomn" : in_use == S_FALSE ? "widl" : "widl-unused");
+        *text = s->answer;
+        return S_OK;
+    }
+    return S_FALSE;
+}
+
+static HRESULT create_server(REFIID riid, void **ppv) {
+    OpcCommonOptions options;
+    static LCID locales[OOP_LOCALES];
+    unsigned i;
+    HRESULT hr;
+    Server *s = (Server *)calloc(1, sizeof *s);
+    if (!s) return E_OUTOFMEMORY;
+    s->unk.lpVtbl = &server_vtbl;
+    s->refs = 1;
+    InitializeCriticalSection(&s->lock);
+    object_created();
+    for (i = 0; i < OOP_LOCALES; i++) locales[i] = oop_locale(i);
+    memset(&options, 0, sizeof options);
+    options.struct_size = sizeof options;
+    options.locales = locales;
+    options.locale_count = OOP_LOCALES;
+    options.vendor_error_string = vendor_text;
+    options.vendor_error_context = s;
+    options.client_name_changed = client_name_changed;
+    options.client_name_context = s;
+    hr = OpcCommonCreate(&options, &s->unk, &IID_IUnknown, (void **)&s->common);
+    if (SUCCEEDED(hr)) hr = OpcShutdownCreate(&s->unk, &IID_IUnknown, (void **)&s->shutdown);
+    if (SUCCEEDED(hr)) hr = server_qi(&s->unk, riid, ppv);
+    server_release(&s->unk);
+    return hr;
+}
+
+/* ---- Class factories ---- */
+typedef struct Factory {
+    IClassFactory cf;
+    int list; /* 0: the server object; 1: the server list */
+} Factory;
+
+static HRESULT STDMETHODCALLTYPE factory_qi(IClassFactory *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IClassFactory)) {
+        *ppv = This;
+        return S_OK;
+    }
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE factory_add_ref(IClassFactory *This) { (void)This; return 2; }
+static ULONG STDMETHODCALLTYPE factory_release(IClassFactory *This) { (void)This; return 1; }
+
+/* The server list is the library's object; an outer object in this EXE only counts its lifetime. */
+typedef struct ListHolder {
+    IUnknown unk;
+    LONG refs;
+    IUnknown *inner;
+} ListHolder;
+
+static HRESULT STDMETHODCALLTYPE holder_qi(IUnknown *This, REFIID riid, void **ppv) {
+    ListHolder *h = (ListHolder *)This;
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown)) {
+        *ppv = This;
+        This->lpVtbl->AddRef(This);
+        return S_OK;
+    }
+    if (IsEqualIID(riid, &IID_IOPCServerList) || IsEqualIID(riid, &IID_IOPCServerList2))
+        return h->inner->lpVtbl->QueryInterface(h->inner, riid, ppv);
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE holder_add_ref(IUnknown *This) { return (ULONG)InterlockedIncrement(&((ListHolder *)This)->refs); }
+static ULONG STDMETHODCALLTYPE holder_release(IUnknown *This) {
+    ListHolder *h = (ListHolder *)This;
+    LONG n = InterlockedDecrement(&h->refs);
+    if (n == 0) {
+        h->refs = 1;
+        if (h->inner) h->inner->lpVtbl->Release(h->inner);
+        free(h);
+        object_destroyed();
+    }
+    return (ULONG)n;
+}
+static IUnknownVtbl holder_vtbl = {holder_qi, holder_add_ref, holder_release};
+
+static HRESULT create_list(REFIID riid, void **ppv) {
+    HRESULT hr;
+    ListHolder *h = (ListHolder *)calloc(1, sizeof *h);
+    if (!h) return E_OUTOFMEMORY;
+    h->unk.lpVtbl = &holder_vtbl;
+    h->refs = 1;
+    object_created();
+    hr = OpcServerListCreateOver(fake_registry, &h->unk, &IID_IUnknown, (void **)&h->inner);
+    if (SUCCEEDED(hr)) hr = holder_qi(&h->unk, riid, ppv);
+    holder_release(&h->unk);
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE factory_create(IClassFactory *This, IUnknown *outer, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (outer) return CLASS_E_NOAGGREGATION;
+    return ((Factory *)This)->list ? create_list(riid, ppv) : create_server(riid, ppv);
+}
+static HRESULT STDMETHODCALLTYPE factory_lock(IClassFactory *This, BOOL lock) {
+    (void)This;
+    if (lock) object_created();
+    else object_destroyed();
+    return S_OK;
+}
+static IClassFactoryVtbl factory_vtbl = {factory_qi, factory_add_ref, factory_release, factory_create, factory_lock};
+static Factory server_factory = {{&factory_vtbl}, 0};
+static Factory list_factory = {{&factory_vtbl}, 1};
+
+/* The fake servers: OOP_FAKE_SERVERS Data Access 2.0 servers with ProgIDs Oop.Fake<N>.1. */
+static HRESULT fill_fake_registry(void) {
+    static const CATID da2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
+    unsigned n;
+    HRESULT hr = OpcRegistryCreateMemory(&fake_registry);
+    for (n = 0; SUCCEEDED(hr) && n < OOP_FAKE_SERVERS; n++) {
+        char prog[32], vi[32], user[32];
+        WCHAR wprog[32], wvi[32], wuser[32];
+        OpcServerRegistration r;
+        size_t i;
+        snprintf(prog, sizeof prog, "Oop.Fake%u.1", n);
+        snprintf(vi, sizeof vi, "Oop.Fake%u", n);
+        snprintf(user, sizeof user, "Oop fake server %u", n);
+        for (i = 0; i < sizeof prog; i++) wprog[i] = (WCHAR)prog[i];
+        for (i = 0; i < sizeof vi; i++) wvi[i] = (WCHAR)vi[i];
+        for (i = 0; i < sizeof user; i++) wuser[i] = (WCHAR)user[i];
+        memset(&r, 0, sizeof r);
+        r.struct_size = sizeof r;
+        r.server_type = OPC_SERVER_TYPE_LOCAL;
+        r.clsid = oop_fake_clsid(n);
+        r.prog_id = wprog;
+        r.version_independent_prog_id = wvi;
+        r.user_type = wuser;
+        r.module_path = L"C:\\oop\\fake.exe";
+        r.implemented_categories = &da2;
+        r.implemented_category_count = 1;
+        hr = OpcRegisterServer(&r, fake_registry);
+    }
+    return hr;
+}
+
+int main(void) {
+    HRESULT hr;
+    widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
+    done = CreateEventW(NULL, TRUE, FALSE, NULL);
+    hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
+    if (SUCCEEDED(hr) && widl_mode) hr = use_widl_proxy_stub();
+    if (SUCCEEDED(hr)) hr = fill_fake_registry();
+    if (SUCCEEDED(hr))
+        hr = CoRegisterClassObject(&CLSID_OopServer, (IUnknown *)&server_factory.cf, CLSCTX_LOCAL_SERVER,
+                                   REGCLS_MULTIPLEUSE, &cookies[0]);
+    if (SUCCEEDED(hr))
+        hr = CoRegisterClassObject(&CLSID_OopServerList, (IUnknown *)&list_factory.cf, CLSCTX_LOCAL_SERVER,
+                                   REGCLS_MULTIPLEUSE, &cookies[1]);
+    if (FAILED(hr)) {
+        fprintf(stderr, "oop_server: start failed: 0x%08lX\n", (unsigned long)hr);
+        return 1;
+    }
+    /* Exit when the last object goes; a server nobody connects to gives up after two minutes. */
+    WaitForSingleObject(done, 120000);
+    revoke_classes();
+    while (InterlockedCompareExchange(&objects, 0, 0) > 0) Sleep(50);
+    OpcRegistryRelease(fake_registry);
+    CoUninitialize();
+    return 0;
+}

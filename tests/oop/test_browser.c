@@ -1,0 +1,219 @@
+/* The server browser service (service/opccomn_browser.c) under Wine: registered as LocalServer32 with
+ * its AppID, a client in this process enumerates fake servers registered in the system registry
+ * through CLSCTX_LOCAL_SERVER, the browser process exits when the client lets go, and next to an
+ * OpcEnum-style registration it stays inactive unless told to take over, after which unregistration
+ * restores OpcEnum's registration exactly. */
+#include "oop.h"
+
+#include <tlhelp32.h>
+
+static WCHAR dir[MAX_PATH];
+static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
+static CLSID fake(unsigned n) {
+    CLSID c = {0xC3200000 + n, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x20}};
+    return c;
+}
+#define FAKES 3
+static const WCHAR *const FAKE_PROGIDS[FAKES] = {L"Oop.Browse0.1", L"Oop.Browse1.1", L"Oop.Browse2.1"};
+
+static DWORD run(const WCHAR *args) {
+    WCHAR cmd[1200];
+    STARTUPINFOW si;
+    PROCESS_INFORMATION pi;
+    DWORD code = 999;
+    swprintf(cmd, 1200, L"\"%ls\\opccomn_browser.exe\" %ls", dir, args);
+    memset(&si, 0, sizeof si);
+    si.cb = sizeof si;
+    if (!CreateProcessW(NULL, cmd, NULL, NULL, FALSE, 0, NULL, NULL, &si, &pi)) return 998;
+    WaitForSingleObject(pi.hProcess, 60000);
+    GetExitCodeProcess(pi.hProcess, &code);
+    CloseHandle(pi.hProcess);
+    CloseHandle(pi.hThread);
+    return code;
+}
+
+static int browser_running(void) {
+    PROCESSENTRY32W e;
+    int found = 0;
+    HANDLE snap = CreateToolhelp32Snapshot(TH32CS_SNAPPROCESS, 0);
+    if (snap == INVALID_HANDLE_VALUE) return -1;
+    e.dwSize = sizeof e;
+    if (Process32FirstW(snap, &e)) {
+        do found |= _wcsicmp(e.szExeFile, L"opccomn_browser.exe") == 0;
+        while (Process32NextW(snap, &e));
+    }
+    CloseHandle(snap);
+    return found;
+}
+
+static int wait_browser_gone(void) {
+    int i;
+    for (i = 0; i < 100; i++) {
+        if (browser_running() == 0) return 1;
+        Sleep(100);
+    }
+    return 0;
+}
+
+static OpcServerRegistration fake_registration(unsigned n, CLSID *clsid) {
+    OpcServerRegistration r;
+    *clsid = fake(n);
+    memset(&r, 0, sizeof r);
+    r.struct_size = sizeof r;
+    r.server_type = OPC_SERVER_TYPE_LOCAL;
+    r.clsid = *clsid;
+    r.prog_id = FAKE_PROGIDS[n];
+    r.user_type = L"Oop browse test server";
+    r.module_path = L"C:\\oop\\fake.exe";
+    r.implemented_categories = &CATID_DA2;
+    r.implemented_category_count = 1;
+    return r;
+}
+
+/* Browses through the out-of-process server list: every fake server must be there. */
+static void browse(void) {
+    IOPCServerList2 *l2 = NULL;
+    IOPCServerList *l1 = NULL;
+    IOPCEnumGUID *e = NULL;
+    GUID got[256];
+    ULONG n = 0, i, found = 0;
+    unsigned k;
+    LPOLESTR prog = NULL, user = NULL, vi = NULL;
+    CLSID one = fake(1);
+    CHECK_HR(CoCreateInstance(&CLSID_OPCServerList, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&l2), S_OK);
+    if (!l2) return;
+    CHECK(browser_running() == 1);
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+    if (e) {
+        CHECK_HR(e->lpVtbl->Next(e, 256, got, &n), S_FALSE);
+        for (k = 0; k < FAKES; k++) {
+            CLSID f = fake(k);
+            for (i = 0; i < n; i++) found += IsEqualGUID(&got[i], &f);
+        }
+        CHECK(found == FAKES);
+        e->lpVtbl->Release(e);
+    }
+    CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &one, &prog, &user, &vi), S_OK);
+    CHECK(wstr_is(prog, "Oop.Browse1.1") && wstr_is(user, "Oop browse test server"));
+    CHECK(wstr_is(vi, "Oop.Browse1.1")); /* no version-independent ProgID: the ProgID */
+    CoTaskMemFree(prog);
+    CoTaskMemFree(user);
+    CoTaskMemFree(vi);
+    CHECK_HR(l2->lpVtbl->QueryInterface(l2, &IID_IOPCServerList, (void **)&l1), S_OK);
+    if (l1) {
+        CLSID c;
+        CHECK_HR(l1->lpVtbl->CLSIDFromProgID(l1, L"Oop.Browse2.1", &c), S_OK);
+        {
+            CLSID two = fake(2);
+            CHECK(IsEqualGUID(&c, &two));
+        }
+        l1->lpVtbl->Release(l1);
+    }
+    l2->lpVtbl->Release(l2);
+    CHECK(wait_browser_gone()); /* it exits when its last client goes */
+}
+
+static LPWSTR snapshot(OpcRegistry *sys) {
+    static const WCHAR *const keys[] = {L"CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}",
+                                        L"AppID\\{13486D44-4821-11D2-A494-3CB306C10000}", L"AppID\\OpcEnum.exe",
+                                        L"OPC.ServerList.1", L"OPC.ServerList",
+                                        L"AppID\\{CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}",
+                                        L"AppID\\opccomn_browser.exe"};
+    size_t total = 1, i;
+    LPWSTR parts[7], out;
+    for (i = 0; i < 7; i++) {
+        parts[i] = NULL;
+        OpcRegistryExport(sys, keys[i], &parts[i]);
+        if (parts[i]) total += wlen(parts[i]);
+    }
+    out = (LPWSTR)malloc(total * sizeof(WCHAR));
+    out[0] = 0;
+    for (i = 0; i < 7; i++) {
+        if (parts[i]) wcscat(out, parts[i]);
+        OpcTaskMemFree(parts[i]);
+    }
+    return out;
+}
+
+/* What the Foundation's OpcEnum.exe registers for itself. */
+static const WCHAR OPCENUM_REG[] =
+    L"Windows Registry Editor Version 5.00\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}]\r\n@=\"OpcServerList Class\"\r\n"
+    L"\"AppID\"=\"{13486D44-4821-11D2-A494-3CB306C10000}\"\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}\\LocalServer32]\r\n"
+    L"@=\"C:\\\\Windows\\\\System32\\\\OpcEnum.exe\"\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}\\ProgID]\r\n@=\"OPC.ServerList.1\"\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\AppID\\{13486D44-4821-11D2-A494-3CB306C10000}]\r\n@=\"OpcEnum\"\r\n"
+    L"\"LocalService\"=\"OpcEnum\"\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\AppID\\OpcEnum.exe]\r\n\"AppID\"=\"{13486D44-4821-11D2-A494-3CB306C10000}\"\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\OPC.ServerList.1]\r\n@=\"OpcServerList Class\"\r\n\r\n"
+    L"[HKEY_CLASSES_ROOT\\OPC.ServerList.1\\CLSID]\r\n@=\"{13486D51-4821-11D2-A494-3CB306C10000}\"\r\n\r\n";
+
+static const WCHAR OPCENUM_DELETE[] =
+    L"Windows Registry Editor Version 5.00\r\n\r\n"
+    L"[-HKEY_CLASSES_ROOT\\CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}]\r\n\r\n"
+    L"[-HKEY_CLASSES_ROOT\\AppID\\{13486D44-4821-11D2-A494-3CB306C10000}]\r\n\r\n"
+    L"[-HKEY_CLASSES_ROOT\\AppID\\OpcEnum.exe]\r\n\r\n"
+    L"[-HKEY_CLASSES_ROOT\\OPC.ServerList.1]\r\n\r\n";
+
+int main(void) {
+    OpcRegistry *sys = NULL;
+    OpcServerRegistration fakes[FAKES];
+    CLSID clsids[FAKES];
+    LPWSTR before, after;
+    WCHAR *slash;
+    unsigned k;
+    GetModuleFileNameW(NULL, dir, MAX_PATH);
+    slash = wcsrchr(dir, L'\\');
+    if (slash) *slash = 0;
+    CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
+    CHECK_HR(OpcRegistryOpenSystem(&sys), S_OK);
+    CHECK_HR(OpcRegisterProxyStub(NULL, 0), S_OK);
+    for (k = 0; k < FAKES; k++) {
+        fakes[k] = fake_registration(k, &clsids[k]);
+        CHECK_HR(OpcRegisterServer(&fakes[k], NULL), S_OK);
+    }
+
+    /* Alone: /RegServer makes it the active browser; clients reach it through CLSCTX_LOCAL_SERVER. */
+    before = snapshot(sys);
+    CHECK(run(L"/RegServer") == 0);
+    CHECK(run(L"/Status") == 0);
+    browse();
+    CHECK(run(L"/UnregServer") == 0);
+    CHECK(run(L"/Status") == 2);
+    after = snapshot(sys);
+    CHECK(wsame(before, after));
+    free(before);
+    free(after);
+
+    /* Next to OpcEnum: inactive unless it takes over; unregistration restores OpcEnum exactly. */
+    CHECK_HR(OpcRegistryApply(sys, OPCENUM_REG), S_OK);
+    before = snapshot(sys);
+    CHECK(run(L"/RegServer") == 2);
+    after = snapshot(sys);
+    CHECK(wsame(before, after));
+    free(after);
+    CHECK(run(L"/RegServer /TakeOver") == 0);
+    CHECK(run(L"/Status") == 0);
+    browse();
+    CHECK(run(L"/UnregServer") == 0);
+    CHECK(run(L"/Status") == 2);
+    after = snapshot(sys);
+    CHECK(wsame(before, after));
+    if (!wsame(before, after)) {
+        fputs("  before: ", stderr);
+        wprint(stderr, before);
+        fputs("\n  after: ", stderr);
+        wprint(stderr, after);
+        fputc('\n', stderr);
+    }
+    free(before);
+    free(after);
+    CHECK_HR(OpcRegistryApply(sys, OPCENUM_DELETE), S_OK);
+
+    for (k = 0; k < FAKES; k++) CHECK_HR(OpcUnregisterServer(&fakes[k], NULL), S_OK);
+    CHECK_HR(OpcUnregisterProxyStub(NULL), S_OK);
+    OpcRegistryRelease(sys);
+    CoUninitialize();
+    return test_summary("test_browser");
+}

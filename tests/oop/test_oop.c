@@ -1,0 +1,372 @@
+/* Every method of the OPC Common interfaces across processes, under the real COM runtime (Wine in
+ * CI): this client and the EXE server oop_server.c (LocalServer32), talking through a proxy/stub on
+ * each side.
+ *
+ *   test_oop CLIENT SERVER     CLIENT, SERVER: "opccomn" (opccomn.dll's proxy/stub, registered with
+ *                              OpcRegisterProxyStub) or "widl" (the stand-in for the Foundation's
+ *                              opccomn_ps.dll, see oop.h)
+ *
+ * Covered: SetLocaleID / GetLocaleID / QueryAvailableLocaleIDs (4096 locales arrive whole) /
+ * GetErrorString (texts allocated for the client; NULL on failure) / SetClientName (the server sees
+ * it); strings up to the library's bound of 2^19 code units through, longer ones refused with a
+ * defined error and both processes still answering; a shutdown sink in this process advised through
+ * the connection point, OpcShutdownNotify in the server reaching it with the reason, Unadvise from
+ * inside the callback; IOPCServerList2 / IOPCServerList over 100 fake servers with IOPCEnumGUID and
+ * IEnumGUID Next of several elements, Skip, Reset, Clone, GetClassDetails, CLSIDFromProgID, category
+ * arrays up to the library's 4096 and beyond. Registration is undone at the end and checked. */
+#include "oop.h"
+
+#include <comcat.h>
+#include <olectl.h> /* CONNECT_E_NOCONNECTION */
+
+static int widl_client, widl_server;
+static WCHAR server_path[MAX_PATH];
+static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
+
+#define STRING_BOUND (1u << 19)
+
+static WCHAR *long_name(size_t units) {
+    WCHAR *s = (WCHAR *)malloc((units + 1) * sizeof(WCHAR));
+    size_t i;
+    for (i = 0; s && i < units; i++) s[i] = (WCHAR)(0x41 + i % 26);
+    if (s) s[units] = 0;
+    return s;
+}
+
+static int key_exists(const WCHAR *key) {
+    HKEY h;
+    if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_READ, &h) != ERROR_SUCCESS) return 0;
+    RegCloseKey(h);
+    return 1;
+}
+
+static OpcServerRegistration server_registration(const CLSID *clsid, const WCHAR *prog_id) {
+    OpcServerRegistration r;
+    memset(&r, 0, sizeof r);
+    r.struct_size = sizeof r;
+    r.server_type = OPC_SERVER_TYPE_LOCAL;
+    r.clsid = *clsid;
+    r.prog_id = prog_id;
+    r.user_type = L"opccomn cross-process test server";
+    r.module_path = server_path;
+    return r;
+}
+
+static void set_server_command(const CLSID *clsid) {
+    WCHAR key[80], command[MAX_PATH + 32], guid[40];
+    HKEY h;
+    StringFromGUID2(clsid, guid, 40);
+    swprintf(key, 80, L"CLSID\\%ls\\LocalServer32", guid);
+    swprintf(command, MAX_PATH + 32, L"\"%ls\" -ps:widl", server_path);
+    CHECK(RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_WRITE, &h) == ERROR_SUCCESS);
+    CHECK(RegSetValueExW(h, NULL, 0, REG_SZ, (const BYTE *)command, (DWORD)((wcslen(command) + 1) * sizeof(WCHAR))) ==
+          ERROR_SUCCESS);
+    RegCloseKey(h);
+}
+
+/* GetErrorString of a vendor code of the test server, as a malloc'd copy (NULL on failure). */
+static WCHAR *ask(IOPCCommon *c, HRESULT code) {
+    LPWSTR text = (LPWSTR)GARBAGE_PTR;
+    WCHAR *copy = NULL;
+    HRESULT hr = c->lpVtbl->GetErrorString(c, code, &text);
+    if (SUCCEEDED(hr) && text) {
+        size_t n = wlen(text);
+        copy = (WCHAR *)malloc((n + 1) * sizeof(WCHAR));
+        memcpy(copy, text, (n + 1) * sizeof(WCHAR));
+    }
+    if (SUCCEEDED(hr)) CoTaskMemFree(text);
+    return copy;
+}
+
+static void check_common(IOPCCommon *c) {
+    LCID lcid = GARBAGE_U32, *lcids = (LCID *)GARBAGE_PTR;
+    DWORD count = GARBAGE_U32, i;
+    LPWSTR text = (LPWSTR)GARBAGE_PTR, local = NULL;
+    WCHAR *name, *seen;
+    int all = 1;
+
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0407), S_OK);
+    CHECK_HR(c->lpVtbl->GetLocaleID(c, &lcid), S_OK);
+    CHECK(lcid == 0x0407);
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0C0C), E_INVALIDARG); /* not one the server declared */
+    CHECK_HR(c->lpVtbl->GetLocaleID(c, &lcid), S_OK);
+    CHECK(lcid == 0x0407);
+    CHECK(FAILED(c->lpVtbl->GetLocaleID(c, NULL))); /* the proxy refuses a NULL [out] pointer */
+
+    /* The array arrives whole: every declared locale, in order, at the start. */
+    CHECK_HR(c->lpVtbl->QueryAvailableLocaleIDs(c, &count, &lcids), S_OK);
+    CHECK(count >= OOP_LOCALES && count <= OOP_LOCALES + 4);
+    for (i = 0; lcids && i < OOP_LOCALES && i < count; i++) all &= lcids[i] == oop_locale(i);
+    CHECK(all && lcids != NULL);
+    CoTaskMemFree(lcids);
+
+    /* Texts are allocated for this process, in the session's language. */
+    CHECK_HR(c->lpVtbl->GetErrorString(c, (HRESULT)0xC0040007L, &text), S_OK); /* OPC_E_UNKNOWNITEMID */
+    CHECK_HR(OpcGetErrorString((HRESULT)0xC0040007L, 0x0407, &local), S_OK);
+    CHECK(text != NULL && wsame(text, local));
+    CoTaskMemFree(text);
+    OpcTaskMemFree(local);
+    text = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(c->lpVtbl->GetErrorString(c, (HRESULT)0x12345678L, &text), E_INVALIDARG);
+    CHECK(text == NULL); /* a failing call still gives NULL on the client side */
+
+    /* SetClientName: the server sees it. */
+    CHECK_HR(c->lpVtbl->SetClientName(c, W("Client \xc3\x84 \xf0\x9f\x98\x80 1")), S_OK);
+    seen = ask(c, OOP_CODE_CLIENT_NAME);
+    CHECK(wstr_is(seen, "Client \xc3\x84 \xf0\x9f\x98\x80 1"));
+    free(seen);
+
+    /* The library's bound: 2^19 code units go through both ways, one more is refused. */
+    name = long_name(STRING_BOUND);
+    CHECK_HR(c->lpVtbl->SetClientName(c, name), S_OK);
+    seen = ask(c, OOP_CODE_CLIENT_NAME);
+    CHECK(seen && wlen(seen) == STRING_BOUND && wsame(seen, name));
+    free(seen);
+    free(name);
+    name = long_name(STRING_BOUND + 1);
+    CHECK_HR(c->lpVtbl->SetClientName(c, name), E_INVALIDARG);
+    free(name);
+    name = long_name((size_t)1 << 22); /* 8 MiB on the wire */
+    CHECK_HR(c->lpVtbl->SetClientName(c, name), E_INVALIDARG);
+    free(name);
+    seen = ask(c, OOP_CODE_CLIENT_NAME); /* the server kept the last accepted name and still answers */
+    CHECK(seen && wlen(seen) == STRING_BOUND);
+    free(seen);
+    CHECK(FAILED(c->lpVtbl->SetClientName(c, NULL)));
+    CHECK_HR(c->lpVtbl->GetLocaleID(c, &lcid), S_OK);
+}
+
+typedef struct SinkState {
+    IUnknown *server;
+    DWORD cookie;
+    LONG calls;
+    HRESULT unadvise;
+    DWORD thread;
+    WCHAR reason[128];
+} SinkState;
+
+static void on_shutdown(void *context, LPCWSTR reason) {
+    SinkState *s = (SinkState *)context;
+    size_t n = wlen(reason);
+    InterlockedIncrement(&s->calls);
+    s->thread = GetCurrentThreadId();
+    if (n < 128) memcpy(s->reason, reason, (n + 1) * sizeof(WCHAR));
+    s->unadvise = OpcShutdownUnadvise(s->server, s->cookie); /* from inside the callback */
+}
+
+static void check_shutdown(IOPCCommon *c) {
+    IUnknown *sink = NULL, *cpc = NULL;
+    SinkState state;
+    WCHAR *answer;
+    memset(&state, 0, sizeof state);
+    state.server = (IUnknown *)c;
+    state.unadvise = E_FAIL;
+    CHECK_HR(c->lpVtbl->QueryInterface(c, &IID_IConnectionPointContainer, (void **)&cpc), S_OK);
+    if (cpc) cpc->lpVtbl->Release(cpc);
+    CHECK_HR(OpcShutdownSinkCreate(on_shutdown, &state, &IID_IUnknown, (void **)&sink), S_OK);
+    CHECK_HR(OpcShutdownAdvise((IUnknown *)c, sink, &state.cookie), S_OK);
+    CHECK(state.cookie != 0);
+    sink->lpVtbl->Release(sink); /* the server's connection keeps the sink alive */
+
+    answer = ask(c, OOP_CODE_SHUTDOWN);
+    CHECK(wstr_is(answer, "hr=00000000 notified=1 failed=0"));
+    if (answer && !wstr_is(answer, "hr=00000000 notified=1 failed=0")) {
+        fputs("  shutdown answer: ", stderr);
+        wprint(stderr, answer);
+        fputc('\n', stderr);
+    }
+    free(answer);
+    CHECK(state.calls == 1);
+    CHECK(wstr_is(state.reason, OOP_REASON));
+    CHECK_HR(state.unadvise, S_OK);
+    CHECK(state.thread != 0 && state.thread != GetCurrentThreadId()); /* it came in through RPC */
+
+    answer = ask(c, OOP_CODE_SHUTDOWN); /* unadvised: nobody left to notify */
+    CHECK(wstr_is(answer, "hr=00000000 notified=0 failed=0"));
+    free(answer);
+    CHECK(state.calls == 1);
+    CHECK_HR(OpcShutdownUnadvise((IUnknown *)c, state.cookie), CONNECT_E_NOCONNECTION);
+}
+
+static int is_fake(const GUID *g, int *seen) {
+    unsigned n;
+    for (n = 0; n < OOP_FAKE_SERVERS; n++) {
+        CLSID f = oop_fake_clsid(n);
+        if (IsEqualGUID(g, &f)) {
+            if (seen[n]) return 0;
+            seen[n] = 1;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void check_server_list(void) {
+    IOPCServerList2 *l2 = NULL;
+    IOPCServerList *l1 = NULL;
+    IOPCEnumGUID *e = NULL, *clone = NULL;
+    IEnumGUID *e1 = NULL;
+    GUID buf[128];
+    ULONG fetched = GARBAGE_U32, total = 0;
+    int seen[OOP_FAKE_SERVERS] = {0}, ok = 1;
+    LPOLESTR prog = (LPOLESTR)GARBAGE_PTR, user = (LPOLESTR)GARBAGE_PTR, vi = (LPOLESTR)GARBAGE_PTR;
+    CLSID clsid, five = oop_fake_clsid(5), unknown = oop_fake_clsid(1000);
+    static CATID many[4097];
+    unsigned i;
+
+    CHECK_HR(CoCreateInstance(&CLSID_OopServerList, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&l2), S_OK);
+    if (!l2) return;
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+    if (e) {
+        /* Several elements per Next across the boundary, then the rest, then nothing. */
+        CHECK_HR(e->lpVtbl->Next(e, 7, buf, &fetched), S_OK);
+        CHECK(fetched == 7);
+        for (i = 0; i < fetched && i < 7; i++) ok &= is_fake(&buf[i], seen);
+        total += fetched;
+        CHECK_HR(e->lpVtbl->Skip(e, 3), S_OK);
+        total += 3;
+        CHECK_HR(e->lpVtbl->Clone(e, &clone), S_OK);
+        fetched = GARBAGE_U32;
+        CHECK_HR(e->lpVtbl->Next(e, 128, buf, &fetched), S_FALSE);
+        CHECK(fetched == OOP_FAKE_SERVERS - 10);
+        for (i = 0; i < fetched && i < 128; i++) ok &= is_fake(&buf[i], seen);
+        total += fetched;
+        CHECK(ok && total == OOP_FAKE_SERVERS);
+        CHECK_HR(e->lpVtbl->Next(e, 5, buf, &fetched), S_FALSE);
+        CHECK(fetched == 0);
+        if (clone) { /* the clone continues where the original was */
+            CHECK_HR(clone->lpVtbl->Next(clone, 128, buf, &fetched), S_FALSE);
+            CHECK(fetched == OOP_FAKE_SERVERS - 10);
+            clone->lpVtbl->Release(clone);
+        }
+        CHECK_HR(e->lpVtbl->Reset(e), S_OK);
+        /* A count far beyond what exists, with the room for it that the caller must provide (the
+         * proxy clears that much; 2^20 GUIDs are 16 MiB): the stub allocates it on the server side
+         * and only the elements that exist come back. */
+        {
+            GUID *big = (GUID *)malloc(((size_t)1 << 20) * sizeof(GUID));
+            fetched = GARBAGE_U32;
+            CHECK_HR(e->lpVtbl->Next(e, 1u << 20, big, &fetched), S_FALSE);
+            CHECK(fetched == OOP_FAKE_SERVERS);
+            free(big);
+        }
+        e->lpVtbl->Release(e);
+    }
+
+    CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &five, &prog, &user, &vi), S_OK);
+    CHECK(wstr_is(prog, "Oop.Fake5.1") && wstr_is(user, "Oop fake server 5") && wstr_is(vi, "Oop.Fake5"));
+    CoTaskMemFree(prog);
+    CoTaskMemFree(user);
+    CoTaskMemFree(vi);
+    prog = user = vi = (LPOLESTR)GARBAGE_PTR;
+    CHECK(FAILED(l2->lpVtbl->GetClassDetails(l2, &unknown, &prog, &user, &vi)));
+    CHECK(prog == NULL && user == NULL && vi == NULL);
+    CHECK_HR(l2->lpVtbl->CLSIDFromProgID(l2, W("Oop.Fake9.1"), &clsid), S_OK);
+    {
+        CLSID nine = oop_fake_clsid(9);
+        CHECK(IsEqualGUID(&clsid, &nine));
+    }
+    memset(&clsid, 0xAB, sizeof clsid);
+    CHECK(FAILED(l2->lpVtbl->CLSIDFromProgID(l2, W("Oop.Nothing.1"), &clsid)));
+    CHECK(IsEqualGUID(&clsid, &GUID_NULL));
+
+    /* Category arrays up to the library's limit of 4096 go through; 4097 are refused. */
+    for (i = 0; i < 4097; i++) many[i] = CATID_DA2;
+    e = (IOPCEnumGUID *)GARBAGE_PTR;
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 4096, many, 0, NULL, &e), S_OK);
+    if (e && e != GARBAGE_PTR) {
+        CHECK_HR(e->lpVtbl->Next(e, 128, buf, &fetched), S_FALSE);
+        CHECK(fetched == OOP_FAKE_SERVERS);
+        e->lpVtbl->Release(e);
+    }
+    e = (IOPCEnumGUID *)GARBAGE_PTR;
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 4097, many, 0, NULL, &e), E_INVALIDARG);
+    CHECK(e == NULL);
+
+    /* IOPCServerList with the system's IEnumGUID. */
+    CHECK_HR(l2->lpVtbl->QueryInterface(l2, &IID_IOPCServerList, (void **)&l1), S_OK);
+    if (l1) {
+        CHECK_HR(l1->lpVtbl->EnumClassesOfCategories(l1, 1, (CATID *)&CATID_DA2, 0, NULL, &e1), S_OK);
+        if (e1) {
+            CHECK_HR(e1->lpVtbl->Next(e1, 10, buf, &fetched), S_OK);
+            CHECK(fetched == 10);
+            e1->lpVtbl->Release(e1);
+        }
+        prog = user = (LPOLESTR)GARBAGE_PTR;
+        CHECK_HR(l1->lpVtbl->GetClassDetails(l1, &five, &prog, &user), S_OK);
+        CHECK(wstr_is(prog, "Oop.Fake5.1") && wstr_is(user, "Oop fake server 5"));
+        CoTaskMemFree(prog);
+        CoTaskMemFree(user);
+        l1->lpVtbl->Release(l1);
+    }
+    l2->lpVtbl->Release(l2);
+}
+
+int main(int argc, char **argv) {
+    OpcServerRegistration server, list;
+    IOPCCommon *c = NULL;
+    WCHAR *which;
+    WCHAR *slash;
+    int i;
+    if (argc != 3) {
+        fprintf(stderr, "usage: test_oop opccomn|widl opccomn|widl\n");
+        return 2;
+    }
+    widl_client = strcmp(argv[1], "widl") == 0;
+    widl_server = strcmp(argv[2], "widl") == 0;
+    printf("test_oop: client proxy/stub %s, server proxy/stub %s\n", argv[1], argv[2]);
+    GetModuleFileNameW(NULL, server_path, MAX_PATH);
+    slash = wcsrchr(server_path, L'\\');
+    wcscpy(slash ? slash + 1 : server_path, L"opccomn_test_server.exe");
+
+    CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
+    if (widl_client) CHECK_HR(use_widl_proxy_stub(), S_OK);
+    CHECK_HR(OpcRegisterProxyStub(NULL, 0), S_OK);
+    server = server_registration(&CLSID_OopServer, L"Oop.Server.1");
+    list = server_registration(&CLSID_OopServerList, L"Oop.ServerList.1");
+    CHECK_HR(OpcRegisterServer(&server, NULL), S_OK);
+    CHECK_HR(OpcRegisterServer(&list, NULL), S_OK);
+    if (widl_server) {
+        set_server_command(&CLSID_OopServer);
+        set_server_command(&CLSID_OopServerList);
+    }
+
+    CHECK_HR(CoCreateInstance(&CLSID_OopServer, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCCommon, (void **)&c), S_OK);
+    if (c) {
+        /* Which proxy/stub serves: in this process, and in the server's. */
+        if (widl_client) {
+            CHECK_HR(widl_proxy_stub_in_use(), S_FALSE);
+            CHECK_HR(OpcDllCanUnloadNow(), S_OK);
+        } else {
+            CHECK(OpcObjectCount() == 0);
+            CHECK_HR(OpcDllCanUnloadNow(), S_FALSE); /* our proxy is alive */
+            CHECK_HR(widl_proxy_stub_in_use(), E_FAIL);
+        }
+        which = ask(c, OOP_CODE_PROXY_STUB);
+        CHECK(wstr_is(which, widl_server ? "widl" : "opccomn"));
+        free(which);
+
+        check_common(c);
+        check_shutdown(c);
+        c->lpVtbl->Release(c);
+    }
+    check_server_list();
+    CoUninitialize();
+    CHECK(OpcObjectCount() == 0); /* the shutdown sink is gone in this process too */
+    CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
+
+    /* Undo the registration and check nothing of it is left. */
+    CHECK_HR(OpcUnregisterServer(&server, NULL), S_OK);
+    CHECK_HR(OpcUnregisterServer(&list, NULL), S_OK);
+    CHECK_HR(OpcUnregisterProxyStub(NULL), S_OK);
+    CHECK(!key_exists(L"CLSID\\{3D738B71-0B9D-4337-A725-E8541A96D1C9}"));
+    CHECK(!key_exists(L"CLSID\\{C3000000-5EED-4000-8000-000000000001}"));
+    for (i = 0; i < 5; i++) {
+        WCHAR key[64], guid[40];
+        StringFromGUID2(OOP_IIDS[i], guid, 40);
+        swprintf(key, 64, L"Interface\\%ls", guid);
+        CHECK(!key_exists(key));
+    }
+    CoUninitialize();
+    return test_summary("test_oop");
+}
