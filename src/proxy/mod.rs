@@ -1,9 +1,9 @@
 //! opccomn.dll as the proxy/stub of the OPC Common interfaces (IOPCShutdown, IOPCCommon,
 //! IOPCServerList, IOPCServerList2, IOPCEnumGUID), the way a MIDL "merged proxy/stub" DLL is one:
 //! `DllGetClassObject(CLSID_OpcComnProxyStub)` hands out the system RPC runtime's PSFactoryBuffer over
-//! NDR format strings generated from `idl/opccomn.idl` (`src/proxy/opccomn_ps.c`, built by build.rs
-//! on Windows with mingw; `tools/gen-proxy.py` generates and corrects the tables, CI checks they are
-//! current). The bytes on the wire are therefore the runtime's NDR for the interfaces as the OPC
+//! NDR format strings generated from `idl/opccomn.idl` (`src/proxy/opccomn_ps.c`, built by
+//! `buildscript/proxy.rs` on Windows with mingw; `tools/gen-proxy.py` generates and corrects the
+//! tables, CI checks they are current). The bytes on the wire are therefore the runtime's NDR for the interfaces as the OPC
 //! Foundation's IDL declares them, the same as its `opccomn_ps.dll` produces.
 //!
 //! Registering the proxy/stub is a separate step, never a side effect of `regsvr32 opccomn.dll`:

@@ -6,7 +6,7 @@
  * NdrClientCall2 / NdrStubCall2 interpret, as they interpret the format strings of MIDL's /Oicf
  * proxies. This file adds what MIDL's dlldata.c would: the factory object and its two entry points,
  * under opccomn's names, because DllGetClassObject / DllCanUnloadNow are opccomn's own (src/proxy/mod.rs
- * dispatches to these). Built by build.rs for Windows targets. */
+ * dispatches to these). Built by buildscript/proxy.rs for Windows targets. */
 #define USE_STUBLESS_PROXY
 #include <objbase.h>
 #include <rpcproxy.h>
