@@ -9,15 +9,17 @@
  *
  * Phases alternate (5 of each) and each contender keeps its best, as the machine is shared. Prints
  * the time per round trip, the ratio ours/widl and whether the goal (<= 1.1x) is met; exit code 0
- * either way (a benchmark, not a test), 1 when something failed. Run with scripts/bench-cross-process.sh. */
+ * either way (a benchmark, not a test), 1 when something failed. Run with scripts/bench-cross-process.sh
+ * [N]: N GetErrorString and N/5 Enum+Next per phase (default 500). */
 #include "oop.h"
 
 #include <tlhelp32.h>
 
 static WCHAR server_path[MAX_PATH];
 static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
-#define CALLS_STRING 3000
-#define CALLS_ENUM 600
+/* Round trips per phase (the first argument scales both: GetErrorString N, Enum+Next N/5). */
+static int CALLS_STRING = 500;
+static int CALLS_ENUM = 100;
 #define ROUNDS 5
 
 static double now(void) {
@@ -109,17 +111,24 @@ static int phase(int widl, double *t_string, double *t_enum) {
     return 0;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
     OpcServerRegistration server, list;
     double best[2][2] = {{1e9, 1e9}, {1e9, 1e9}};
     WCHAR *slash;
     int round, widl, failed = 0;
+    if (argc > 1 && atoi(argv[1]) >= 5) {
+        CALLS_STRING = atoi(argv[1]);
+        CALLS_ENUM = CALLS_STRING / 5;
+    }
+    printf("%d x GetErrorString and %d x Enum+Next(100) per phase, %d phases each\n", CALLS_STRING, CALLS_ENUM,
+           ROUNDS);
     GetModuleFileNameW(NULL, server_path, MAX_PATH);
     slash = wcsrchr(server_path, L'\\');
     wcscpy(slash ? slash + 1 : server_path, L"opccomn_test_server.exe");
     if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_widl_proxy_stub())) return 1;
     server = server_registration(&CLSID_OopServer, L"Oop.Server.1");
     list = server_registration(&CLSID_OopServerList, L"Oop.ServerList.1");
+    OpcUnregisterProxyStub(NULL); /* whatever an interrupted earlier run left */
     if (FAILED(OpcRegisterProxyStub(NULL, 0)) || FAILED(OpcRegisterServer(&server, NULL)) ||
         FAILED(OpcRegisterServer(&list, NULL)))
         return 1;

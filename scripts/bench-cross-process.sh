@@ -3,7 +3,7 @@
 # Next of 100 classes, through opccomn.dll's proxy/stub and through the widl-generated stand-in for
 # the Foundation's opccomn_ps.dll, in the same run (benches/cross_process_bench.c; goal <= 1.1x).
 #
-# Usage: scripts/bench-cross-process.sh
+# Usage: scripts/bench-cross-process.sh [N]   (N GetErrorString and N/5 Enum+Next per phase; default 500)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -14,4 +14,4 @@ cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmak
 cmake --build "$build" -j2 --target cross_process_bench >/dev/null
 . scripts/wine-env.sh "$build"
 cd "$build/bin"
-wine cross_process_bench.exe
+wine cross_process_bench.exe "$@"

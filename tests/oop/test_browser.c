@@ -168,6 +168,7 @@ int main(void) {
     if (slash) *slash = 0;
     CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
     CHECK_HR(OpcRegistryOpenSystem(&sys), S_OK);
+    OpcUnregisterProxyStub(NULL); /* whatever an interrupted earlier run left */
     CHECK_HR(OpcRegisterProxyStub(NULL, 0), S_OK);
     for (k = 0; k < FAKES; k++) {
         fakes[k] = fake_registration(k, &clsids[k]);

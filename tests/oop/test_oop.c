@@ -321,6 +321,7 @@ int main(int argc, char **argv) {
 
     CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
     if (widl_client) CHECK_HR(use_widl_proxy_stub(), S_OK);
+    OpcUnregisterProxyStub(NULL); /* whatever an interrupted earlier run left */
     CHECK_HR(OpcRegisterProxyStub(NULL, 0), S_OK);
     server = server_registration(&CLSID_OopServer, L"Oop.Server.1");
     list = server_registration(&CLSID_OopServerList, L"Oop.ServerList.1");

@@ -87,7 +87,10 @@ int main(void) {
     if (slash) *slash = 0;
     swprintf(our_class, 64, L"CLSID\\%ls", OUR_CLSID);
     CHECK_HR(OpcRegistryOpenSystem(&sys), S_OK);
-    CHECK(all_are(L"")); /* a clean prefix */
+    /* Start clean, whatever an interrupted earlier run left. */
+    regsvr32(L"/u /n /i:ProxyStub", L"opccomn.dll");
+    if (!all_are(L"")) regsvr32(L"/u", L"opccomn_widl_ps.dll");
+    CHECK(all_are(L""));
 
     /* Plain regsvr32 registers the server list only. */
     CHECK(regsvr32(L"", L"opccomn.dll") == 0);
