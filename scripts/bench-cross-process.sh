@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Benchmark of round trips across processes under Wine: GetErrorString, and EnumClassesOfCategories +
 # Next of 100 classes, through opccomn.dll's proxy/stub and through the widl-generated stand-in for
-# the Foundation's opccomn_ps.dll, in the same run (benches/cross_process_bench.c; goal <= 1.1x).
+# the Foundation's opccomn_ps.dll, in the same run (benches/cross_process_bench.c; goal <= 1.1x, a GOAL
+# line per goal; exit code 1 when one is missed).
 #
 # Usage: scripts/bench-cross-process.sh [N]   (N GetErrorString and N/5 Enum+Next per phase; default 500)
 set -euo pipefail
