@@ -103,7 +103,7 @@ if [ -n "$win_build" ]; then
     implib="$win_build/cargo/x86_64-pc-windows-gnu/release/libopccomn.dll.a"
     dll="$win_build/cargo/x86_64-pc-windows-gnu/release/opccomn.dll"
     [ -f "$static" ] && [ -f "$implib" ] && [ -f "$dll" ] || fail "build $win_build first (static library, import library, DLL)"
-    deps=(-lole32 -loleaut32 -luuid -ladvapi32 -lversion -luserenv -lws2_32 -lntdll -lsynchronization -static-libgcc)
+    deps=(-lole32 -loleaut32 -lrpcrt4 -luuid -ladvapi32 -lversion -luserenv -lws2_32 -lntdll -lsynchronization -static-libgcc)
     mkdir -p "$out/run"
     cp "$dll" "$out/run/"
     for lib in static dll; do
