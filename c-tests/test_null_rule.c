@@ -864,6 +864,13 @@ static void case_OpcPatternFree__pattern(void) {
     cases++;
 }
 
+static void case_OpcDllInstall__command_line(void) {
+    nr_setup();
+    CHECK_HR(OpcDllInstall(0, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
 static void case_OpcRegistryCreateMemory__out(void) {
     nr_setup();
     CHECK_HR(OpcRegistryCreateMemory(NULL), E_INVALIDARG);
@@ -1397,6 +1404,7 @@ int main(void) {
     case_OpcPatternMatchA__pattern();
     case_OpcPatternMatchA__string();
     case_OpcPatternFree__pattern();
+    case_OpcDllInstall__command_line();
     case_OpcRegistryCreateMemory__out();
     case_OpcRegistryOpenSystem__out();
     case_OpcRegistryGetString__key();
