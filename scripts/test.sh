@@ -47,16 +47,22 @@ skip_stage() {
 # Runs the C tests of a 32-bit Windows build directory under 32-bit Wine and proves they ran: a 32-bit
 # program that did not start prints nothing, so every test must have printed its closing line.
 run_x86_c_tests() {
-    local dir=$1 tests t
+    local dir=$1 tests t oop_tests lines
     # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
     tests=$(ctest --test-dir "$dir" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
+    oop_tests=$(ctest --test-dir "$dir" -N | grep -cE '^ *Test +#[0-9]+: oop\.') || true
     [ -n "$tests" ] || { echo "no C tests found in $dir" >&2; exit 1; }
     ctest --test-dir "$dir" --output-on-failure --timeout 300
     for t in $tests; do
         grep -qE "^$t: [0-9]+ passed, 0 failed" "$dir/Testing/Temporary/LastTest.log" ||
             { echo "$t (x86, $dir) printed no result line" >&2; exit 1; }
     done
-    echo "every x86 C test in $dir printed its result line"
+    # The cross-process tests (tests/oop) of the same build: one result line per ctest entry.
+    lines=$(grep -cE '^test_(oop|browser|ps_registration): [0-9]+ passed, 0 failed' \
+        "$dir/Testing/Temporary/LastTest.log") || true
+    [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
+        { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; exit 1; }
+    echo "every x86 C test and cross-process test in $dir printed its result line"
 }
 
 need_linux_tools
@@ -199,11 +205,18 @@ if [ "$wine_stage" = 1 ]; then
         stage "Rust tests (Windows x86, under 32-bit Wine)"
         CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
 
-        stage "C tests (Windows x86 DLL, under 32-bit Wine)"
+        stage "C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)"
         run_x86_c_tests "$build/windows-x86"
 
         stage "conformance checker (opccomn-check, x86) against the x86 seeded-defect servers, under 32-bit Wine"
         scripts/test-conformance.sh "$build/windows-x86/bin" - "$build/windows/bin/opccomn-check.exe"
+
+        stage "cross-process: a 32-bit client browses both registry views through the 64-bit browser service"
+        wine "$build/windows/bin/test_browser.exe" wow64-serve
+        wow64_rc=0
+        wine "$build/windows-x86/bin/test_browser.exe" wow64-client || wow64_rc=$?
+        wine "$build/windows/bin/test_browser.exe" wow64-cleanup
+        [ "$wow64_rc" = 0 ]
     else
         skip_stage "Rust tests, C tests and the conformance checker of the x86 DLL under 32-bit Wine" \
             "32-bit Wine is not available: $wine32_missing" \

@@ -2,7 +2,13 @@
  * its AppID, a client in this process enumerates fake servers registered in the system registry
  * through CLSCTX_LOCAL_SERVER, the browser process exits when the client lets go, and next to an
  * OpcEnum-style registration it stays inactive unless told to take over, after which unregistration
- * restores OpcEnum's registration exactly. */
+ * restores OpcEnum's registration exactly.
+ *
+ * With an argument it is one step of the WOW64 run (scripts/test.sh, when 32-bit Wine is there): the
+ * 64-bit build's `test_browser wow64-serve` registers the 64-bit browser, the 64-bit proxy/stub and
+ * fakes 0..2 in the 64-bit view; the 32-bit build's `test_browser wow64-client` registers its own
+ * proxy/stub and fakes 3..5 in the 32-bit view and browses through CLSCTX_LOCAL_SERVER, which only the
+ * 64-bit browser serves, expecting all six; `test_browser wow64-cleanup` (64-bit) undoes the first. */
 #include "oop.h"
 
 #include <tlhelp32.h>
@@ -14,7 +20,9 @@ static CLSID fake(unsigned n) {
     return c;
 }
 #define FAKES 3
-static const WCHAR *const FAKE_PROGIDS[FAKES] = {L"Oop.Browse0.1", L"Oop.Browse1.1", L"Oop.Browse2.1"};
+/* Fakes 0..2 are registered by the process under test; for the WOW64 run, 3..5 by a 32-bit client. */
+static const WCHAR *const FAKE_PROGIDS[2 * FAKES] = {L"Oop.Browse0.1", L"Oop.Browse1.1", L"Oop.Browse2.1",
+                                                     L"Oop.Browse3.1", L"Oop.Browse4.1", L"Oop.Browse5.1"};
 
 static DWORD run(const WCHAR *args) {
     WCHAR cmd[1200];
@@ -156,7 +164,102 @@ static const WCHAR OPCENUM_DELETE[] =
     L"[-HKEY_CLASSES_ROOT\\AppID\\OpcEnum.exe]\r\n\r\n"
     L"[-HKEY_CLASSES_ROOT\\OPC.ServerList.1]\r\n\r\n";
 
-int main(void) {
+/* ---- The WOW64 run: a 32-bit client browsing through the 64-bit service ---- */
+
+static int clsid_key_exists(REGSAM view, const WCHAR *sub) {
+    HKEY h;
+    WCHAR key[128];
+    swprintf(key, 128, L"CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}%ls", sub);
+    if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_READ | view, &h) != ERROR_SUCCESS) return 0;
+    RegCloseKey(h);
+    return 1;
+}
+
+static int wow64_serve(int cleanup) {
+    OpcServerRegistration r;
+    CLSID c;
+    unsigned k;
+    BOOL wow = TRUE;
+    CHECK(sizeof(void *) == 8);
+    CHECK(IsWow64Process(GetCurrentProcess(), &wow) && !wow);
+    CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
+    if (!cleanup) {
+        OpcUnregisterProxyStub(NULL);
+        CHECK_HR(OpcRegisterProxyStub(NULL, 0), S_OK);
+        for (k = 0; k < FAKES; k++) {
+            r = fake_registration(k, &c);
+            CHECK_HR(OpcRegisterServer(&r, NULL), S_OK);
+        }
+        CHECK(run(L"/RegServer") == 0);
+        CHECK(run(L"/Status") == 0);
+    } else {
+        CHECK(run(L"/UnregServer") == 0);
+        for (k = 0; k < FAKES; k++) {
+            r = fake_registration(k, &c);
+            CHECK_HR(OpcUnregisterServer(&r, NULL), S_OK);
+        }
+        CHECK_HR(OpcUnregisterProxyStub(NULL), S_OK);
+        CHECK(!clsid_key_exists(KEY_WOW64_64KEY, L""));
+    }
+    CoUninitialize();
+    return test_summary(cleanup ? "test_browser (wow64-cleanup)" : "test_browser (wow64-serve)");
+}
+
+static int wow64_client(void) {
+    OpcServerRegistration r[FAKES];
+    IOPCServerList2 *l2 = NULL;
+    IOPCEnumGUID *e = NULL;
+    GUID got[256];
+    ULONG n = 0, i;
+    unsigned k, found = 0;
+    BOOL wow = FALSE;
+    CLSID c;
+    LPOLESTR prog = NULL, user = NULL, vi = NULL;
+    CHECK(sizeof(void *) == 4);
+    CHECK(IsWow64Process(GetCurrentProcess(), &wow) && wow);
+    /* Only the 64-bit view has the browser: whatever answers CLSCTX_LOCAL_SERVER is the 64-bit one. */
+    CHECK(clsid_key_exists(KEY_WOW64_64KEY, L"\\LocalServer32"));
+    CHECK(!clsid_key_exists(KEY_WOW64_32KEY, L"\\LocalServer32"));
+    CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
+    OpcUnregisterProxyStub(NULL);
+    CHECK_HR(OpcRegisterProxyStub(NULL, 0), S_OK); /* the 32-bit view's proxy/stub, for this side */
+    for (k = 0; k < FAKES; k++) {
+        r[k] = fake_registration(FAKES + k, &c);
+        CHECK_HR(OpcRegisterServer(&r[k], NULL), S_OK);
+    }
+    CHECK_HR(CoCreateInstance(&CLSID_OPCServerList, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&l2), S_OK);
+    if (l2) {
+        CHECK(browser_running() == 1);
+        CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+        if (e) {
+            CHECK_HR(e->lpVtbl->Next(e, 256, got, &n), S_FALSE);
+            for (k = 0; k < 2 * FAKES; k++) {
+                CLSID f = fake(k);
+                for (i = 0; i < n; i++) found += IsEqualGUID(&got[i], &f);
+            }
+            CHECK(found == 2 * FAKES); /* both registry views */
+            e->lpVtbl->Release(e);
+        }
+        for (k = 0; k < 2 * FAKES; k += FAKES + 1) { /* one of each view: 0 (64-bit), 4 (32-bit) */
+            CLSID f = fake(k);
+            CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &f, &prog, &user, &vi), S_OK);
+            CHECK(prog && wcscmp(prog, FAKE_PROGIDS[k]) == 0);
+            CHECK(wstr_is(user, "Oop browse test server"));
+            CoTaskMemFree(prog);
+            CoTaskMemFree(user);
+            CoTaskMemFree(vi);
+            prog = user = vi = NULL;
+        }
+        l2->lpVtbl->Release(l2);
+        CHECK(wait_browser_gone());
+    }
+    for (k = 0; k < FAKES; k++) CHECK_HR(OpcUnregisterServer(&r[k], NULL), S_OK);
+    CHECK_HR(OpcUnregisterProxyStub(NULL), S_OK);
+    CoUninitialize();
+    return test_summary("test_browser (wow64-client)");
+}
+
+int main(int argc, char **argv) {
     OpcRegistry *sys = NULL;
     OpcServerRegistration fakes[FAKES];
     CLSID clsids[FAKES];
@@ -166,6 +269,13 @@ int main(void) {
     GetModuleFileNameW(NULL, dir, MAX_PATH);
     slash = wcsrchr(dir, L'\\');
     if (slash) *slash = 0;
+    if (argc == 2 && strcmp(argv[1], "wow64-serve") == 0) return wow64_serve(0);
+    if (argc == 2 && strcmp(argv[1], "wow64-cleanup") == 0) return wow64_serve(1);
+    if (argc == 2 && strcmp(argv[1], "wow64-client") == 0) return wow64_client();
+    if (argc != 1) {
+        fprintf(stderr, "usage: test_browser [wow64-serve | wow64-client | wow64-cleanup]\n");
+        return 2;
+    }
     CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
     CHECK_HR(OpcRegistryOpenSystem(&sys), S_OK);
     OpcUnregisterProxyStub(NULL); /* whatever an interrupted earlier run left */
