@@ -141,7 +141,9 @@ static int serve(void) {
     WaitForSingleObject(done, IDLE_MS);
     revoke_class();
     while (InterlockedCompareExchange(&objects, 0, 0) > 0) Sleep(50);
-    CoUninitialize();
+    /* No CoUninitialize: the last Release may still be on its way back to the client on an RPC thread,
+     * and CoUninitialize of the apartment that call runs in waits for it (under Wine it can wait for
+     * ever). Process exit tears COM down. */
     return 0;
 }
 
