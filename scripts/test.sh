@@ -218,7 +218,7 @@ if [ "$wine_stage" = 1 ]; then
         wine "$build/windows/bin/test_browser.exe" wow64-cleanup
         [ "$wow64_rc" = 0 ]
     else
-        skip_stage "Rust tests, C tests and the conformance checker of the x86 DLL under 32-bit Wine" \
+        skip_stage "Rust tests, C tests, cross-process tests and the conformance checker of the x86 DLL under 32-bit Wine" \
             "32-bit Wine is not available: $wine32_missing" \
             "The x86 DLL was built and its exports checked, but it was NOT run. This run does not prove x86."
     fi
