@@ -9,8 +9,9 @@
 set -euo pipefail
 dll=$1
 objdump=${OPCCOMN_OBJDUMP:-x86_64-w64-mingw32-objdump}
-# The DLLs Windows 7 has that a Rust library built with mingw-w64 may import.
-allowed_dlls="kernel32.dll advapi32.dll ntdll.dll ole32.dll oleaut32.dll userenv.dll ws2_32.dll msvcrt.dll user32.dll shell32.dll"
+# The DLLs Windows 7 has that a Rust library built with mingw-w64 may import (rpcrt4: the proxy/stub's NDR
+# engine; every function it takes from there exists since Windows 2000).
+allowed_dlls="kernel32.dll advapi32.dll ntdll.dll ole32.dll oleaut32.dll rpcrt4.dll userenv.dll ws2_32.dll msvcrt.dll user32.dll shell32.dll"
 # Functions of Windows 8 and later (kernel32, advapi32, ole32).
 too_new="GetSystemTimePreciseAsFileTime WaitOnAddress WakeByAddressSingle WakeByAddressAll ProcessPrng
 CreateFile2 CopyFile2 GetCurrentThreadStackLimits SetThreadDescription GetThreadDescription GetTempPath2W
