@@ -48,12 +48,10 @@ kill_surrogates() {
     done
 }
 
-# Out of process needs the OPC Common proxy/stub (OpcRegisterProxyStub, in opccomn.dll).
+# Out of process needs the OPC Common proxy/stub (OpcRegisterProxyStub), which opccomn.dll carries.
 oop_available=1
-if ! grep -q OpcRegisterProxyStub "$bin/opccomn.dll"; then
-    oop_available=0
-    echo "!!!! NOT RUN: the out-of-process checks: $bin/opccomn.dll has no proxy/stub (OpcRegisterProxyStub)"
-fi
+grep -q OpcRegisterProxyStub "$bin/opccomn.dll" ||
+    { echo "$bin/opccomn.dll has no proxy/stub (OpcRegisterProxyStub): the out-of-process checks cannot run" >&2; exit 1; }
 
 while read -r number name want flags; do
     case "$number" in '#'* | '') continue ;; esac
