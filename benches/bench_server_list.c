@@ -15,6 +15,7 @@
    ProgIDFromCLSID for each class (less work: one string per class). For information: no goal.
 
    Everything registered is removed at the end. Windows only (run: scripts/bench.sh --wine server-list). */
+#define BENCH_WALL_CLOCK /* the registry lives in wineserver, another process: its time counts */
 #include "bench.h"
 
 #include <opccomn/opccomn.h>
