@@ -198,9 +198,6 @@ pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LP
         if string.is_null() {
             return FALSE;
         }
-        if pattern.program.matches_everything() {
-            return TRUE;
-        }
         // SAFETY: the caller vouches `string` is NUL-terminated.
         to_bool(unsafe { pattern.program.matches_cursor(WideCursor(string)) })
     })

@@ -74,7 +74,7 @@ mod imp {
     use windows_sys::Win32::Globalization::{GetACP, GetCPInfo, MultiByteToWideChar, CPINFO, CP_ACP, CP_UTF8};
 
     use super::super::smallvec::SmallVec;
-    use super::super::stream::{self, DecodedCursor};
+    use super::super::stream::{self, Cursor, DecodedCursor, TableCursor, Utf8Cursor};
     use super::super::text::{invalid_byte, Chars, Text, Utf16, Utf8};
     use super::*;
 
@@ -85,6 +85,14 @@ mod imp {
         single: [u32; 256],
         /// Lead bytes of double-byte characters (DBCS code pages such as 932).
         lead: [bool; 256],
+        /// Some byte is a lead byte.
+        double: bool,
+        /// No lead byte is below 0x80, so ASCII text has none.
+        lead_above_ascii: bool,
+        /// `single` maps no byte of 0x80 and above to an ASCII character, so a string without lead
+        /// bytes can be read in place (`stream::TableCursor`). True for every code page Windows uses
+        /// as its ANSI code page; checked rather than assumed.
+        table_reads: bool,
     }
 
     /// Decodes up to two bytes of the ANSI code page; `None` when they are not one valid character.
@@ -120,6 +128,9 @@ mod imp {
                 utf8: acp == CP_UTF8,
                 single: [0; 256],
                 lead: [false; 256],
+                double: false,
+                lead_above_ascii: true,
+                table_reads: true,
             };
             let mut info = CPINFO {
                 MaxCharSize: 1,
@@ -143,9 +154,20 @@ mod imp {
                     _ if cp.lead[b as usize] => invalid_byte(b),
                     _ => decode_acp(&[b]).unwrap_or(invalid_byte(b)),
                 };
+                cp.double |= cp.lead[b as usize];
+                cp.lead_above_ascii &= b >= 0x80 || !cp.lead[b as usize];
+                cp.table_reads &= b < 0x80 || cp.single[b as usize] >= 0x80;
             }
             cp
         })
+    }
+
+    impl CodePage {
+        /// Whether `bytes` decode one character per byte, `single[byte]`: no lead byte among them.
+        #[inline(always)]
+        fn bytes_are_single(&self, bytes: &[u8]) -> bool {
+            !self.double || (self.lead_above_ascii && bytes.is_ascii()) || !bytes.iter().any(|&b| self.lead[b as usize])
+        }
     }
 
     /// Decodes `bytes` into `out`, one code point per character.
@@ -176,37 +198,88 @@ mod imp {
         }
     }
 
+    /// Every character of `bytes` as `decode` splits them (for the tests' reference).
+    #[cfg(test)]
+    pub(crate) fn decode_all(bytes: &[u8]) -> Vec<u32> {
+        let mut chars = SmallVec::<u32, 256>::new();
+        decode(bytes, &mut chars);
+        chars.as_slice().to_vec()
+    }
+
     pub(crate) fn compile(pattern: &[u8], case_sensitive: bool) -> Result<Program, Malformed> {
         let mut chars = SmallVec::new();
         decode(pattern, &mut chars);
         Program::compile(&Chars(chars.as_slice()), case_sensitive)
     }
 
-    /// Whether the NUL-terminated `string` matches the compiled `program`.
+    /// Whether the NUL-terminated `string` matches the compiled `program`: read in place in UTF-8 and
+    /// in single-byte code pages (and in a double-byte one when the string has no lead byte), decoded
+    /// first otherwise.
     ///
     /// # Safety
     /// `string` must point at a NUL-terminated string.
     pub(crate) unsafe fn matches(program: &Program, string: *const u8) -> bool {
-        // SAFETY: NUL-terminated (the caller's contract).
-        let Some(string) = (unsafe { cstr_bytes(string.cast()) }) else {
+        let cp = code_page();
+        if cp.utf8 {
+            // SAFETY: NUL-terminated (the caller's contract).
+            return unsafe { program.matches_cursor(Utf8Cursor(string)) };
+        }
+        if cp.table_reads && !cp.double {
+            // SAFETY: as above.
+            return unsafe { program.matches_cursor(TableCursor(string, &cp.single)) };
+        }
+        // SAFETY: as above.
+        let Some(bytes) = (unsafe { cstr_bytes(string.cast()) }) else {
             return false;
         };
+        if cp.table_reads && cp.bytes_are_single(bytes) {
+            // SAFETY: as above.
+            return unsafe { program.matches_cursor(TableCursor(string, &cp.single)) };
+        }
+        matches_decoded(program, bytes)
+    }
+
+    /// `matches` for a string decoded first (out of line: its buffer would make every caller's stack
+    /// frame large).
+    #[inline(never)]
+    fn matches_decoded(program: &Program, bytes: &[u8]) -> bool {
         let mut chars = SmallVec::new();
-        decode(string, &mut chars);
+        decode(bytes, &mut chars);
         program.matches(&Chars(chars.as_slice()))
     }
 
-    /// `MatchPatternA`: decodes both strings from the ANSI code page (on the stack for ordinary
-    /// lengths), then matches without compiling.
+    /// `MatchPatternA` without compiling: both strings read in place where `matches` reads the string
+    /// in place, decoded first (on the stack for ordinary lengths) otherwise.
     ///
     /// # Safety
     /// Both must point at NUL-terminated strings.
     pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
-        // SAFETY: both are NUL-terminated (the caller's contract).
-        let (string, pattern) = unsafe { (cstr_bytes(string.cast()), cstr_bytes(pattern.cast())) };
-        let (Some(string), Some(pattern)) = (string, pattern) else {
+        let cp = code_page();
+        if cp.utf8 {
+            // SAFETY: both are NUL-terminated (the caller's contract).
+            return unsafe { match_in_place(Utf8Cursor(string), Utf8Cursor(pattern), pattern, case_sensitive) };
+        }
+        let in_place = (TableCursor(string, &cp.single), TableCursor(pattern, &cp.single));
+        if cp.table_reads && !cp.double {
+            // SAFETY: as above.
+            return unsafe { match_in_place(in_place.0, in_place.1, pattern, case_sensitive) };
+        }
+        // SAFETY: as above.
+        let (string, pattern_bytes) = unsafe { (cstr_bytes(string.cast()), cstr_bytes(pattern.cast())) };
+        let (Some(string), Some(pattern_bytes)) = (string, pattern_bytes) else {
             return false;
         };
+        if cp.table_reads && cp.bytes_are_single(string) && cp.bytes_are_single(pattern_bytes) {
+            // SAFETY: as above.
+            return unsafe { match_in_place(in_place.0, in_place.1, pattern, case_sensitive) };
+        }
+        match_decoded(string, pattern_bytes, case_sensitive)
+    }
+
+    /// `match_once` for strings decoded first (out of line: its buffers would make every caller's
+    /// stack frame large).
+    #[inline(never)]
+    fn match_decoded(string: &[u8], pattern: &[u8], case_sensitive: bool) -> bool {
         let mut s = SmallVec::new();
         decode(string, &mut s);
         s.push(0);
@@ -231,6 +304,40 @@ mod imp {
             }
         })
     }
+
+    /// `stream::matches` over cursors that read the strings in place; a long pattern is compiled
+    /// first (out of line, so the common path stays lean).
+    ///
+    /// # Safety
+    /// Both cursors must point at NUL-terminated strings; `pattern` is the pattern's cursor's string.
+    #[inline(always)]
+    unsafe fn match_in_place(string: impl Cursor, cursor: impl Cursor, pattern: *const u8, cs: bool) -> bool {
+        // SAFETY: both are NUL-terminated (the caller's contract).
+        match unsafe { stream::matches(string, cursor, cs) } {
+            Some(matched) => matched,
+            // SAFETY: as above.
+            None => unsafe { match_long_pattern(string, pattern, cs) },
+        }
+    }
+
+    /// A pattern longer than `stream::LONG_PATTERN` with a `*`: compiled, then matched as by
+    /// `matches`.
+    ///
+    /// # Safety
+    /// `pattern` must point at a NUL-terminated string; `string` must be a cursor over one.
+    #[cold]
+    #[inline(never)]
+    unsafe fn match_long_pattern(string: impl Cursor, pattern: *const u8, case_sensitive: bool) -> bool {
+        // SAFETY: NUL-terminated (the caller's contract).
+        let bytes = unsafe { cstr_bytes(pattern.cast()) }.unwrap_or_default();
+        match compile(bytes, case_sensitive) {
+            // SAFETY: as above.
+            Ok(program) => unsafe { program.matches_cursor(string) },
+            Err(_) => false,
+        }
+    }
 }
 
+#[cfg(all(test, windows))]
+pub(crate) use imp::decode_all;
 pub(crate) use imp::{compile, match_once, matches};

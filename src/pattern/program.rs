@@ -51,11 +51,16 @@ pub(crate) enum Malformed {
 /// patterns spill over transparently.
 pub(crate) struct Program {
     case_sensitive: bool,
-    /// The pattern's leading ASCII literals, `?` and `#` as (unit, mask): a string unit `u` matches a
-    /// literal when `u | mask == unit` (mask 0x20 for letters when case-insensitive); `LEAD_ANY` and
-    /// `LEAD_DIGIT` stand for `?` and `#`. The common prefix of a filter is compared a code unit at a
-    /// time, without decoding.
-    lead: SmallVec<(u32, u32), 32>,
+    /// The pattern's leading ASCII literals, `?`, `#` and lists as (unit, mask): a string unit `u`
+    /// matches a literal when `u | mask == unit` (mask 0x20 for letters when case-insensitive);
+    /// `LEAD_ANY`, `LEAD_DIGIT` and `LEAD_SET + k` stand for `?`, `#` and the list `k`. The common prefix of a filter is compared a code unit at a
+    /// time, without decoding. At most `LEAD_MAX` (the tokens after them are matched one by one).
+    /// `lead[lead_len]` is `(LEAD_END, 0)`, which no unit matches: the loop over `lead` needs no
+    /// other end test.
+    lead: [(u32, u32); LEAD_MAX + 1],
+    lead_len: usize,
+    /// What the string must do after the characters `lead` matched.
+    tail: Tail,
     /// No segment starts with a literal run long enough for the Knuth-Morris-Pratt search.
     kmp_free: bool,
     tokens: SmallVec<Token, 40>,
@@ -65,10 +70,26 @@ pub(crate) struct Program {
     ranges: SmallVec<(u32, u32), 12>,
 }
 
-/// `lead` entries for `?` and `#` (no ASCII literal has these values).
-/// No code unit or character reaches these values, so `u | mask` never equals them.
+/// What is left of a pattern after its `lead` tokens.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Tail {
+    /// Only a final `*` (or nothing but `*`s): every rest of the string matches.
+    Any,
+    /// Nothing: the string must end there.
+    End,
+    /// More tokens: `matches_after_lead` decides.
+    General,
+}
+
+/// How many leading tokens `lead` holds at most.
+const LEAD_MAX: usize = 32;
+
+/// `lead` entries for `?`, `#` and lists (`LEAD_SET + k` for `Token::Set(k)`). No code unit or
+/// character reaches these values, so `u | mask` never equals them.
 const LEAD_ANY: u32 = u32::MAX;
 const LEAD_DIGIT: u32 = u32::MAX - 1;
+const LEAD_SET: u32 = 0x8000_0000;
+const LEAD_END: u32 = u32::MAX - 2;
 
 /// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt (shorter
 /// runs cost at most this many steps per place tried, and skip to their first character quickly).
@@ -80,7 +101,9 @@ impl Program {
     pub(crate) fn compile(pattern: &impl Text, case_sensitive: bool) -> Result<Program, Malformed> {
         let mut p = Program {
             case_sensitive,
-            lead: SmallVec::new(),
+            lead: [(LEAD_END, 0); LEAD_MAX + 1],
+            lead_len: 0,
+            tail: Tail::General,
             kmp_free: true,
             tokens: SmallVec::new(),
             segments: SmallVec::new(),
@@ -127,18 +150,32 @@ impl Program {
             start = end as usize;
         }
         for &t in &p.tokens.as_slice()[..p.segments.as_slice()[0] as usize] {
-            match t {
-                Token::Any => p.lead.push((LEAD_ANY, 0)),
-                Token::Digit => p.lead.push((LEAD_DIGIT, 0)),
+            if p.lead_len == LEAD_MAX {
+                break;
+            }
+            p.lead[p.lead_len] = match t {
+                Token::Any => (LEAD_ANY, 0),
+                Token::Digit => (LEAD_DIGIT, 0),
+                Token::Set(k) => (LEAD_SET + k, 0),
                 Token::Literal(c) if c < 0x80 => {
                     let mask = if !case_sensitive && c.wrapping_sub('a' as u32) < 26 {
                         0x20
                     } else {
                         0
                     };
-                    p.lead.push((c, mask));
+                    (c, mask)
                 }
                 _ => break,
+            };
+            p.lead_len += 1;
+        }
+        p.lead[p.lead_len] = (LEAD_END, 0);
+        let segments = p.segments.as_slice();
+        if segments[0] as usize == p.lead_len {
+            if segments.len() == 1 {
+                p.tail = Tail::End;
+            } else if segments.len() == 2 && segments[1] == segments[0] {
+                p.tail = Tail::Any;
             }
         }
         Ok(p)
@@ -264,11 +301,6 @@ impl Program {
         self.sets.push(set);
     }
 
-    /// True when every string matches (the pattern is only `*`s, possibly with `[]`).
-    pub(crate) fn matches_everything(&self) -> bool {
-        self.tokens.len() == 0 && self.segments.len() > 1
-    }
-
     #[inline(always)]
     fn set_contains(&self, set: &CharSet, c: u32) -> bool {
         if c < 0x80 {
@@ -321,45 +353,73 @@ impl Program {
     }
 
     /// Whether the NUL-terminated string behind `cursor` matches. The first segment is matched while
-    /// reading, so most strings that do not match are rejected before their end is even looked for.
+    /// reading, so most strings that do not match are rejected before their end is even looked for:
+    /// the leading ASCII literals, `?`, `#` and lists here, inlined into the caller (a filter with a literal
+    /// prefix rejects most strings in this loop), everything after them out of line.
     ///
     /// # Safety
     /// `cursor` must point at a NUL-terminated string.
+    #[inline(always)]
     pub(crate) unsafe fn matches_cursor(&self, cursor: impl Cursor) -> bool {
-        let tokens = self.tokens.as_slice();
-        let segments = self.segments.as_slice();
         let mut i = 0;
-        for &(unit, mask) in self.lead.as_slice() {
-            // SAFETY: units before `i` were not NUL (they matched ASCII literals, `?` or `#`), so unit
-            // `i` is at or before the terminator.
+        loop {
+            // `i <= lead_len`: the loop ends at the `LEAD_END` entry at the latest.
+            let (unit, mask) = self.lead[i];
+            // SAFETY: units before `i` were not NUL (they matched ASCII literals, `?`, `#` or lists),
+            // so unit `i` is at or before the terminator.
             let u = unsafe { cursor.unit(i) };
             if u | mask != unit {
                 let ascii = u != 0 && u < 0x80;
-                match unit {
-                    LEAD_ANY if ascii => {
-                        i += 1;
-                        continue;
+                let matched = match unit {
+                    LEAD_END => break,
+                    LEAD_ANY => ascii,
+                    LEAD_DIGIT => u.wrapping_sub('0' as u32) < 10,
+                    LEAD_SET.. => ascii && self.set_contains(&self.sets.as_slice()[(unit - LEAD_SET) as usize], u),
+                    _ => false,
+                };
+                if !matched {
+                    // A non-ASCII character for `?` or a list, or one that may fold to an ASCII letter
+                    // (KELVIN SIGN is a `k`): the general path decides.
+                    if u >= 0x80 && (unit >= LEAD_SET || !self.case_sensitive) {
+                        // SAFETY: NUL-terminated.
+                        return unsafe { self.matches_decoded(cursor) };
                     }
-                    LEAD_DIGIT if u.wrapping_sub('0' as u32) < 10 => {
-                        i += 1;
-                        continue;
-                    }
-                    _ => {}
+                    return false;
                 }
-                // A non-ASCII character for `?`, or one that may fold to an ASCII letter (KELVIN SIGN
-                // is a `k`): the general path decides.
-                if u >= 0x80 && (unit == LEAD_ANY || !self.case_sensitive) {
-                    // A non-ASCII character may still fold to an ASCII letter (KELVIN SIGN is a `k`).
-                    // SAFETY: NUL-terminated.
-                    let end = unsafe { cursor.end_from(0) };
-                    // SAFETY: `end` is the terminator's index.
-                    return self.matches(&unsafe { cursor.slice(end) });
-                }
-                return false;
             }
             i += 1;
         }
-        for &t in &tokens[self.lead.len()..segments[0] as usize] {
+        match self.tail {
+            Tail::Any => true,
+            // SAFETY: `i` is at or before the terminator (units before it were not NUL).
+            Tail::End => (unsafe { cursor.unit(i) }) == 0,
+            // SAFETY: `i` is a character boundary (after ASCII units only) at or before the terminator.
+            Tail::General => unsafe { self.matches_after_lead(cursor, i) },
+        }
+    }
+
+    /// `matches` over the whole string behind `cursor`.
+    ///
+    /// # Safety
+    /// `cursor` must point at a NUL-terminated string.
+    #[inline(never)]
+    unsafe fn matches_decoded(&self, cursor: impl Cursor) -> bool {
+        // SAFETY: NUL-terminated.
+        let end = unsafe { cursor.end_from(0) };
+        // SAFETY: `end` is the terminator's index.
+        self.matches(&unsafe { cursor.slice(end) })
+    }
+
+    /// `matches_cursor` from unit `i`, where the leading tokens in `lead` have matched.
+    ///
+    /// # Safety
+    /// `cursor` must point at a NUL-terminated string; `i` must be the character boundary after the
+    /// characters the `lead` tokens matched.
+    #[inline(never)]
+    unsafe fn matches_after_lead(&self, cursor: impl Cursor, mut i: usize) -> bool {
+        let tokens = self.tokens.as_slice();
+        let segments = self.segments.as_slice();
+        for &t in &tokens[self.lead_len..segments[0] as usize] {
             // SAFETY: `i` is a character boundary at or before the terminator; an ASCII unit is a whole
             // character.
             let (c, next) = match unsafe { cursor.unit(i) } {
@@ -615,8 +675,12 @@ mod tests {
         let p = compile("a*??b*?", true).unwrap(); // `*?` is compiled as `?*`
         assert_eq!(p.segments.as_slice(), &[3, 5, 5]);
         let p = compile("***", true).unwrap();
-        assert!(p.matches_everything());
-        assert!(!compile("", true).unwrap().matches_everything());
+        assert_eq!(p.tail, Tail::Any); // every string matches
+        assert_eq!(compile("", true).unwrap().tail, Tail::End);
+        assert_eq!(compile("ab?", true).unwrap().tail, Tail::End);
+        assert_eq!(compile("a[b-c]#*", true).unwrap().tail, Tail::Any);
+        assert_eq!(compile("a*b", true).unwrap().tail, Tail::General);
+        assert_eq!(compile("\u{e9}*", true).unwrap().tail, Tail::General); // not ASCII: not in `lead`
     }
 
     #[test]

@@ -8,10 +8,10 @@
 //! side with it, so a literal prefix costs what it costs the specification's sample: one comparison per
 //! character up to the first difference. Each later segment is searched for at its leftmost place after
 //! the previous one (taking the leftmost place never hurts the segments after it, because each has a
-//! fixed length), and the last one must end at the end of the string. That is exact, uses no recursion
-//! and costs at most O(len(string) x len(pattern)) token steps. A malformed pattern (an unclosed `[`, a
-//! reversed range) never matches: a match is only reported once every token of the pattern has been
-//! read, and reading a malformed list ends the call with FALSE.
+//! fixed length); the last one must end at the end of the string, so it is only tried there. That is
+//! exact, uses no recursion and costs at most O(len(string) x len(pattern)) token steps. A malformed
+//! pattern (an unclosed `[`, a reversed range) never matches: a match is only reported once every
+//! token of the pattern has been read, and reading a malformed list ends the call with FALSE.
 //!
 //! Strings are read through NUL-terminated pointers and never past the NUL: a lookahead only happens
 //! after a unit that cannot be the terminator.
@@ -57,22 +57,26 @@ pub(crate) trait Cursor: Copy {
 }
 
 /// Word-at-a-time search: the index of the first lane of `words` equal to `a` or `b`, where a lane is
-/// `LANE` bits of a little-endian u64 (8 for bytes, 16 for UTF-16 units). Exact: the lowest lane the
-/// zero test flags is always a real zero (borrows only run towards higher lanes).
+/// `LANE` bits of a little-endian machine word (8 for bytes, 16 for UTF-16 units; a word is 64 bits on
+/// 64-bit targets, 32 on 32-bit ones, so the search never emulates wider arithmetic). Exact: the
+/// lowest lane the zero test flags is always a real zero (borrows only run towards higher lanes).
 #[inline(always)]
-fn find_in_words<const LANE: u32>(words: impl Iterator<Item = u64>, a: u32, b: u32) -> Option<usize> {
-    let lo = u64::MAX / ((1u64 << LANE) - 1); // 0x0101.. or 0x0001_0001..
+fn find_in_words<const LANE: u32>(words: impl Iterator<Item = usize>, a: u32, b: u32) -> Option<usize> {
+    let lo = usize::MAX / ((1usize << LANE) - 1); // 0x0101.. or 0x0001_0001..
     let hi = lo << (LANE - 1);
-    let (ra, rb) = (lo * a as u64, lo * b as u64);
+    let (ra, rb) = (lo * a as usize, lo * b as usize);
     for (k, w) in words.enumerate() {
         let (x, y) = (w ^ ra, w ^ rb);
         let zero = (x.wrapping_sub(lo) & !x | y.wrapping_sub(lo) & !y) & hi;
         if zero != 0 {
-            return Some(k * (64 / LANE as usize) + (zero.trailing_zeros() / LANE) as usize);
+            return Some(k * (usize::BITS / LANE) as usize + (zero.trailing_zeros() / LANE) as usize);
         }
     }
     None
 }
+
+/// Bytes in a machine word.
+const WORD: usize = core::mem::size_of::<usize>();
 
 /// A NUL-terminated UTF-16 string; unpaired surrogates are characters of their own.
 #[derive(Clone, Copy)]
@@ -123,9 +127,9 @@ impl Cursor for WideCursor {
     unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
         // SAFETY: units `from..end` lie before the terminator (the caller's contract).
         let units = unsafe { core::slice::from_raw_parts(self.0.add(from), end - from) };
-        let chunks = units.chunks_exact(4);
+        let chunks = units.chunks_exact(WORD / 2);
         let tail = chunks.remainder();
-        let words = chunks.map(|c| c[0] as u64 | (c[1] as u64) << 16 | (c[2] as u64) << 32 | (c[3] as u64) << 48);
+        let words = chunks.map(|c| c.iter().rev().fold(0usize, |w, &u| w << 16 | u as usize));
         if let Some(k) = find_in_words::<16>(words, a, b) {
             return Some(from + k);
         }
@@ -137,7 +141,6 @@ impl Cursor for WideCursor {
 }
 
 /// A NUL-terminated UTF-8 string; bytes outside well-formed sequences are characters of their own.
-#[cfg_attr(windows, allow(dead_code))]
 #[derive(Clone, Copy)]
 pub(crate) struct Utf8Cursor(pub *const u8);
 
@@ -189,25 +192,90 @@ impl Cursor for Utf8Cursor {
     #[inline(always)]
     unsafe fn end_from(self, i: usize) -> usize {
         // SAFETY: NUL-terminated from `i` on (the caller's contract).
-        let len = unsafe { core::ffi::CStr::from_ptr(self.0.add(i).cast()) }.count_bytes();
-        super::steps::step(len);
-        i + len
+        unsafe { byte_end_from(self.0, i) }
     }
 
     #[inline(always)]
     unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
         // SAFETY: bytes `from..end` lie before the terminator (the caller's contract).
-        let bytes = unsafe { core::slice::from_raw_parts(self.0.add(from), end - from) };
-        let chunks = bytes.chunks_exact(8);
-        let tail = chunks.remainder();
-        let words = chunks.map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
-        if let Some(k) = find_in_words::<8>(words, a, b) {
-            return Some(from + k);
-        }
-        let done = bytes.len() - tail.len();
-        tail.iter()
-            .position(|&u| u as u32 == a || u as u32 == b)
-            .map(|k| from + done + k)
+        unsafe { byte_find_ascii(self.0, from, end, a, b) }
+    }
+}
+
+/// The index of the NUL of the byte string at `p`, searching from `i`.
+///
+/// # Safety
+/// `p` must be NUL-terminated from `i` on.
+#[inline(always)]
+unsafe fn byte_end_from(p: *const u8, i: usize) -> usize {
+    // SAFETY: NUL-terminated from `i` on (the caller's contract).
+    let len = unsafe { core::ffi::CStr::from_ptr(p.add(i).cast()) }.count_bytes();
+    super::steps::step(len);
+    i + len
+}
+
+/// The first index in `from..end` of the byte string at `p` whose byte is `a` or `b`, a word at a time.
+///
+/// # Safety
+/// Bytes `from..end` of `p` must be readable.
+#[inline(always)]
+unsafe fn byte_find_ascii(p: *const u8, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
+    // SAFETY: bytes `from..end` are readable (the caller's contract).
+    let bytes = unsafe { core::slice::from_raw_parts(p.add(from), end - from) };
+    let chunks = bytes.chunks_exact(WORD);
+    let tail = chunks.remainder();
+    let words = chunks.map(|c| c.iter().rev().fold(0usize, |w, &b| w << 8 | b as usize));
+    if let Some(k) = find_in_words::<8>(words, a, b) {
+        return Some(from + k);
+    }
+    let done = bytes.len() - tail.len();
+    tail.iter()
+        .position(|&u| u as u32 == a || u as u32 == b)
+        .map(|k| from + done + k)
+}
+
+/// A NUL-terminated string in a single-byte code page: every byte is one character, `table[byte]`.
+/// The table must map every ASCII byte to itself and every other byte to a value of 0x80 or above,
+/// so that code units compare with ASCII exactly as the characters do (the matcher reads ASCII a code
+/// unit at a time and searches for ASCII literals a word at a time).
+#[cfg_attr(not(windows), allow(dead_code))]
+#[derive(Clone, Copy)]
+pub(crate) struct TableCursor<'t>(pub *const u8, pub &'t [u32; 256]);
+
+impl<'t> Cursor for TableCursor<'t> {
+    #[inline(always)]
+    unsafe fn at(self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
+        // SAFETY: `i` is at or before the terminator (the caller's contract).
+        let b = unsafe { *self.0.add(i) };
+        (self.1[b as usize], i + 1)
+    }
+
+    #[inline(always)]
+    unsafe fn unit(self, i: usize) -> u32 {
+        super::steps::step(1);
+        // SAFETY: at or before the terminator (the caller's contract).
+        unsafe { *self.0.add(i) as u32 }
+    }
+
+    type Slice<'a> = super::text::TableText<'a, 't>;
+
+    #[inline(always)]
+    unsafe fn slice<'a>(self, len: usize) -> Self::Slice<'a> {
+        // SAFETY: the `len` bytes before the terminator are readable (the caller's contract).
+        super::text::TableText(unsafe { core::slice::from_raw_parts(self.0, len) }, self.1)
+    }
+
+    #[inline(always)]
+    unsafe fn end_from(self, i: usize) -> usize {
+        // SAFETY: NUL-terminated from `i` on (the caller's contract).
+        unsafe { byte_end_from(self.0, i) }
+    }
+
+    #[inline(always)]
+    unsafe fn find_ascii(self, from: usize, end: usize, a: u32, b: u32) -> Option<usize> {
+        // SAFETY: bytes `from..end` lie before the terminator (the caller's contract).
+        unsafe { byte_find_ascii(self.0, from, end, a, b) }
     }
 }
 
@@ -368,14 +436,111 @@ pub(crate) const LONG_PATTERN: usize = 128;
 /// before it (as in the specification's sample). From there on the pattern is taken a segment (the
 /// tokens up to the next `*`) at a time, each searched for at its leftmost place: by its first two
 /// literals a code unit at a time when it starts with ASCII literals, then token by token. The last
-/// segment must match at the end of the string: once a place matches it entirely, only the end is tried.
+/// segment must match at the end of the string, so it is tried there only.
+///
+/// The pattern's leading ASCII literals, `?`, `#` and simple lists (`[a-z]`, `[x]`) against ASCII
+/// characters are compared here, inlined into the caller, in a loop that needs nothing but the two
+/// strings: a filter with a literal prefix rejects most strings in it, and one that ends with `*`
+/// accepts them there. Everything from the first other pattern character (or non-ASCII string
+/// character) on is out of line ([`matches_from`]).
 ///
 /// # Safety
 /// Both cursors must point at NUL-terminated strings.
 #[inline(always)]
 pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sensitive: bool) -> Option<bool> {
-    // SAFETY: both start at their first character.
-    let (pi, si) = match unsafe { match_here(string, pattern, 0, 0, case_sensitive) } {
+    let (mut pi, mut si) = (0, 0);
+    loop {
+        // SAFETY: the units before `pi` and `si` were ASCII (not NUL) and matched, so unit `pi` of the
+        // pattern and unit `si` of the string are at or before their terminators.
+        let p = unsafe { pattern.unit(pi) };
+        // SAFETY: as above.
+        let u = unsafe { string.unit(si) };
+        if PLAIN_OR_NOT[p.min(0x80) as usize] {
+            if u != p && (case_sensitive || ascii_fold(u) != ascii_fold(p)) {
+                // A non-ASCII character may still fold to an ASCII letter (KELVIN SIGN is a `k`, LONG S
+                // an `s`): the general path decides. Otherwise the characters differ.
+                if !case_sensitive && u >= 0x80 && matches!(ascii_fold(p), 0x6B | 0x73) {
+                    break;
+                }
+                return Some(false);
+            }
+            pi += 1;
+        } else {
+            let ascii = u != 0 && u < 0x80;
+            match p {
+                ANY if ascii => pi += 1,
+                DIGIT if ascii => {
+                    if u.wrapping_sub('0' as u32) >= 10 {
+                        return Some(false);
+                    }
+                    pi += 1;
+                }
+                // SAFETY: `pi + 1` follows the `[`.
+                OPEN if ascii => match unsafe { simple_list(pattern, pi + 1, u, case_sensitive) } {
+                    Some((true, next)) => pi = next,
+                    Some((false, _)) => return Some(false),
+                    None => break, // any other list: the general path reads it
+                },
+                // SAFETY: unit `pi` is not the NUL.
+                STAR if unsafe { pattern.unit(pi + 1) } == 0 => {
+                    return Some(true); // a final `*`: everything before it matched
+                }
+                _ => break, // the pattern's end, other syntax or characters, or a non-ASCII string character
+            }
+        }
+        si += 1;
+    }
+    // SAFETY: `pi` and `si` are character boundaries (every unit before them was ASCII).
+    unsafe { matches_from(string, pattern, pi, si, case_sensitive) }
+}
+
+/// A list of the form `[x]` or `[x-y]` (`x` and `y` ASCII, not `!`, `-` or `]`, `x <= y`) after the `[`
+/// at `i - 1`, tested against the ASCII character `c`: whether it matches and the index after the `]`.
+/// `None` for every other list, which `list` reads.
+///
+/// # Safety
+/// `i` must be the index right after a `[` of `p`.
+#[inline(always)]
+unsafe fn simple_list(p: impl Cursor, i: usize, c: u32, case_sensitive: bool) -> Option<(bool, usize)> {
+    let simple = |x: u32| x != 0 && x < 0x80 && x != BANG && x != HYPHEN && x != CLOSE;
+    // SAFETY: unit `i - 1` is the `[`, not the NUL.
+    let lo = unsafe { p.unit(i) };
+    if !simple(lo) {
+        return None;
+    }
+    // SAFETY: unit `i` is not the NUL.
+    let (hi, close) = match unsafe { p.unit(i + 1) } {
+        CLOSE => (lo, i + 1),
+        HYPHEN => {
+            // SAFETY: unit `i + 1` is not the NUL.
+            let hi = unsafe { p.unit(i + 2) };
+            // SAFETY: unit `i + 2` is not the NUL when it is simple.
+            if !(simple(hi) && hi >= lo && unsafe { p.unit(i + 3) } == CLOSE) {
+                return None;
+            }
+            (hi, i + 3)
+        }
+        _ => return None,
+    };
+    let found = (lo <= c && c <= hi) || (!case_sensitive && c >= 0x41 && range_has_folding(lo, hi, ascii_fold(c)));
+    Some((found, close + 1))
+}
+
+/// [`matches`] from unit `pi` of the pattern and `si` of the string on, where everything before matched.
+///
+/// # Safety
+/// Both cursors must point at NUL-terminated strings; `pi` and `si` must be character boundaries at or
+/// before their terminators, with every character of both before them ASCII.
+#[inline(never)]
+unsafe fn matches_from(
+    string: impl Cursor,
+    pattern: impl Cursor,
+    pi: usize,
+    si: usize,
+    case_sensitive: bool,
+) -> Option<bool> {
+    // SAFETY: `pi` and `si` are character boundaries (the caller's contract).
+    let (pi, si) = match unsafe { match_here(string, pattern, pi, si, case_sensitive) } {
         Step::Star(pi, si) => (pi, si),
         // SAFETY: `si` is at or before the terminator.
         Step::End(si, _) => return Some(unsafe { string.unit(si) } == 0),
@@ -385,12 +550,22 @@ pub(crate) unsafe fn matches(string: impl Cursor, pattern: impl Cursor, case_sen
     if unsafe { pattern.unit(pi + 1) } == 0 {
         return Some(true); // a final `*`: everything before it matched, and nothing is left to check
     }
-    // SAFETY: as above.
-    if unsafe { pattern.end_from(pi) } > LONG_PATTERN {
+    // The pattern's length, and where its last `*` unit is: no segment after it has a `*`.
+    let (mut end, mut last_star) = (pi + 1, pi);
+    loop {
+        // SAFETY: `end` only moves past units that are not the terminator.
+        match unsafe { pattern.unit(end) } {
+            0 => break,
+            STAR => last_star = end,
+            _ => {}
+        }
+        end += 1;
+    }
+    if end > LONG_PATTERN {
         return None;
     }
     // SAFETY: `pi` is at a `*`; `si` is a character boundary.
-    unsafe { match_segments(string, pattern, pi, si, case_sensitive) }
+    unsafe { match_segments(string, pattern, pi, si, last_star, case_sensitive) }
 }
 
 /// How far [`match_here`] got.
@@ -494,7 +669,8 @@ unsafe fn match_here(
     }
 }
 
-/// The segments after the `*` at `pi`, against the string from `si`.
+/// The segments after the `*` at `pi`, against the string from `si`; `last_star` is the index of the
+/// pattern's last `*` unit.
 ///
 /// # Safety
 /// `pi` must be the index of a `*` of the NUL-terminated `pattern`; `si` a character boundary of the
@@ -505,6 +681,7 @@ unsafe fn match_segments(
     pattern: impl Cursor,
     mut pi: usize,
     mut si: usize,
+    last_star: usize,
     case_sensitive: bool,
 ) -> Option<bool> {
     // The string's end, found once: the searches below go a word at a time up to it.
@@ -520,6 +697,35 @@ unsafe fn match_segments(
                 OPEN if unsafe { pattern.unit(pi + 1) } == CLOSE => pi += 2,
                 0 => return Some(true), // the pattern ends with `*`
                 _ => break,
+            }
+        }
+        // The last segment can only match the characters at the end of the string: no search. (A
+        // segment after the last `*` unit is the last; one before it may still be, when that `*` is in
+        // a list, and the search below then finds its place as for any other.)
+        let last = if pi > last_star {
+            // SAFETY: `pi` is a character boundary of the pattern.
+            unsafe { last_segment(pattern, pi) }
+        } else {
+            Last::No
+        };
+        match last {
+            Last::No => {}
+            Last::Malformed => return Some(false),
+            Last::Chars(count) => {
+                // SAFETY: `end` is the index of the terminator.
+                let text = unsafe { string.slice(end) };
+                let mut q = end;
+                for _ in 0..count {
+                    if q <= si {
+                        return Some(false); // fewer characters left than the segment consumes
+                    }
+                    q = text.prev(q).1;
+                }
+                // SAFETY: `q` is a character boundary at or after `si` (walked back from the end).
+                return Some(matches!(
+                    unsafe { match_here(string, pattern, pi, q, case_sensitive) },
+                    Step::End(e, _) if e == end
+                ));
             }
         }
         // The segment's first two tokens when they are ASCII literals found a code unit at a time (an
@@ -597,6 +803,51 @@ unsafe fn match_segments(
     }
 }
 
+/// Whether the segment at `pi` is the pattern's last, and then how many characters it consumes.
+enum Last {
+    /// A `*` follows it.
+    No,
+    /// It is the last and consumes this many characters (every token one, `[]` none).
+    Chars(usize),
+    /// It holds a malformed list: the pattern never matches.
+    Malformed,
+}
+
+/// Reads the segment at `pi` up to the next `*` or the pattern's end (see [`Last`]).
+///
+/// # Safety
+/// `pi` must be a character boundary of the NUL-terminated `pattern`.
+#[inline]
+unsafe fn last_segment(pattern: impl Cursor, mut pi: usize) -> Last {
+    let mut count = 0;
+    loop {
+        // SAFETY: `pi` only moves past characters that are not the terminator.
+        match unsafe { pattern.unit(pi) } {
+            0 => return Last::Chars(count),
+            STAR => return Last::No,
+            // Where a list ends and whether it is malformed do not depend on the character tested.
+            // SAFETY: `pi + 1` follows the `[`.
+            OPEN => match unsafe { list(pattern, pi + 1, 0, true) } {
+                List::Empty(next) => pi = next,
+                List::Match(_, next) => {
+                    pi = next;
+                    count += 1;
+                }
+                List::Malformed => return Last::Malformed,
+            },
+            u if u < 0x80 => {
+                pi += 1;
+                count += 1;
+            }
+            _ => {
+                // SAFETY: as above.
+                pi = unsafe { pattern.at(pi) }.1;
+                count += 1;
+            }
+        }
+    }
+}
+
 /// ASCII characters that stand for themselves in a pattern: all but NUL, `*`, `?`, `#` and `[`.
 const PLAIN_ASCII: [bool; 128] = {
     let mut t = [true; 128];
@@ -605,6 +856,17 @@ const PLAIN_ASCII: [bool; 128] = {
     t[ANY as usize] = false;
     t[DIGIT as usize] = false;
     t[OPEN as usize] = false;
+    t
+};
+
+/// `PLAIN_ASCII` with one more entry, false, for everything from 0x80 on (index `unit.min(0x80)`).
+const PLAIN_OR_NOT: [bool; 129] = {
+    let mut t = [false; 129];
+    let mut k = 0;
+    while k < 128 {
+        t[k] = PLAIN_ASCII[k];
+        k += 1;
+    }
     t
 };
 

@@ -331,6 +331,123 @@ fn differential_long_literal_runs() {
     }
 }
 
+/// Bytes for the narrow differential tests: pattern syntax, case pairs, and bytes of 0x80 and above
+/// (in a double-byte code page such as 932 some are lead bytes, and `\x83A` is one character).
+const NARROW_BYTES: &[u8] = &[
+    b'a', b'b', b'A', b'K', b'k', b's', b'S', b'[', b']', b'!', b'-', b'#', b'*', b'?', b'0', b'9', 0x80, 0x81, 0x82,
+    0x83, 0x8A, 0x9A, 0x9F, 0xA0, 0xC9, 0xD7, 0xE0, 0xE9, 0xFF,
+];
+
+fn random_narrow(rng: &mut XorShift, max: usize) -> Vec<u8> {
+    let len = rng.below(max + 1);
+    (0..len).map(|_| NARROW_BYTES[rng.below(NARROW_BYTES.len())]).collect()
+}
+
+/// A pattern long enough (over `stream::LONG_PATTERN`) to be compiled by the one-call matchers.
+fn long_narrow(rng: &mut XorShift) -> Vec<u8> {
+    let mut p = random_narrow(rng, 4);
+    p.push(b'*');
+    p.extend((0..140).map(|_| [b'?', b'*', b'a', 0xE9][rng.below(4)]));
+    p.extend(random_narrow(rng, 4));
+    p
+}
+
+#[test]
+fn single_byte_code_pages_read_in_place_like_the_decoded_text() {
+    // Windows-1252 in part: undefined bytes, letters whose case pair is elsewhere in the table (0x9F is
+    // Ÿ, whose folding ÿ is 0xFF), the rest Latin-1.
+    let mut table = [0u32; 256];
+    for (b, entry) in table.iter_mut().enumerate() {
+        *entry = match b {
+            0x80 => 0x20AC,
+            0x8A => 0x160,
+            0x9A => 0x161,
+            0x9F => 0x178,
+            0x81 | 0x8D | 0x8F | 0x90 | 0x9D => text::invalid_byte(b as u8),
+            _ => b as u32,
+        };
+    }
+    let decode = |b: &[u8]| b.iter().map(|&x| table[x as usize]).collect::<Vec<u32>>();
+    let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
+    for case in 0..differential_cases() / 10 {
+        let p = if case % 16 == 0 {
+            long_narrow(&mut rng)
+        } else {
+            random_narrow(&mut rng, 9)
+        };
+        let s = random_narrow(&mut rng, 9);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&decode(&s), &decode(&p), cs);
+        let what = format!("case {case}: {s:x?} Like {p:x?} (case sensitive: {cs})");
+        let (sz, pz) = (CString::new(s.clone()).unwrap(), CString::new(p.clone()).unwrap());
+        let (sc, pc) = (
+            stream::TableCursor(sz.as_ptr().cast(), &table),
+            stream::TableCursor(pz.as_ptr().cast(), &table),
+        );
+        // SAFETY: both are NUL-terminated.
+        match unsafe { stream::matches(sc, pc, cs) } {
+            Some(got) => assert_eq!(got, expected, "one call, {what}"),
+            None => assert!(
+                p.len() > stream::LONG_PATTERN,
+                "only long patterns are handed back: {what}"
+            ),
+        }
+        let compiled = Program::compile(&text::TableText(&p, &table), cs);
+        let got = match compiled {
+            Ok(prog) => {
+                // SAFETY: NUL-terminated.
+                let by_cursor = unsafe { prog.matches_cursor(sc) };
+                assert_eq!(by_cursor, prog.matches(&text::TableText(&s, &table)), "{what}");
+                by_cursor
+            }
+            Err(_) => false,
+        };
+        assert_eq!(got, expected, "compiled, {what}");
+    }
+}
+
+/// MatchPatternA and the compiled filter in the process's ANSI code page against the reference over
+/// the characters the code page decodes: in place or decoded first, the answers are the same. When
+/// `OPCCOMN_TEST_ACP` is set, the code page must be that one (test.sh runs this under 932, a
+/// double-byte code page, as well as under the default).
+#[cfg(windows)]
+#[test]
+fn narrow_entry_points_agree_with_the_decoded_ansi_code_page() {
+    // SAFETY: no arguments.
+    let acp = unsafe { windows_sys::Win32::Globalization::GetACP() };
+    if let Ok(want) = std::env::var("OPCCOMN_TEST_ACP") {
+        assert_eq!(acp.to_string(), want, "the ANSI code page");
+    }
+    eprintln!("narrow differential in ANSI code page {acp}");
+    let mut rng = XorShift(0xD1B5_4A32_D192_ED03);
+    for case in 0..differential_cases() / 10 {
+        let p = if case % 16 == 0 {
+            long_narrow(&mut rng)
+        } else {
+            random_narrow(&mut rng, 9)
+        };
+        let s = random_narrow(&mut rng, 9);
+        let cs = rng.next() & 1 == 0;
+        let expected = ref_match(&narrow::decode_all(&s), &narrow::decode_all(&p), cs);
+        let what = format!("case {case}: {s:x?} Like {p:x?} (case sensitive: {cs})");
+        assert_eq!(match_a(&s, &p, cs), expected, "MatchPatternA, {what}");
+        let (sz, pz) = (CString::new(s.clone()).unwrap(), CString::new(p.clone()).unwrap());
+        let mut f = ptr::null_mut();
+        // SAFETY: a NUL-terminated pattern and a writable out-pointer.
+        let hr = unsafe { OpcPatternCompileA(pz.as_ptr(), cs as BOOL, &mut f) };
+        if hr == OPC_E_INVALIDFILTER {
+            assert!(!expected, "{what}");
+            continue;
+        }
+        assert_eq!(hr, S_OK, "{what}");
+        // SAFETY: a live filter and a NUL-terminated string; freed once.
+        let got = unsafe { OpcPatternMatchA(f, sz.as_ptr()) } == TRUE;
+        // SAFETY: freed once.
+        unsafe { OpcPatternFree(f) };
+        assert_eq!(got, expected, "OpcPatternMatchA, {what}");
+    }
+}
+
 #[cfg(windows)]
 #[test]
 fn narrow_strings_use_the_ansi_code_page() {

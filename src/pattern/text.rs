@@ -196,6 +196,37 @@ impl Text for Chars<'_> {
     }
 }
 
+/// Text in a single-byte code page: every byte is one character, `table[byte]` (see
+/// `stream::TableCursor`); code units are the bytes.
+#[cfg_attr(not(windows), allow(dead_code))]
+#[derive(Clone, Copy)]
+pub(crate) struct TableText<'a, 't>(pub &'a [u8], pub &'t [u32; 256]);
+
+impl Text for TableText<'_, '_> {
+    #[inline(always)]
+    fn units(&self) -> usize {
+        self.0.len()
+    }
+
+    #[inline(always)]
+    fn next(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
+        (self.1[self.0[i] as usize], i + 1)
+    }
+
+    #[inline(always)]
+    fn prev(&self, i: usize) -> (u32, usize) {
+        super::steps::step(1);
+        (self.1[self.0[i - 1] as usize], i - 1)
+    }
+
+    #[inline(always)]
+    fn unit(&self, i: usize) -> u32 {
+        super::steps::step(1);
+        self.0[i] as u32
+    }
+}
+
 /// All characters of `t`, front to back.
 #[cfg(test)]
 pub(crate) fn chars_of(t: &impl Text) -> Vec<u32> {
