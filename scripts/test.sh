@@ -167,6 +167,18 @@ if [ "$wine_stage" = 1 ]; then
     stage "Rust tests (Windows, under Wine)"
     CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=wine cargo test --target x86_64-pc-windows-gnu --lib
 
+    # Narrow strings are in the ANSI code page on Windows; the prefix's default is 1252. Wine takes
+    # the code page from the locale's name (installed or not), so LC_ALL=ja_JP.SJIS gives 932, a
+    # double-byte one; the test asserts it (OPCCOMN_TEST_ACP) and says which it ran under.
+    stage "MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine"
+    acp_test=pattern::tests::narrow_entry_points_agree_with_the_decoded_ansi_code_page
+    acp_out=$(OPCCOMN_TEST_ACP=932 LC_ALL=ja_JP.SJIS CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=wine \
+        cargo test --target x86_64-pc-windows-gnu --lib -- --exact "$acp_test" --nocapture 2>&1) ||
+        { echo "$acp_out"; exit 1; }
+    grep -q "narrow differential in ANSI code page 932" <<<"$acp_out" && grep -q "test result: ok. 1 passed" <<<"$acp_out" ||
+        { echo "$acp_out"; echo "the code page 932 test did not run" >&2; exit 1; }
+    echo "$acp_test: passed in ANSI code page 932"
+
     stage "C tests (Windows DLL, under Wine)"
     cmake -S . -B "$build/windows" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" >/dev/null
     cmake --build "$build/windows" -j2
