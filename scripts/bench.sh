@@ -5,11 +5,14 @@
 #
 # Usage: scripts/bench.sh [--wine | --wine32] [NAME...] [WORD...]
 #   NAME     match-pattern, error-string, server-list (default: match-pattern and error-string on
-#            Linux; error-string and server-list under Wine, as server-list needs the Windows registry)
+#            Linux; all three under Wine, as server-list needs the Windows registry)
 #   WORD     passed to the benchmarks: `scripts/bench.sh match-pattern typical Device` runs only the
 #            typical set of match-pattern, and of it only the filters containing "Device"
 #   --wine   the Windows DLL (x86_64, mingw-w64) under Wine instead of the Linux library
-#   --wine32 the 32-bit Windows DLL (i686, mingw-w64) under 32-bit Wine
+#   --wine32 the 32-bit Windows DLL (i686, mingw-w64) under 32-bit Wine; fails (exit 2) when 32-bit
+#            Wine cannot run a 32-bit program (without wine32:i386 `wine prog32.exe` exits 0 silently)
+# Every benchmark must print its closing line ("bench_NAME: N goals, ..."): one that printed nothing
+# did not run, and fails the run.
 # Environment: BENCH_ROUNDS (default 31), BENCH_ROUND_MS (default 2) for every benchmark.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -29,10 +32,10 @@ for arg in "$@"; do
     esac
 done
 if [ ${#names[@]} = 0 ]; then
-    # Linux: MatchPattern and GetErrorString. Under Wine: GetErrorString and the server list, whose
-    # goals are stated for the Windows registry; MatchPattern runs there when named.
+    # Linux: MatchPattern and GetErrorString. Under Wine all three: the server list's goal is stated
+    # for the Windows registry.
     if [ "$wine" = 1 ]; then
-        names=(error-string server-list)
+        names=(match-pattern error-string server-list)
     else
         names=(match-pattern error-string)
     fi
@@ -52,6 +55,19 @@ if [ "$wine" = 1 ]; then
     fi
     cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$toolchain" >/dev/null
     . scripts/wine-env.sh "$build"
+    if [ "$arch" = x86 ]; then
+        . scripts/deps.sh
+        if ! need_wine32; then
+            echo "scripts/bench.sh: NOT RUN: 32-bit Wine is not available: $wine32_missing" >&2
+            exit 2
+        fi
+        i686-w64-mingw32-gcc -O2 -o "$build/wow64_canary.exe" tests/wine/wow64_canary.c
+        canary=$(wine "$build/wow64_canary.exe" 2>&1 | tr -d '\r') || true
+        if [ "$canary" != "wow64 canary: 32-bit process, WOW64 yes" ]; then
+            echo "scripts/bench.sh: NOT RUN: wine32:i386 is installed, but a 32-bit program did not run (it printed: '$canary')" >&2
+            exit 2
+        fi
+    fi
     run() { wine "$build/bin/$1.exe" "${words[@]}"; }
 else
     build="$root/build/bench"
@@ -66,8 +82,14 @@ cmake --build "$build" -j2 --target "${targets[@]}" >/dev/null
 
 echo "machine: $(nproc) cores, $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
 status=0
+log=$(mktemp)
 for target in "${targets[@]}"; do
     printf '\n==== %s%s\n' "$target" "$([ "$wine" = 1 ] && echo " (Windows $arch DLL under Wine)")"
-    run "$target" || status=1
+    run "$target" | tee "$log" || status=1
+    if ! tr -d '\r' <"$log" | grep -qE "^$target: [0-9]+ goals"; then
+        echo "scripts/bench.sh: $target printed no closing line: it did not run to its end" >&2
+        status=1
+    fi
 done
+rm -f "$log"
 exit "$status"
