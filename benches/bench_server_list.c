@@ -256,7 +256,9 @@ static void finish(Found *f)
 
 static void plain_walk(Found *f)
 {
-    static const REGSAM views[2] = {0, KEY_WOW64_32KEY};
+    /* The views the server list reads, in its order: the process's own (flag 0), then the other one
+       (a 32-bit process's other view is the 64-bit one). */
+    static const REGSAM views[2] = {0, sizeof(void *) == 8 ? KEY_WOW64_32KEY : KEY_WOW64_64KEY};
     WCHAR name[256], path[300], catid[40];
     guid_text(&CATID_OPCDAServer10, catid);
     f->count = 0;
