@@ -374,7 +374,7 @@ impl Program {
                     LEAD_END => break,
                     LEAD_ANY => ascii,
                     LEAD_DIGIT => u.wrapping_sub('0' as u32) < 10,
-                    LEAD_SET.. => ascii && self.set_contains(&self.sets.as_slice()[(unit - LEAD_SET) as usize], u),
+                    LEAD_SET.. => ascii && self.lead_set_contains(unit - LEAD_SET, u),
                     _ => false,
                 };
                 if !matched {
@@ -396,6 +396,13 @@ impl Program {
             // SAFETY: `i` is a character boundary (after ASCII units only) at or before the terminator.
             Tail::General => unsafe { self.matches_after_lead(cursor, i) },
         }
+    }
+
+    /// Whether list `k` contains `c`, out of line: finding the list would otherwise take registers
+    /// (and their saving) from every call of the inlined `matches_cursor`.
+    #[inline(never)]
+    fn lead_set_contains(&self, k: u32, c: u32) -> bool {
+        self.set_contains(&self.sets.as_slice()[k as usize], c)
     }
 
     /// `matches` over the whole string behind `cursor`.

@@ -550,22 +550,28 @@ unsafe fn matches_from(
     if unsafe { pattern.unit(pi + 1) } == 0 {
         return Some(true); // a final `*`: everything before it matched, and nothing is left to check
     }
-    // The pattern's length, and where its last `*` unit is: no segment after it has a `*`.
-    let (mut end, mut last_star) = (pi + 1, pi);
+    // The pattern's length, where its last `*` unit is (no segment after it has a `*`), and whether
+    // the units after that are all ASCII outside lists: then each is one character.
+    let mut tail = Tail {
+        end: pi + 1,
+        last_star: pi,
+        plain: true,
+    };
     loop {
-        // SAFETY: `end` only moves past units that are not the terminator.
-        match unsafe { pattern.unit(end) } {
+        // SAFETY: `tail.end` only moves past units that are not the terminator.
+        match unsafe { pattern.unit(tail.end) } {
             0 => break,
-            STAR => last_star = end,
+            STAR => (tail.last_star, tail.plain) = (tail.end, true),
+            OPEN | 0x80.. => tail.plain = false,
             _ => {}
         }
-        end += 1;
+        tail.end += 1;
     }
-    if end > LONG_PATTERN {
+    if tail.end > LONG_PATTERN {
         return None;
     }
     // SAFETY: `pi` is at a `*`; `si` is a character boundary.
-    unsafe { match_segments(string, pattern, pi, si, last_star, case_sensitive) }
+    unsafe { match_segments(string, pattern, pi, si, tail, case_sensitive) }
 }
 
 /// How far [`match_here`] got.
@@ -669,8 +675,18 @@ unsafe fn match_here(
     }
 }
 
-/// The segments after the `*` at `pi`, against the string from `si`; `last_star` is the index of the
-/// pattern's last `*` unit.
+/// What [`matches_from`] learned of the pattern after its first `*`.
+#[derive(Clone, Copy)]
+struct Tail {
+    /// The index of the terminator.
+    end: usize,
+    /// The index of the last `*` unit.
+    last_star: usize,
+    /// No unit after `last_star` is a `[` or not ASCII.
+    plain: bool,
+}
+
+/// The segments after the `*` at `pi`, against the string from `si` (`tail`: see [`Tail`]).
 ///
 /// # Safety
 /// `pi` must be the index of a `*` of the NUL-terminated `pattern`; `si` a character boundary of the
@@ -681,7 +697,7 @@ unsafe fn match_segments(
     pattern: impl Cursor,
     mut pi: usize,
     mut si: usize,
-    last_star: usize,
+    tail: Tail,
     case_sensitive: bool,
 ) -> Option<bool> {
     // The string's end, found once: the searches below go a word at a time up to it.
@@ -702,11 +718,13 @@ unsafe fn match_segments(
         // The last segment can only match the characters at the end of the string: no search. (A
         // segment after the last `*` unit is the last; one before it may still be, when that `*` is in
         // a list, and the search below then finds its place as for any other.)
-        let last = if pi > last_star {
+        let last = if pi <= tail.last_star {
+            Last::No
+        } else if tail.plain {
+            Last::Chars(tail.end - pi) // one character per unit, none of them a list
+        } else {
             // SAFETY: `pi` is a character boundary of the pattern.
             unsafe { last_segment(pattern, pi) }
-        } else {
-            Last::No
         };
         match last {
             Last::No => {}
