@@ -48,7 +48,7 @@ static void set_command(const CLSID *clsid, int widl) {
     HKEY h;
     StringFromGUID2(clsid, guid, 40);
     swprintf(key, 80, L"CLSID\\%ls\\LocalServer32", guid);
-    swprintf(command, MAX_PATH + 32, widl ? L"\"%ls\" -ps:widl" : L"\"%ls\"", server_path);
+    swprintf(command, MAX_PATH + 32, widl ? L"\"%ls\" -ps:widl" : L"\"%ls\" -ps:opccomn-direct", server_path);
     if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_WRITE, &h) == ERROR_SUCCESS) {
         RegSetValueExW(h, NULL, 0, REG_SZ, (const BYTE *)command, (DWORD)((wcslen(command) + 1) * sizeof(WCHAR)));
         RegCloseKey(h);
@@ -125,7 +125,11 @@ int main(int argc, char **argv) {
     GetModuleFileNameW(NULL, server_path, MAX_PATH);
     slash = wcsrchr(server_path, L'\\');
     wcscpy(slash ? slash + 1 : server_path, L"opccomn_test_server.exe");
-    if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_widl_proxy_stub())) return 1;
+    /* Both proxy/stub class objects registered in this process (and in each phase's server), so that
+     * neither pays a registry lookup per new proxy or stub that the other does not. */
+    if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_widl_proxy_stub()) ||
+        FAILED(use_opccomn_proxy_stub_directly()))
+        return 1;
     server = server_registration(&CLSID_OopServer, L"Oop.Server.1");
     list = server_registration(&CLSID_OopServerList, L"Oop.ServerList.1");
     OpcUnregisterProxyStub(NULL); /* whatever an interrupted earlier run left */

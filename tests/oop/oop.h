@@ -78,6 +78,20 @@ static HRESULT use_widl_proxy_stub(void) {
     return hr;
 }
 
+/* The same for opccomn.dll's proxy/stub: its class object registered in this process, so that finding
+ * it costs what finding the stand-in's costs (no registry lookup per new proxy or stub). */
+static HRESULT use_opccomn_proxy_stub_directly(void) {
+    IUnknown *factory = NULL;
+    DWORD cookie;
+    int i;
+    HRESULT hr = OpcDllGetClassObject(&CLSID_OpcComnProxyStub, &IID_IUnknown, (void **)&factory);
+    if (FAILED(hr)) return hr;
+    hr = CoRegisterClassObject(&CLSID_OpcComnProxyStub, factory, CLSCTX_INPROC_SERVER, REGCLS_MULTIPLEUSE, &cookie);
+    factory->lpVtbl->Release(factory);
+    for (i = 0; SUCCEEDED(hr) && i < 5; i++) hr = CoRegisterPSClsid(OOP_IIDS[i], &CLSID_OpcComnProxyStub);
+    return hr;
+}
+
 /* S_FALSE while proxies or stubs of opccomn_widl_ps.dll are alive in this process, S_OK when none
  * are, E_FAIL when it is not loaded. */
 static HRESULT widl_proxy_stub_in_use(void) {

@@ -276,6 +276,7 @@ int main(void) {
     done = CreateEventW(NULL, TRUE, FALSE, NULL);
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
     if (SUCCEEDED(hr) && widl_mode) hr = use_widl_proxy_stub();
+    if (SUCCEEDED(hr) && wcsstr(GetCommandLineW(), L"-ps:opccomn-direct")) hr = use_opccomn_proxy_stub_directly();
     if (SUCCEEDED(hr)) hr = fill_fake_registry();
     if (SUCCEEDED(hr))
         hr = CoRegisterClassObject(&CLSID_OopServer, (IUnknown *)&server_factory.cf, CLSCTX_LOCAL_SERVER,
