@@ -182,8 +182,12 @@ fn the_c_entry_points_check_their_arguments() {
     unsafe {
         assert_eq!(crate::registry::OpcRegistryCreateMemory(&mut mem), S_OK);
         assert_eq!(OpcRegisterProxyStub(mem, 2), E_INVALIDARG);
-        assert_eq!(OpcRegisterProxyStub(mem, OPC_PROXY_STUB_TAKE_OVER), S_OK);
-        assert_eq!(OpcUnregisterProxyStub(mem), S_OK);
+        // Registering finds this module's path with dladdr, which Miri cannot call.
+        #[cfg(not(miri))]
+        {
+            assert_eq!(OpcRegisterProxyStub(mem, OPC_PROXY_STUB_TAKE_OVER), S_OK);
+            assert_eq!(OpcUnregisterProxyStub(mem), S_OK);
+        }
         assert_eq!(OpcDllInstall(1, ptr::null()), E_INVALIDARG);
         let empty = [0u16];
         assert_eq!(OpcDllInstall(1, empty.as_ptr()), E_INVALIDARG);
