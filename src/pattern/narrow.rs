@@ -35,10 +35,12 @@ mod imp {
         unsafe { program.matches_cursor(Utf8Cursor(string)) }
     }
 
-    /// `MatchPatternA` without compiling: reads both strings in place.
+    /// `MatchPatternA` without compiling: reads both strings in place (inlined into the export, as
+    /// `MatchPatternW`'s loop is, so a call costs no extra frame).
     ///
     /// # Safety
     /// Both must point at NUL-terminated strings.
+    #[inline(always)]
     pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
         // SAFETY: both are NUL-terminated (the caller's contract).
         match unsafe { stream::matches(Utf8Cursor(string), Utf8Cursor(pattern), case_sensitive) } {
@@ -93,6 +95,10 @@ mod imp {
         /// bytes can be read in place (`stream::TableCursor`). True for every code page Windows uses
         /// as its ANSI code page; checked rather than assumed.
         table_reads: bool,
+        /// Every string can be read in place through `single` without looking at it first: a
+        /// single-byte code page (not UTF-8) with `table_reads`. The one flag `MatchPatternA` tests
+        /// before matching in the common case.
+        every_string_in_place: bool,
     }
 
     /// Decodes up to two bytes of the ANSI code page; `None` when they are not one valid character.
@@ -131,6 +137,7 @@ mod imp {
                 double: false,
                 lead_above_ascii: true,
                 table_reads: true,
+                every_string_in_place: false,
             };
             let mut info = CPINFO {
                 MaxCharSize: 1,
@@ -158,6 +165,7 @@ mod imp {
                 cp.lead_above_ascii &= b >= 0x80 || !cp.lead[b as usize];
                 cp.table_reads &= b < 0x80 || cp.single[b as usize] >= 0x80;
             }
+            cp.every_string_in_place = !cp.utf8 && !cp.double && cp.table_reads;
             cp
         })
     }
@@ -224,7 +232,7 @@ mod imp {
             // SAFETY: NUL-terminated (the caller's contract).
             return unsafe { program.matches_cursor(Utf8Cursor(string)) };
         }
-        if cp.table_reads && !cp.double {
+        if cp.every_string_in_place {
             // SAFETY: as above.
             return unsafe { program.matches_cursor(TableCursor(string, &cp.single)) };
         }
@@ -249,21 +257,36 @@ mod imp {
     }
 
     /// `MatchPatternA` without compiling: both strings read in place where `matches` reads the string
-    /// in place, decoded first (on the stack for ordinary lengths) otherwise.
+    /// in place, decoded first (on the stack for ordinary lengths) otherwise. Inlined into the export:
+    /// in a single-byte code page (the common case) a call costs `MatchPatternW`'s plus one test of
+    /// the code page, with no frame of its own; every other code page goes out of line.
     ///
     /// # Safety
     /// Both must point at NUL-terminated strings.
+    #[inline(always)]
     pub(crate) unsafe fn match_once(string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
         let cp = code_page();
+        if cp.every_string_in_place {
+            let (s, p) = (TableCursor(string, &cp.single), TableCursor(pattern, &cp.single));
+            // SAFETY: both are NUL-terminated (the caller's contract).
+            return unsafe { match_in_place(s, p, pattern, case_sensitive) };
+        }
+        // SAFETY: as above.
+        unsafe { match_once_other(cp, string, pattern, case_sensitive) }
+    }
+
+    /// `match_once` in UTF-8 and in double-byte code pages (and in any code page whose table cannot
+    /// read strings in place).
+    ///
+    /// # Safety
+    /// Both must point at NUL-terminated strings.
+    #[inline(never)]
+    unsafe fn match_once_other(cp: &CodePage, string: *const u8, pattern: *const u8, case_sensitive: bool) -> bool {
         if cp.utf8 {
             // SAFETY: both are NUL-terminated (the caller's contract).
             return unsafe { match_in_place(Utf8Cursor(string), Utf8Cursor(pattern), pattern, case_sensitive) };
         }
         let in_place = (TableCursor(string, &cp.single), TableCursor(pattern, &cp.single));
-        if cp.table_reads && !cp.double {
-            // SAFETY: as above.
-            return unsafe { match_in_place(in_place.0, in_place.1, pattern, case_sensitive) };
-        }
         // SAFETY: as above.
         let (string, pattern_bytes) = unsafe { (cstr_bytes(string.cast()), cstr_bytes(pattern.cast())) };
         let (Some(string), Some(pattern_bytes)) = (string, pattern_bytes) else {
