@@ -3,7 +3,9 @@
 
 use std::ffi::CString;
 
-use super::reference::{decode_narrow, decode_wide, ref_match};
+#[cfg(not(windows))]
+use super::reference::decode_narrow;
+use super::reference::{decode_wide, ref_match};
 use super::steps;
 use super::*;
 use crate::com::E_INVALIDARG;
