@@ -120,6 +120,13 @@ typedef struct {
    machine most rounds are clean and the median is theirs. */
 static int bench_rounds = 31;        /* BENCH_ROUNDS overrides (3-101) */
 static double bench_round_ms = 2.0;  /* one contender's round; BENCH_ROUND_MS overrides */
+/* A case stops adding rounds once it has run this long (seconds on the benchmark's clock; 0: never)
+   and has BENCH_MIN_ROUNDS; BENCH_BUDGET_S overrides. For benchmarks whose round is one slow operation
+   (a registry scan): on a loaded machine each of its calls into another process waits for the scheduler,
+   a round then takes minutes instead of seconds, and a fixed count of rounds would not finish. */
+static double bench_budget_s;
+#define BENCH_MIN_ROUNDS 5
+static int bench_fewest_rounds;       /* the fewest rounds a case ran, when the budget cut one short */
 static int bench_failures;            /* goals not met */
 static int bench_goals;
 
@@ -127,11 +134,13 @@ static int bench_goals;
 static void bench_init(void)
 {
     bench_choose_clock();
-    const char *r = getenv("BENCH_ROUNDS"), *ms = getenv("BENCH_ROUND_MS");
+    const char *r = getenv("BENCH_ROUNDS"), *ms = getenv("BENCH_ROUND_MS"), *budget = getenv("BENCH_BUDGET_S");
     if (r && atoi(r) >= 3)
         bench_rounds = atoi(r) > BENCH_MAX_ROUNDS ? BENCH_MAX_ROUNDS : atoi(r);
     if (ms && atof(ms) > 0)
         bench_round_ms = atof(ms);
+    if (budget && atof(budget) >= 0)
+        bench_budget_s = atof(budget);
 }
 
 static int bench_cmp(const void *a, const void *b)
@@ -153,9 +162,12 @@ static void bench_stats(const double *values, int n, double *median, double *lo,
 
 /* How many repetitions make one round of `c` last about bench_round_ms: grows a trial until it lasts a
    tenth of a round, then takes the fastest of five such trials (a trial that was interrupted must not
-   make every round of this contender too long). */
-static long bench_calibrate(const BenchContender *c)
+   make every round of this contender too long). `warm_ms` is how long the warm-up repetition took: one
+   that lasted ten rounds already makes a round of one repetition, without another trial. */
+static long bench_calibrate(const BenchContender *c, double warm_ms)
 {
+    if (warm_ms >= 10 * bench_round_ms)
+        return 1;
     long reps = 1;
     double ms;
     for (;;) {
@@ -185,15 +197,23 @@ static BenchResult bench_case(const BenchContender *contenders, int n)
     r.contenders = n;
     r.rounds = bench_rounds;
     for (int i = 0; i < n; i++) {
+        double start = bench_now_ns();
         contenders[i].run(contenders[i].context, 1); /* warm up caches */
-        reps[i] = bench_calibrate(&contenders[i]);
+        reps[i] = bench_calibrate(&contenders[i], (bench_now_ns() - start) / 1e6);
     }
+    double start_rounds = bench_now_ns();
     for (int round = 0; round < r.rounds; round++) {
         for (int k = 0; k < n; k++) {
             int i = (k + round) % n;
             double start = bench_now_ns();
             contenders[i].run(contenders[i].context, reps[i]);
             r.ns[i][round] = (bench_now_ns() - start) / ((double)reps[i] * contenders[i].per_rep);
+        }
+        if (bench_budget_s > 0 && round + 1 >= BENCH_MIN_ROUNDS && round + 1 < r.rounds &&
+            bench_now_ns() - start_rounds > bench_budget_s * 1e9) {
+            r.rounds = round + 1;
+            if (!bench_fewest_rounds || r.rounds < bench_fewest_rounds)
+                bench_fewest_rounds = r.rounds;
         }
     }
     return r;
@@ -248,8 +268,13 @@ static int bench_goal(const char *what, double value, double lo, double hi, int 
 /* The last line of every benchmark, and its exit status. */
 static int bench_finish(const char *name)
 {
-    printf("\n%s: %d goals, %d met, %d NOT MET (%d interleaved rounds of about %.0f ms per contender and case; %s)\n",
-           name, bench_goals, bench_goals - bench_failures, bench_failures, bench_rounds, bench_round_ms, bench_clock);
+    char rounds[160] = "";
+    if (bench_fewest_rounds)
+        snprintf(rounds, sizeof rounds, ", the %.0f s budget stopped a case after %d of them", bench_budget_s,
+                 bench_fewest_rounds);
+    printf("\n%s: %d goals, %d met, %d NOT MET (%d interleaved rounds of about %.0f ms per contender and case%s; %s)\n",
+           name, bench_goals, bench_goals - bench_failures, bench_failures, bench_rounds, bench_round_ms, rounds,
+           bench_clock);
     return bench_failures ? 1 : 0;
 }
 
