@@ -56,6 +56,10 @@ fn install_foundation(reg: &MemoryRegistry, interfaces: &[(&GUID, &str, u32)]) {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn registration_writes_the_interfaces_and_unregistration_removes_everything() {
     let reg = MemoryRegistry::new();
     assert_eq!(register(&reg, MODULE, false), Ok(true));
@@ -81,6 +85,10 @@ fn registration_writes_the_interfaces_and_unregistration_removes_everything() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn an_installed_foundation_proxy_stub_keeps_its_interfaces() {
     let reg = MemoryRegistry::new();
     // An opccomn_ps.dll of OPC Common 1.0 knows three of the five interfaces.
@@ -103,6 +111,10 @@ fn an_installed_foundation_proxy_stub_keeps_its_interfaces() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn taking_over_is_undone_by_unregistration() {
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces());
@@ -118,6 +130,10 @@ fn taking_over_is_undone_by_unregistration() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn a_proxy_stub_installed_after_us_keeps_what_it_wrote() {
     let reg = MemoryRegistry::new();
     assert_eq!(register(&reg, MODULE, false), Ok(true));
@@ -146,6 +162,10 @@ fn a_proxy_stub_installed_after_us_keeps_what_it_wrote() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn a_dangling_proxy_stub_class_is_replaced_and_restored() {
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces()[..1]);
@@ -162,6 +182,10 @@ fn a_dangling_proxy_stub_class_is_replaced_and_restored() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn unregistration_without_a_ledger_removes_only_our_values() {
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces()[..1]);

@@ -65,6 +65,10 @@ fn ids(list: &[u128]) -> Vec<GUID> {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn zero_means_any_category() {
     let regs = sample();
     assert_eq!(classes_of_categories(&regs, None, None), ids(&[1, 2, 3, 4, 5]));
@@ -98,6 +102,10 @@ fn a_class_qualifies_by_any_implemented_category() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn required_categories_are_the_ones_the_caller_supports() {
     let regs = sample();
     // Supporting A&E: every class that requires nothing (1, 3, 4) and class 2 (requires A&E); not 5,

@@ -49,6 +49,10 @@ fn dump(regs: &Registries) -> Vec<(String, Vec<(String, RegValue)>)> {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn registration_writes_what_com_and_the_specification_require() {
     let regs = memory();
     let mut d = server(1);
