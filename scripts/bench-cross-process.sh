@@ -4,7 +4,8 @@
 # the Foundation's opccomn_ps.dll, in the same run (benches/cross_process_bench.c; goal <= 1.1x, a GOAL
 # line per goal; exit code 1 when one is missed).
 #
-# Usage: scripts/bench-cross-process.sh [N]   (N GetErrorString and N/5 Enum+Next per phase; default 500)
+# Usage: scripts/bench-cross-process.sh [N]   (N GetErrorString and N/5 Enum+Next per contender in all, in 51
+# interleaved rounds; default 10200)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"

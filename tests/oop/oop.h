@@ -16,6 +16,13 @@
 static const CLSID CLSID_OopServer = {0xC3000000, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x01}};
 /* The same EXE's server list over a registry held in memory with OOP_FAKE_SERVERS classes. */
 static const CLSID CLSID_OopServerList = {0xC3000000, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x02}};
+/* The same two classes under other CLSIDs, served by a server started with "-set:N" (N from 1 to 9):
+ * the cross-process benchmark keeps several servers running at once. Set 0 is the two above. */
+static CLSID oop_class(unsigned set, int server_list) {
+    CLSID c = CLSID_OopServer;
+    c.Data4[7] = (unsigned char)(1 + 2 * set + (server_list ? 1 : 0));
+    return c;
+}
 #define OOP_FAKE_SERVERS 100
 static CLSID oop_fake_clsid(unsigned n) {
     CLSID c = {0xC3100000 + n, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x10}};
@@ -26,7 +33,17 @@ static CLSID oop_fake_clsid(unsigned n) {
 #define OOP_CODE_CLIENT_NAME ((HRESULT)0xE0040201L) /* the last name SetClientName gave the server */
 #define OOP_CODE_SHUTDOWN ((HRESULT)0xE0040202L)    /* sends OpcShutdownNotify; "notified=N failed=M" */
 #define OOP_CODE_PROXY_STUB ((HRESULT)0xE0040203L)  /* which proxy/stub the server's stubs come from */
+#define OOP_CODE_CPU_TIME ((HRESULT)0xE0040204L)    /* the server's process_cpu_time(), as text */
 #define OOP_REASON "Maintenance at 12:00 \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac"
+
+/* The CPU time (user and kernel, 100 ns units) this process has used so far; 0 when unknown. Under
+ * Wine it advances in clock ticks (10 ms): measure long stretches. */
+static unsigned long long process_cpu_time(void) {
+    FILETIME created, exited, kernel, user;
+    if (!GetProcessTimes(GetCurrentProcess(), &created, &exited, &kernel, &user)) return 0;
+    return (((unsigned long long)kernel.dwHighDateTime << 32) | kernel.dwLowDateTime) +
+           (((unsigned long long)user.dwHighDateTime << 32) | user.dwLowDateTime);
+}
 
 /* The locales the test server declares: the library's limit of 4096. */
 #define OOP_LOCALES 4096

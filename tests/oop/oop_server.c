@@ -2,11 +2,13 @@
  * object written in C that aggregates OpcCommonCreate (IOPCCommon) and OpcShutdownCreate
  * (IConnectionPointContainer with the IOPCShutdown connection point), as an OPC server does, and a
  * server list over a registry held in memory with OOP_FAKE_SERVERS classes. Runs in the multithreaded
- * apartment and exits when its last object is released (or after two minutes without one); the class
+ * apartment and exits when its last object is released (or after two minutes without one, or 20
+ * minutes after its first when objects are never released: a client that died); the class
  * objects are revoked the moment the last object goes, so a client activating then gets a new server.
  *
  * With "-ps:widl" on its command line it uses the stand-in for the Foundation's proxy/stub
  * (opccomn_widl_ps.dll) for the five interfaces; otherwise what the registry names (opccomn.dll).
+ * With "-set:N" it serves its two classes under the CLSIDs oop_class(N, ...) instead (oop.h).
  *
  * The server answers the vendor codes of oop.h in GetErrorString, so the client can ask what the
  * server saw: the client name, the result of a shutdown notification, the proxy/stub in use. */
@@ -28,7 +30,11 @@ static void revoke_classes(void) {
     }
 }
 
-static void object_created(void) { InterlockedIncrement(&objects); }
+static LONG ever_created; /* an object was made: the server is in use */
+static void object_created(void) {
+    InterlockedIncrement(&objects);
+    InterlockedExchange(&ever_created, 1);
+}
 /* The last object gone: revoke the class objects at once, so that a client activating now gets a new
  * server instead of this exiting one, then let main() finish. */
 static void object_destroyed(void) {
@@ -116,6 +122,12 @@ static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *te
         HRESULT hr = OpcShutdownNotifyEx(&s->unk, W(OOP_REASON), &notified, &failed);
         snprintf(buf, sizeof buf, "hr=%08lX notified=%lu failed=%lu", (unsigned long)hr, (unsigned long)notified,
                  (unsigned long)failed);
+        set_answer(s, buf);
+        *text = s->answer;
+        return S_OK;
+    }
+    if (code == OOP_CODE_CPU_TIME) {
+        snprintf(buf, sizeof buf, "%llu", process_cpu_time());
         set_answer(s, buf);
         *text = s->answer;
         return S_OK;
@@ -272,6 +284,9 @@ static HRESULT fill_fake_registry(void) {
 int main(void) {
     HRESULT hr;
     DWORD wait_ms;
+    const WCHAR *set_flag = wcsstr(GetCommandLineW(), L" -set:");
+    unsigned set = set_flag ? (unsigned)(set_flag[6] - L'0') % 10 : 0;
+    CLSID server_clsid = oop_class(set, 0), list_clsid = oop_class(set, 1);
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
     done = CreateEventW(NULL, TRUE, FALSE, NULL);
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
@@ -279,17 +294,21 @@ int main(void) {
     if (SUCCEEDED(hr) && wcsstr(GetCommandLineW(), L"-ps:opccomn-direct")) hr = use_opccomn_proxy_stub_directly();
     if (SUCCEEDED(hr)) hr = fill_fake_registry();
     if (SUCCEEDED(hr))
-        hr = CoRegisterClassObject(&CLSID_OopServer, (IUnknown *)&server_factory.cf, CLSCTX_LOCAL_SERVER,
+        hr = CoRegisterClassObject(&server_clsid, (IUnknown *)&server_factory.cf, CLSCTX_LOCAL_SERVER,
                                    REGCLS_MULTIPLEUSE, &cookies[0]);
     if (SUCCEEDED(hr))
-        hr = CoRegisterClassObject(&CLSID_OopServerList, (IUnknown *)&list_factory.cf, CLSCTX_LOCAL_SERVER,
+        hr = CoRegisterClassObject(&list_clsid, (IUnknown *)&list_factory.cf, CLSCTX_LOCAL_SERVER,
                                    REGCLS_MULTIPLEUSE, &cookies[1]);
     if (FAILED(hr)) {
         fprintf(stderr, "oop_server: start failed: 0x%08lX\n", (unsigned long)hr);
         return 1;
     }
-    /* Exit when the last object goes; a server nobody connects to gives up after two minutes. */
-    WaitForSingleObject(done, 120000);
+    /* Exit when the last object goes. A server nobody connects to gives up after two minutes; one in
+     * use, however long its client's calls take (a benchmark runs for minutes on a loaded machine),
+     * after 20 minutes, so that a client that died without releasing (Wine runs no rundown of a dead
+     * client's references) does not leave it running for ever. */
+    for (wait_ms = 0; WaitForSingleObject(done, 1000) == WAIT_TIMEOUT; wait_ms += 1000)
+        if (wait_ms >= (InterlockedCompareExchange(&ever_created, 0, 0) ? 1200000u : 120000u)) break;
     revoke_classes();
     /* An object a vanished client never released (Wine runs no rundown of a dead client's references)
      * must not keep this process, and the test runner's output pipe it inherited, alive for ever. */
