@@ -232,6 +232,10 @@ struct Ctx {
 
 bool Local() { return g_opt.host.empty(); }
 
+// The context of a creation on --host, as remote OPC clients ask: the host's local server, which COM
+// reaches by DCOM, or this machine's when the host names this machine ("localhost", its own name).
+constexpr DWORD kHostContext = CLSCTX_REMOTE_SERVER | CLSCTX_LOCAL_SERVER;
+
 COSERVERINFO *ServerInfo(COSERVERINFO *info) {
     if (Local()) return nullptr;
     memset(info, 0, sizeof *info);
@@ -245,7 +249,7 @@ IUnknown *Server(Session &s) {
         s.create_tried = true;
         COSERVERINFO info;
         MULTI_QI mqi = {&IID_IUnknown, nullptr, S_OK};
-        DWORD context = Local() ? g_opt.context : static_cast<DWORD>(CLSCTX_REMOTE_SERVER);
+        DWORD context = Local() ? g_opt.context : kHostContext;
         Call c("CoCreateInstanceEx");
         s.create_hr = CoCreateInstanceEx(g_facts.clsid, nullptr, context, ServerInfo(&info), 1, &mqi);
         if (SUCCEEDED(s.create_hr)) s.create_hr = mqi.hr;
@@ -1072,7 +1076,7 @@ IOPCServerList2 *ServerList(Ctx &x) {
         COSERVERINFO info;
         MULTI_QI mqi = {&IID_IOPCServerList2, nullptr, S_OK};
         Call c("CoCreateInstanceEx(CLSID_OPCServerList)");
-        hr = CoCreateInstanceEx(CLSID_OPCServerList, nullptr, CLSCTX_REMOTE_SERVER, ServerInfo(&info), 1, &mqi);
+        hr = CoCreateInstanceEx(CLSID_OPCServerList, nullptr, kHostContext, ServerInfo(&info), 1, &mqi);
         if (SUCCEEDED(hr)) hr = mqi.hr;
         p = mqi.pItf;
         g_list_source = "OPCServerList on " + Utf8(g_opt.host.c_str());
@@ -1654,7 +1658,7 @@ HRESULT Resolve() {
     if (Local()) return CLSIDFromProgID(g_opt.server.c_str(), &g_facts.clsid);
     COSERVERINFO info;
     MULTI_QI mqi = {&IID_IOPCServerList, nullptr, S_OK};
-    HRESULT hr = CoCreateInstanceEx(CLSID_OPCServerList, nullptr, CLSCTX_REMOTE_SERVER, ServerInfo(&info), 1, &mqi);
+    HRESULT hr = CoCreateInstanceEx(CLSID_OPCServerList, nullptr, kHostContext, ServerInfo(&info), 1, &mqi);
     if (SUCCEEDED(hr)) hr = mqi.hr;
     if (FAILED(hr)) return hr;
     IOPCServerList *list = static_cast<IOPCServerList *>(mqi.pItf);

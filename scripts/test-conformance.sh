@@ -41,7 +41,9 @@ run_checker() {
 # Ends the surrogate processes (dllhost.exe) of a test server class left running in this Wine prefix.
 kill_surrogates() {
     local pid
-    for pid in $(pgrep -f "dllhost.exe /PROCESSID:$1" || true); do
+    # (The AppID's braces are no pattern: the command line is compared as a fixed string.)
+    for pid in $(pgrep -fi "dllhost\.exe" || true); do
+        tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -qiF "/PROCESSID:$1" || continue
         if tr '\0' '\n' <"/proc/$pid/environ" 2>/dev/null | grep -qxF "WINEPREFIX=$WINEPREFIX"; then
             kill "$pid" 2>/dev/null || true
         fi
@@ -147,9 +149,33 @@ run_checker example-local text OpcComn.ExampleServer.1 --context local --hostile
 $report text "$out/example-local.text" "$rc"
 run_checker example-local json OpcComn.ExampleServer.1 --context local --hostile
 $report json "$out/example-local.json" "$rc"
+passed=$((passed + 1))
+cat "$out/example-local.text"
+
+# --host, as for a server on another machine: creation with CLSCTX_REMOTE_SERVER | CLSCTX_LOCAL_SERVER
+# and the host in COSERVERINFO, the ProgID resolved through the host's OPCServerList (the browser
+# service, opccomn_browser.exe), no registry or file of the host read. "localhost" names this machine,
+# where COM (Windows' DCOM as Wine's) starts the local server: every check of the server and the
+# browsing checks must pass, the registration checks are not applicable.
+(cd "$bin" && wine opccomn_browser.exe /RegServer >/dev/null)
+run_checker example-host json OpcComn.ExampleServer.1 --host localhost
+$report json "$out/example-host.json" "$rc"
+(cd "$bin" && wine opccomn_browser.exe /UnregServer >/dev/null)
+python3 - "$out/example-host.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["server"]["host"] == "localhost", r["server"]
+status = {c["id"]: c["status"] for c in r["checks"]}
+for check, s in status.items():
+    if check.startswith("reg."):
+        assert s == "not applicable", (check, s)
+    else:
+        assert s == "passed", (check, s, [c for c in r["checks"] if c["id"] == check])
+assert status["server.create"] == "passed" and status["browse.progid"] == "passed", status
+print("--host localhost: the server checked through the host's server list; registration checks not applicable")
+PY
 (cd "$bin" && wine regsvr32 /u /s /n /i:ProxyStub opccomn.dll)
 (cd "$example" && wine opccomn_example_server.exe /UnregServer)
 passed=$((passed + 1))
-cat "$out/example-local.text"
 
 echo "test-conformance: $passed passed, 0 failed"

@@ -117,4 +117,24 @@ static HRESULT widl_proxy_stub_in_use(void) {
     return refs > widl_baseline ? S_FALSE : S_OK;
 }
 
+/* The .reg text of the given keys (and everything under them) of `sys`, one after the other, for
+ * comparing the registry before and after; the caller frees it with free(). */
+static LPWSTR registry_snapshot(OpcRegistry *sys, const WCHAR *const *keys, size_t count) {
+    size_t total = 1, i;
+    LPWSTR *parts = (LPWSTR *)calloc(count, sizeof(LPWSTR)), out;
+    if (!parts) return NULL;
+    for (i = 0; i < count; i++) {
+        OpcRegistryExport(sys, keys[i], &parts[i]);
+        if (parts[i]) total += wlen(parts[i]);
+    }
+    out = (LPWSTR)malloc(total * sizeof(WCHAR));
+    if (out) out[0] = 0;
+    for (i = 0; i < count; i++) {
+        if (parts[i] && out) wcscat(out, parts[i]);
+        OpcTaskMemFree(parts[i]);
+    }
+    free(parts);
+    return out;
+}
+
 #endif

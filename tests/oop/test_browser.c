@@ -127,20 +127,7 @@ static LPWSTR snapshot(OpcRegistry *sys) {
                                         L"OPC.ServerList.1", L"OPC.ServerList",
                                         L"AppID\\{CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}",
                                         L"AppID\\opccomn_browser.exe"};
-    size_t total = 1, i;
-    LPWSTR parts[7], out;
-    for (i = 0; i < 7; i++) {
-        parts[i] = NULL;
-        OpcRegistryExport(sys, keys[i], &parts[i]);
-        if (parts[i]) total += wlen(parts[i]);
-    }
-    out = (LPWSTR)malloc(total * sizeof(WCHAR));
-    out[0] = 0;
-    for (i = 0; i < 7; i++) {
-        if (parts[i]) wcscat(out, parts[i]);
-        OpcTaskMemFree(parts[i]);
-    }
-    return out;
+    return registry_snapshot(sys, keys, sizeof keys / sizeof keys[0]);
 }
 
 /* What the Foundation's OpcEnum.exe registers for itself. */

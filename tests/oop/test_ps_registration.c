@@ -61,20 +61,7 @@ static LPWSTR snapshot(OpcRegistry *sys) {
         L"Interface\\{13486D50-4821-11D2-A494-3CB306C10000}", L"Interface\\{9DD0B56C-AD9E-43EE-8305-487F3188BF7A}",
         L"Interface\\{55C382C8-21C7-4E88-96C1-BECFB1E3F483}", L"CLSID\\{13486D50-4821-11D2-A494-3CB306C10000}",
         L"CLSID\\{3D738B71-0B9D-4337-A725-E8541A96D1C9}"};
-    size_t total = 1, i;
-    LPWSTR parts[7], out;
-    for (i = 0; i < 7; i++) {
-        parts[i] = NULL;
-        OpcRegistryExport(sys, keys[i], &parts[i]);
-        if (parts[i]) total += wlen(parts[i]);
-    }
-    out = (LPWSTR)malloc(total * sizeof(WCHAR));
-    out[0] = 0;
-    for (i = 0; i < 7; i++) {
-        if (parts[i]) wcscat(out, parts[i]);
-        OpcTaskMemFree(parts[i]);
-    }
-    return out;
+    return registry_snapshot(sys, keys, sizeof keys / sizeof keys[0]);
 }
 
 int main(void) {
