@@ -59,6 +59,10 @@ pub(crate) struct Program {
     /// other end test.
     lead: [(u32, u32); LEAD_MAX + 1],
     lead_len: usize,
+    /// The ASCII bitmaps of the lists `0..LEAD_SETS` (those that can be in `lead`, the pattern's first
+    /// lists), at a fixed place: the inlined loop over `lead` tests an ASCII character against them
+    /// with one load, where `sets` would need its inline-or-heap storage looked up.
+    lead_sets: [[u64; 2]; LEAD_SETS],
     /// What the string must do after the characters `lead` matched.
     tail: Tail,
     /// No segment starts with a literal run long enough for the Knuth-Morris-Pratt search.
@@ -91,6 +95,10 @@ const LEAD_DIGIT: u32 = u32::MAX - 1;
 const LEAD_SET: u32 = 0x8000_0000;
 const LEAD_END: u32 = u32::MAX - 2;
 
+/// How many of a pattern's first lists have their ASCII bitmap in `Program::lead_sets`; a `lead`
+/// list after them is tested out of line.
+const LEAD_SETS: usize = 4;
+
 /// Segments starting with at least this many literals are searched with Knuth-Morris-Pratt (shorter
 /// runs cost at most this many steps per place tried, and skip to their first character quickly).
 const KMP_MIN_RUN: usize = 16;
@@ -103,6 +111,7 @@ impl Program {
             case_sensitive,
             lead: [(LEAD_END, 0); LEAD_MAX + 1],
             lead_len: 0,
+            lead_sets: [[0; 2]; LEAD_SETS],
             tail: Tail::General,
             kmp_free: true,
             tokens: SmallVec::new(),
@@ -170,6 +179,9 @@ impl Program {
             p.lead_len += 1;
         }
         p.lead[p.lead_len] = (LEAD_END, 0);
+        for (bits, set) in p.lead_sets.iter_mut().zip(p.sets.as_slice()) {
+            *bits = set.ascii;
+        }
         let segments = p.segments.as_slice();
         if segments[0] as usize == p.lead_len {
             if segments.len() == 1 {
@@ -363,8 +375,12 @@ impl Program {
     pub(crate) unsafe fn matches_cursor(&self, cursor: impl Cursor) -> bool {
         let mut i = 0;
         loop {
-            // `i <= lead_len`: the loop ends at the `LEAD_END` entry at the latest.
-            let (unit, mask) = self.lead[i];
+            // `i <= lead_len`: the loop ends at the `LEAD_END` entry at the latest (no code unit matches
+            // it, and `lead_len <= LEAD_MAX`). Unchecked: a bounds test per character would be a third
+            // of the loop.
+            debug_assert!(i <= self.lead_len);
+            // SAFETY: `i <= lead_len <= LEAD_MAX`, an index of `lead`, as above.
+            let (unit, mask) = unsafe { *self.lead.get_unchecked(i) };
             // SAFETY: units before `i` were not NUL (they matched ASCII literals, `?`, `#` or lists),
             // so unit `i` is at or before the terminator.
             let u = unsafe { cursor.unit(i) };
@@ -374,7 +390,13 @@ impl Program {
                     LEAD_END => break,
                     LEAD_ANY => ascii,
                     LEAD_DIGIT => u.wrapping_sub('0' as u32) < 10,
-                    LEAD_SET.. => ascii && self.lead_set_contains(unit - LEAD_SET, u),
+                    LEAD_SET.. => {
+                        ascii
+                            && match self.lead_sets.get((unit - LEAD_SET) as usize) {
+                                Some(bits) => bits[(u >> 6) as usize & 1] & (1 << (u & 63)) != 0,
+                                None => self.lead_set_contains(unit - LEAD_SET, u),
+                            }
+                    }
                     _ => false,
                 };
                 if !matched {
@@ -744,6 +766,39 @@ mod tests {
         // Short runs take the naive search.
         assert!(is_match("aaaaab1", "*aaab#*", true));
         assert!(!is_match("aaaaab", "*aaab#*", true));
+    }
+
+    /// The loop over `lead` tests the first `LEAD_SETS` lists from `lead_sets` and later ones out of
+    /// line: both agree with the general matcher (negated lists, both modes, characters that are not
+    /// ASCII), and each rejects what it should.
+    #[test]
+    fn lead_lists_in_place_and_out_of_line_agree_with_the_general_matcher() {
+        let pattern = "[a-c][!0-9][A-Z][#-%][x][b-d][!q]*";
+        const { assert!(LEAD_SETS < 7, "the pattern must have lists beyond lead_sets") };
+        let cases: &[(&str, bool, bool)] = &[
+            ("aXB#xby", true, true),
+            ("aXB#xbyzz", true, true),
+            ("a5B#xby", false, false),       // second list (in place)
+            ("aXb#xby", false, true),        // third list, case folding (in place)
+            ("aXB&xby", false, false),       // fourth list (in place)
+            ("aXB#xay", false, false),       // sixth list (out of line)
+            ("aXB#xBy", false, true),        // sixth list, case folding (out of line)
+            ("aXB#xbq", false, false),       // seventh list, negated (out of line)
+            ("aÉB#xby", true, true),         // not ASCII: the general path
+            ("aX\u{212A}#xby", false, true), // KELVIN SIGN folds to k, in [A-Z] when insensitive
+            ("aXB#x", false, false),
+        ];
+        for &(s, sensitive, insensitive) in cases {
+            for (cs, expected) in [(true, sensitive), (false, insensitive)] {
+                let p = compile(pattern, cs).unwrap();
+                let units: Vec<u16> = s.encode_utf16().collect();
+                let terminated: Vec<u16> = units.iter().copied().chain([0]).collect();
+                // SAFETY: NUL-terminated.
+                let by_cursor = unsafe { p.matches_cursor(super::super::stream::WideCursor(terminated.as_ptr())) };
+                assert_eq!(by_cursor, expected, "{s:?}, case sensitive: {cs}");
+                assert_eq!(p.matches(&Utf16(&units)), expected, "{s:?}, case sensitive: {cs}");
+            }
+        }
     }
 
     #[test]
