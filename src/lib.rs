@@ -33,6 +33,6 @@ mod stress_tests;
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.
 #[no_mangle]
-pub extern "C" fn OpcObjectCount() -> u32 {
+pub extern "C" fn OpcObjectCount() -> com::ffi::Crossed<u32> {
     com::ffi::guard!(0, { com::object::live_objects() as u32 })
 }

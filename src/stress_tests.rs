@@ -74,7 +74,7 @@ fn notify(server: *mut IUnknown) -> (HRESULT, ULONG) {
     // SAFETY: a live shutdown object; valid out-parameters.
     let hr = unsafe { OpcShutdownNotifyEx(server, reason.as_ptr(), &mut notified, &mut failed) };
     assert_eq!(failed, 0);
-    (hr, notified)
+    (hr.get(), notified)
 }
 
 #[test]

@@ -218,13 +218,13 @@ typedef struct OpcPattern OpcPattern;
 typedef struct OpcRegistry OpcRegistry;
 
 #if !defined(_WIN32)
-// A COM result code. Negative values are failures (`FAILED(hr)`).
-typedef int32_t HRESULT;
+// A locale identifier.
+typedef uint32_t LCID;
 #endif
 
 #if !defined(_WIN32)
-// A locale identifier.
-typedef uint32_t LCID;
+// A COM result code. Negative values are failures (`FAILED(hr)`).
+typedef int32_t HRESULT;
 #endif
 
 #if !defined(_WIN32)
@@ -1803,7 +1803,7 @@ uint32_t OPCCOMN_CDECL OpcObjectCount(void);
 // Allocates `size` bytes with the allocator the library uses for all memory it hands to callers:
 // CoTaskMemAlloc on Windows, malloc elsewhere. Returns NULL when out of memory; a size of 0 returns
 // a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
-void *OPCCOMN_CDECL OpcTaskMemAlloc(size_t size);
+void * OPCCOMN_CDECL OpcTaskMemAlloc(size_t size);
 
 // Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`. NULL is ignored.
 //

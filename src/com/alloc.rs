@@ -4,6 +4,7 @@
 //! library returns with CoTaskMemFree as COM requires. Elsewhere it is malloc / free. Both are exported
 //! as `OpcTaskMemAlloc` / `OpcTaskMemFree`, so C code frees library memory the same way everywhere.
 
+use super::ffi::Crossed;
 use core::ffi::c_void;
 use core::ptr;
 
@@ -104,7 +105,7 @@ pub fn alloc_wstr_from_str(text: &str) -> Result<LPWSTR, HRESULT> {
 /// CoTaskMemAlloc on Windows, malloc elsewhere. Returns NULL when out of memory; a size of 0 returns
 /// a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
 #[no_mangle]
-pub extern "C" fn OpcTaskMemAlloc(size: usize) -> *mut c_void {
+pub extern "C" fn OpcTaskMemAlloc(size: usize) -> Crossed<*mut c_void> {
     super::ffi::guard!(ptr::null_mut(), { task_alloc(size) })
 }
 

@@ -23,7 +23,7 @@
 use core::ptr::{self, NonNull};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::ffi::{self, Fail};
+use super::ffi::{self, Fail, Hr};
 use super::hresult::{S_FALSE, S_OK};
 use super::object::{ComClass, ComObject, Slot};
 use super::types::{GUID, HRESULT, ULONG};
@@ -188,7 +188,7 @@ pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
     celt: ULONG,
     rgelt: *mut <K::Item as Element>::Out,
     pceltFetched: *mut ULONG,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [pceltFetched], {
         // SAFETY: the caller vouches a non-NULL `pceltFetched` is writable.
         let fetched = unsafe { ffi::out_opt(pceltFetched) };
@@ -219,7 +219,7 @@ pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
 ///
 /// # Safety
 /// Called through an enumerator's vtable.
-pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface, celt: ULONG) -> HRESULT {
+pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface, celt: ULONG) -> Hr {
     ffi::boundary!(Com, [], {
         // SAFETY: COM calls this only through our vtable.
         let (_, count) = unsafe { object::<K>(this) }.advance(celt);
@@ -231,7 +231,7 @@ pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface,
 ///
 /// # Safety
 /// Called through an enumerator's vtable.
-pub(crate) unsafe extern "system" fn reset<K: EnumInterface>(this: *mut K::Iface) -> HRESULT {
+pub(crate) unsafe extern "system" fn reset<K: EnumInterface>(this: *mut K::Iface) -> Hr {
     ffi::boundary!(Com, [], {
         // SAFETY: COM calls this only through our vtable.
         *unsafe { object::<K>(this) }.position() = 0;
@@ -243,10 +243,7 @@ pub(crate) unsafe extern "system" fn reset<K: EnumInterface>(this: *mut K::Iface
 ///
 /// # Safety
 /// Called through an enumerator's vtable; `ppenum` NULL or writable.
-pub(crate) unsafe extern "system" fn clone<K: EnumInterface>(
-    this: *mut K::Iface,
-    ppenum: *mut *mut K::Iface,
-) -> HRESULT {
+pub(crate) unsafe extern "system" fn clone<K: EnumInterface>(this: *mut K::Iface, ppenum: *mut *mut K::Iface) -> Hr {
     ffi::boundary!(Com, [ppenum], {
         // SAFETY: the caller vouches a non-NULL `ppenum` is writable.
         let out = unsafe { ffi::out(ppenum) }?;
@@ -263,6 +260,7 @@ mod tests {
     use core::ffi::c_void;
 
     use super::*;
+    use crate::com::ffi::Crossed;
     use crate::com::hresult::E_POINTER;
     use crate::com::iids::IID_IUNKNOWN;
     use crate::com::types::REFIID;
@@ -272,13 +270,13 @@ mod tests {
     #[repr(C)]
     #[allow(non_snake_case)]
     struct TestEnumVtbl<E: 'static> {
-        QueryInterface: unsafe extern "system" fn(*mut TestEnum<E>, REFIID, *mut *mut c_void) -> HRESULT,
-        AddRef: unsafe extern "system" fn(*mut TestEnum<E>) -> ULONG,
-        Release: unsafe extern "system" fn(*mut TestEnum<E>) -> ULONG,
-        Next: unsafe extern "system" fn(*mut TestEnum<E>, ULONG, *mut E, *mut ULONG) -> HRESULT,
-        Skip: unsafe extern "system" fn(*mut TestEnum<E>, ULONG) -> HRESULT,
-        Reset: unsafe extern "system" fn(*mut TestEnum<E>) -> HRESULT,
-        Clone: unsafe extern "system" fn(*mut TestEnum<E>, *mut *mut TestEnum<E>) -> HRESULT,
+        QueryInterface: unsafe extern "system" fn(*mut TestEnum<E>, REFIID, *mut *mut c_void) -> Hr,
+        AddRef: unsafe extern "system" fn(*mut TestEnum<E>) -> Crossed<ULONG>,
+        Release: unsafe extern "system" fn(*mut TestEnum<E>) -> Crossed<ULONG>,
+        Next: unsafe extern "system" fn(*mut TestEnum<E>, ULONG, *mut E, *mut ULONG) -> Hr,
+        Skip: unsafe extern "system" fn(*mut TestEnum<E>, ULONG) -> Hr,
+        Reset: unsafe extern "system" fn(*mut TestEnum<E>) -> Hr,
+        Clone: unsafe extern "system" fn(*mut TestEnum<E>, *mut *mut TestEnum<E>) -> Hr,
     }
     #[repr(C)]
     struct TestEnum<E: 'static> {

@@ -6,14 +6,19 @@
 //!   body under the panic guard, turns the body's `Result` into the HRESULT and resets the
 //!   out-parameters again when the result is a failure;
 //! - [`guard!`](crate::ffi_guard) for the few functions returning something else (a BOOL, a count,
-//!   a pointer, nothing): the panic guard with the function's documented failure value.
+//!   a pointer, nothing) or an HRESULT without arguments to check (ShutdownRequest, the `Dll...`
+//!   entry points): the panic guard with the function's documented failure value.
 //!
 //! Inside a body the typed readers below take the raw arguments apart: [`out`] for an out-pointer,
 //! [`in_ref`] for an in-reference, [`in_units`] / [`in_string`] for an in-string, [`in_array`] for an
 //! in-array. A NULL argument gives [`Fail::Null`], which the boundary turns into the function's NULL
 //! code, so the rule is written once per function and cannot drift between functions of one kind.
-//! A test in this module reads the crate's sources and fails when an export or a vtable method is not
-//! written this way.
+//!
+//! Both macros return a [`Crossed<T>`] ([`Hr`] for an HRESULT), which only they can make. Every
+//! vtable's methods (AddRef and Release included) and every export that returns something are typed
+//! to return it, so a method or an export whose body skipped the boundary does not compile; C sees the
+//! plain `T` (`#[repr(transparent)]`). A test in this module reads the crate's sources and also fails
+//! when an export does not declare that type, or is not written with one of the two macros.
 //!
 //! The rule (README, "API conventions"): COM plumbing (IUnknown, IClassFactory, the enumerators,
 //! connection points, and the creation functions that follow CoCreateInstance's `riid, ppv`
@@ -125,6 +130,82 @@ out_tuple!(A, B);
 out_tuple!(A, B, C);
 out_tuple!(A, B, C, D);
 
+/// What every export and vtable method returns (an HRESULT, a BOOL, a count, a pointer), as proof
+/// that it came out of [`run`] or [`guarded`], the functions behind
+/// [`boundary!`](crate::ffi_boundary) and [`guard!`](crate::ffi_guard). The field is private to this
+/// module and nothing else makes one, so a vtable entry or an export whose body skipped the boundary
+/// does not type-check. `#[repr(transparent)]`: the ABI is exactly `T`'s under every calling
+/// convention (an HRESULT is returned as the `int32_t` it is); `cbindgen.toml` has the header say `T`.
+///
+/// A result read from C (a method of an object the library was given) arrives as a `Crossed<T>` too;
+/// [`Crossed::get`] gives the plain value.
+///
+/// Methods written with the macros fill a vtable:
+///
+/// ```
+/// use core::ffi::c_void;
+/// use opccomn::com::ffi::{self, Crossed, Hr};
+/// use opccomn::com::{IUnknown, IUnknownVtbl, E_NOINTERFACE, REFIID, ULONG};
+///
+/// unsafe extern "system" fn qi(_: *mut IUnknown, _: REFIID, ppv: *mut *mut c_void) -> Hr {
+///     ffi::boundary!(Com, [ppv], { Err(E_NOINTERFACE.into()) })
+/// }
+/// unsafe extern "system" fn count(_: *mut IUnknown) -> Crossed<ULONG> {
+///     ffi::guard!(1, { 1 })
+/// }
+/// static VTBL: IUnknownVtbl = IUnknownVtbl { QueryInterface: qi, AddRef: count, Release: count };
+/// ```
+///
+/// one that skips the boundary does not compile:
+///
+/// ```compile_fail,E0308
+/// use core::ffi::c_void;
+/// use opccomn::com::ffi::{self, Crossed};
+/// use opccomn::com::{IUnknown, IUnknownVtbl, E_NOINTERFACE, HRESULT, REFIID, ULONG};
+///
+/// unsafe extern "system" fn qi(_: *mut IUnknown, _: REFIID, _: *mut *mut c_void) -> HRESULT {
+///     E_NOINTERFACE
+/// }
+/// unsafe extern "system" fn count(_: *mut IUnknown) -> Crossed<ULONG> {
+///     ffi::guard!(1, { 1 })
+/// }
+/// static VTBL: IUnknownVtbl = IUnknownVtbl { QueryInterface: qi, AddRef: count, Release: count };
+/// ```
+#[repr(transparent)]
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Crossed<T>(T);
+
+/// The result of a function returning an HRESULT across the boundary.
+pub type Hr = Crossed<HRESULT>;
+
+impl<T> Crossed<T> {
+    /// The plain value.
+    pub fn get(self) -> T {
+        self.0
+    }
+}
+
+#[cfg(test)]
+impl<T> Crossed<T> {
+    /// What a method of an object written in C returns: for the tests' stand-ins for the objects
+    /// callers give the library (sinks, outer objects, servers), which do not cross its boundary.
+    pub(crate) fn from_c(method: impl FnOnce() -> T) -> Self {
+        Crossed(method())
+    }
+}
+
+impl<T: core::fmt::Debug> core::fmt::Debug for Crossed<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<T: PartialEq> PartialEq<T> for Crossed<T> {
+    fn eq(&self, other: &T) -> bool {
+        self.0 == *other
+    }
+}
+
 /// The boundary behind [`boundary!`](crate::ffi_boundary): resets `outs`, runs `body` under the panic
 /// guard, maps [`Fail::Null`] to the rule's code and a panic to E_UNEXPECTED, and resets `outs` again
 /// on any failure code, so out-parameters are NULL/zero whenever the result is a failure.
@@ -132,7 +213,7 @@ out_tuple!(A, B, C, D);
 /// # Safety
 /// Every pointer in `outs` must be NULL or valid for writing one value for the whole call.
 #[inline(always)]
-pub unsafe fn run<O: OutParams>(rule: Rule, outs: O, body: impl FnOnce() -> FfiResult) -> HRESULT {
+pub unsafe fn run<O: OutParams>(rule: Rule, outs: O, body: impl FnOnce() -> FfiResult) -> Hr {
     // SAFETY: the caller's contract.
     unsafe { outs.reset() };
     let hr = match catch_unwind(AssertUnwindSafe(body)) {
@@ -145,14 +226,20 @@ pub unsafe fn run<O: OutParams>(rule: Rule, outs: O, body: impl FnOnce() -> FfiR
         // SAFETY: as above.
         unsafe { outs.reset() };
     }
-    hr
+    Crossed(hr)
 }
 
-/// The panic guard behind [`guard!`](crate::ffi_guard): `fallback` when `body` panics. Inlined, so
-/// that a hot export (MatchPattern) pays nothing for it.
+/// The panic guard: `fallback` when `body` panics. Inlined, so that a hot export (MatchPattern) pays
+/// nothing for it.
 #[inline(always)]
 pub fn guard<R>(fallback: R, body: impl FnOnce() -> R) -> R {
     catch_unwind(AssertUnwindSafe(body)).unwrap_or(fallback)
+}
+
+/// The boundary behind [`guard!`](crate::ffi_guard): [`guard`], with the result as a [`Crossed`].
+#[inline(always)]
+pub fn guarded<R>(fallback: R, body: impl FnOnce() -> R) -> Crossed<R> {
+    Crossed(guard(fallback, body))
 }
 
 /// The body of an HRESULT-returning export or vtable method:
@@ -172,8 +259,12 @@ macro_rules! ffi_boundary {
 /// The body of an export or vtable method that returns no HRESULT: `guard!(fallback, { ... })`.
 #[macro_export]
 macro_rules! ffi_guard {
+    // A function returning nothing has no result to carry the proof; the scanning test below checks it.
+    ((), $body:block) => {
+        $crate::com::ffi::guard((), move || $body)
+    };
     ($fallback:expr, $body:block) => {
-        $crate::com::ffi::guard($fallback, move || $body)
+        $crate::com::ffi::guarded($fallback, move || $body)
     };
 }
 
@@ -344,7 +435,7 @@ mod tests {
                 panic!("a bug inside a method")
             })
         };
-        assert_eq!((hr, v), (E_UNEXPECTED, 0));
+        assert_eq!((hr.get(), v), (E_UNEXPECTED, 0));
         // SAFETY: `p` is a writable local.
         let hr = unsafe { run(Rule::Com, (), || Err(E_OUTOFMEMORY.into())) };
         assert_eq!(hr, E_OUTOFMEMORY);
@@ -406,8 +497,14 @@ mod tests {
             let text = std::fs::read_to_string(&path).unwrap();
             // Test modules build foreign objects and callbacks; they are not the library's boundary.
             let text = without_test_modules(&text);
+            // Comments (the doc examples of this module among them) are not code.
+            let text: String = text
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .flat_map(|l| [l, "\n"])
+                .collect();
             let text = text.as_str();
-            for (name, body) in extern_functions(text) {
+            for (name, ret, body) in extern_functions(text) {
                 checked += 1;
                 let body = strip_comments(body);
                 let body = body.trim();
@@ -415,6 +512,16 @@ mod tests {
                 let ok = (head.ends_with("ffi::boundary!") || head.ends_with("ffi::guard!")) && ends_with_macro(body);
                 if !ok {
                     offenders.push(format!("{}: {name}", path.display()));
+                }
+                // What the compiler cannot see: that an export declares the proof type. (A vtable
+                // method that does not cannot be put in its vtable.)
+                let ret = ret.trim();
+                let proof = ret.is_empty() || ret == "Hr" || ret.ends_with("::Hr") || ret.contains("Crossed<");
+                if !proof {
+                    offenders.push(format!(
+                        "{}: {name} returns {ret}, not ffi::Hr or ffi::Crossed",
+                        path.display()
+                    ));
                 }
             }
             for (i, _) in text.match_indices("\n#[no_mangle]") {
@@ -440,13 +547,14 @@ mod tests {
         );
         assert!(
             offenders.is_empty(),
-            "not written with ffi::boundary!/ffi::guard!: {offenders:#?}"
+            "not written with ffi::boundary!/ffi::guard!, or not declared to return ffi::Hr/ffi::Crossed: {offenders:#?}"
         );
     }
 
-    /// Named `extern "C"` / `extern "system"` function definitions in `text` and their bodies (the
-    /// text inside the outermost braces). Function pointer types (`extern "system" fn(`) are skipped.
-    fn extern_functions(text: &str) -> Vec<(String, &str)> {
+    /// Named `extern "C"` / `extern "system"` function definitions in `text`: name, return type (empty
+    /// for none) and body (the text inside the outermost braces). Function pointer types
+    /// (`extern "system" fn(`) are skipped.
+    fn extern_functions(text: &str) -> Vec<(String, &str, &str)> {
         let mut found = Vec::new();
         for abi in ["extern \"C\" fn ", "extern \"system\" fn "] {
             for (i, _) in text.match_indices(abi) {
@@ -496,7 +604,8 @@ mod tests {
                         _ => {}
                     }
                 }
-                found.push((name, &rest[body_start..end]));
+                let ret = after[1..brace].trim().strip_prefix("->").unwrap_or("");
+                found.push((name, ret, &rest[body_start..end]));
             }
         }
         found

@@ -34,7 +34,7 @@ use core::ptr::{self, NonNull};
 use core::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::mem::MaybeUninit;
 
-use super::ffi::guard;
+use super::ffi::{guard, Crossed, Hr};
 use super::hresult::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, E_UNEXPECTED, S_OK};
 use super::iids::IID_IUNKNOWN;
 use super::types::{GUID, HRESULT, REFIID, ULONG};
@@ -442,21 +442,21 @@ static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
     Release: inner_release,
 };
 
-unsafe extern "system" fn inner_query_interface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+unsafe extern "system" fn inner_query_interface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
     super::ffi::boundary!(Com, [ppv], {
         // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
         Ok(unsafe { ComHeader::query_interface(header_of(this), riid, ppv) })
     })
 }
 
-unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> ULONG {
+unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> Crossed<ULONG> {
     super::ffi::guard!(0, {
         // SAFETY: as above.
         unsafe { header_of(this).as_ref().add_ref() }
     })
 }
 
-unsafe extern "system" fn inner_release(this: *mut IUnknown) -> ULONG {
+unsafe extern "system" fn inner_release(this: *mut IUnknown) -> Crossed<ULONG> {
     super::ffi::guard!(0, {
         // SAFETY: as above; the caller gives up its reference.
         unsafe { ComHeader::release(header_of(this)) }
@@ -467,11 +467,7 @@ unsafe extern "system" fn inner_release(this: *mut IUnknown) -> ULONG {
 ///
 /// # Safety
 /// Only for vtables installed in library object slots; COM callers pass such slots as `this`.
-pub unsafe extern "system" fn delegating_query_interface<I>(
-    this: *mut I,
-    riid: REFIID,
-    ppv: *mut *mut c_void,
-) -> HRESULT {
+pub unsafe extern "system" fn delegating_query_interface<I>(this: *mut I, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
     super::ffi::boundary!(Com, [ppv], {
         // SAFETY: `this` is a slot of a live object; the controlling unknown is valid while it lives.
         let header = unsafe { header_of(this) };
@@ -492,7 +488,7 @@ pub unsafe extern "system" fn delegating_query_interface<I>(
 ///
 /// # Safety
 /// As for [`delegating_query_interface`].
-pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> ULONG {
+pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> Crossed<ULONG> {
     super::ffi::guard!(0, {
         // SAFETY: as for delegating_query_interface.
         unsafe {
@@ -510,7 +506,7 @@ pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> ULONG {
 ///
 /// # Safety
 /// As for [`delegating_query_interface`]; the caller gives up a reference.
-pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> ULONG {
+pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> Crossed<ULONG> {
     super::ffi::guard!(0, {
         // SAFETY: as for delegating_query_interface.
         unsafe {
@@ -536,11 +532,11 @@ mod tests {
     /// A test interface: IUnknown plus one method that returns a value and one that panics.
     #[repr(C)]
     struct ITestVtbl {
-        QueryInterface: unsafe extern "system" fn(*mut ITest, REFIID, *mut *mut c_void) -> HRESULT,
-        AddRef: unsafe extern "system" fn(*mut ITest) -> ULONG,
-        Release: unsafe extern "system" fn(*mut ITest) -> ULONG,
-        Value: unsafe extern "system" fn(*mut ITest, *mut u32) -> HRESULT,
-        Explode: unsafe extern "system" fn(*mut ITest) -> HRESULT,
+        QueryInterface: unsafe extern "system" fn(*mut ITest, REFIID, *mut *mut c_void) -> Hr,
+        AddRef: unsafe extern "system" fn(*mut ITest) -> Crossed<ULONG>,
+        Release: unsafe extern "system" fn(*mut ITest) -> Crossed<ULONG>,
+        Value: unsafe extern "system" fn(*mut ITest, *mut u32) -> Hr,
+        Explode: unsafe extern "system" fn(*mut ITest) -> Hr,
     }
     #[repr(C)]
     struct ITest {
@@ -564,18 +560,17 @@ mod tests {
         }
     }
 
-    unsafe extern "system" fn value(this: *mut ITest, out: *mut u32) -> HRESULT {
-        if out.is_null() {
-            return E_INVALIDARG;
-        }
-        // SAFETY: called through TEST_VTBL only, on a live TestObject; `out` checked.
-        guard(E_UNEXPECTED, || unsafe {
-            *out = ComObject::<TestObject>::from_interface(this).value;
-            S_OK
+    unsafe extern "system" fn value(this: *mut ITest, out: *mut u32) -> Hr {
+        crate::com::ffi::boundary!(Opc, [out], {
+            // SAFETY: the caller passes NULL or a writable `out`.
+            let out = unsafe { crate::com::ffi::out(out) }?;
+            // SAFETY: called through TEST_VTBL only, on a live TestObject.
+            out.write(unsafe { ComObject::<TestObject>::from_interface(this) }.value);
+            Ok(S_OK)
         })
     }
-    unsafe extern "system" fn explode(_this: *mut ITest) -> HRESULT {
-        guard(E_UNEXPECTED, || panic!("a bug inside a method"))
+    unsafe extern "system" fn explode(_this: *mut ITest) -> Hr {
+        crate::com::ffi::guard!(E_UNEXPECTED, { panic!("a bug inside a method") })
     }
     static TEST_VTBL: ITestVtbl = ITestVtbl {
         QueryInterface: delegating_query_interface::<ITest>,

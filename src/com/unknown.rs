@@ -1,5 +1,6 @@
 //! `IUnknown`, the root of every COM interface, in the exact COM layout.
 
+use super::ffi::{Crossed, Hr};
 use core::ffi::c_void;
 use core::ptr::NonNull;
 
@@ -11,10 +12,9 @@ use super::types::{GUID, HRESULT, REFIID, ULONG};
 #[repr(C)]
 #[allow(non_snake_case)]
 pub struct IUnknownVtbl {
-    pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IUnknown) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IUnknown) -> ULONG,
+    pub QueryInterface: unsafe extern "system" fn(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IUnknown) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IUnknown) -> Crossed<ULONG>,
 }
 
 /// A COM object seen through its `IUnknown` interface.
@@ -31,7 +31,7 @@ pub struct IUnknown {
 /// `unknown` must be a valid COM interface pointer and `ppv` writable.
 pub unsafe fn query_interface(unknown: *mut IUnknown, iid: &GUID, ppv: *mut *mut c_void) -> HRESULT {
     // SAFETY: every COM interface starts with the IUnknown methods; the caller vouches for the pointer.
-    unsafe { ((*(*unknown).lpVtbl).QueryInterface)(unknown, iid, ppv) }
+    unsafe { ((*(*unknown).lpVtbl).QueryInterface)(unknown, iid, ppv) }.get()
 }
 
 /// Calls `AddRef` on any COM interface pointer.
@@ -40,7 +40,7 @@ pub unsafe fn query_interface(unknown: *mut IUnknown, iid: &GUID, ppv: *mut *mut
 /// `unknown` must be a valid COM interface pointer.
 pub unsafe fn add_ref(unknown: *mut IUnknown) -> ULONG {
     // SAFETY: as for `query_interface`.
-    unsafe { ((*(*unknown).lpVtbl).AddRef)(unknown) }
+    unsafe { ((*(*unknown).lpVtbl).AddRef)(unknown) }.get()
 }
 
 /// Calls `Release` on any COM interface pointer.
@@ -49,7 +49,7 @@ pub unsafe fn add_ref(unknown: *mut IUnknown) -> ULONG {
 /// `unknown` must be a valid COM interface pointer that the caller owns a reference to.
 pub unsafe fn release(unknown: *mut IUnknown) -> ULONG {
     // SAFETY: as for `query_interface`.
-    unsafe { ((*(*unknown).lpVtbl).Release)(unknown) }
+    unsafe { ((*(*unknown).lpVtbl).Release)(unknown) }.get()
 }
 
 /// One counted reference to an interface of an object; released when dropped.
@@ -116,8 +116,9 @@ pub(crate) mod hostile {
     use core::sync::atomic::{AtomicU32, Ordering};
 
     use super::{IUnknown, IUnknownVtbl};
+    use crate::com::ffi::{Crossed, Hr};
     use crate::com::hresult::{E_NOINTERFACE, S_OK};
-    use crate::com::types::{HRESULT, REFIID, ULONG};
+    use crate::com::types::{REFIID, ULONG};
 
     /// How the object answers every QueryInterface.
     #[derive(Clone, Copy)]
@@ -142,37 +143,43 @@ pub(crate) mod hostile {
         Release: release,
     };
 
-    unsafe extern "system" fn qi(this: *mut IUnknown, _riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-        // SAFETY: only Hostile objects present VTBL; the library passes a writable `ppv`.
-        unsafe {
-            match (*(this as *const Hostile)).answer {
-                Answer::OkWithNull => {
-                    *ppv = core::ptr::null_mut();
-                    S_OK
-                }
-                Answer::FailWithGarbage => {
-                    *ppv = core::ptr::NonNull::<u64>::dangling().as_ptr().cast();
-                    E_NOINTERFACE
+    unsafe extern "system" fn qi(this: *mut IUnknown, _riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+        Crossed::from_c(|| {
+            // SAFETY: only Hostile objects present VTBL; the library passes a writable `ppv`.
+            unsafe {
+                match (*(this as *const Hostile)).answer {
+                    Answer::OkWithNull => {
+                        *ppv = core::ptr::null_mut();
+                        S_OK
+                    }
+                    Answer::FailWithGarbage => {
+                        *ppv = core::ptr::NonNull::<u64>::dangling().as_ptr().cast();
+                        E_NOINTERFACE
+                    }
                 }
             }
-        }
+        })
     }
 
-    unsafe extern "system" fn add_ref(this: *mut IUnknown) -> ULONG {
-        // SAFETY: as above.
-        unsafe { &*(this as *const Hostile) }
-            .refs
-            .fetch_add(1, Ordering::SeqCst)
-            + 1
+    unsafe extern "system" fn add_ref(this: *mut IUnknown) -> Crossed<ULONG> {
+        Crossed::from_c(|| {
+            // SAFETY: as above.
+            unsafe { &*(this as *const Hostile) }
+                .refs
+                .fetch_add(1, Ordering::SeqCst)
+                + 1
+        })
     }
 
-    unsafe extern "system" fn release(this: *mut IUnknown) -> ULONG {
-        // SAFETY: as above.
-        let before = unsafe { &*(this as *const Hostile) }
-            .refs
-            .fetch_sub(1, Ordering::SeqCst);
-        assert!(before > 1, "released the reference the test holds");
-        before - 1
+    unsafe extern "system" fn release(this: *mut IUnknown) -> Crossed<ULONG> {
+        Crossed::from_c(|| {
+            // SAFETY: as above.
+            let before = unsafe { &*(this as *const Hostile) }
+                .refs
+                .fetch_sub(1, Ordering::SeqCst);
+            assert!(before > 1, "released the reference the test holds");
+            before - 1
+        })
     }
 
     impl Hostile {

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::com::alloc::{alloc_array, alloc_wstr};
-use crate::com::ffi;
+use crate::com::ffi::{self, Crossed, Hr};
 use crate::com::iids::IID_IOPCCommon;
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
@@ -25,16 +25,15 @@ use crate::locale::{LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
 #[allow(non_snake_case)]
 pub struct IOPCCommonVtbl {
     pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCCommon, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCCommon) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCCommon) -> ULONG,
-    pub SetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, dwLcid: LCID) -> HRESULT,
-    pub GetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IOPCCommon, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCCommon) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCCommon) -> Crossed<ULONG>,
+    pub SetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, dwLcid: LCID) -> Hr,
+    pub GetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> Hr,
     pub QueryAvailableLocaleIDs:
-        unsafe extern "system" fn(This: *mut IOPCCommon, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> HRESULT,
-    pub GetErrorString:
-        unsafe extern "system" fn(This: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT,
-    pub SetClientName: unsafe extern "system" fn(This: *mut IOPCCommon, szName: LPCWSTR) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IOPCCommon, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> Hr,
+    pub GetErrorString: unsafe extern "system" fn(This: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> Hr,
+    pub SetClientName: unsafe extern "system" fn(This: *mut IOPCCommon, szName: LPCWSTR) -> Hr,
 }
 
 /// The IOPCCommon interface: per-client locale, client name and error texts.
@@ -242,14 +241,14 @@ unsafe fn object<'a>(this: *mut IOPCCommon) -> &'a OpcCommon {
     unsafe { ComObject::<OpcCommon>::from_interface(this) }
 }
 
-unsafe extern "system" fn set_locale_id(this: *mut IOPCCommon, lcid: LCID) -> HRESULT {
+unsafe extern "system" fn set_locale_id(this: *mut IOPCCommon, lcid: LCID) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: COM calls this only through our vtable.
         Ok(unsafe { object(this) }.set_locale(lcid)?)
     })
 }
 
-unsafe extern "system" fn get_locale_id(this: *mut IOPCCommon, pdwLcid: *mut LCID) -> HRESULT {
+unsafe extern "system" fn get_locale_id(this: *mut IOPCCommon, pdwLcid: *mut LCID) -> Hr {
     ffi::boundary!(Opc, [pdwLcid], {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
         let out = unsafe { ffi::out(pdwLcid) }?;
@@ -263,7 +262,7 @@ unsafe extern "system" fn query_available_locale_ids(
     this: *mut IOPCCommon,
     pdwCount: *mut DWORD,
     pdwLcid: *mut *mut LCID,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [pdwCount, pdwLcid], {
         // SAFETY: the caller vouches non-NULL out-parameters are writable.
         let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(pdwLcid)?) };
@@ -275,7 +274,7 @@ unsafe extern "system" fn query_available_locale_ids(
     })
 }
 
-unsafe extern "system" fn get_error_string(this: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> HRESULT {
+unsafe extern "system" fn get_error_string(this: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [ppString], {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
         let out = unsafe { ffi::out(ppString) }?;
@@ -285,7 +284,7 @@ unsafe extern "system" fn get_error_string(this: *mut IOPCCommon, dwError: HRESU
     })
 }
 
-unsafe extern "system" fn set_client_name(this: *mut IOPCCommon, szName: LPCWSTR) -> HRESULT {
+unsafe extern "system" fn set_client_name(this: *mut IOPCCommon, szName: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller passes NULL or a NUL-terminated string.
         let name = unsafe { ffi::in_units(szName) }?;
@@ -318,7 +317,7 @@ pub unsafe extern "C" fn OpcCommonCreate(
     outer: *mut IUnknown,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
         Ok(unsafe {
@@ -345,7 +344,7 @@ pub unsafe extern "C" fn OpcCommonCreate(
 /// # Safety
 /// `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [ppName], {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
         let out = unsafe { ffi::out(ppName) }?;

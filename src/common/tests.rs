@@ -123,37 +123,43 @@ static OUTER_VTBL: crate::com::IUnknownVtbl = crate::com::IUnknownVtbl {
     Release: outer_release,
 };
 
-unsafe extern "system" fn outer_qi(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    // SAFETY: only Outer objects present OUTER_VTBL; the callers pass valid pointers.
-    unsafe {
-        let o = &*(this as *const Outer);
-        if *riid == IID_IUNKNOWN {
-            *ppv = this.cast();
-            outer_add_ref(this);
-            return S_OK;
+unsafe extern "system" fn outer_qi(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: only Outer objects present OUTER_VTBL; the callers pass valid pointers.
+        unsafe {
+            let o = &*(this as *const Outer);
+            if *riid == IID_IUNKNOWN {
+                *ppv = this.cast();
+                outer_add_ref(this);
+                return S_OK;
+            }
+            if *riid == IID_IOPCCommon {
+                return query_interface(o.inner.get(), &*riid, ppv);
+            }
+            *ppv = ptr::null_mut();
+            E_NOINTERFACE
         }
-        if *riid == IID_IOPCCommon {
-            return query_interface(o.inner.get(), &*riid, ppv);
-        }
-        *ppv = ptr::null_mut();
-        E_NOINTERFACE
-    }
+    })
 }
 
-unsafe extern "system" fn outer_add_ref(this: *mut IUnknown) -> ULONG {
-    // SAFETY: as above.
-    unsafe { &*(this as *const Outer) }
-        .refs
-        .fetch_add(1, core::sync::atomic::Ordering::SeqCst)
-        + 1
+unsafe extern "system" fn outer_add_ref(this: *mut IUnknown) -> Crossed<ULONG> {
+    Crossed::from_c(|| {
+        // SAFETY: as above.
+        unsafe { &*(this as *const Outer) }
+            .refs
+            .fetch_add(1, core::sync::atomic::Ordering::SeqCst)
+            + 1
+    })
 }
 
-unsafe extern "system" fn outer_release(this: *mut IUnknown) -> ULONG {
-    // SAFETY: as above; the test owns the memory and releases the inner object itself.
-    unsafe { &*(this as *const Outer) }
-        .refs
-        .fetch_sub(1, core::sync::atomic::Ordering::SeqCst)
-        - 1
+unsafe extern "system" fn outer_release(this: *mut IUnknown) -> Crossed<ULONG> {
+    Crossed::from_c(|| {
+        // SAFETY: as above; the test owns the memory and releases the inner object itself.
+        unsafe { &*(this as *const Outer) }
+            .refs
+            .fetch_sub(1, core::sync::atomic::Ordering::SeqCst)
+            - 1
+    })
 }
 
 #[test]

@@ -18,7 +18,7 @@ use core::ffi::c_void;
 use core::ptr;
 
 use crate::com::alloc::{alloc_array, alloc_wstr, alloc_wstr_from_str, alloc_wstr_terminated};
-use crate::com::ffi::{self, FfiResult};
+use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
 use crate::com::{DWORD, E_INVALIDARG, HRESULT, LCID, LPCWSTR, LPWSTR, S_OK};
 use crate::locale::resolve_locale;
@@ -140,7 +140,7 @@ fn export_text(code: HRESULT, locale: LCID, kind: u32) -> FfiResult<LPWSTR> {
 /// # Safety
 /// `ppString` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [ppString], {
         // SAFETY: the caller vouches a non-NULL `ppString` is writable.
         let out = unsafe { ffi::out(ppString) }?;
@@ -159,7 +159,7 @@ pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString
 /// # Safety
 /// `ppString` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [ppString], {
         // SAFETY: the caller vouches a non-NULL `ppString` is writable.
         let out = unsafe { ffi::out(ppString) }?;
@@ -181,7 +181,7 @@ pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: 
 /// # Safety
 /// `pdwCount` and `ppCodes` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcErrorCodesOfKind(kind: u32, pdwCount: *mut DWORD, ppCodes: *mut *mut HRESULT) -> HRESULT {
+pub unsafe extern "C" fn OpcErrorCodesOfKind(kind: u32, pdwCount: *mut DWORD, ppCodes: *mut *mut HRESULT) -> Hr {
     ffi::boundary!(Opc, [pdwCount, ppCodes], {
         // SAFETY: the caller vouches non-NULL out-parameters are writable.
         let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(ppCodes)?) };
@@ -204,7 +204,7 @@ pub unsafe extern "C" fn OpcErrorCodesOfKind(kind: u32, pdwCount: *mut DWORD, pp
 /// # Safety
 /// `ppSymbol` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcErrorSymbol(code: HRESULT, kind: u32, ppSymbol: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcErrorSymbol(code: HRESULT, kind: u32, ppSymbol: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [ppSymbol], {
         // SAFETY: the caller vouches a non-NULL `ppSymbol` is writable.
         let out = unsafe { ffi::out(ppSymbol) }?;
@@ -227,7 +227,7 @@ mod tests {
         let hr = unsafe { OpcErrorCodesOfKind(kind, &mut count, &mut array) };
         if hr != S_OK {
             assert!(count == 0 && array.is_null());
-            return Err(hr);
+            return Err(hr.get());
         }
         // SAFETY: S_OK gives a task array of `count` codes, freed once here.
         unsafe {
@@ -246,7 +246,7 @@ mod tests {
         let hr = unsafe { OpcErrorSymbol(code as HRESULT, kind, &mut p) };
         if hr != S_OK {
             assert!(p.is_null());
-            return Err(hr);
+            return Err(hr.get());
         }
         // SAFETY: S_OK gives a NUL-terminated task string, freed once here.
         unsafe {
@@ -286,7 +286,7 @@ mod tests {
         let mut count: DWORD = 5;
         // SAFETY: `count` is writable; NULL is allowed.
         let hr = unsafe { OpcErrorCodesOfKind(0, &mut count, ptr::null_mut()) };
-        assert_eq!((hr, count), (E_INVALIDARG, 0));
+        assert_eq!((hr.get(), count), (E_INVALIDARG, 0));
         // SAFETY: NULL is allowed.
         let hr = unsafe { OpcErrorSymbol(0xC0040001u32 as HRESULT, 0, ptr::null_mut()) };
         assert_eq!(hr, E_INVALIDARG);
@@ -298,7 +298,7 @@ mod tests {
         let hr = unsafe { OpcGetErrorStringEx(code as HRESULT, locale, kind, &mut p) };
         if hr != S_OK {
             assert!(p.is_null());
-            return Err(hr);
+            return Err(hr.get());
         }
         // SAFETY: S_OK gives a NUL-terminated task string, freed once here.
         unsafe {

@@ -27,9 +27,9 @@ mod text;
 #[cfg(test)]
 mod tests;
 
-use crate::com::ffi::{self, Fail, FfiResult};
+use crate::com::ffi::{self, Crossed, Fail, FfiResult, Hr};
 use crate::com::wstr::wstr_units;
-use crate::com::{BOOL, FALSE, HRESULT, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK, TRUE};
+use crate::com::{BOOL, FALSE, LPCSTR, LPCWSTR, OPC_E_INVALIDFILTER, S_OK, TRUE};
 use program::{Malformed, Program};
 use stream::WideCursor;
 use text::Utf16;
@@ -65,7 +65,7 @@ fn to_bool(b: bool) -> BOOL {
 /// # Safety
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
-pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> BOOL {
+pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
         if string.is_null() || pattern.is_null() {
             return FALSE;
@@ -109,7 +109,7 @@ unsafe fn match_long_pattern(string: LPCWSTR, pattern: LPCWSTR, case_sensitive: 
 /// # Safety
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
 #[no_mangle]
-pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, bCaseSensitive: BOOL) -> BOOL {
+pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, bCaseSensitive: BOOL) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
         if string.is_null() || pattern.is_null() {
             return FALSE;
@@ -151,7 +151,7 @@ pub unsafe extern "C" fn OpcPatternCompileW(
     pattern: LPCWSTR,
     caseSensitive: BOOL,
     ppPattern: *mut *mut OpcPattern,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [ppPattern], {
         // SAFETY: the caller vouches a non-NULL `ppPattern` is writable.
         let out = unsafe { ffi::out(ppPattern) }?;
@@ -171,7 +171,7 @@ pub unsafe extern "C" fn OpcPatternCompileA(
     pattern: LPCSTR,
     caseSensitive: BOOL,
     ppPattern: *mut *mut OpcPattern,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [ppPattern], {
         // SAFETY: the caller vouches a non-NULL `ppPattern` is writable.
         let out = unsafe { ffi::out(ppPattern) }?;
@@ -189,7 +189,7 @@ pub unsafe extern "C" fn OpcPatternCompileA(
 /// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
 /// or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
-pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LPCWSTR) -> BOOL {
+pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LPCWSTR) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
         // SAFETY: the caller vouches `pattern` is NULL or a live filter.
         let Some(pattern) = (unsafe { pattern.as_ref() }) else {
@@ -209,7 +209,7 @@ pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LP
 /// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
 /// or point at a NUL-terminated string.
 #[no_mangle]
-pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LPCSTR) -> BOOL {
+pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LPCSTR) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
         // SAFETY: the caller vouches `pattern` is NULL or a live filter.
         let Some(pattern) = (unsafe { pattern.as_ref() }) else {

@@ -27,7 +27,7 @@
 use core::ffi::c_void;
 use core::ptr;
 
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 pub use crate::com::guids::CLSID_OpcComnProxyStub;
 use crate::com::iids::{IID_IOPCCommon, IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IOPCShutdown};
 use crate::com::{BOOL, E_INVALIDARG, GUID, HRESULT, IID, LPCWSTR, S_FALSE, S_OK};
@@ -220,7 +220,7 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
 /// # Safety
 /// `reg` must be NULL or a live registry handle.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegisterProxyStub(reg: *const OpcRegistry, flags: u32) -> HRESULT {
+pub unsafe extern "C" fn OpcRegisterProxyStub(reg: *const OpcRegistry, flags: u32) -> Hr {
     ffi::boundary!(Opc, [], {
         if flags & !OPC_PROXY_STUB_TAKE_OVER != 0 {
             return Err(E_INVALIDARG.into());
@@ -246,7 +246,7 @@ pub unsafe extern "C" fn OpcRegisterProxyStub(reg: *const OpcRegistry, flags: u3
 /// # Safety
 /// `reg` must be NULL or a live registry handle.
 #[no_mangle]
-pub unsafe extern "C" fn OpcUnregisterProxyStub(reg: *const OpcRegistry) -> HRESULT {
+pub unsafe extern "C" fn OpcUnregisterProxyStub(reg: *const OpcRegistry) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller vouches for the handle.
         let regs = unsafe { registries(reg) };
@@ -283,7 +283,7 @@ fn parse_install_command(text: &str) -> Option<bool> {
 /// # Safety
 /// `command_line` must be NULL or a NUL-terminated UTF-16 string.
 #[no_mangle]
-pub unsafe extern "C" fn OpcDllInstall(install: BOOL, command_line: LPCWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcDllInstall(install: BOOL, command_line: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller vouches for NULL or a NUL-terminated string; the reader bounds the read.
         let text = unsafe { ffi::in_string(command_line)? };
@@ -291,9 +291,9 @@ pub unsafe extern "C" fn OpcDllInstall(install: BOOL, command_line: LPCWSTR) -> 
         // SAFETY: NULL is the system registry.
         Ok(unsafe {
             if install != 0 {
-                OpcRegisterProxyStub(ptr::null(), u32::from(take_over))
+                OpcRegisterProxyStub(ptr::null(), u32::from(take_over)).get()
             } else {
-                OpcUnregisterProxyStub(ptr::null())
+                OpcUnregisterProxyStub(ptr::null()).get()
             }
         })
     })
@@ -307,10 +307,10 @@ pub unsafe extern "C" fn OpcDllInstall(install: BOOL, command_line: LPCWSTR) -> 
 /// As for `OpcDllInstall`.
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
-pub unsafe extern "system" fn DllInstall(install: BOOL, command_line: LPCWSTR) -> HRESULT {
+pub unsafe extern "system" fn DllInstall(install: BOOL, command_line: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: forwarded under the same contract.
-        Ok(unsafe { OpcDllInstall(install, command_line) })
+        Ok(unsafe { OpcDllInstall(install, command_line) }.get())
     })
 }
 

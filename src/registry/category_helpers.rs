@@ -5,8 +5,8 @@ use super::categories::standard_description;
 use super::register::LCID_ENGLISH;
 use super::{registries, OpcRegistry};
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::ffi::{self, FfiResult};
-use crate::com::{CATID, E_INVALIDARG, GUID, HRESULT, LPCWSTR, LPWSTR, REFCLSID, S_OK};
+use crate::com::ffi::{self, FfiResult, Hr};
+use crate::com::{CATID, E_INVALIDARG, GUID, LPCWSTR, LPWSTR, REFCLSID, S_OK};
 
 /// Reads a GUID argument: NULL gives the rule's code.
 ///
@@ -32,7 +32,7 @@ pub unsafe extern "C" fn OpcCreateComponentCategory(
     reg: *const OpcRegistry,
     catid: *const CATID,
     description: LPCWSTR,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller's contract: `catid` NULL or readable, `description` NULL or
         // NUL-terminated.
@@ -65,7 +65,7 @@ pub unsafe extern "C" fn OpcRegisterClassInCategory(
     reg: *const OpcRegistry,
     clsid: REFCLSID,
     catid: *const CATID,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller's contract: `clsid` and `catid` NULL or readable.
         let (clsid, catid) = unsafe { (guid_arg(clsid)?, guid_arg(catid)?) };
@@ -89,7 +89,7 @@ pub unsafe extern "C" fn OpcUnregisterClassInCategory(
     reg: *const OpcRegistry,
     clsid: REFCLSID,
     catid: *const CATID,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller's contract: `clsid` and `catid` NULL or readable.
         let (clsid, catid) = unsafe { (guid_arg(clsid)?, guid_arg(catid)?) };
@@ -110,7 +110,7 @@ pub unsafe extern "C" fn OpcUnregisterClassInCategory(
 /// # Safety
 /// `catid` NULL or readable; `description` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcCategoryDescription(catid: *const CATID, description: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcCategoryDescription(catid: *const CATID, description: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [description], {
         // SAFETY: the caller's contract: `catid` NULL or readable, `description` NULL or writable.
         let (catid, description) = unsafe { (guid_arg(catid)?, ffi::out(description)?) };

@@ -2,7 +2,7 @@
 //! to register itself, `/UnregServer` or `-UnregServer` to unregister, and COM starts it with
 //! `-Embedding` (or `/Embedding`; `-Automation` for automation servers) to serve its classes.
 
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 use crate::com::{E_INVALIDARG, HRESULT, LPCWSTR, S_OK};
 
 /// What an EXE server's command line asks it to do.
@@ -89,7 +89,7 @@ pub fn parse_command_line(line: &str) -> Result<OpcServerCommand, HRESULT> {
 /// # Safety
 /// `command_line` NULL or NUL-terminated; `command` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcParseCommandLine(command_line: LPCWSTR, command: *mut u32) -> HRESULT {
+pub unsafe extern "C" fn OpcParseCommandLine(command_line: LPCWSTR, command: *mut u32) -> Hr {
     ffi::boundary!(Opc, [command], {
         // SAFETY: the caller's contract: `command` NULL or writable, `command_line` NULL or
         // NUL-terminated.

@@ -24,7 +24,7 @@ pub mod windows;
 use std::sync::{Arc, OnceLock};
 
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 use crate::com::{GUID, HRESULT, LPCWSTR, LPWSTR, S_OK};
 
 /// `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
@@ -275,7 +275,7 @@ pub(crate) unsafe fn registries(reg: *const OpcRegistry) -> Arc<Registries> {
 /// # Safety
 /// `out` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> HRESULT {
+pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> Hr {
     ffi::boundary!(Opc, [out], {
         // SAFETY: the caller vouches a non-NULL `out` is writable.
         let out = unsafe { ffi::out(out) }?;
@@ -297,7 +297,7 @@ pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> 
 /// # Safety
 /// `out` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> HRESULT {
+pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> Hr {
     ffi::boundary!(Opc, [out], {
         // SAFETY: the caller vouches a non-NULL `out` is writable.
         let out = unsafe { ffi::out(out) }?;
@@ -337,7 +337,7 @@ pub unsafe extern "C" fn OpcRegistryGetString(
     key: LPCWSTR,
     name: LPCWSTR,
     data: *mut LPWSTR,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [data], {
         // SAFETY: the caller's contract: `data` NULL or writable, the strings NULL or NUL-terminated.
         let (data, key, name) = unsafe { (ffi::out(data)?, ffi::in_string(key)?, ffi::in_string_opt(name)?) };

@@ -17,7 +17,7 @@ use core::fmt::Write as _;
 use super::path::RegPath;
 use super::{registries, OpcRegistry, RegValue, Registry, REGDB_E_KEYMISSING};
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 use crate::com::{E_INVALIDARG, HRESULT, LPCWSTR, LPWSTR, S_OK};
 
 const HEADER: &str = "Windows Registry Editor Version 5.00";
@@ -292,7 +292,7 @@ pub fn apply(reg: &dyn Registry, text: &str) -> Result<(), HRESULT> {
 /// # Safety
 /// `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistryExport(reg: *const OpcRegistry, key: LPCWSTR, text: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcRegistryExport(reg: *const OpcRegistry, key: LPCWSTR, text: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [text], {
         // SAFETY: the caller's contract: `text` NULL or writable, `key` NULL or NUL-terminated.
         let (text, key) = unsafe { (ffi::out(text)?, ffi::in_string_opt(key)?) };
@@ -313,7 +313,7 @@ pub unsafe extern "C" fn OpcRegistryExport(reg: *const OpcRegistry, key: LPCWSTR
 /// # Safety
 /// `reg` NULL or a live handle; `text` NULL or NUL-terminated.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistryApply(reg: *const OpcRegistry, text: LPCWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcRegistryApply(reg: *const OpcRegistry, text: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller's contract: `text` NULL or NUL-terminated.
         let text = unsafe { ffi::in_string(text) }?;

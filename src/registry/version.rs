@@ -5,8 +5,8 @@
 use core::cmp::Ordering;
 
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::ffi;
-use crate::com::{BOOL, DWORD, E_INVALIDARG, FALSE, HRESULT, LPCWSTR, LPWSTR, S_OK, TRUE};
+use crate::com::ffi::{self, Crossed, Hr};
+use crate::com::{BOOL, DWORD, E_INVALIDARG, FALSE, LPCWSTR, LPWSTR, S_OK, TRUE};
 
 /// A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
 #[repr(C)]
@@ -70,7 +70,7 @@ impl core::fmt::Display for OpcVersion {
 /// # Safety
 /// `text` NULL or NUL-terminated; `version` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcVersionParse(text: LPCWSTR, version: *mut OpcVersion) -> HRESULT {
+pub unsafe extern "C" fn OpcVersionParse(text: LPCWSTR, version: *mut OpcVersion) -> Hr {
     ffi::boundary!(Opc, [version], {
         // SAFETY: the caller's contract: `version` NULL or writable, `text` NULL or NUL-terminated.
         let (version, text) = unsafe { (ffi::out(version)?, ffi::in_string(text)?) };
@@ -86,7 +86,7 @@ pub unsafe extern "C" fn OpcVersionParse(text: LPCWSTR, version: *mut OpcVersion
 /// # Safety
 /// `version` NULL or readable; `text` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcVersionFormat(version: *const OpcVersion, text: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcVersionFormat(version: *const OpcVersion, text: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [text], {
         // SAFETY: the caller's contract: `version` NULL or readable, `text` NULL or writable.
         let (version, text) = unsafe { (ffi::in_ref(version)?, ffi::out(text)?) };
@@ -103,11 +103,7 @@ pub unsafe extern "C" fn OpcVersionFormat(version: *const OpcVersion, text: *mut
 /// # Safety
 /// `version` NULL or readable; `ms` and `ls` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcVersionToFileVersion(
-    version: *const OpcVersion,
-    ms: *mut DWORD,
-    ls: *mut DWORD,
-) -> HRESULT {
+pub unsafe extern "C" fn OpcVersionToFileVersion(version: *const OpcVersion, ms: *mut DWORD, ls: *mut DWORD) -> Hr {
     ffi::boundary!(Opc, [ms, ls], {
         // SAFETY: the caller's contract: `version` NULL or readable, `ms` and `ls` NULL or writable.
         let (version, ms, ls) = unsafe { (ffi::in_ref(version)?, ffi::out(ms)?, ffi::out(ls)?) };
@@ -127,7 +123,7 @@ pub unsafe extern "C" fn OpcVersionToFileVersion(
 /// # Safety
 /// `version` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcVersionFromFileVersion(ms: DWORD, ls: DWORD, version: *mut OpcVersion) -> HRESULT {
+pub unsafe extern "C" fn OpcVersionFromFileVersion(ms: DWORD, ls: DWORD, version: *mut OpcVersion) -> Hr {
     ffi::boundary!(Opc, [version], {
         // SAFETY: the caller vouches a non-NULL `version` is writable.
         let version = unsafe { ffi::out(version) }?;
@@ -142,7 +138,7 @@ pub unsafe extern "C" fn OpcVersionFromFileVersion(ms: DWORD, ls: DWORD, version
 /// # Safety
 /// `a` and `b` NULL or readable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcVersionCompare(a: *const OpcVersion, b: *const OpcVersion) -> i32 {
+pub unsafe extern "C" fn OpcVersionCompare(a: *const OpcVersion, b: *const OpcVersion) -> Crossed<i32> {
     ffi::guard!(0, {
         // SAFETY: each is read only when non-NULL.
         let (a, b) = unsafe { (a.as_ref(), b.as_ref()) };
@@ -161,10 +157,13 @@ pub unsafe extern "C" fn OpcVersionCompare(a: *const OpcVersion, b: *const OpcVe
 /// # Safety
 /// `candidate` and `installed` NULL or readable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcVersionIsNewer(candidate: *const OpcVersion, installed: *const OpcVersion) -> BOOL {
+pub unsafe extern "C" fn OpcVersionIsNewer(
+    candidate: *const OpcVersion,
+    installed: *const OpcVersion,
+) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
         // SAFETY: forwarded from the caller's contract.
-        if !candidate.is_null() && unsafe { OpcVersionCompare(candidate, installed) } > 0 {
+        if !candidate.is_null() && unsafe { OpcVersionCompare(candidate, installed) }.get() > 0 {
             TRUE
         } else {
             FALSE

@@ -40,7 +40,7 @@ use std::sync::Arc;
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
 use crate::com::enumerator::{EnumInterface, Enumerator};
-use crate::com::ffi::{self, Fail, FfiResult};
+use crate::com::ffi::{self, Crossed, Fail, FfiResult, Hr};
 use crate::com::iids::{IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IENUMGUID};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
@@ -80,9 +80,9 @@ const ANY_CATEGORY: ULONG = ULONG::MAX;
 #[allow(non_snake_case)]
 pub struct IOPCServerListVtbl {
     pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCServerList, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList) -> ULONG,
+        unsafe extern "system" fn(This: *mut IOPCServerList, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList) -> Crossed<ULONG>,
     pub EnumClassesOfCategories: unsafe extern "system" fn(
         This: *mut IOPCServerList,
         cImplemented: ULONG,
@@ -90,15 +90,15 @@ pub struct IOPCServerListVtbl {
         cRequired: ULONG,
         rgcatidReq: *mut CATID,
         ppenumClsid: *mut *mut IEnumGUID,
-    ) -> HRESULT,
+    ) -> Hr,
     pub GetClassDetails: unsafe extern "system" fn(
         This: *mut IOPCServerList,
         clsid: REFCLSID,
         ppszProgID: *mut LPOLESTR,
         ppszUserType: *mut LPOLESTR,
-    ) -> HRESULT,
+    ) -> Hr,
     pub CLSIDFromProgID:
-        unsafe extern "system" fn(This: *mut IOPCServerList, szProgId: LPCOLESTR, clsid: LPCLSID) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IOPCServerList, szProgId: LPCOLESTR, clsid: LPCLSID) -> Hr,
 }
 
 /// IOPCServerList: the list of OPC servers registered on a machine, by category.
@@ -113,9 +113,9 @@ pub struct IOPCServerList {
 #[allow(non_snake_case)]
 pub struct IOPCServerList2Vtbl {
     pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCServerList2, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList2) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList2) -> ULONG,
+        unsafe extern "system" fn(This: *mut IOPCServerList2, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList2) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList2) -> Crossed<ULONG>,
     pub EnumClassesOfCategories: unsafe extern "system" fn(
         This: *mut IOPCServerList2,
         cImplemented: ULONG,
@@ -123,16 +123,16 @@ pub struct IOPCServerList2Vtbl {
         cRequired: ULONG,
         rgcatidReq: *mut CATID,
         ppenumClsid: *mut *mut IOPCEnumGUID,
-    ) -> HRESULT,
+    ) -> Hr,
     pub GetClassDetails: unsafe extern "system" fn(
         This: *mut IOPCServerList2,
         clsid: REFCLSID,
         ppszProgID: *mut LPOLESTR,
         ppszUserType: *mut LPOLESTR,
         ppszVerIndProgID: *mut LPOLESTR,
-    ) -> HRESULT,
+    ) -> Hr,
     pub CLSIDFromProgID:
-        unsafe extern "system" fn(This: *mut IOPCServerList2, szProgId: LPCOLESTR, clsid: LPCLSID) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IOPCServerList2, szProgId: LPCOLESTR, clsid: LPCLSID) -> Hr,
 }
 
 /// IOPCServerList2 (OPC Common 1.10): IOPCServerList with the version-independent ProgID and an
@@ -441,7 +441,7 @@ unsafe extern "system" fn list_enum(
     c_req: ULONG,
     rg_req: *mut CATID,
     ppenum: *mut *mut IEnumGUID,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [ppenum], {
         // SAFETY: forwarded; the enumerator answers for IEnumGUID with the same layout.
         unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum.cast()) }
@@ -453,14 +453,14 @@ unsafe extern "system" fn list_details(
     clsid: REFCLSID,
     prog_id: *mut LPOLESTR,
     user_type: *mut LPOLESTR,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [prog_id, user_type], {
         // SAFETY: forwarded.
         unsafe { get_class_details(this, clsid, prog_id, user_type, None) }
     })
 }
 
-unsafe extern "system" fn list_clsid(this: *mut IOPCServerList, prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
+unsafe extern "system" fn list_clsid(this: *mut IOPCServerList, prog_id: LPCOLESTR, clsid: LPCLSID) -> Hr {
     ffi::boundary!(Opc, [clsid], {
         // SAFETY: forwarded.
         unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
@@ -474,7 +474,7 @@ unsafe extern "system" fn list2_enum(
     c_req: ULONG,
     rg_req: *mut CATID,
     ppenum: *mut *mut IOPCEnumGUID,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [ppenum], {
         // SAFETY: forwarded.
         unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum) }
@@ -487,14 +487,14 @@ unsafe extern "system" fn list2_details(
     prog_id: *mut LPOLESTR,
     user_type: *mut LPOLESTR,
     vi: *mut LPOLESTR,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [prog_id, user_type, vi], {
         // SAFETY: forwarded.
         unsafe { get_class_details(this, clsid, prog_id, user_type, Some(vi)) }
     })
 }
 
-unsafe extern "system" fn list2_clsid(this: *mut IOPCServerList2, prog_id: LPCOLESTR, clsid: LPCLSID) -> HRESULT {
+unsafe extern "system" fn list2_clsid(this: *mut IOPCServerList2, prog_id: LPCOLESTR, clsid: LPCLSID) -> Hr {
     ffi::boundary!(Opc, [clsid], {
         // SAFETY: forwarded.
         unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
@@ -553,7 +553,7 @@ pub(crate) unsafe fn create(
 /// `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
 /// writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcServerListCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+pub unsafe extern "C" fn OpcServerListCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
         Ok(unsafe { create(registries(ptr::null()), outer, riid, ppv) })
@@ -571,7 +571,7 @@ pub unsafe extern "C" fn OpcServerListCreateOver(
     outer: *mut IUnknown,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
         Ok(unsafe { create(registries(reg), outer, riid, ppv) })

@@ -17,7 +17,7 @@ use core::ffi::c_void;
 use core::ptr;
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use crate::com::ffi;
+use crate::com::ffi::{self, Crossed, Hr};
 use crate::com::iids::{CLSID_OPCServerList, IID_ICLASSFACTORY};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, live_objects, ComClass, ComObject, Slot,
@@ -37,11 +37,11 @@ static LOCKS: AtomicU32 = AtomicU32::new(0);
 #[repr(C)]
 #[allow(non_snake_case)]
 pub(crate) struct IClassFactoryVtbl {
-    QueryInterface: unsafe extern "system" fn(*mut IClassFactory, REFIID, *mut *mut c_void) -> HRESULT,
-    AddRef: unsafe extern "system" fn(*mut IClassFactory) -> ULONG,
-    Release: unsafe extern "system" fn(*mut IClassFactory) -> ULONG,
-    CreateInstance: unsafe extern "system" fn(*mut IClassFactory, *mut IUnknown, REFIID, *mut *mut c_void) -> HRESULT,
-    LockServer: unsafe extern "system" fn(*mut IClassFactory, BOOL) -> HRESULT,
+    QueryInterface: unsafe extern "system" fn(*mut IClassFactory, REFIID, *mut *mut c_void) -> Hr,
+    AddRef: unsafe extern "system" fn(*mut IClassFactory) -> Crossed<ULONG>,
+    Release: unsafe extern "system" fn(*mut IClassFactory) -> Crossed<ULONG>,
+    CreateInstance: unsafe extern "system" fn(*mut IClassFactory, *mut IUnknown, REFIID, *mut *mut c_void) -> Hr,
+    LockServer: unsafe extern "system" fn(*mut IClassFactory, BOOL) -> Hr,
 }
 
 #[repr(C)]
@@ -73,14 +73,14 @@ unsafe extern "system" fn create_instance(
     outer: *mut IUnknown,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded: the standard creation protocol checks every argument.
         Ok(unsafe { super::create(registries(ptr::null()), outer, riid, ppv) })
     })
 }
 
-unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> HRESULT {
+unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> Hr {
     ffi::boundary!(Com, [], {
         if lock != 0 {
             LOCKS.fetch_add(1, Ordering::AcqRel);
@@ -104,7 +104,7 @@ unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> 
 /// # Safety
 /// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: the caller's contract: `ppv` NULL or writable, `rclsid` and `riid` NULL or readable.
         let (out, rclsid, riid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(rclsid)?, ffi::in_ref(riid)?) };
@@ -125,7 +125,7 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
 /// so COM may unload the DLL;
 /// S_FALSE otherwise.
 #[no_mangle]
-pub extern "C" fn OpcDllCanUnloadNow() -> HRESULT {
+pub extern "C" fn OpcDllCanUnloadNow() -> Hr {
     ffi::guard!(S_FALSE, {
         if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 && crate::proxy::can_unload() {
             S_OK
@@ -155,7 +155,7 @@ fn server_list_registration() -> ServerDescription {
 /// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
 /// changing it. Returns S_OK or SELFREG_E_CLASS.
 #[no_mangle]
-pub extern "C" fn OpcDllRegisterServer() -> HRESULT {
+pub extern "C" fn OpcDllRegisterServer() -> Hr {
     ffi::guard!(SELFREG_E_CLASS, {
         // SAFETY: NULL is the system registry.
         match register(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
@@ -169,7 +169,7 @@ pub extern "C" fn OpcDllRegisterServer() -> HRESULT {
 /// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
 /// SELFREG_E_CLASS.
 #[no_mangle]
-pub extern "C" fn OpcDllUnregisterServer() -> HRESULT {
+pub extern "C" fn OpcDllUnregisterServer() -> Hr {
     ffi::guard!(SELFREG_E_CLASS, {
         // SAFETY: NULL is the system registry.
         match unregister(&*unsafe { registries(ptr::null()) }, &server_list_registration()) {
@@ -188,10 +188,10 @@ pub extern "C" fn OpcDllUnregisterServer() -> HRESULT {
 /// As for `OpcDllGetClassObject`.
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
-pub unsafe extern "system" fn DllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+pub unsafe extern "system" fn DllGetClassObject(rclsid: REFCLSID, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded.
-        Ok(unsafe { OpcDllGetClassObject(rclsid, riid, ppv) })
+        Ok(unsafe { OpcDllGetClassObject(rclsid, riid, ppv) }.get())
     })
 }
 
@@ -200,8 +200,8 @@ pub unsafe extern "system" fn DllGetClassObject(rclsid: REFCLSID, riid: REFIID, 
 /// cbindgen:ignore
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
-pub extern "system" fn DllCanUnloadNow() -> HRESULT {
-    ffi::guard!(S_FALSE, { OpcDllCanUnloadNow() })
+pub extern "system" fn DllCanUnloadNow() -> Hr {
+    ffi::guard!(S_FALSE, { OpcDllCanUnloadNow().get() })
 }
 
 /// The standard self-registration entry point (`regsvr32 opccomn.dll`): `OpcDllRegisterServer`.
@@ -209,8 +209,8 @@ pub extern "system" fn DllCanUnloadNow() -> HRESULT {
 /// cbindgen:ignore
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
-pub extern "system" fn DllRegisterServer() -> HRESULT {
-    ffi::guard!(SELFREG_E_CLASS, { OpcDllRegisterServer() })
+pub extern "system" fn DllRegisterServer() -> Hr {
+    ffi::guard!(SELFREG_E_CLASS, { OpcDllRegisterServer().get() })
 }
 
 /// The standard unregistration entry point (`regsvr32 /u opccomn.dll`): `OpcDllUnregisterServer`.
@@ -218,8 +218,8 @@ pub extern "system" fn DllRegisterServer() -> HRESULT {
 /// cbindgen:ignore
 #[cfg(feature = "dll-exports")]
 #[no_mangle]
-pub extern "system" fn DllUnregisterServer() -> HRESULT {
-    ffi::guard!(SELFREG_E_CLASS, { OpcDllUnregisterServer() })
+pub extern "system" fn DllUnregisterServer() -> Hr {
+    ffi::guard!(SELFREG_E_CLASS, { OpcDllUnregisterServer().get() })
 }
 
 #[cfg(test)]

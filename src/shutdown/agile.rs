@@ -15,7 +15,7 @@ use core::ffi::c_void;
 use core::ptr::{self, NonNull};
 use std::sync::OnceLock;
 
-use crate::com::ffi;
+use crate::com::ffi::{self, Crossed, Hr};
 use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject};
 use crate::com::ole32::CoCreateFreeThreadedMarshaler;
 use crate::com::unknown::{query, release};
@@ -28,25 +28,18 @@ pub(crate) const IID_IMARSHAL: GUID = GUID::from_u128(0x00000003_0000_0000_C000_
 #[repr(C)]
 #[allow(non_snake_case)]
 pub(crate) struct IMarshalVtbl {
-    QueryInterface: unsafe extern "system" fn(*mut IMarshal, REFIID, *mut *mut c_void) -> HRESULT,
-    AddRef: unsafe extern "system" fn(*mut IMarshal) -> ULONG,
-    Release: unsafe extern "system" fn(*mut IMarshal) -> ULONG,
+    QueryInterface: unsafe extern "system" fn(*mut IMarshal, REFIID, *mut *mut c_void) -> Hr,
+    AddRef: unsafe extern "system" fn(*mut IMarshal) -> Crossed<ULONG>,
+    Release: unsafe extern "system" fn(*mut IMarshal) -> Crossed<ULONG>,
     GetUnmarshalClass:
-        unsafe extern "system" fn(*mut IMarshal, REFIID, *mut c_void, DWORD, *mut c_void, DWORD, *mut GUID) -> HRESULT,
+        unsafe extern "system" fn(*mut IMarshal, REFIID, *mut c_void, DWORD, *mut c_void, DWORD, *mut GUID) -> Hr,
     GetMarshalSizeMax:
-        unsafe extern "system" fn(*mut IMarshal, REFIID, *mut c_void, DWORD, *mut c_void, DWORD, *mut DWORD) -> HRESULT,
-    MarshalInterface: unsafe extern "system" fn(
-        *mut IMarshal,
-        *mut c_void,
-        REFIID,
-        *mut c_void,
-        DWORD,
-        *mut c_void,
-        DWORD,
-    ) -> HRESULT,
-    UnmarshalInterface: unsafe extern "system" fn(*mut IMarshal, *mut c_void, REFIID, *mut *mut c_void) -> HRESULT,
-    ReleaseMarshalData: unsafe extern "system" fn(*mut IMarshal, *mut c_void) -> HRESULT,
-    DisconnectObject: unsafe extern "system" fn(*mut IMarshal, DWORD) -> HRESULT,
+        unsafe extern "system" fn(*mut IMarshal, REFIID, *mut c_void, DWORD, *mut c_void, DWORD, *mut DWORD) -> Hr,
+    MarshalInterface:
+        unsafe extern "system" fn(*mut IMarshal, *mut c_void, REFIID, *mut c_void, DWORD, *mut c_void, DWORD) -> Hr,
+    UnmarshalInterface: unsafe extern "system" fn(*mut IMarshal, *mut c_void, REFIID, *mut *mut c_void) -> Hr,
+    ReleaseMarshalData: unsafe extern "system" fn(*mut IMarshal, *mut c_void) -> Hr,
+    DisconnectObject: unsafe extern "system" fn(*mut IMarshal, DWORD) -> Hr,
 }
 
 #[repr(C)]
@@ -136,13 +129,13 @@ unsafe extern "system" fn get_unmarshal_class<T: HasFtm>(
     pvctx: *mut c_void,
     flags: DWORD,
     clsid: *mut GUID,
-) -> HRESULT {
+) -> Hr {
     // The free-threaded marshaler checks and writes the arguments itself.
     ffi::boundary!(Com, [], {
         // SAFETY: COM calls this only through our vtable; the arguments go to the FTM unchanged.
         Ok(unsafe {
             with_ftm::<T>(this, |m| {
-                ((*(*m).vtbl).GetUnmarshalClass)(m, riid, pv, ctx, pvctx, flags, clsid)
+                ((*(*m).vtbl).GetUnmarshalClass)(m, riid, pv, ctx, pvctx, flags, clsid).get()
             })
         })
     })
@@ -156,13 +149,13 @@ unsafe extern "system" fn get_marshal_size_max<T: HasFtm>(
     pvctx: *mut c_void,
     flags: DWORD,
     size: *mut DWORD,
-) -> HRESULT {
+) -> Hr {
     // The free-threaded marshaler checks and writes the arguments itself.
     ffi::boundary!(Com, [], {
         // SAFETY: as above.
         Ok(unsafe {
             with_ftm::<T>(this, |m| {
-                ((*(*m).vtbl).GetMarshalSizeMax)(m, riid, pv, ctx, pvctx, flags, size)
+                ((*(*m).vtbl).GetMarshalSizeMax)(m, riid, pv, ctx, pvctx, flags, size).get()
             })
         })
     })
@@ -176,13 +169,13 @@ unsafe extern "system" fn marshal_interface<T: HasFtm>(
     ctx: DWORD,
     pvctx: *mut c_void,
     flags: DWORD,
-) -> HRESULT {
+) -> Hr {
     // The free-threaded marshaler checks and writes the arguments itself.
     ffi::boundary!(Com, [], {
         // SAFETY: as above.
         Ok(unsafe {
             with_ftm::<T>(this, |m| {
-                ((*(*m).vtbl).MarshalInterface)(m, stream, riid, pv, ctx, pvctx, flags)
+                ((*(*m).vtbl).MarshalInterface)(m, stream, riid, pv, ctx, pvctx, flags).get()
             })
         })
     })
@@ -193,26 +186,26 @@ unsafe extern "system" fn unmarshal_interface<T: HasFtm>(
     stream: *mut c_void,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     // The free-threaded marshaler checks and writes the arguments itself.
     ffi::boundary!(Com, [], {
         // SAFETY: as above.
-        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).UnmarshalInterface)(m, stream, riid, ppv)) })
+        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).UnmarshalInterface)(m, stream, riid, ppv).get()) })
     })
 }
 
-unsafe extern "system" fn release_marshal_data<T: HasFtm>(this: *mut IMarshal, stream: *mut c_void) -> HRESULT {
+unsafe extern "system" fn release_marshal_data<T: HasFtm>(this: *mut IMarshal, stream: *mut c_void) -> Hr {
     // The free-threaded marshaler checks and writes the arguments itself.
     ffi::boundary!(Com, [], {
         // SAFETY: as above.
-        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).ReleaseMarshalData)(m, stream)) })
+        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).ReleaseMarshalData)(m, stream).get()) })
     })
 }
 
-unsafe extern "system" fn disconnect_object<T: HasFtm>(this: *mut IMarshal, reserved: DWORD) -> HRESULT {
+unsafe extern "system" fn disconnect_object<T: HasFtm>(this: *mut IMarshal, reserved: DWORD) -> Hr {
     // The free-threaded marshaler checks and writes the arguments itself.
     ffi::boundary!(Com, [], {
         // SAFETY: as above.
-        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).DisconnectObject)(m, reserved)) })
+        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).DisconnectObject)(m, reserved).get()) })
     })
 }

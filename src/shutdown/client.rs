@@ -5,7 +5,7 @@ use core::ffi::c_void;
 use core::ptr;
 
 use super::interfaces::{IConnectionPoint, IConnectionPointContainer, IOPCShutdown, IOPCShutdownVtbl};
-use crate::com::ffi::{self, Fail};
+use crate::com::ffi::{self, Fail, Hr};
 use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINTCONTAINER};
 use crate::com::object::{
     delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
@@ -66,7 +66,7 @@ static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
     ShutdownRequest: shutdown_request,
 };
 
-unsafe extern "system" fn shutdown_request(this: *mut IOPCShutdown, szReason: LPCWSTR) -> HRESULT {
+unsafe extern "system" fn shutdown_request(this: *mut IOPCShutdown, szReason: LPCWSTR) -> Hr {
     // The specification requires S_OK whatever happens, a panic included.
     ffi::guard!(S_OK, {
         // SAFETY: COM calls this only through our vtable.
@@ -102,7 +102,7 @@ pub unsafe extern "C" fn OpcShutdownSinkCreate(
     context: *mut c_void,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppv], {
         let callback = callback.ok_or(Fail::Null)?;
         // SAFETY: forwarded from the caller's contract; not aggregated.
@@ -133,7 +133,7 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint,
     // SAFETY: a counted IConnectionPointContainer pointer, released right after.
     let hr = unsafe {
         let c = container.as_ptr();
-        ((*(*c).lpVtbl).FindConnectionPoint)(c, &IID_IOPCShutdown, &mut point)
+        ((*(*c).lpVtbl).FindConnectionPoint)(c, &IID_IOPCShutdown, &mut point).get()
     };
     drop(container);
     if hr < 0 || point.is_null() {
@@ -155,11 +155,7 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint,
 /// # Safety
 /// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcShutdownAdvise(
-    server: *mut IUnknown,
-    sink: *mut IUnknown,
-    pdwCookie: *mut DWORD,
-) -> HRESULT {
+pub unsafe extern "C" fn OpcShutdownAdvise(server: *mut IUnknown, sink: *mut IUnknown, pdwCookie: *mut DWORD) -> Hr {
     ffi::boundary!(Opc, [pdwCookie], {
         // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
         let (out, server, sink) = (
@@ -172,7 +168,7 @@ pub unsafe extern "C" fn OpcShutdownAdvise(
         let mut cookie: DWORD = 0;
         // SAFETY: a counted IConnectionPoint pointer, released right after.
         let hr = unsafe {
-            let hr = ((*(*point).lpVtbl).Advise)(point, sink.as_ptr(), &mut cookie);
+            let hr = ((*(*point).lpVtbl).Advise)(point, sink.as_ptr(), &mut cookie).get();
             release(point.cast());
             hr
         };
@@ -191,14 +187,14 @@ pub unsafe extern "C" fn OpcShutdownAdvise(
 /// # Safety
 /// `server` must be NULL or a valid COM interface pointer.
 #[no_mangle]
-pub unsafe extern "C" fn OpcShutdownUnadvise(server: *mut IUnknown, cookie: DWORD) -> HRESULT {
+pub unsafe extern "C" fn OpcShutdownUnadvise(server: *mut IUnknown, cookie: DWORD) -> Hr {
     ffi::boundary!(Opc, [], {
         let server = ffi::in_ptr(server)?;
         // SAFETY: valid per the caller.
         let point = unsafe { shutdown_point(server.as_ptr()) }?;
         // SAFETY: a counted IConnectionPoint pointer, released right after.
         Ok(unsafe {
-            let hr = ((*(*point).lpVtbl).Unadvise)(point, cookie);
+            let hr = ((*(*point).lpVtbl).Unadvise)(point, cookie).get();
             release(point.cast());
             hr
         })

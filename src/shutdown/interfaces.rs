@@ -4,19 +4,20 @@
 //! The four standard interfaces and CONNECTDATA carry `#[cfg(not(system_com_headers))]`: C programs
 //! on Windows get them from <ocidl.h>, everywhere else from this library's header.
 
+use crate::com::ffi::{Crossed, Hr};
 use core::ffi::c_void;
 
-use crate::com::{IUnknown, DWORD, HRESULT, IID, LPCWSTR, REFIID, ULONG};
+use crate::com::{IUnknown, DWORD, IID, LPCWSTR, REFIID, ULONG};
 
 /// The methods of IOPCShutdown, in the order of the specification's IDL.
 #[repr(C)]
 #[allow(non_snake_case)]
 pub struct IOPCShutdownVtbl {
     pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCShutdown, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCShutdown) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCShutdown) -> ULONG,
-    pub ShutdownRequest: unsafe extern "system" fn(This: *mut IOPCShutdown, szReason: LPCWSTR) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IOPCShutdown, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IOPCShutdown) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IOPCShutdown) -> Crossed<ULONG>,
+    pub ShutdownRequest: unsafe extern "system" fn(This: *mut IOPCShutdown, szReason: LPCWSTR) -> Hr,
 }
 
 /// IOPCShutdown: implemented by a client, called by a server that is about to shut down.
@@ -45,18 +46,16 @@ pub struct IConnectionPointContainerVtbl {
         This: *mut IConnectionPointContainer,
         riid: REFIID,
         ppvObject: *mut *mut c_void,
-    ) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IConnectionPointContainer) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IConnectionPointContainer) -> ULONG,
-    pub EnumConnectionPoints: unsafe extern "system" fn(
-        This: *mut IConnectionPointContainer,
-        ppEnum: *mut *mut IEnumConnectionPoints,
-    ) -> HRESULT,
+    ) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IConnectionPointContainer) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IConnectionPointContainer) -> Crossed<ULONG>,
+    pub EnumConnectionPoints:
+        unsafe extern "system" fn(This: *mut IConnectionPointContainer, ppEnum: *mut *mut IEnumConnectionPoints) -> Hr,
     pub FindConnectionPoint: unsafe extern "system" fn(
         This: *mut IConnectionPointContainer,
         riid: REFIID,
         ppCP: *mut *mut IConnectionPoint,
-    ) -> HRESULT,
+    ) -> Hr,
 }
 
 /// IConnectionPointContainer: the object that has connection points.
@@ -72,23 +71,20 @@ pub struct IConnectionPointContainer {
 #[repr(C)]
 #[allow(non_snake_case)]
 pub struct IEnumConnectionPointsVtbl {
-    pub QueryInterface: unsafe extern "system" fn(
-        This: *mut IEnumConnectionPoints,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
-    ) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IEnumConnectionPoints) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IEnumConnectionPoints) -> ULONG,
+    pub QueryInterface:
+        unsafe extern "system" fn(This: *mut IEnumConnectionPoints, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IEnumConnectionPoints) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IEnumConnectionPoints) -> Crossed<ULONG>,
     pub Next: unsafe extern "system" fn(
         This: *mut IEnumConnectionPoints,
         cConnections: ULONG,
         ppCP: *mut *mut IConnectionPoint,
         pcFetched: *mut ULONG,
-    ) -> HRESULT,
-    pub Skip: unsafe extern "system" fn(This: *mut IEnumConnectionPoints, cConnections: ULONG) -> HRESULT,
-    pub Reset: unsafe extern "system" fn(This: *mut IEnumConnectionPoints) -> HRESULT,
+    ) -> Hr,
+    pub Skip: unsafe extern "system" fn(This: *mut IEnumConnectionPoints, cConnections: ULONG) -> Hr,
+    pub Reset: unsafe extern "system" fn(This: *mut IEnumConnectionPoints) -> Hr,
     pub Clone:
-        unsafe extern "system" fn(This: *mut IEnumConnectionPoints, ppEnum: *mut *mut IEnumConnectionPoints) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IEnumConnectionPoints, ppEnum: *mut *mut IEnumConnectionPoints) -> Hr,
 }
 
 /// IEnumConnectionPoints: enumerates the connection points of a container.
@@ -105,20 +101,17 @@ pub struct IEnumConnectionPoints {
 #[allow(non_snake_case)]
 pub struct IConnectionPointVtbl {
     pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IConnectionPoint, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IConnectionPoint) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IConnectionPoint) -> ULONG,
-    pub GetConnectionInterface: unsafe extern "system" fn(This: *mut IConnectionPoint, pIID: *mut IID) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IConnectionPoint, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IConnectionPoint) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IConnectionPoint) -> Crossed<ULONG>,
+    pub GetConnectionInterface: unsafe extern "system" fn(This: *mut IConnectionPoint, pIID: *mut IID) -> Hr,
     pub GetConnectionPointContainer:
-        unsafe extern "system" fn(This: *mut IConnectionPoint, ppCPC: *mut *mut IConnectionPointContainer) -> HRESULT,
-    pub Advise: unsafe extern "system" fn(
-        This: *mut IConnectionPoint,
-        pUnkSink: *mut IUnknown,
-        pdwCookie: *mut DWORD,
-    ) -> HRESULT,
-    pub Unadvise: unsafe extern "system" fn(This: *mut IConnectionPoint, dwCookie: DWORD) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IConnectionPoint, ppCPC: *mut *mut IConnectionPointContainer) -> Hr,
+    pub Advise:
+        unsafe extern "system" fn(This: *mut IConnectionPoint, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> Hr,
+    pub Unadvise: unsafe extern "system" fn(This: *mut IConnectionPoint, dwCookie: DWORD) -> Hr,
     pub EnumConnections:
-        unsafe extern "system" fn(This: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> HRESULT,
+        unsafe extern "system" fn(This: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> Hr,
 }
 
 /// IConnectionPoint: one outgoing interface of a container, to which sinks are advised.
@@ -135,18 +128,18 @@ pub struct IConnectionPoint {
 #[allow(non_snake_case)]
 pub struct IEnumConnectionsVtbl {
     pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IEnumConnections, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-    pub AddRef: unsafe extern "system" fn(This: *mut IEnumConnections) -> ULONG,
-    pub Release: unsafe extern "system" fn(This: *mut IEnumConnections) -> ULONG,
+        unsafe extern "system" fn(This: *mut IEnumConnections, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    pub AddRef: unsafe extern "system" fn(This: *mut IEnumConnections) -> Crossed<ULONG>,
+    pub Release: unsafe extern "system" fn(This: *mut IEnumConnections) -> Crossed<ULONG>,
     pub Next: unsafe extern "system" fn(
         This: *mut IEnumConnections,
         cConnections: ULONG,
         rgcd: *mut CONNECTDATA,
         pcFetched: *mut ULONG,
-    ) -> HRESULT,
-    pub Skip: unsafe extern "system" fn(This: *mut IEnumConnections, cConnections: ULONG) -> HRESULT,
-    pub Reset: unsafe extern "system" fn(This: *mut IEnumConnections) -> HRESULT,
-    pub Clone: unsafe extern "system" fn(This: *mut IEnumConnections, ppEnum: *mut *mut IEnumConnections) -> HRESULT,
+    ) -> Hr,
+    pub Skip: unsafe extern "system" fn(This: *mut IEnumConnections, cConnections: ULONG) -> Hr,
+    pub Reset: unsafe extern "system" fn(This: *mut IEnumConnections) -> Hr,
+    pub Clone: unsafe extern "system" fn(This: *mut IEnumConnections, ppEnum: *mut *mut IEnumConnections) -> Hr,
 }
 
 /// IEnumConnections: enumerates the connections of a connection point.

@@ -24,9 +24,9 @@ mod tests;
 use core::ffi::c_void;
 use core::ptr;
 
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 use crate::com::object::ComObject;
-use crate::com::{IUnknown, HRESULT, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
+use crate::com::{IUnknown, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
 use client::NUL_STRING;
 use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 
@@ -45,10 +45,10 @@ use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 /// `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
 /// NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcShutdownCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+pub unsafe extern "C" fn OpcShutdownCreate(outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
-        Ok(unsafe { OpcShutdownCreateEx(ptr::null(), outer, riid, ppv) })
+        Ok(unsafe { OpcShutdownCreateEx(ptr::null(), outer, riid, ppv) }.get())
     })
 }
 
@@ -66,7 +66,7 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
     outer: *mut IUnknown,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: forwarded from the caller's contract.
         Ok(unsafe {
@@ -98,10 +98,10 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
 /// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
 /// UTF-16 string.
 #[no_mangle]
-pub unsafe extern "C" fn OpcShutdownNotify(shutdown: *mut IUnknown, reason: LPCWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcShutdownNotify(shutdown: *mut IUnknown, reason: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: forwarded from the caller's contract.
-        Ok(unsafe { OpcShutdownNotifyEx(shutdown, reason, ptr::null_mut(), ptr::null_mut()) })
+        Ok(unsafe { OpcShutdownNotifyEx(shutdown, reason, ptr::null_mut(), ptr::null_mut()) }.get())
     })
 }
 
@@ -117,7 +117,7 @@ pub unsafe extern "C" fn OpcShutdownNotifyEx(
     reason: LPCWSTR,
     pNotified: *mut ULONG,
     pFailed: *mut ULONG,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Opc, [pNotified, pFailed], {
         // SAFETY: the caller's contract: both counts NULL or writable (either may be NULL).
         let (notified, failed) = unsafe { (ffi::out_opt(pNotified), ffi::out_opt(pFailed)) };

@@ -19,7 +19,7 @@ use super::interfaces::{
     CONNECTDATA,
 };
 use crate::com::enumerator::{Counted, Element, EnumInterface, Enumerator};
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 use crate::com::iids::{
     IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
     IID_IENUMCONNECTIONS, IID_IUNKNOWN,
@@ -202,7 +202,7 @@ impl OpcShutdown {
                 Ok(call) => {
                     let p = call.as_ptr();
                     // SAFETY: `p` is a counted IOPCShutdown pointer valid on this thread; no lock is held.
-                    let hr = unsafe { ((*(*p).lpVtbl).ShutdownRequest)(p, reason) };
+                    let hr = unsafe { ((*(*p).lpVtbl).ShutdownRequest)(p, reason) }.get();
                     hr >= 0
                 }
                 Err(_) => false,
@@ -317,7 +317,7 @@ unsafe fn object<'a, I>(this: *mut I) -> &'a ComObject<OpcShutdown> {
 unsafe extern "system" fn enum_connection_points(
     this: *mut IConnectionPointContainer,
     ppEnum: *mut *mut IEnumConnectionPoints,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
         // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
         let out = unsafe { ffi::out(ppEnum) }?;
@@ -339,7 +339,7 @@ unsafe extern "system" fn find_connection_point(
     this: *mut IConnectionPointContainer,
     riid: REFIID,
     ppCP: *mut *mut IConnectionPoint,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppCP], {
         // SAFETY: the caller's contract: `ppCP` NULL or writable, `riid` NULL or readable.
         let (out, riid) = unsafe { (ffi::out(ppCP)?, ffi::in_ref(riid)?) };
@@ -361,7 +361,7 @@ unsafe extern "system" fn point_query_interface(
     this: *mut IConnectionPoint,
     riid: REFIID,
     ppv: *mut *mut c_void,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppv], {
         // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
         let (out, iid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?) };
@@ -375,7 +375,7 @@ unsafe extern "system" fn point_query_interface(
     })
 }
 
-unsafe extern "system" fn get_connection_interface(_this: *mut IConnectionPoint, pIID: *mut IID) -> HRESULT {
+unsafe extern "system" fn get_connection_interface(_this: *mut IConnectionPoint, pIID: *mut IID) -> Hr {
     ffi::boundary!(Com, [pIID], {
         // SAFETY: the caller vouches a non-NULL `pIID` is writable.
         unsafe { ffi::out(pIID) }?.write(IID_IOPCShutdown);
@@ -386,7 +386,7 @@ unsafe extern "system" fn get_connection_interface(_this: *mut IConnectionPoint,
 unsafe extern "system" fn get_connection_point_container(
     this: *mut IConnectionPoint,
     ppCPC: *mut *mut IConnectionPointContainer,
-) -> HRESULT {
+) -> Hr {
     ffi::boundary!(Com, [ppCPC], {
         // SAFETY: the caller vouches a non-NULL `ppCPC` is writable.
         let out = unsafe { ffi::out(ppCPC) }?;
@@ -415,11 +415,7 @@ unsafe extern "system" fn get_connection_point_container(
     })
 }
 
-unsafe extern "system" fn advise(
-    this: *mut IConnectionPoint,
-    pUnkSink: *mut IUnknown,
-    pdwCookie: *mut DWORD,
-) -> HRESULT {
+unsafe extern "system" fn advise(this: *mut IConnectionPoint, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> Hr {
     ffi::boundary!(Com, [pdwCookie], {
         // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
         let (out, sink) = (unsafe { ffi::out(pdwCookie) }?, ffi::in_ptr(pUnkSink)?);
@@ -429,14 +425,14 @@ unsafe extern "system" fn advise(
     })
 }
 
-unsafe extern "system" fn unadvise(this: *mut IConnectionPoint, dwCookie: DWORD) -> HRESULT {
+unsafe extern "system" fn unadvise(this: *mut IConnectionPoint, dwCookie: DWORD) -> Hr {
     ffi::boundary!(Com, [], {
         // SAFETY: COM calls this only through our vtable.
         Ok(unsafe { object(this) }.unadvise(dwCookie))
     })
 }
 
-unsafe extern "system" fn enum_connections(this: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> HRESULT {
+unsafe extern "system" fn enum_connections(this: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
         // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
         let out = unsafe { ffi::out(ppEnum) }?;

@@ -2,6 +2,9 @@
 
 use core::ffi::c_void;
 use core::ptr;
+
+use crate::com::ffi::{Crossed, Hr};
+use crate::com::HRESULT;
 use core::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Mutex;
 
@@ -42,51 +45,59 @@ static MOCK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
     ShutdownRequest: mock_shutdown_request,
 };
 
-unsafe extern "system" fn mock_qi(this: *mut IOPCShutdown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-    // SAFETY: only MockSink objects present MOCK_VTBL; the caller passes valid pointers.
-    unsafe {
-        let m = &*(this as *const MockSink);
-        *ppv = ptr::null_mut();
-        if *riid == IID_IUNKNOWN || (m.has_shutdown && *riid == IID_IOPCShutdown) {
-            m.refs.fetch_add(1, Ordering::SeqCst);
-            *ppv = this.cast();
-            return S_OK;
+unsafe extern "system" fn mock_qi(this: *mut IOPCShutdown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: only MockSink objects present MOCK_VTBL; the caller passes valid pointers.
+        unsafe {
+            let m = &*(this as *const MockSink);
+            *ppv = ptr::null_mut();
+            if *riid == IID_IUNKNOWN || (m.has_shutdown && *riid == IID_IOPCShutdown) {
+                m.refs.fetch_add(1, Ordering::SeqCst);
+                *ppv = this.cast();
+                return S_OK;
+            }
         }
-    }
-    E_NOINTERFACE
+        E_NOINTERFACE
+    })
 }
 
-unsafe extern "system" fn mock_add_ref(this: *mut IOPCShutdown) -> ULONG {
-    // SAFETY: as above.
-    unsafe { &*(this as *const MockSink) }
-        .refs
-        .fetch_add(1, Ordering::SeqCst)
-        + 1
+unsafe extern "system" fn mock_add_ref(this: *mut IOPCShutdown) -> Crossed<ULONG> {
+    Crossed::from_c(|| {
+        // SAFETY: as above.
+        unsafe { &*(this as *const MockSink) }
+            .refs
+            .fetch_add(1, Ordering::SeqCst)
+            + 1
+    })
 }
 
-unsafe extern "system" fn mock_release(this: *mut IOPCShutdown) -> ULONG {
-    // SAFETY: as above. The test owns the memory; the count only has to stay observable.
-    let m = unsafe { &*(this as *const MockSink) };
-    let before = m.refs.fetch_sub(1, Ordering::SeqCst);
-    assert!(before > 0, "Release without a reference");
-    before - 1
+unsafe extern "system" fn mock_release(this: *mut IOPCShutdown) -> Crossed<ULONG> {
+    Crossed::from_c(|| {
+        // SAFETY: as above. The test owns the memory; the count only has to stay observable.
+        let m = unsafe { &*(this as *const MockSink) };
+        let before = m.refs.fetch_sub(1, Ordering::SeqCst);
+        assert!(before > 0, "Release without a reference");
+        before - 1
+    })
 }
 
-unsafe extern "system" fn mock_shutdown_request(this: *mut IOPCShutdown, reason: LPCWSTR) -> HRESULT {
-    // SAFETY: as above; the server passes a NUL-terminated string.
-    let m = unsafe { &*(this as *const MockSink) };
-    m.calls.fetch_add(1, Ordering::SeqCst);
-    assert!(!reason.is_null(), "the server must never pass a NULL reason");
-    // SAFETY: NUL-terminated per the interface contract.
-    let units = unsafe { crate::com::wstr::wstr_units(reason, 1000) }.unwrap().to_vec();
-    m.reasons.lock().unwrap().push(units);
-    // Taken out of the mutex while it runs, so the hook may re-enter the server freely.
-    let hook = m.hook.lock().unwrap().take();
-    if let Some(mut hook) = hook {
-        hook();
-        *m.hook.lock().unwrap() = Some(hook);
-    }
-    m.result
+unsafe extern "system" fn mock_shutdown_request(this: *mut IOPCShutdown, reason: LPCWSTR) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: as above; the server passes a NUL-terminated string.
+        let m = unsafe { &*(this as *const MockSink) };
+        m.calls.fetch_add(1, Ordering::SeqCst);
+        assert!(!reason.is_null(), "the server must never pass a NULL reason");
+        // SAFETY: NUL-terminated per the interface contract.
+        let units = unsafe { crate::com::wstr::wstr_units(reason, 1000) }.unwrap().to_vec();
+        m.reasons.lock().unwrap().push(units);
+        // Taken out of the mutex while it runs, so the hook may re-enter the server freely.
+        let hook = m.hook.lock().unwrap().take();
+        if let Some(mut hook) = hook {
+            hook();
+            *m.hook.lock().unwrap() = Some(hook);
+        }
+        m.result
+    })
 }
 
 impl MockSink {
@@ -152,7 +163,7 @@ impl Server {
     fn find(&self, iid: &IID) -> (HRESULT, *mut IConnectionPoint) {
         let mut cp = core::ptr::null_mut::<IConnectionPoint>().wrapping_byte_add(1); // garbage, to prove it is written
                                                                                      // SAFETY: a live container.
-        let hr = unsafe { ((*(*self.0).lpVtbl).FindConnectionPoint)(self.0, iid, &mut cp) };
+        let hr = unsafe { ((*(*self.0).lpVtbl).FindConnectionPoint)(self.0, iid, &mut cp) }.get();
         (hr, cp)
     }
     fn point(&self) -> Point {
@@ -164,7 +175,7 @@ impl Server {
         let (mut n, mut f) = (99, 99);
         // SAFETY: a live object.
         let hr = unsafe { OpcShutdownNotifyEx(self.unk(), reason, &mut n, &mut f) };
-        (hr, n, f)
+        (hr.get(), n, f)
     }
     fn connections(&self) -> usize {
         // SAFETY: a live container of ours.
@@ -186,11 +197,11 @@ impl Point {
         let mut cookie: DWORD = 0xDEAD;
         // SAFETY: a live point.
         let hr = unsafe { ((*(*self.0).lpVtbl).Advise)(self.0, sink, &mut cookie) };
-        (hr, cookie)
+        (hr.get(), cookie)
     }
     fn unadvise(&self, cookie: DWORD) -> HRESULT {
         // SAFETY: a live point.
-        unsafe { ((*(*self.0).lpVtbl).Unadvise)(self.0, cookie) }
+        unsafe { ((*(*self.0).lpVtbl).Unadvise)(self.0, cookie) }.get()
     }
 }
 
@@ -528,7 +539,7 @@ fn a_sink_may_release_the_last_reference_to_the_server_inside_shutdown_request()
     let (mut n, mut f) = (0, 0);
     // SAFETY: the object is alive when the call starts.
     let hr = unsafe { OpcShutdownNotifyEx(raw as *mut IUnknown, ptr::null(), &mut n, &mut f) };
-    assert_eq!((hr, n, f), (S_OK, 1, 0));
+    assert_eq!((hr.get(), n, f), (S_OK, 1, 0));
     assert_eq!(
         sink.refs(),
         1,

@@ -50,7 +50,7 @@ pub use description::{OpcServerRegistration, OpcServerType, ServerDescription, O
 pub(crate) use ledger::{read_ledger, Entry, Recorder, LEDGER};
 
 use crate::com::alloc::alloc_wstr_from_str;
-use crate::com::ffi;
+use crate::com::ffi::{self, Hr};
 use crate::com::{HRESULT, LPWSTR, S_OK};
 use crate::registry::{registries, OpcRegistry, Registries};
 
@@ -71,7 +71,7 @@ use crate::registry::{registries, OpcRegistry, Registries};
 /// # Safety
 /// `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration, reg: *const OpcRegistry) -> HRESULT {
+pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration, reg: *const OpcRegistry) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller's contract: `server` NULL or valid, `reg` NULL or a live handle.
         let (d, regs) = unsafe { (ServerDescription::read(server)?, registries(reg)) };
@@ -91,7 +91,7 @@ pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration,
 /// # Safety
 /// As for `OpcRegisterServer`.
 #[no_mangle]
-pub unsafe extern "C" fn OpcUnregisterServer(server: *const OpcServerRegistration, reg: *const OpcRegistry) -> HRESULT {
+pub unsafe extern "C" fn OpcUnregisterServer(server: *const OpcServerRegistration, reg: *const OpcRegistry) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller's contract: `server` NULL or valid, `reg` NULL or a live handle.
         let (d, regs) = unsafe { (ServerDescription::read(server)?, registries(reg)) };
@@ -119,7 +119,7 @@ pub(crate) fn export_registration(d: &ServerDescription) -> Result<String, HRESU
 /// # Safety
 /// `server` as for `OpcRegisterServer`; `text` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistrationExport(server: *const OpcServerRegistration, text: *mut LPWSTR) -> HRESULT {
+pub unsafe extern "C" fn OpcRegistrationExport(server: *const OpcServerRegistration, text: *mut LPWSTR) -> Hr {
     ffi::boundary!(Opc, [text], {
         // SAFETY: the caller's contract: `text` NULL or writable, `server` NULL or valid.
         let (text, d) = unsafe { (ffi::out(text)?, ServerDescription::read(server)?) };

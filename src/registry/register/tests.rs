@@ -372,7 +372,7 @@ fn the_c_entry_points_read_the_structure_and_write_through_a_handle() {
             let name = name.map(w);
             let mut data = ptr::null_mut();
             let name_ptr = name.as_ref().map_or(ptr::null(), |n| n.as_ptr());
-            match crate::registry::OpcRegistryGetString(reg, key.as_ptr(), name_ptr, &mut data) {
+            match crate::registry::OpcRegistryGetString(reg, key.as_ptr(), name_ptr, &mut data).get() {
                 crate::com::S_OK => {
                     let s = String::from_utf16(crate::com::wstr::wstr_units(data, usize::MAX).unwrap()).unwrap();
                     crate::com::alloc::OpcTaskMemFree(data.cast());
