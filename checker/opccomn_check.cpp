@@ -1207,28 +1207,31 @@ void HostileNullLocaleArray(Ctx &x) {
     x.Pass("NULL count: " + Hr(b) + "; NULL array: " + Hr(a) + (x.s.proxy ? " (refused by the proxy)" : "; the other out-parameter cleared"));
 }
 
+// A call with a NULL where the method needs a pointer, which must fail: `call` is what the progress line
+// names, `shown` what the report says was called.
+template <typename F>
+void MustFail(Ctx &x, const char *call, const char *shown, const char *expected, F f) {
+    HRESULT hr;
+    {
+        Call c(call);
+        hr = f();
+    }
+    if (SUCCEEDED(hr)) return x.Fail(expected, Hr(hr));
+    x.Pass(std::string(shown) + " = " + Hr(hr));
+}
+
 void HostileNullErrorString(Ctx &x) {
     IOPCCommon *common = Common(x);
     if (!common) return;
-    HRESULT hr;
-    {
-        Call c("IOPCCommon::GetErrorString(code, NULL)");
-        hr = common->GetErrorString(E_FAIL, nullptr);
-    }
-    if (SUCCEEDED(hr)) return x.Fail("E_INVALIDARG", Hr(hr));
-    x.Pass("GetErrorString(E_FAIL, NULL) = " + Hr(hr));
+    MustFail(x, "IOPCCommon::GetErrorString(code, NULL)", "GetErrorString(E_FAIL, NULL)", "E_INVALIDARG",
+             [&] { return common->GetErrorString(E_FAIL, nullptr); });
 }
 
 void HostileNullClientName(Ctx &x) {
     IOPCCommon *common = Common(x);
     if (!common) return;
-    HRESULT hr;
-    {
-        Call c("IOPCCommon::SetClientName(NULL)");
-        hr = common->SetClientName(nullptr);
-    }
-    if (SUCCEEDED(hr)) return x.Fail("E_INVALIDARG", Hr(hr));
-    x.Pass("SetClientName(NULL) = " + Hr(hr));
+    MustFail(x, "IOPCCommon::SetClientName(NULL)", "SetClientName(NULL)", "E_INVALIDARG",
+             [&] { return common->SetClientName(nullptr); });
 }
 
 void HostileLongClientName(Ctx &x) {
@@ -1248,13 +1251,9 @@ void HostileLongClientName(Ctx &x) {
 void HostileFindNull(Ctx &x) {
     IConnectionPointContainer *container = Container(x);
     if (!container) return;
-    HRESULT hr;
-    {
-        Call c("IConnectionPointContainer::FindConnectionPoint(IID_IOPCShutdown, NULL)");
-        hr = container->FindConnectionPoint(IID_IOPCShutdown, nullptr);
-    }
-    if (SUCCEEDED(hr)) return x.Fail("E_POINTER", Hr(hr));
-    x.Pass("FindConnectionPoint(IID_IOPCShutdown, NULL) = " + Hr(hr));
+    MustFail(x, "IConnectionPointContainer::FindConnectionPoint(IID_IOPCShutdown, NULL)",
+             "FindConnectionPoint(IID_IOPCShutdown, NULL)", "E_POINTER",
+             [&] { return container->FindConnectionPoint(IID_IOPCShutdown, nullptr); });
 }
 
 void HostileAdviseNull(Ctx &x) {

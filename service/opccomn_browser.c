@@ -26,125 +26,27 @@
 
 #include <opccomn/opccomn.h>
 
+#include "exe_host.h"
+
 static const CLSID APPID_OpcComnBrowser = {0xCCD63ADF, 0xD02D, 0x46DD, {0xB1, 0x70, 0xFA, 0x6E, 0x0F, 0x08, 0x6F, 0xE3}};
 #define SERVER_LIST_KEY L"CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}\\LocalServer32"
 /* A browser nobody connects to gives up after this long (COM starts it for a client, so one comes). */
 #define IDLE_MS 60000
 
-static HANDLE done;
-static LONG objects;
-
-static DWORD cookie; /* the registered class object */
-static LONG revoked;
-
-/* Stops new activations reaching this process (COM starts a new one for them). */
-static void revoke_class(void) {
-    if (InterlockedExchange(&revoked, 1) == 0) CoRevokeClassObject(cookie);
-}
-
-static void object_created(void) { InterlockedIncrement(&objects); }
-/* The last object gone: revoke the class object at once, so that a client activating now gets a new
- * browser instead of this exiting one, then let serve() finish. */
-static void object_destroyed(void) {
-    if (InterlockedDecrement(&objects) == 0) {
-        revoke_class();
-        SetEvent(done);
-    }
-}
-
-/* ---- An outer object around each server list, so the process knows when its last client is gone. ---- */
-typedef struct Holder {
-    IUnknown unk;
-    LONG refs;
-    IUnknown *inner;
-} Holder;
-
-static HRESULT STDMETHODCALLTYPE holder_qi(IUnknown *This, REFIID riid, void **ppv) {
-    Holder *h = (Holder *)This;
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (IsEqualIID(riid, &IID_IUnknown)) {
-        *ppv = This;
-        This->lpVtbl->AddRef(This);
-        return S_OK;
-    }
-    if (IsEqualIID(riid, &IID_IOPCServerList) || IsEqualIID(riid, &IID_IOPCServerList2))
-        return h->inner->lpVtbl->QueryInterface(h->inner, riid, ppv);
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE holder_add_ref(IUnknown *This) { return (ULONG)InterlockedIncrement(&((Holder *)This)->refs); }
-static ULONG STDMETHODCALLTYPE holder_release(IUnknown *This) {
-    Holder *h = (Holder *)This;
-    LONG n = InterlockedDecrement(&h->refs);
-    if (n == 0) {
-        h->refs = 1; /* the inner object's release must not come back here */
-        if (h->inner) h->inner->lpVtbl->Release(h->inner);
-        HeapFree(GetProcessHeap(), 0, h);
-        object_destroyed();
-    }
-    return (ULONG)n;
-}
-static IUnknownVtbl holder_vtbl = {holder_qi, holder_add_ref, holder_release};
-
-static HRESULT STDMETHODCALLTYPE factory_qi(IClassFactory *This, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IClassFactory)) {
-        *ppv = This;
-        return S_OK;
-    }
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE factory_add_ref(IClassFactory *This) { (void)This; return 2; }
-static ULONG STDMETHODCALLTYPE factory_release(IClassFactory *This) { (void)This; return 1; }
-static HRESULT STDMETHODCALLTYPE factory_create(IClassFactory *This, IUnknown *outer, REFIID riid, void **ppv) {
-    Holder *h;
-    HRESULT hr;
-    (void)This;
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (outer) return CLASS_E_NOAGGREGATION;
-    h = (Holder *)HeapAlloc(GetProcessHeap(), HEAP_ZERO_MEMORY, sizeof *h);
-    if (!h) return E_OUTOFMEMORY;
-    h->unk.lpVtbl = &holder_vtbl;
-    h->refs = 1;
-    object_created();
-    hr = OpcServerListCreate(&h->unk, &IID_IUnknown, (void **)&h->inner);
-    if (SUCCEEDED(hr)) hr = holder_qi(&h->unk, riid, ppv);
-    holder_release(&h->unk);
-    return hr;
-}
-static HRESULT STDMETHODCALLTYPE factory_lock(IClassFactory *This, BOOL lock) {
-    (void)This;
-    if (lock) object_created();
-    else object_destroyed();
-    return S_OK;
-}
-static IClassFactoryVtbl factory_vtbl = {factory_qi, factory_add_ref, factory_release, factory_create, factory_lock};
-static IClassFactory factory = {&factory_vtbl};
+static HRESULT create_server_list(REFIID riid, void **ppv) { return exe_host_create_server_list(NULL, riid, ppv); }
 
 static int serve(void) {
+    static const CLSID *const clsids[1] = {&CLSID_OPCServerList};
+    static ExeHostClass classes[1] = {EXE_HOST_CLASS(create_server_list)};
     HRESULT hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
-    done = CreateEventW(NULL, TRUE, FALSE, NULL);
     /* The AppID's AccessPermission decides who may call (machine defaults when it has none). */
     if (SUCCEEDED(hr))
         hr = CoInitializeSecurity((PSECURITY_DESCRIPTOR)&APPID_OpcComnBrowser, -1, NULL, NULL,
                                   RPC_C_AUTHN_LEVEL_DEFAULT, RPC_C_IMP_LEVEL_IDENTIFY, NULL, EOAC_APPID, NULL);
-    if (SUCCEEDED(hr))
-        hr = CoRegisterClassObject(&CLSID_OPCServerList, (IUnknown *)&factory, CLSCTX_LOCAL_SERVER,
-                                   REGCLS_MULTIPLEUSE, &cookie);
-    if (FAILED(hr)) {
-        fprintf(stderr, "opccomn_browser: cannot serve CLSID_OPCServerList: 0x%08lX\n", (unsigned long)hr);
-        return 1;
-    }
-    /* Until the last object goes (or nobody came). */
-    WaitForSingleObject(done, IDLE_MS);
-    revoke_class();
-    while (InterlockedCompareExchange(&objects, 0, 0) > 0) Sleep(50);
-    /* No CoUninitialize: the last Release may still be on its way back to the client on an RPC thread,
-     * and CoUninitialize of the apartment that call runs in waits for it (under Wine it can wait for
-     * ever). Process exit tears COM down. */
-    return 0;
+    /* Until the last object goes (or nobody came), however long clients keep it. */
+    if (SUCCEEDED(hr) && exe_host_serve(clsids, classes, 1, IDLE_MS, INFINITE, INFINITE, &hr) == 0) return 0;
+    fprintf(stderr, "opccomn_browser: cannot serve CLSID_OPCServerList: 0x%08lX\n", (unsigned long)hr);
+    return 1;
 }
 
 static OpcServerRegistration registration(const WCHAR *self) {

@@ -14,35 +14,10 @@
  * server saw: the client name, the result of a shutdown notification, the proxy/stub in use. */
 #include "oop.h"
 
-static HANDLE done;        /* set when the last object is gone */
-static LONG objects;       /* live server objects and server lists */
+#include "exe_host.h"
+
 static int widl_mode;
 static OpcRegistry *fake_registry; /* the server list's registry */
-
-static DWORD cookies[2]; /* the registered class objects */
-static LONG revoked;
-
-/* Stops new activations reaching this process (COM starts a new one for them). */
-static void revoke_classes(void) {
-    if (InterlockedExchange(&revoked, 1) == 0) {
-        CoRevokeClassObject(cookies[0]);
-        CoRevokeClassObject(cookies[1]);
-    }
-}
-
-static LONG ever_created; /* an object was made: the server is in use */
-static void object_created(void) {
-    InterlockedIncrement(&objects);
-    InterlockedExchange(&ever_created, 1);
-}
-/* The last object gone: revoke the class objects at once, so that a client activating now gets a new
- * server instead of this exiting one, then let main() finish. */
-static void object_destroyed(void) {
-    if (InterlockedDecrement(&objects) == 0) {
-        revoke_classes();
-        SetEvent(done);
-    }
-}
 
 /* ---- The server object ---- */
 typedef struct Server {
@@ -82,7 +57,7 @@ static ULONG STDMETHODCALLTYPE server_release(IUnknown *This) {
         DeleteCriticalSection(&s->lock);
         free(s->client_name);
         free(s);
-        object_destroyed();
+        exe_host_object_destroyed();
     }
     return (ULONG)n;
 }
@@ -152,7 +127,7 @@ static HRESULT create_server(REFIID riid, void **ppv) {
     s->unk.lpVtbl = &server_vtbl;
     s->refs = 1;
     InitializeCriticalSection(&s->lock);
-    object_created();
+    exe_host_object_created();
     for (i = 0; i < OOP_LOCALES; i++) locales[i] = oop_locale(i);
     memset(&options, 0, sizeof options);
     options.struct_size = sizeof options;
@@ -169,86 +144,8 @@ static HRESULT create_server(REFIID riid, void **ppv) {
     return hr;
 }
 
-/* ---- Class factories ---- */
-typedef struct Factory {
-    IClassFactory cf;
-    int list; /* 0: the server object; 1: the server list */
-} Factory;
-
-static HRESULT STDMETHODCALLTYPE factory_qi(IClassFactory *This, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IClassFactory)) {
-        *ppv = This;
-        return S_OK;
-    }
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE factory_add_ref(IClassFactory *This) { (void)This; return 2; }
-static ULONG STDMETHODCALLTYPE factory_release(IClassFactory *This) { (void)This; return 1; }
-
-/* The server list is the library's object; an outer object in this EXE only counts its lifetime. */
-typedef struct ListHolder {
-    IUnknown unk;
-    LONG refs;
-    IUnknown *inner;
-} ListHolder;
-
-static HRESULT STDMETHODCALLTYPE holder_qi(IUnknown *This, REFIID riid, void **ppv) {
-    ListHolder *h = (ListHolder *)This;
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (IsEqualIID(riid, &IID_IUnknown)) {
-        *ppv = This;
-        This->lpVtbl->AddRef(This);
-        return S_OK;
-    }
-    if (IsEqualIID(riid, &IID_IOPCServerList) || IsEqualIID(riid, &IID_IOPCServerList2))
-        return h->inner->lpVtbl->QueryInterface(h->inner, riid, ppv);
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE holder_add_ref(IUnknown *This) { return (ULONG)InterlockedIncrement(&((ListHolder *)This)->refs); }
-static ULONG STDMETHODCALLTYPE holder_release(IUnknown *This) {
-    ListHolder *h = (ListHolder *)This;
-    LONG n = InterlockedDecrement(&h->refs);
-    if (n == 0) {
-        h->refs = 1;
-        if (h->inner) h->inner->lpVtbl->Release(h->inner);
-        free(h);
-        object_destroyed();
-    }
-    return (ULONG)n;
-}
-static IUnknownVtbl holder_vtbl = {holder_qi, holder_add_ref, holder_release};
-
-static HRESULT create_list(REFIID riid, void **ppv) {
-    HRESULT hr;
-    ListHolder *h = (ListHolder *)calloc(1, sizeof *h);
-    if (!h) return E_OUTOFMEMORY;
-    h->unk.lpVtbl = &holder_vtbl;
-    h->refs = 1;
-    object_created();
-    hr = OpcServerListCreateOver(fake_registry, &h->unk, &IID_IUnknown, (void **)&h->inner);
-    if (SUCCEEDED(hr)) hr = holder_qi(&h->unk, riid, ppv);
-    holder_release(&h->unk);
-    return hr;
-}
-
-static HRESULT STDMETHODCALLTYPE factory_create(IClassFactory *This, IUnknown *outer, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (outer) return CLASS_E_NOAGGREGATION;
-    return ((Factory *)This)->list ? create_list(riid, ppv) : create_server(riid, ppv);
-}
-static HRESULT STDMETHODCALLTYPE factory_lock(IClassFactory *This, BOOL lock) {
-    (void)This;
-    if (lock) object_created();
-    else object_destroyed();
-    return S_OK;
-}
-static IClassFactoryVtbl factory_vtbl = {factory_qi, factory_add_ref, factory_release, factory_create, factory_lock};
-static Factory server_factory = {{&factory_vtbl}, 0};
-static Factory list_factory = {{&factory_vtbl}, 1};
+/* The server list is the library's object over the fake registry, counted by exe_host.h. */
+static HRESULT create_list(REFIID riid, void **ppv) { return exe_host_create_server_list(fake_registry, riid, ppv); }
 
 /* The fake servers: OOP_FAKE_SERVERS Data Access 2.0 servers with ProgIDs Oop.Fake<N>.1. */
 static HRESULT fill_fake_registry(void) {
@@ -283,43 +180,31 @@ static HRESULT fill_fake_registry(void) {
 
 int main(void) {
     HRESULT hr;
-    DWORD wait_ms;
+    LONG left;
     const WCHAR *set_flag = wcsstr(GetCommandLineW(), L" -set:");
     unsigned set = set_flag ? (unsigned)(set_flag[6] - L'0') % 10 : 0;
     CLSID server_clsid = oop_class(set, 0), list_clsid = oop_class(set, 1);
+    const CLSID *clsids[2] = {&server_clsid, &list_clsid};
+    static ExeHostClass classes[2] = {EXE_HOST_CLASS(create_server), EXE_HOST_CLASS(create_list)};
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
-    done = CreateEventW(NULL, TRUE, FALSE, NULL);
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
     if (SUCCEEDED(hr) && widl_mode) hr = use_widl_proxy_stub();
     if (SUCCEEDED(hr) && wcsstr(GetCommandLineW(), L"-ps:opccomn-direct")) hr = use_opccomn_proxy_stub_directly();
     if (SUCCEEDED(hr)) hr = fill_fake_registry();
-    if (SUCCEEDED(hr))
-        hr = CoRegisterClassObject(&server_clsid, (IUnknown *)&server_factory.cf, CLSCTX_LOCAL_SERVER,
-                                   REGCLS_MULTIPLEUSE, &cookies[0]);
-    if (SUCCEEDED(hr))
-        hr = CoRegisterClassObject(&list_clsid, (IUnknown *)&list_factory.cf, CLSCTX_LOCAL_SERVER,
-                                   REGCLS_MULTIPLEUSE, &cookies[1]);
-    if (FAILED(hr)) {
+    /* Until the last object goes. A server nobody connects to gives up after two minutes; one in use,
+     * however long its client's calls take (a benchmark runs for minutes on a loaded machine), after
+     * 20 minutes; then objects a vanished client never released (Wine runs no rundown of a dead
+     * client's references) get 30 s, so they cannot keep this process, and the test runner's output
+     * pipe it inherited, alive for ever. */
+    left = SUCCEEDED(hr) ? exe_host_serve(clsids, classes, 2, 120000, 1200000, 30000, &hr) : -1;
+    if (left < 0) {
         fprintf(stderr, "oop_server: start failed: 0x%08lX\n", (unsigned long)hr);
         return 1;
     }
-    /* Exit when the last object goes. A server nobody connects to gives up after two minutes; one in
-     * use, however long its client's calls take (a benchmark runs for minutes on a loaded machine),
-     * after 20 minutes, so that a client that died without releasing (Wine runs no rundown of a dead
-     * client's references) does not leave it running for ever. */
-    for (wait_ms = 0; WaitForSingleObject(done, 1000) == WAIT_TIMEOUT; wait_ms += 1000)
-        if (wait_ms >= (InterlockedCompareExchange(&ever_created, 0, 0) ? 1200000u : 120000u)) break;
-    revoke_classes();
-    /* An object a vanished client never released (Wine runs no rundown of a dead client's references)
-     * must not keep this process, and the test runner's output pipe it inherited, alive for ever. */
-    for (wait_ms = 0; InterlockedCompareExchange(&objects, 0, 0) > 0 && wait_ms < 30000; wait_ms += 50) Sleep(50);
-    if (objects > 0) {
-        fprintf(stderr, "oop_server: exiting with %ld objects a client never released\n", objects);
+    if (left > 0) {
+        fprintf(stderr, "oop_server: exiting with %ld objects a client never released\n", left);
         return 3;
     }
     OpcRegistryRelease(fake_registry);
-    /* No CoUninitialize: the last Release may still be on its way back to the client on an RPC thread,
-     * and CoUninitialize of the apartment that call runs in waits for it (under Wine it can wait for
-     * ever). Process exit tears COM down. */
-    return 0;
+    return 0; /* without CoUninitialize (exe_host.h) */
 }

@@ -1,0 +1,176 @@
+/* The lifetime of an out-of-process COM server (an EXE started by COM as LocalServer32) whose objects
+ * come from opccomn: class objects, the count of live objects, and the exit when the last one goes.
+ * Used by the server browser service (opccomn_browser.c) and by the cross-process tests' server
+ * (tests/oop/oop_server.c). One process, one set of these: include it in one file of the EXE.
+ *
+ * An object of the EXE calls exe_host_object_created() when it is made and exe_host_object_destroyed()
+ * when it is freed (IClassFactory::LockServer counts as one). When the count falls to zero the class
+ * objects are revoked at once, so that a client activating now gets a new process instead of this
+ * exiting one, and exe_host_serve() returns. */
+#ifndef OPCCOMN_EXE_HOST_H
+#define OPCCOMN_EXE_HOST_H
+
+#include <opccomn/opccomn.h>
+
+#define EXE_HOST_MAX_CLASSES 4
+
+/* Makes an object of one class for IClassFactory::CreateInstance (no aggregation across processes). */
+typedef HRESULT (*ExeHostCreate)(REFIID riid, void **ppv);
+
+typedef struct ExeHostClass {
+    IClassFactory factory;
+    ExeHostCreate create;
+} ExeHostClass;
+
+static HANDLE exe_host_done;     /* set when the last object is gone */
+static LONG exe_host_objects;    /* live objects and server locks */
+static LONG exe_host_in_use;     /* an object was made: a client came */
+static LONG exe_host_revoked;
+static DWORD exe_host_cookies[EXE_HOST_MAX_CLASSES];
+static LONG exe_host_classes;
+
+static void exe_host_revoke(void) {
+    LONG i;
+    if (InterlockedExchange(&exe_host_revoked, 1) == 0)
+        for (i = 0; i < exe_host_classes; i++) CoRevokeClassObject(exe_host_cookies[i]);
+}
+
+static void exe_host_object_created(void) {
+    InterlockedIncrement(&exe_host_objects);
+    InterlockedExchange(&exe_host_in_use, 1);
+}
+
+static void exe_host_object_destroyed(void) {
+    if (InterlockedDecrement(&exe_host_objects) == 0) {
+        exe_host_revoke();
+        SetEvent(exe_host_done);
+    }
+}
+
+/* ---- The class objects: static, never freed, so their reference count is not kept. ---- */
+static HRESULT STDMETHODCALLTYPE exe_host_factory_qi(IClassFactory *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IClassFactory)) {
+        *ppv = This;
+        return S_OK;
+    }
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE exe_host_factory_add_ref(IClassFactory *This) {
+    (void)This;
+    return 2;
+}
+static ULONG STDMETHODCALLTYPE exe_host_factory_release(IClassFactory *This) {
+    (void)This;
+    return 1;
+}
+static HRESULT STDMETHODCALLTYPE exe_host_factory_create(IClassFactory *This, IUnknown *outer, REFIID riid,
+                                                        void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (outer) return CLASS_E_NOAGGREGATION;
+    return ((ExeHostClass *)This)->create(riid, ppv);
+}
+static HRESULT STDMETHODCALLTYPE exe_host_factory_lock(IClassFactory *This, BOOL lock) {
+    (void)This;
+    if (lock) exe_host_object_created();
+    else exe_host_object_destroyed();
+    return S_OK;
+}
+static IClassFactoryVtbl exe_host_factory_vtbl = {exe_host_factory_qi, exe_host_factory_add_ref,
+                                                  exe_host_factory_release, exe_host_factory_create,
+                                                  exe_host_factory_lock};
+
+/* A class object for `create`, to pass to exe_host_serve(). */
+#define EXE_HOST_CLASS(create) {{&exe_host_factory_vtbl}, (create)}
+
+/* ---- The server list: the library's object inside an outer one that counts its lifetime. ---- */
+typedef struct ExeHostListHolder {
+    IUnknown unk;
+    LONG refs;
+    IUnknown *inner;
+} ExeHostListHolder;
+
+static HRESULT STDMETHODCALLTYPE exe_host_holder_qi(IUnknown *This, REFIID riid, void **ppv) {
+    ExeHostListHolder *h = (ExeHostListHolder *)This;
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown)) {
+        *ppv = This;
+        This->lpVtbl->AddRef(This);
+        return S_OK;
+    }
+    if (IsEqualIID(riid, &IID_IOPCServerList) || IsEqualIID(riid, &IID_IOPCServerList2))
+        return h->inner->lpVtbl->QueryInterface(h->inner, riid, ppv);
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE exe_host_holder_add_ref(IUnknown *This) {
+    return (ULONG)InterlockedIncrement(&((ExeHostListHolder *)This)->refs);
+}
+static ULONG STDMETHODCALLTYPE exe_host_holder_release(IUnknown *This) {
+    ExeHostListHolder *h = (ExeHostListHolder *)This;
+    LONG n = InterlockedDecrement(&h->refs);
+    if (n == 0) {
+        h->refs = 1; /* the inner object's release must not come back here */
+        if (h->inner) h->inner->lpVtbl->Release(h->inner);
+        HeapFree(GetProcessHeap(), 0, h);
+        exe_host_object_destroyed();
+    }
+    return (ULONG)n;
+}
+static IUnknownVtbl exe_host_holder_vtbl = {exe_host_holder_qi, exe_host_holder_add_ref, exe_host_holder_release};
+
+/* A server list over `registry` (NULL: the system registry, both views) for CreateInstance. */
+static HRESULT exe_host_create_server_list(OpcRegistry *registry, REFIID riid, void **ppv) {
+    HRESULT hr;
+    ExeHostListHolder *h = (ExeHostListHolder *)HeapAlloc(GetProcessHeap(), HEAP_ZERO_MEMORY, sizeof *h);
+    if (!h) return E_OUTOFMEMORY;
+    h->unk.lpVtbl = &exe_host_holder_vtbl;
+    h->refs = 1;
+    exe_host_object_created();
+    hr = registry ? OpcServerListCreateOver(registry, &h->unk, &IID_IUnknown, (void **)&h->inner)
+                  : OpcServerListCreate(&h->unk, &IID_IUnknown, (void **)&h->inner);
+    if (SUCCEEDED(hr)) hr = exe_host_holder_qi(&h->unk, riid, ppv);
+    exe_host_holder_release(&h->unk);
+    return hr;
+}
+
+/* Registers the class objects (COM must be initialized), then serves until the last object is gone:
+ * a process no client comes to gives up after idle_ms, one in use after in_use_ms (INFINITE: never);
+ * then the class objects are revoked and objects still alive get unreleased_ms (INFINITE: as long as
+ * they live) to go. Returns the number of objects left (0: a clean end), or -1 when a class object
+ * could not be registered (its HRESULT in *failure).
+ *
+ * The caller then exits without CoUninitialize: the last Release may still be on its way back to the
+ * client on an RPC thread, and CoUninitialize of the apartment that call runs in waits for it (under
+ * Wine it can wait for ever). Process exit tears COM down. */
+static LONG exe_host_serve(const CLSID *const *clsids, ExeHostClass *classes, LONG count, DWORD idle_ms,
+                           DWORD in_use_ms, DWORD unreleased_ms, HRESULT *failure) {
+    DWORD waited;
+    LONG i;
+    *failure = S_OK;
+    exe_host_done = CreateEventW(NULL, TRUE, FALSE, NULL);
+    if (!exe_host_done || count > EXE_HOST_MAX_CLASSES) *failure = E_FAIL;
+    for (i = 0; SUCCEEDED(*failure) && i < count; i++) {
+        *failure = CoRegisterClassObject(clsids[i], (IUnknown *)&classes[i].factory, CLSCTX_LOCAL_SERVER,
+                                         REGCLS_MULTIPLEUSE, &exe_host_cookies[i]);
+        if (SUCCEEDED(*failure)) exe_host_classes = i + 1;
+    }
+    if (FAILED(*failure)) {
+        exe_host_revoke();
+        return -1;
+    }
+    for (waited = 0; WaitForSingleObject(exe_host_done, 1000) == WAIT_TIMEOUT; waited += 1000) {
+        DWORD limit = InterlockedCompareExchange(&exe_host_in_use, 0, 0) ? in_use_ms : idle_ms;
+        if (limit != INFINITE && waited >= limit) break;
+    }
+    exe_host_revoke();
+    for (waited = 0; InterlockedCompareExchange(&exe_host_objects, 0, 0) > 0; waited += 50) {
+        if (unreleased_ms != INFINITE && waited >= unreleased_ms) break;
+        Sleep(50);
+    }
+    return InterlockedCompareExchange(&exe_host_objects, 0, 0);
+}
+
+#endif
