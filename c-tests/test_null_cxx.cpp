@@ -2,39 +2,7 @@
  * caller that passes NULL gets the same HRESULT as the C tests check through lpVtbl (test_common.c,
  * test_server_list.c, test_shutdown.c), and out-parameters are written the same way. Built and run on
  * Linux and for both Windows DLLs (x64 and x86). */
-#include <stdio.h>
-#include <string.h>
-
-#include <opccomn/opccomn.h>
-
-static int test_passed, test_failed;
-#define CHECK(cond)                                                                        \
-    do {                                                                                   \
-        if (cond) {                                                                        \
-            test_passed++;                                                                 \
-        } else {                                                                           \
-            test_failed++;                                                                 \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);       \
-        }                                                                                  \
-    } while (0)
-#define CHECK_HR(expr, expected)                                                           \
-    do {                                                                                   \
-        HRESULT got_ = (expr);                                                             \
-        if (got_ == (expected)) {                                                          \
-            test_passed++;                                                                 \
-        } else {                                                                           \
-            test_failed++;                                                                 \
-            fprintf(stderr, "%s:%d: %s returned 0x%08lX\n", __FILE__, __LINE__, #expr,      \
-                    static_cast<unsigned long>(static_cast<unsigned int>(got_)));          \
-        }                                                                                  \
-    } while (0)
-#define GARBAGE_PTR (reinterpret_cast<void *>(static_cast<size_t>(0xDEADBEEFu)))
-#define GARBAGE_U32 0xDEADBEEFu
-#ifdef _WIN32
-#define W(s) reinterpret_cast<const WCHAR *>(L##s)
-#else
-#define W(s) reinterpret_cast<const WCHAR *>(u##s)
-#endif
+#include "test_check.h"
 
 static void test_common_nulls() {
     IOPCCommon *c = nullptr;
@@ -108,6 +76,5 @@ int main() {
     test_server_list_nulls();
     test_shutdown_nulls();
     CHECK(OpcObjectCount() == objects);
-    printf("test_null_cxx: %d passed, %d failed\n", test_passed, test_failed);
-    return test_failed == 0 ? 0 : 1;
+    return test_summary("test_null_cxx");
 }
