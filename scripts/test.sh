@@ -215,7 +215,12 @@ if [ "$wine_stage" = 1 ]; then
     fi
     if [ "$wine32_ok" = 1 ]; then
         stage "Rust tests (Windows x86, under 32-bit Wine)"
-        CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
+        # RUST_BACKTRACE=0: with backtraces on (RUST_BACKTRACE=1 in the environment), taking the
+        # backtrace of a panic under Debian 12's 32-bit Wine 8 reads through NULL inside its ucrtbase
+        # and kills the process at the first test that panics on purpose (the boundary's panic tests);
+        # a plain program that catches a panic survives it. What those tests check is the library's
+        # handling of the panic; the x64 stage above runs them with backtraces as the environment sets.
+        RUST_BACKTRACE=0 CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
 
         stage "C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)"
         run_x86_c_tests "$build/windows-x86"
