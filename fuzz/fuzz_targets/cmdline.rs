@@ -62,7 +62,7 @@ fuzz_target!(|data: &[u8]| {
     let text = units(data);
     let mut command = 99;
     // SAFETY: NUL-terminated text, writable out-parameter.
-    let hr = unsafe { OpcParseCommandLine(text.as_ptr(), &mut command) };
+    let hr = unsafe { OpcParseCommandLine(text.as_ptr(), &mut command) }.get();
     assert_eq!(
         (hr, command),
         reference(&text[..text.len() - 1]),

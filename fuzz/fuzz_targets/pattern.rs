@@ -37,13 +37,13 @@ fn wide_results(s: &[u16], p: &[u16], cs: bool) -> bool {
     let s: Vec<u16> = s.iter().copied().chain([0]).collect();
     let p: Vec<u16> = p.iter().copied().chain([0]).collect();
     // SAFETY: NUL-terminated.
-    let direct = boolean(unsafe { MatchPatternW(s.as_ptr(), p.as_ptr(), cs as i32) });
+    let direct = boolean(unsafe { MatchPatternW(s.as_ptr(), p.as_ptr(), cs as i32) }.get());
     let mut filter = core::ptr::null_mut();
     // SAFETY: NUL-terminated pattern, writable out-pointer.
-    let hr = unsafe { OpcPatternCompileW(p.as_ptr(), cs as i32, &mut filter) };
+    let hr = unsafe { OpcPatternCompileW(p.as_ptr(), cs as i32, &mut filter) }.get();
     if hr == S_OK {
         // SAFETY: a live filter, freed once.
-        let compiled = boolean(unsafe { OpcPatternMatchW(filter, s.as_ptr()) });
+        let compiled = boolean(unsafe { OpcPatternMatchW(filter, s.as_ptr()) }.get());
         // SAFETY: as above.
         unsafe { OpcPatternFree(filter) };
         assert_eq!(compiled, direct, "compiled filter vs MatchPatternW");
@@ -62,13 +62,13 @@ fn narrow_results(s: &[u8], p: &[u8], cs: bool) -> bool {
     let s: Vec<u8> = s.iter().copied().chain([0]).collect();
     let p: Vec<u8> = p.iter().copied().chain([0]).collect();
     // SAFETY: NUL-terminated.
-    let direct = boolean(unsafe { MatchPatternA(s.as_ptr().cast(), p.as_ptr().cast(), cs as i32) });
+    let direct = boolean(unsafe { MatchPatternA(s.as_ptr().cast(), p.as_ptr().cast(), cs as i32) }.get());
     let mut filter = core::ptr::null_mut();
     // SAFETY: as in `wide_results`.
-    let hr = unsafe { OpcPatternCompileA(p.as_ptr().cast(), cs as i32, &mut filter) };
+    let hr = unsafe { OpcPatternCompileA(p.as_ptr().cast(), cs as i32, &mut filter) }.get();
     if hr == S_OK {
         // SAFETY: a live filter, freed once.
-        let compiled = boolean(unsafe { OpcPatternMatchA(filter, s.as_ptr().cast()) });
+        let compiled = boolean(unsafe { OpcPatternMatchA(filter, s.as_ptr().cast()) }.get());
         // SAFETY: as above.
         unsafe { OpcPatternFree(filter) };
         assert_eq!(compiled, direct, "compiled filter vs MatchPatternA");

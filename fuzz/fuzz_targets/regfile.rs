@@ -37,7 +37,7 @@ impl Memory {
 
     fn apply(&self, text: &[u16]) -> i32 {
         // SAFETY: a live handle and a NUL-terminated text.
-        unsafe { OpcRegistryApply(self.0, text.as_ptr()) }
+        unsafe { OpcRegistryApply(self.0, text.as_ptr()) }.get()
     }
 
     /// The whole registry as `.reg` text, NUL included.

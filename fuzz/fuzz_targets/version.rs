@@ -45,7 +45,7 @@ fn parse(text: &[u16]) -> (i32, OpcVersion) {
         build: 3,
     };
     // SAFETY: NUL-terminated text, writable out-parameter.
-    let hr = unsafe { OpcVersionParse(text.as_ptr(), &mut v) };
+    let hr = unsafe { OpcVersionParse(text.as_ptr(), &mut v) }.get();
     (hr, v)
 }
 
