@@ -15,7 +15,7 @@
 use core::fmt::Write as _;
 
 use super::path::RegPath;
-use super::{registries, OpcRegistry, RegValue, Registry, REGDB_E_KEYMISSING};
+use super::{registries, OpcRegistry, RegValue, Registry, MAX_NAME_UNITS, REGDB_E_KEYMISSING};
 use crate::com::alloc::alloc_wstr_from_str;
 use crate::com::ffi::{self, Hr};
 use crate::com::{E_INVALIDARG, HRESULT, LPCWSTR, LPWSTR, S_OK};
@@ -122,10 +122,17 @@ fn key_path(header: &str) -> Result<String, HRESULT> {
     if !root.eq_ignore_ascii_case(ROOT) && !root.eq_ignore_ascii_case("HKCR") {
         return Err(E_INVALIDARG);
     }
-    if rest.is_empty() || rest.split('\\').any(str::is_empty) {
+    if rest.is_empty() || rest.split('\\').any(|name| !name_fits(name)) {
         return Err(E_INVALIDARG);
     }
     Ok(rest.to_string())
+}
+
+/// A key or value name the registry takes (1 to MAX_NAME_UNITS UTF-16 units; a value name may be
+/// empty, the default value). Checked while parsing, so that a file the registry would refuse halfway
+/// is refused before anything is written.
+fn name_fits(name: &str) -> bool {
+    !name.is_empty() && name.encode_utf16().count() <= MAX_NAME_UNITS
 }
 
 /// Parses a quoted string at the start of `s`; returns it and the rest after the closing quote.
@@ -251,6 +258,9 @@ fn parse(text: &str) -> Result<Vec<Change>, HRESULT> {
         } else {
             unquote(&line)?
         };
+        if !name.is_empty() && !name_fits(&name) {
+            return Err(E_INVALIDARG);
+        }
         let data = rest.trim_start().strip_prefix('=').ok_or(E_INVALIDARG)?;
         changes.push(match parse_data(data)? {
             Some(value) => Change::Set(path, name, value),
@@ -414,6 +424,21 @@ mod tests {
         ] {
             assert_eq!(apply(&reg, bad), Err(E_INVALIDARG), "{bad:?}");
         }
+        // Names the registry refuses (found by the fuzz target: the key was written, then the value
+        // refused): the whole file is refused before the first write.
+        let long = "n".repeat(MAX_NAME_UNITS + 1);
+        for bad in [
+            format!("REGEDIT4\n[HKCR\\A]\n\"{long}\"=\"v\""),
+            format!("REGEDIT4\n[HKCR\\A]\n\"{long}\"=-"),
+            format!("REGEDIT4\n[HKCR\\A]\n[HKCR\\B\\{long}]"),
+        ] {
+            assert_eq!(apply(&reg, &bad), Err(E_INVALIDARG), "{bad:?}");
+        }
         assert!(reg.subkeys("").is_empty());
+        // The longest names are taken.
+        let longest = "n".repeat(MAX_NAME_UNITS);
+        let fits = format!("REGEDIT4\n[HKCR\\{longest}]\n\"{longest}\"=\"v\"");
+        assert_eq!(apply(&reg, &fits), Ok(()));
+        assert_eq!(reg.subkeys(""), vec![longest]);
     }
 }
