@@ -138,7 +138,7 @@ static HRESULT enumerate(Contender *k, int *made_widl_proxy) {
     IOPCEnumGUID *e = NULL;
     GUID buf[OOP_FAKE_SERVERS];
     ULONG fetched = 0;
-    LONG before = widl_proxy_stub_refs();
+    LONG before = made_widl_proxy ? widl_proxy_stub_refs() : 0; /* (not in the timed loop) */
     HRESULT hr = k->list->lpVtbl->EnumClassesOfCategories(k->list, 1, (CATID *)&CATID_DA2, 0, NULL, &e);
     if (FAILED(hr)) return hr;
     if (made_widl_proxy) *made_widl_proxy = widl_proxy_stub_refs() > before;

@@ -128,8 +128,8 @@ fn key_path(header: &str) -> Result<String, HRESULT> {
     Ok(rest.to_string())
 }
 
-/// A key or value name the registry takes (1 to MAX_NAME_UNITS UTF-16 units; a value name may be
-/// empty, the default value). Checked while parsing, so that a file the registry would refuse halfway
+/// A key name the registry takes (1 to MAX_NAME_UNITS UTF-16 units; value names have the same upper
+/// bound and may be empty). Checked while parsing, so that a file the registry would refuse halfway
 /// is refused before anything is written.
 fn name_fits(name: &str) -> bool {
     !name.is_empty() && name.encode_utf16().count() <= MAX_NAME_UNITS
@@ -258,7 +258,7 @@ fn parse(text: &str) -> Result<Vec<Change>, HRESULT> {
         } else {
             unquote(&line)?
         };
-        if !name.is_empty() && !name_fits(&name) {
+        if name.encode_utf16().count() > MAX_NAME_UNITS {
             return Err(E_INVALIDARG);
         }
         let data = rest.trim_start().strip_prefix('=').ok_or(E_INVALIDARG)?;
