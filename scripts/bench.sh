@@ -54,13 +54,16 @@ if [ "$wine" = 1 ]; then
         exit 2
     fi
     cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$toolchain" >/dev/null
-    . scripts/wine-env.sh "$build"
+    # 32-bit Wine is installed before the prefix is made (scripts/wine-env.sh).
     if [ "$arch" = x86 ]; then
         . scripts/deps.sh
         if ! need_wine32; then
             echo "scripts/bench.sh: NOT RUN: 32-bit Wine is not available: $wine32_missing" >&2
             exit 2
         fi
+    fi
+    . scripts/wine-env.sh "$build"
+    if [ "$arch" = x86 ]; then
         i686-w64-mingw32-gcc -O2 -o "$build/wow64_canary.exe" tests/wine/wow64_canary.c
         canary=$(wine "$build/wow64_canary.exe" 2>&1 | tr -d '\r') || true
         if [ "$canary" != "wow64 canary: 32-bit process, WOW64 yes" ]; then

@@ -67,7 +67,14 @@ run_x86_c_tests() {
 
 need_linux_tools
 need_soundness_tools
-[ "$wine_stage" = 1 ] && need_windows_tools
+# Every Wine package, 32-bit Wine included, is installed before the Wine prefix is made: a prefix made
+# by 64-bit Wine alone is unusable once wine32:i386 arrives (scripts/wine-env.sh also makes such a
+# prefix anew).
+wine32_installed=0
+if [ "$wine_stage" = 1 ]; then
+    need_windows_tools
+    need_wine32 && wine32_installed=1
+fi
 
 if [ "$lint_stage" = 1 ]; then
     stage "format, clippy, drift of generated files (header, C test vectors, case folding)"
@@ -204,7 +211,7 @@ if [ "$wine_stage" = 1 ]; then
     # 32-bit Wine: without wine32:i386 `wine prog32.exe` exits 0 without running anything, so the
     # stages below run only after a 32-bit program has been seen to run and print.
     wine32_ok=0
-    if need_wine32; then
+    if [ "$wine32_installed" = 1 ]; then
         i686-w64-mingw32-gcc -O2 -o "$build/windows-x86/wow64_canary.exe" tests/wine/wow64_canary.c
         canary=$(wine "$build/windows-x86/wow64_canary.exe" 2>&1 | tr -d '\r') || true
         if [ "$canary" = "wow64 canary: 32-bit process, WOW64 yes" ]; then

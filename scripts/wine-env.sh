@@ -6,10 +6,28 @@
 wine_build_dir=$(mkdir -p "$1" && cd "$1" && pwd)
 export WINEPREFIX="$wine_build_dir/wineprefix" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=;winemenubuilder.exe=d"
 unset DISPLAY
+# A prefix belongs to the Wine installation that made it: one made while only 64-bit Wine was installed
+# has no 32-bit system, and after wine32:i386 arrives every program in it fails ("could not load
+# kernel32.dll, status c0000135"). The prefix records which installation made it and is made anew when
+# that changes. Callers install every Wine package before sourcing this file (scripts/deps.sh).
+wine_installation() {
+    local pkg
+    printf '%s\n' "$(wine --version 2>/dev/null)"
+    for pkg in wine64 wine32:i386 libwine libwine:i386; do
+        printf '%s=%s\n' "$pkg" "$(dpkg-query -W -f='${Status} ${Version}' "$pkg" 2>/dev/null || true)"
+    done
+}
+wine_stamp="$WINEPREFIX/opccomn-wine-installation.txt"
+if [ -f "$WINEPREFIX/system.reg" ] && [ "$(cat "$wine_stamp" 2>/dev/null)" != "$(wine_installation)" ]; then
+    echo "== Wine prefix $WINEPREFIX was made by another Wine installation: making it anew"
+    wineserver -k 2>/dev/null || true
+    rm -rf "$WINEPREFIX"
+fi
 if [ ! -f "$WINEPREFIX/system.reg" ]; then
     echo "== creating Wine prefix $WINEPREFIX"
     wine wineboot -i >/dev/null 2>&1 || true
     wineserver -w
+    wine_installation >"$wine_stamp"
 fi
 wineserver -p 2>/dev/null || true
 trap 'wineserver -k 2>/dev/null || true' EXIT
