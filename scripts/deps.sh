@@ -1,25 +1,36 @@
 # Sourced by the scripts: installs what a fresh Debian 12 machine with only Rust lacks, and nothing when
-# it is all there already. Needs root (or sudo) only when something is missing.
-need_linux_tools() {
+# it is all there already. Needs root (or sudo) only when something is missing. Each script asks only
+# for what it uses, and every install is announced (with its reason) before it starts.
+
+# What building the library and its C programs with CMake needs (scripts/demo.sh).
+need_build_tools() {
     local missing=()
     command -v cmake >/dev/null || missing+=(cmake)
     command -v cc >/dev/null || missing+=(gcc)
     command -v c++ >/dev/null || missing+=(g++)
-    command -v pkg-config >/dev/null || missing+=(pkg-config)
     command -v llvm-ar >/dev/null || missing+=(llvm)   # rewrites libopccomn.a (CMakeLists.txt)
+    install_packages "to build the library with CMake" "${missing[@]}"
+}
+
+# Everything the Linux test stages use besides the build tools.
+need_linux_tools() {
+    need_build_tools
+    local missing=()
+    command -v pkg-config >/dev/null || missing+=(pkg-config)
     command -v python3 >/dev/null || missing+=(python3)
     # CaseFolding.txt, for the drift check of the case-folding table (scripts/check-generated.sh).
     [ -f /usr/share/unicode/CaseFolding.txt ] || missing+=(unicode-data)
-    install_packages "${missing[@]}"
+    install_packages "for the Linux tests (pkg-config check, generators, case-folding drift check)" "${missing[@]}"
 }
 
 # valgrind, and the nightly toolchain with the standard library's sources (ThreadSanitizer needs an
 # instrumented standard library, built with -Zbuild-std).
 need_soundness_tools() {
-    command -v valgrind >/dev/null || install_packages valgrind
+    command -v valgrind >/dev/null || install_packages "for the leak checks" valgrind
     local installed
     installed=$(rustup +nightly component list --installed 2>/dev/null || true)
     if ! grep -q '^rust-src' <<<"$installed"; then
+        echo "== installing: Rust nightly toolchain with rust-src (rustup), for the ThreadSanitizer stage"
         rustup toolchain install nightly --profile minimal --component rust-src
     fi
 }
@@ -46,10 +57,11 @@ need_windows_tools() {
     command -v clang >/dev/null || missing+=(clang)
     command -v lld-link >/dev/null || missing+=(lld)
     { command -v llvm-dlltool && command -v llvm-lib; } >/dev/null || missing+=(llvm)
-    install_packages "${missing[@]}"
+    install_packages "to cross-build the Windows DLLs (mingw-w64, clang, lld) and run them (64-bit Wine)" "${missing[@]}"
     local target
     for target in x86_64-pc-windows-gnu i686-pc-windows-gnu; do
         if ! rustup target list --installed | grep -qx "$target"; then
+            echo "== installing: Rust target $target (rustup)"
             rustup target add "$target"
         fi
     done
@@ -65,7 +77,11 @@ need_wine32() {
     local sudo="" added=0 log
     [ "$(id -u)" -ne 0 ] && sudo="sudo"
     log=$(mktemp)
-    echo "== installing: wine32:i386 (32-bit Wine)"
+    if ! dpkg --print-foreign-architectures | grep -qx i386; then
+        echo "== installing: wine32:i386 (32-bit Wine, to run the x86 DLL), after adding Debian's i386 architecture (dpkg --add-architecture i386)"
+    else
+        echo "== installing: wine32:i386 (32-bit Wine, to run the x86 DLL)"
+    fi
     if ! dpkg --print-foreign-architectures | grep -qx i386; then
         $sudo dpkg --add-architecture i386
         added=1
@@ -91,8 +107,10 @@ need_wine32() {
 # (x86_64-win7-windows-gnu, i686-win7-windows-gnu are built with -Zbuild-std).
 need_nightly_rust_src() {
     if ! rustup toolchain list | grep -q '^nightly-'; then
+        echo "== installing: Rust nightly toolchain with rust-src (rustup), for the Windows 7 builds (-Zbuild-std)"
         rustup toolchain install nightly --profile minimal --component rust-src
     elif ! rustup +nightly component list --installed 2>/dev/null | grep -q '^rust-src'; then
+        echo "== installing: rust-src for the nightly toolchain (rustup)"
         rustup component add rust-src --toolchain nightly
     fi
 }
@@ -103,16 +121,20 @@ need_nightly_rust_src() {
 need_miri() {
     need_nightly_rust_src
     if ! rustup +nightly component list --installed 2>/dev/null | grep -q '^miri'; then
+        echo "== installing: Miri for the nightly toolchain (rustup)"
         rustup component add miri --toolchain nightly
     fi
     cargo +nightly miri --version >/dev/null
 }
 
+# install_packages WHY PACKAGE...: installs the Debian packages, saying which and why first.
 install_packages() {
+    local why=$1
+    shift
     [ "$#" -eq 0 ] && return 0
     local sudo=""
     [ "$(id -u)" -ne 0 ] && sudo="sudo"
-    echo "== installing: $*"
+    echo "== installing (apt-get${sudo:+ with sudo}) $why: $*"
     # An index that fails to download (it happens, e.g. Debian's i386 security index) must not stop
     # installs that the other indexes serve.
     $sudo apt-get -o DPkg::Lock::Timeout=900 update -qq || echo "== warning: apt-get update failed; installing from the lists there are" >&2
@@ -122,6 +144,7 @@ install_packages() {
 # Nightly Rust for the fuzz targets (libFuzzer instrumentation with AddressSanitizer).
 need_fuzz_tools() {
     if ! rustup toolchain list | grep -q '^nightly'; then
+        echo "== installing: Rust nightly toolchain (rustup), for the fuzz targets"
         rustup toolchain install nightly --profile minimal
     fi
 }

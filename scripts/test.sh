@@ -1,47 +1,162 @@
 #!/usr/bin/env bash
-# Runs every test of the project: lint and drift of generated files, Rust tests, C tests on Linux under
-# AddressSanitizer and UBSan and under valgrind, a thread stress test under ThreadSanitizer, the
-# installed package (CMake config and pkg-config), the fuzz targets for a bounded time, the Windows
-# DLL with the same C tests under Wine, and the header's coexistence with the OPC Foundation's MIDL
-# headers (scripts/test-coexistence.sh). Installs what is missing on a fresh
-# Debian 12 machine.
+# Runs every test of the project, stage by stage: lint and drift of generated files, Rust tests, C tests
+# on Linux under AddressSanitizer and UBSan and under valgrind, a thread stress test under
+# ThreadSanitizer, Miri, the installed package (CMake config and pkg-config), the fuzz targets for a
+# bounded time, the Windows DLLs (x64, x86, Windows 7) with the same C tests under Wine's COM runtime,
+# the header's coexistence with the OPC Foundation's MIDL headers, the C++ example, the conformance
+# checker and the Windows binary package. `--list` names the stages.
 #
-# Also runs the tests that do not call the operating system under Miri (Stacked and Tree Borrows).
+# Installs what is missing on a fresh Debian 12 machine, and says what before it installs it: Debian
+# packages with apt-get (cmake, gcc, llvm, valgrind, mingw-w64, clang, lld, Wine, and 32-bit Wine
+# after adding Debian's i386 architecture), and with rustup the nightly toolchain (rust-src, Miri) and
+# the two Windows targets. Every package, 32-bit Wine included, is installed before the Wine prefix is
+# made.
 #
-# Usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz] [--no-miri]     (CI runs it with no options)
+# Every stage runs, even after one failed. A stage that does not run, for whatever reason (an option,
+# a missing 32-bit Wine, --only), is counted and named as skipped, never as passed. The last line is
+#   test.sh: N passed, N failed, N skipped
+# and the exit status is 1 when a stage failed.
+#
+# Usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz] [--no-miri] [--only STAGE]... [--list]
+#   (CI runs it with no options)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 . scripts/deps.sh
-
-wine_stage=1
-lint_stage=1
-fuzz_stage=1
-miri_stage=1
-for arg in "$@"; do
-    case "$arg" in
-        --no-wine) wine_stage=0 ;;
-        --no-lint) lint_stage=0 ;;
-        --no-fuzz) fuzz_stage=0 ;;
-        --no-miri) miri_stage=0 ;;
-        *) echo "usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz] [--no-miri]" >&2; exit 2 ;;
-    esac
-done
-
 build="$root/build"
-stages=0
-skipped=0
-stage_started=$SECONDS
-stage() {
-    stages=$((stages + 1))
-    printf '\n==== %s   (previous stage: %ds)\n' "$*" $((SECONDS - stage_started))
-    stage_started=$SECONDS
+
+# ---- The stages, in the order they run: name, group, description ----------------------------------
+# Group: linux (needs nothing but the Linux tools), wine (the Windows tools and Wine), wine32 (32-bit
+# Wine as well).
+stage_table='lint|linux|format, clippy (Linux and Windows targets), drift of every generated file
+rust-linux|linux|Rust tests (Linux)
+c-asan|linux|C tests (Linux, AddressSanitizer + UBSan) and the exported symbols
+c-valgrind|linux|C tests (Linux, valgrind --leak-check=full, no sanitizer)
+tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
+miri|linux|Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system
+package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
+no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
+fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target)
+rust-windows|wine|Rust tests (Windows x64, under Wine)
+acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
+c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
+coexistence|wine|header and library beside the OPC Foundation'"'"'s headers and *_i.c (x64, x86, Linux)
+example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
+conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
+build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
+rust-x86|wine32|Rust tests (Windows x86, under 32-bit Wine)
+c-x86|wine32|C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)
+conformance-x86|wine32|conformance checker (x86) against the x86 seeded-defect servers, under 32-bit Wine
+wow64-browse|wine32|cross-process: a 32-bit client browses both registry views through the 64-bit browser service
+win7-build|wine|Windows 7 builds (x86_64-win7-windows-gnu, i686-win7-windows-gnu): import tables and exports
+c-win7-x64|wine|C tests (Windows 7 x64 DLL, under Wine)
+c-win7-x86|wine32|C tests (Windows 7 x86 DLL, under 32-bit Wine)
+package-windows|wine|Windows binary package: unpacked, a CMake consumer built against it (x64, x86, Windows 7) and run
+package-cpp-example|wine|C++ example server and client and opccomn-check, built against the unpacked package (x64, x86), under Wine
+msvc-link|wine|MSVC-mode program (clang --target=*-pc-windows-msvc, lld-link) linked against the package'"'"'s opccomn.lib, under Wine'
+
+stage_names=()
+declare -A stage_group stage_text
+while IFS='|' read -r name group text; do
+    stage_names+=("$name")
+    stage_group[$name]=$group
+    stage_text[$name]=$text
+done <<<"$stage_table"
+
+usage() {
+    echo "usage: scripts/test.sh [--no-wine] [--no-lint] [--no-fuzz] [--no-miri] [--only STAGE]... [--list]" >&2
+    exit 2
 }
-# A stage that could not run: said loudly, counted as skipped, never as passed.
-skip_stage() {
-    skipped=$((skipped + 1))
-    printf '\n==== SKIPPED: %s\n' "$1"
-    printf '!!!! %s\n' "${@:2}"
+declare -A only=() disabled=()
+list=0
+while [ "$#" -gt 0 ]; do
+    case "$1" in
+        --no-wine) disabled[wine]="--no-wine" ;;
+        --no-lint) disabled[lint]="--no-lint" ;;
+        --no-fuzz) disabled[fuzz]="--no-fuzz" ;;
+        --no-miri) disabled[miri]="--no-miri" ;;
+        --only)
+            [ "$#" -ge 2 ] && [ -n "${stage_group[$2]+set}" ] || { echo "scripts/test.sh: --only needs a stage name (see --list)" >&2; usage; }
+            only[$2]=1
+            shift
+            ;;
+        --list) list=1 ;;
+        *) usage ;;
+    esac
+    shift
+done
+if [ "$list" = 1 ]; then
+    for name in "${stage_names[@]}"; do
+        printf '%-20s %s\n' "$name" "${stage_text[$name]}"
+    done
+    exit 0
+fi
+
+# Why a stage will not run, or nothing when it will.
+reason_not_to_run() {
+    local name=$1 group=${stage_group[$1]}
+    if [ "${#only[@]}" -gt 0 ] && [ -z "${only[$name]+set}" ]; then
+        echo "not selected (--only)"
+    elif [ -n "${disabled[$name]+set}" ]; then
+        echo "${disabled[$name]}"
+    elif [ "$group" != linux ] && [ -n "${disabled[wine]+set}" ]; then
+        echo "--no-wine"
+    elif [ "$group" = wine32 ] && [ "$wine32_ok" != 1 ]; then
+        echo "32-bit Wine is not available: $wine32_missing"
+    fi
+}
+selected() {
+    local name
+    for name in "${stage_names[@]}"; do
+        [ "${stage_group[$name]}" = "$1" ] || { [ "$1" = wine ] && [ "${stage_group[$name]}" = wine32 ]; } || continue
+        [ "${#only[@]}" -gt 0 ] && [ -z "${only[$name]+set}" ] && continue
+        [ -n "${disabled[$name]+set}" ] && continue
+        [ "${stage_group[$name]}" != linux ] && [ -n "${disabled[wine]+set}" ] && continue
+        return 0
+    done
+    return 1
+}
+
+# ---- Builds shared by several stages (incremental: each stage builds what it needs) ---------------
+build_linux() {
+    export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+    cmake -S . -B "$build/linux" -DOPCCOMN_SANITIZE=ON >/dev/null
+    cmake --build "$build/linux" -j2
+}
+build_windows() {
+    cmake -S . -B "$build/windows" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" >/dev/null
+    cmake --build "$build/windows" -j2
+}
+build_windows_x86() {
+    cmake -S . -B "$build/windows-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" >/dev/null
+    cmake --build "$build/windows-x86" -j2
+}
+win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind"
+    -DOPCCOMN_BUILD_CHECKER=OFF)   # the checker and its test servers run from the x64 and x86 builds
+build_win7() {   # build_win7 x64|x86
+    need_nightly_rust_src
+    local toolchain=x86_64 target=x86_64-win7-windows-gnu
+    [ "$1" = x86 ] && toolchain=i686 target=i686-win7-windows-gnu
+    cmake -S . -B "$build/windows7-$1" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-$toolchain.cmake" \
+        -DOPCCOMN_RUST_TARGET="$target" "${win7_args[@]}" >/dev/null
+    cmake --build "$build/windows7-$1" -j2
+}
+version=$(sed -nE 's/^version = "([^"]+)"$/\1/p' Cargo.toml | head -1)
+pkg="$build/package-test/opccomn-$version-windows"
+run_id="$$.$(date +%s)"
+# The Windows package, built and unpacked once per run (the stages run in subshells: a file marks it).
+unpack_package() {
+    [ -f "$build/package-test/unpacked.$run_id" ] && return 0
+    scripts/package-windows.sh "$build/package" >/dev/null
+    rm -rf "$build/package-test" && mkdir -p "$build/package-test"
+    (cd "$build/package-test" && cmake -E tar xf "$build/package/opccomn-$version-windows.zip")
+    touch "$build/package-test/unpacked.$run_id"
+}
+# A part of a stage that could not run (the stage itself ran): counted as skipped and named.
+skipped_parts="$build/test-skipped-parts.$run_id"
+skip_part() {
+    echo "$1: NOT run ($2)"
+    echo "$1 ($2)" >>"$skipped_parts"
 }
 
 # Runs the C tests of a 32-bit Windows build directory under 32-bit Wine and proves they ran: a 32-bit
@@ -51,108 +166,19 @@ run_x86_c_tests() {
     # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
     tests=$(ctest --test-dir "$dir" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
     oop_tests=$(ctest --test-dir "$dir" -N | grep -cE '^ *Test +#[0-9]+: oop\.') || true
-    [ -n "$tests" ] || { echo "no C tests found in $dir" >&2; exit 1; }
+    [ -n "$tests" ] || { echo "no C tests found in $dir" >&2; return 1; }
     ctest --test-dir "$dir" --output-on-failure --timeout 300
     for t in $tests; do
         grep -qE "^$t: [0-9]+ passed, 0 failed" "$dir/Testing/Temporary/LastTest.log" ||
-            { echo "$t (x86, $dir) printed no result line" >&2; exit 1; }
+            { echo "$t (x86, $dir) printed no result line" >&2; return 1; }
     done
     # The cross-process tests (tests/oop) of the same build: one result line per ctest entry.
     lines=$(grep -cE '^test_(oop|browser|ps_registration): [0-9]+ passed, 0 failed' \
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
-        { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; exit 1; }
+        { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }
     echo "every x86 C test and cross-process test in $dir printed its result line"
 }
-
-need_linux_tools
-need_soundness_tools
-# Every Wine package, 32-bit Wine included, is installed before the Wine prefix is made: a prefix made
-# by 64-bit Wine alone is unusable once wine32:i386 arrives (scripts/wine-env.sh also makes such a
-# prefix anew).
-wine32_installed=0
-if [ "$wine_stage" = 1 ]; then
-    need_windows_tools
-    need_wine32 && wine32_installed=1
-fi
-
-if [ "$lint_stage" = 1 ]; then
-    stage "format, clippy, drift of generated files (header, C test vectors, case folding)"
-    cargo fmt --all -- --check
-    cargo clippy --all-targets -- -D warnings
-    if [ "$wine_stage" = 1 ]; then
-        cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
-        cargo clippy --lib --target i686-pc-windows-gnu -- -D warnings
-    fi
-    cargo run -q -p gen-header -- --check
-    scripts/check-generated.sh
-    python3 tools/gen-null-rule-test.py --check
-    # The generator's own checks (IDL reader, the Rust-vtable comparison catching each kind of mismatch).
-    cargo clippy -q -p gen-header --all-targets -- -D warnings
-    cargo test -q -p gen-header
-    # The proxy/stub's NDR tables are generated from idl/opccomn.idl (widl and the system IDLs come
-    # with the Windows tools).
-    [ "$wine_stage" = 1 ] && python3 tools/gen-proxy.py --check
-fi
-
-stage "Rust tests (Linux)"
-cargo test
-
-stage "C tests (Linux, AddressSanitizer + UBSan)"
-export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-cmake -S . -B "$build/linux" -DOPCCOMN_SANITIZE=ON >/dev/null
-cmake --build "$build/linux" -j2
-ctest --test-dir "$build/linux" --output-on-failure --timeout 300
-scripts/check-exports.sh "$build/linux/cargo/release/libopccomn.so"
-
-stage "C tests (Linux, valgrind --leak-check=full, no sanitizer)"
-cmake -S . -B "$build/valgrind" -DOPCCOMN_VALGRIND=ON >/dev/null
-cmake --build "$build/valgrind" -j2
-ctest --test-dir "$build/valgrind" --output-on-failure --timeout 900 -R '^c\.'
-
-stage "thread stress test (ThreadSanitizer, instrumented standard library)"
-# 8 threads on one IOPCCommon, one shutdown object whose sinks unadvise themselves during a notify,
-# one compiled pattern (src/stress_tests.rs). Any report fails the run (halt_on_error).
-RUSTFLAGS="-Zsanitizer=thread" TSAN_OPTIONS="halt_on_error=1" CARGO_TARGET_DIR="$root/target/tsan" \
-    cargo +nightly test -Zbuild-std --target x86_64-unknown-linux-gnu --lib stress_tests
-
-if [ "$miri_stage" = 1 ]; then
-    # Stacked Borrows and Tree Borrows, one process each, at once (scripts/miri.sh): the COM core,
-    # IOPCCommon, errors, locale, pattern, shutdown with the in-process sink, the server list and the
-    # registry over the in-memory registry, the stress test. Any report fails the stage.
-    stage "Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system"
-    scripts/miri.sh
-else
-    skip_stage "Miri (--no-miri)" "The Miri stage was NOT run: this run does not prove the absence of undefined behaviour."
-fi
-
-stage "installed package: find_package(opccomn CONFIG) and pkg-config"
-rm -rf "$build/install" "$build/consumer"
-cmake --install "$build/linux" --prefix "$build/install" >/dev/null
-cmake -S examples/consumer -B "$build/consumer" -DCMAKE_PREFIX_PATH="$build/install" >/dev/null
-cmake --build "$build/consumer" -j2 >/dev/null
-"$build/consumer/consumer"
-PKG_CONFIG_PATH="$build/install/lib/pkgconfig" cc -o "$build/consumer/pkgconfig_demo" examples/demo.c \
-    $(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --cflags --libs opccomn) \
-    -Wl,-rpath,"$build/install/lib"
-"$build/consumer/pkgconfig_demo" >/dev/null
-
-stage "library without the standard Dll* exports (for COM DLLs that have their own)"
-cmake -S . -B "$build/no-dll-exports" -DOPCCOMN_DLL_EXPORTS=OFF -DOPCCOMN_BUILD_TESTS=OFF >/dev/null
-cmake --build "$build/no-dll-exports" -j2 >/dev/null
-no_exports=$(nm -D --defined-only "$build/no-dll-exports/cargo/release/libopccomn.so" | awk '{print $3}')
-if grep -qx DllGetClassObject <<<"$no_exports" || ! grep -qx OpcDllGetClassObject <<<"$no_exports"; then
-    echo "OPCCOMN_DLL_EXPORTS=OFF: expected OpcDllGetClassObject without DllGetClassObject" >&2
-    exit 1
-fi
-echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
-
-if [ "$fuzz_stage" = 1 ]; then
-    stage "fuzz targets (libFuzzer + AddressSanitizer, ${OPCCOMN_FUZZ_SECONDS:-30} s per target)"
-    scripts/fuzz.sh "${OPCCOMN_FUZZ_SECONDS:-30}"
-else
-    printf '\n==== SKIPPED: fuzz targets (--no-fuzz); not counted as passed\n'
-fi
 
 # The C++ example (examples/cpp-server) built as a user builds it: against a Windows build installed as
 # a package (find_package). Its client registers the example servers, uses them through COM under Wine,
@@ -168,125 +194,196 @@ example_stage() {
     ctest --test-dir "$build/example-$arch" --output-on-failure --timeout 300
 }
 
-if [ "$wine_stage" = 1 ]; then
-    . scripts/wine-env.sh "$build/windows"
+# ---- The stages --------------------------------------------------------------------------------------
+stage_lint() {
+    cargo fmt --all -- --check
+    cargo clippy --all-targets -- -D warnings
+    if [ -z "${disabled[wine]+set}" ]; then
+        cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
+        cargo clippy --lib --target i686-pc-windows-gnu -- -D warnings
+    fi
+    cargo run -q -p gen-header -- --check
+    scripts/check-generated.sh
+    python3 tools/gen-null-rule-test.py --check
+    # The generator's own checks (IDL reader, the Rust-vtable comparison catching each kind of mismatch).
+    cargo clippy -q -p gen-header --all-targets -- -D warnings
+    cargo test -q -p gen-header
+    # The proxy/stub's NDR tables are generated from idl/opccomn.idl (widl and the system IDLs come
+    # with the Windows tools).
+    if [ -z "${disabled[wine]+set}" ]; then
+        python3 tools/gen-proxy.py --check
+    else
+        echo "lint: the proxy/stub tables' drift check needs the Windows tools (widl) and was NOT run (--no-wine)"
+    fi
+}
 
-    stage "Rust tests (Windows, under Wine)"
+stage_rust_linux() {
+    cargo test
+}
+
+stage_c_asan() {
+    build_linux
+    ctest --test-dir "$build/linux" --output-on-failure --timeout 300
+    scripts/check-exports.sh "$build/linux/cargo/release/libopccomn.so"
+}
+
+stage_c_valgrind() {
+    cmake -S . -B "$build/valgrind" -DOPCCOMN_VALGRIND=ON >/dev/null
+    cmake --build "$build/valgrind" -j2
+    ctest --test-dir "$build/valgrind" --output-on-failure --timeout 900 -R '^c\.'
+}
+
+stage_tsan() {
+    # 8 threads on one IOPCCommon, one shutdown object whose sinks unadvise themselves during a notify,
+    # one compiled pattern (src/stress_tests.rs). Any report fails the run (halt_on_error).
+    RUSTFLAGS="-Zsanitizer=thread" TSAN_OPTIONS="halt_on_error=1" CARGO_TARGET_DIR="$root/target/tsan" \
+        cargo +nightly test -Zbuild-std --target x86_64-unknown-linux-gnu --lib stress_tests
+}
+
+stage_miri() {
+    # Stacked Borrows and Tree Borrows, one process each, at once (scripts/miri.sh): the COM core,
+    # IOPCCommon, errors, locale, pattern, shutdown with the in-process sink, the server list and the
+    # registry over the in-memory registry, the stress test. Any report fails the stage.
+    scripts/miri.sh
+}
+
+stage_package_linux() {
+    build_linux
+    rm -rf "$build/install" "$build/consumer"
+    cmake --install "$build/linux" --prefix "$build/install" >/dev/null
+    cmake -S examples/consumer -B "$build/consumer" -DCMAKE_PREFIX_PATH="$build/install" >/dev/null
+    cmake --build "$build/consumer" -j2 >/dev/null
+    "$build/consumer/consumer"
+    PKG_CONFIG_PATH="$build/install/lib/pkgconfig" cc -o "$build/consumer/pkgconfig_demo" examples/demo.c \
+        $(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --cflags --libs opccomn) \
+        -Wl,-rpath,"$build/install/lib"
+    "$build/consumer/pkgconfig_demo" >/dev/null
+}
+
+stage_no_dll_exports() {
+    cmake -S . -B "$build/no-dll-exports" -DOPCCOMN_DLL_EXPORTS=OFF -DOPCCOMN_BUILD_TESTS=OFF >/dev/null
+    cmake --build "$build/no-dll-exports" -j2 >/dev/null
+    local no_exports
+    no_exports=$(nm -D --defined-only "$build/no-dll-exports/cargo/release/libopccomn.so" | awk '{print $3}')
+    if grep -qx DllGetClassObject <<<"$no_exports" || ! grep -qx OpcDllGetClassObject <<<"$no_exports"; then
+        echo "OPCCOMN_DLL_EXPORTS=OFF: expected OpcDllGetClassObject without DllGetClassObject" >&2
+        return 1
+    fi
+    echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
+}
+
+stage_fuzz() {
+    echo "${OPCCOMN_FUZZ_SECONDS:-30} s per target"
+    scripts/fuzz.sh "${OPCCOMN_FUZZ_SECONDS:-30}"
+}
+
+stage_rust_windows() {
     CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=wine cargo test --target x86_64-pc-windows-gnu --lib
+}
 
+stage_acp932() {
     # Narrow strings are in the ANSI code page on Windows; the prefix's default is 1252. Wine takes
     # the code page from the locale's name (installed or not), so LC_ALL=ja_JP.SJIS gives 932, a
     # double-byte one; the test asserts it (OPCCOMN_TEST_ACP) and says which it ran under.
-    stage "MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine"
-    acp_test=pattern::tests::narrow_entry_points_agree_with_the_decoded_ansi_code_page
+    local acp_test=pattern::tests::narrow_entry_points_agree_with_the_decoded_ansi_code_page acp_out
     acp_out=$(OPCCOMN_TEST_ACP=932 LC_ALL=ja_JP.SJIS CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=wine \
         cargo test --target x86_64-pc-windows-gnu --lib -- --exact "$acp_test" --nocapture 2>&1) ||
-        { echo "$acp_out"; exit 1; }
+        { echo "$acp_out"; return 1; }
     grep -q "narrow differential in ANSI code page 932" <<<"$acp_out" && grep -q "test result: ok. 1 passed" <<<"$acp_out" ||
-        { echo "$acp_out"; echo "the code page 932 test did not run" >&2; exit 1; }
+        { echo "$acp_out"; echo "the code page 932 test did not run" >&2; return 1; }
     echo "$acp_test: passed in ANSI code page 932"
+}
 
-    stage "C tests (Windows DLL, under Wine)"
-    cmake -S . -B "$build/windows" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" >/dev/null
-    cmake --build "$build/windows" -j2
+stage_c_windows() {
+    build_windows
     ctest --test-dir "$build/windows" --output-on-failure --timeout 300
     scripts/check-exports.sh "$build/windows/cargo/x86_64-pc-windows-gnu/release/opccomn.dll"
+}
 
-    stage "header and library beside the OPC Foundation's headers and *_i.c (x64, x86 compile-only, Linux)"
+stage_coexistence() {
+    build_windows
+    build_linux
     scripts/test-coexistence.sh "$build/windows" "$build/linux"
+}
 
-    stage "C++ example server and client (x64, under Wine, against the installed package)"
+stage_example_x64() {
+    build_windows
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
+}
 
-    stage "conformance checker (opccomn-check): every seeded defect caught by its check, the example server passing (x64, in-process, under Wine)"
+stage_conformance_x64() {
+    build_windows
+    [ -f "$build/example-x64/CMakeCache.txt" ] || example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
     scripts/test-conformance.sh "$build/windows/bin" "$build/example-x64"
+}
 
-    stage "Windows x86 (i686-pc-windows-gnu): DLL, static library, opccomn.lib, C tests built, undecorated exports"
-    cmake -S . -B "$build/windows-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" >/dev/null
-    cmake --build "$build/windows-x86" -j2
-    x86_out="$build/windows-x86/cargo/i686-pc-windows-gnu/release"
+stage_build_x86() {
+    build_windows_x86
+    local x86_out="$build/windows-x86/cargo/i686-pc-windows-gnu/release"
     scripts/check-exports.sh "$x86_out/opccomn.dll"
     ls "$x86_out/libopccomn.a" "$x86_out/libopccomn.dll.a" "$x86_out/msvc/opccomn.lib" >/dev/null
+}
 
-    # 32-bit Wine: without wine32:i386 `wine prog32.exe` exits 0 without running anything, so the
-    # stages below run only after a 32-bit program has been seen to run and print.
-    wine32_ok=0
-    if [ "$wine32_installed" = 1 ]; then
-        i686-w64-mingw32-gcc -O2 -o "$build/windows-x86/wow64_canary.exe" tests/wine/wow64_canary.c
-        canary=$(wine "$build/windows-x86/wow64_canary.exe" 2>&1 | tr -d '\r') || true
-        if [ "$canary" = "wow64 canary: 32-bit process, WOW64 yes" ]; then
-            wine32_ok=1
-        else
-            wine32_missing="wine32:i386 is installed, but a 32-bit program did not run (it printed: '$canary')"
-        fi
-    fi
-    if [ "$wine32_ok" = 1 ]; then
-        stage "Rust tests (Windows x86, under 32-bit Wine)"
-        # RUST_BACKTRACE=0: with backtraces on (RUST_BACKTRACE=1 in the environment), taking the
-        # backtrace of a panic under Debian 12's 32-bit Wine 8 reads through NULL inside its ucrtbase
-        # and kills the process at the first test that panics on purpose (the boundary's panic tests);
-        # a plain program that catches a panic survives it. What those tests check is the library's
-        # handling of the panic; the x64 stage above runs them with backtraces as the environment sets.
-        RUST_BACKTRACE=0 CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
+stage_rust_x86() {
+    # RUST_BACKTRACE=0: with backtraces on (RUST_BACKTRACE=1 in the environment), taking the
+    # backtrace of a panic under Debian 12's 32-bit Wine 8 reads through NULL inside its ucrtbase
+    # and kills the process at the first test that panics on purpose (the boundary's panic tests);
+    # a plain program that catches a panic survives it. What those tests check is the library's
+    # handling of the panic; the x64 stage runs them with backtraces as the environment sets.
+    RUST_BACKTRACE=0 CARGO_TARGET_I686_PC_WINDOWS_GNU_RUNNER=wine cargo test --target i686-pc-windows-gnu --lib
+}
 
-        stage "C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)"
-        run_x86_c_tests "$build/windows-x86"
+stage_c_x86() {
+    build_windows_x86
+    run_x86_c_tests "$build/windows-x86"
+}
 
-        stage "conformance checker (opccomn-check, x86) against the x86 seeded-defect servers, under 32-bit Wine"
-        scripts/test-conformance.sh "$build/windows-x86/bin" - "$build/windows/bin/opccomn-check.exe"
+stage_conformance_x86() {
+    build_windows_x86
+    build_windows
+    scripts/test-conformance.sh "$build/windows-x86/bin" - "$build/windows/bin/opccomn-check.exe"
+}
 
-        stage "cross-process: a 32-bit client browses both registry views through the 64-bit browser service"
-        wine "$build/windows/bin/test_browser.exe" wow64-serve
-        wow64_rc=0
-        wine "$build/windows-x86/bin/test_browser.exe" wow64-client || wow64_rc=$?
-        wine "$build/windows/bin/test_browser.exe" wow64-cleanup
-        [ "$wow64_rc" = 0 ]
-    else
-        skip_stage "Rust tests, C tests, cross-process tests and the conformance checker of the x86 DLL under 32-bit Wine" \
-            "32-bit Wine is not available: $wine32_missing" \
-            "The x86 DLL was built and its exports checked, but it was NOT run. This run does not prove x86."
-    fi
+stage_wow64_browse() {
+    build_windows
+    build_windows_x86
+    wine "$build/windows/bin/test_browser.exe" wow64-serve
+    local rc=0
+    wine "$build/windows-x86/bin/test_browser.exe" wow64-client || rc=$?
+    wine "$build/windows/bin/test_browser.exe" wow64-cleanup
+    [ "$rc" = 0 ]
+}
 
-    # Windows 7 / Server 2008 R2: Rust's tier-3 *-win7-windows-gnu targets (nightly, -Zbuild-std).
-    need_nightly_rust_src
-    win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind"
-        -DOPCCOMN_BUILD_CHECKER=OFF)   # the checker and its test servers run from the x64 and x86 builds
-    stage "Windows 7 builds (x86_64-win7-windows-gnu, i686-win7-windows-gnu): import tables"
-    cmake -S . -B "$build/windows7-x64" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" \
-        -DOPCCOMN_RUST_TARGET=x86_64-win7-windows-gnu "${win7_args[@]}" >/dev/null
-    cmake --build "$build/windows7-x64" -j2
-    cmake -S . -B "$build/windows7-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" \
-        -DOPCCOMN_RUST_TARGET=i686-win7-windows-gnu "${win7_args[@]}" >/dev/null
-    cmake --build "$build/windows7-x86" -j2
+stage_win7_build() {
+    build_win7 x64
+    build_win7 x86
+    local dll
     for dll in "$build/windows7-x64/cargo/x86_64-win7-windows-gnu/release/opccomn.dll" \
         "$build/windows7-x86/cargo/i686-win7-windows-gnu/release/opccomn.dll"; do
         scripts/check-imports-win7.sh "$dll"
         scripts/check-exports.sh "$dll"
     done
     # The check can fail: the default build needs Windows 10 (ProcessPrng) and must be refused.
+    build_windows >/dev/null
     if scripts/check-imports-win7.sh "$build/windows/cargo/x86_64-pc-windows-gnu/release/opccomn.dll" >/dev/null 2>&1; then
         echo "check-imports-win7.sh accepted the default build, which imports ProcessPrng" >&2
-        exit 1
+        return 1
     fi
+}
 
-    stage "C tests (Windows 7 x64 DLL, under Wine)"
+stage_c_win7_x64() {
+    build_win7 x64
     ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300
+}
 
-    if [ "$wine32_ok" = 1 ]; then
-        stage "C tests (Windows 7 x86 DLL, under 32-bit Wine)"
-        run_x86_c_tests "$build/windows7-x86"
-    else
-        skip_stage "C tests of the Windows 7 x86 DLL under 32-bit Wine" \
-            "32-bit Wine is not available: $wine32_missing" \
-            "The Windows 7 x86 DLL was built and its import table checked, but it was NOT run."
-    fi
+stage_c_win7_x86() {
+    build_win7 x86
+    run_x86_c_tests "$build/windows7-x86"
+}
 
-    stage "Windows binary package: unpacked, a CMake consumer built against it (x64, x86, Windows 7) and run"
-    scripts/package-windows.sh "$build/package" >/dev/null
-    version=$(sed -nE 's/^version = "([^"]+)"$/\1/p' Cargo.toml | head -1)
-    rm -rf "$build/package-test" && mkdir -p "$build/package-test"
-    (cd "$build/package-test" && cmake -E tar xf "$build/package/opccomn-$version-windows.zip")
-    pkg="$build/package-test/opccomn-$version-windows"
+stage_package_windows() {
+    unpack_package
+    local variant arch toolchain win7 dir want
     for variant in x64:x86_64:OFF x86:i686:OFF x64:x86_64:ON; do
         IFS=: read -r arch toolchain win7 <<<"$variant"
         dir="$build/package-test/consumer-$arch-win7-$win7"
@@ -296,16 +393,19 @@ if [ "$wine_stage" = 1 ]; then
         # The program got the package's DLL of its own architecture and variant.
         want="$pkg/$arch/opccomn.dll"
         [ "$win7" = ON ] && want="$pkg/win7/$arch/opccomn.dll"
-        cmp -s "$want" "$dir/opccomn.dll" || { echo "$dir/opccomn.dll is not $want" >&2; exit 1; }
+        cmp -s "$want" "$dir/opccomn.dll" || { echo "$dir/opccomn.dll is not $want" >&2; return 1; }
         if [ "$arch" = x86 ] && [ "$wine32_ok" != 1 ]; then
-            echo "package consumer ($arch): built, NOT run (no 32-bit Wine; see the SKIPPED stage)"
+            skip_part "package-windows: the x86 consumer (built)" "32-bit Wine is not available: $wine32_missing"
             continue
         fi
         (cd "$dir" && wine consumer.exe >consumer.out)
         echo "package consumer ($arch, Windows 7 variant $win7): ran, $(wc -l <"$dir/consumer.out") lines of output"
     done
+}
 
-    stage "C++ example server and client built with CMake against the unpacked package (x64, x86), under Wine"
+stage_package_cpp_example() {
+    unpack_package
+    local variant arch toolchain dir rc
     for variant in x64:x86_64 x86:i686; do
         IFS=: read -r arch toolchain <<<"$variant"
         dir="$build/package-test/cpp-server-$arch"
@@ -313,7 +413,7 @@ if [ "$wine_stage" = 1 ]; then
             -DCMAKE_PREFIX_PATH="$pkg" >/dev/null
         cmake --build "$dir" -j2 >/dev/null
         if [ "$arch" = x86 ] && [ "$wine32_ok" != 1 ]; then
-            echo "C++ example ($arch): built, NOT run (no 32-bit Wine; see the SKIPPED stage)"
+            skip_part "package-cpp-example: the x86 example and checker (built)" "32-bit Wine is not available: $wine32_missing"
             continue
         fi
         ctest --test-dir "$dir" --output-on-failure --timeout 300
@@ -326,24 +426,90 @@ if [ "$wine_stage" = 1 ]; then
         tr -d '\r' <"$dir/check.json" >"$dir/check.json.lf"
         python3 tests/conformance/check_report.py json "$dir/check.json.lf" "$rc"
     done
+}
 
-    stage "MSVC-mode program (clang --target=*-pc-windows-msvc, lld-link, no CRT) linked against the package's opccomn.lib, under Wine"
+stage_msvc_link() {
+    unpack_package
     scripts/test-msvc-link.sh x64 "$pkg/x64" "$build/package-test/msvc-x64"
     if [ "$wine32_ok" = 1 ]; then
         scripts/test-msvc-link.sh x86 "$pkg/x86" "$build/package-test/msvc-x86"
     else
         scripts/test-msvc-link.sh --no-run x86 "$pkg/x86" "$build/package-test/msvc-x86"
-        echo "msvc link test (x86): linked, NOT run (no 32-bit Wine; see the SKIPPED stage)"
+        skip_part "msvc-link: the x86 program (linked)" "32-bit Wine is not available: $wine32_missing"
     fi
-else
-    echo "test.sh: --no-wine: the Windows stages, the header coexistence stage and the C++ example were NOT run" >&2
+}
+
+# ---- Tools: everything is installed before the Wine prefix is made --------------------------------
+need_linux_tools
+need_soundness_tools
+wine32_ok=0
+wine32_missing="not checked"
+if selected wine; then
+    need_windows_tools
+    # 32-bit Wine before the prefix: a prefix made by 64-bit Wine alone is unusable once wine32:i386
+    # arrives (scripts/wine-env.sh also makes such a prefix anew).
+    wine32_installed=0
+    need_wine32 && wine32_installed=1
+    . scripts/wine-env.sh "$build/windows"
+    # Without wine32:i386 `wine prog32.exe` exits 0 without running anything, so the 32-bit stages
+    # run only after a 32-bit program has been seen to run and print.
+    if [ "$wine32_installed" = 1 ]; then
+        mkdir -p "$build/windows"
+        i686-w64-mingw32-gcc -O2 -o "$build/windows/wow64_canary.exe" tests/wine/wow64_canary.c
+        canary=$(wine "$build/windows/wow64_canary.exe" 2>&1 | tr -d '\r') || true
+        if [ "$canary" = "wow64 canary: 32-bit process, WOW64 yes" ]; then
+            wine32_ok=1
+        else
+            wine32_missing="wine32:i386 is installed, but a 32-bit program did not run (it printed: '$canary')"
+        fi
+    fi
 fi
 
-# Every stage ran to its end (set -e stops at the first failure).
-printf '\n(last stage: %ds; all: %ds)\n' $((SECONDS - stage_started)) "$SECONDS"
-if [ "$skipped" -eq 0 ]; then
-    printf '\n==== all stages passed\ntest.sh: %d passed, 0 failed\n' "$stages"
-else
-    printf '\n==== %d stages passed, %d SKIPPED (see the SKIPPED lines above)\ntest.sh: %d passed, 0 failed, %d skipped\n' \
-        "$stages" "$skipped" "$stages" "$skipped"
+# ---- Run ----------------------------------------------------------------------------------------------
+passed=()
+failed=()
+skipped=()
+mkdir -p "$build"
+rm -f "$build"/test-skipped-parts.*
+for name in "${stage_names[@]}"; do
+    why=$(reason_not_to_run "$name")
+    if [ -n "$why" ]; then
+        skipped+=("$name ($why)")
+        # An option or a missing 32-bit Wine is said loudly; a stage left out by --only quietly.
+        [ "${#only[@]}" -gt 0 ] && [ -z "${only[$name]+set}" ] ||
+            printf '\n==== SKIPPED: %s: %s\n!!!! not run: %s\n' "$name" "${stage_text[$name]}" "$why"
+        continue
+    fi
+    printf '\n==== %s: %s\n' "$name" "${stage_text[$name]}"
+    started=$SECONDS
+    # The stage runs in a subshell with errexit on (set -e is not in force inside a function called
+    # from a condition, so the status is read after the subshell, not in an `if`).
+    set +e
+    (set -e; "stage_${name//-/_}")
+    rc=$?
+    set -e
+    if [ "$rc" = 0 ]; then
+        passed+=("$name")
+        printf '==== passed: %s (%ds)\n' "$name" $((SECONDS - started))
+    else
+        failed+=("$name")
+        printf '==== FAILED: %s (exit %d, %ds)\n' "$name" "$rc" $((SECONDS - started))
+    fi
+done
+
+if [ -f "$skipped_parts" ]; then
+    while IFS= read -r line; do skipped+=("$line"); done <"$skipped_parts"
+    rm -f "$skipped_parts"
 fi
+printf '\n==== summary (%ds)\n' "$SECONDS"
+for name in "${failed[@]}"; do printf 'FAILED   %s\n' "$name"; done
+not_selected=0
+for name in "${skipped[@]}"; do
+    case "$name" in
+        *"(not selected (--only))") not_selected=$((not_selected + 1)) ;;
+        *) printf 'SKIPPED  %s\n' "$name" ;;
+    esac
+done
+[ "$not_selected" = 0 ] || printf 'SKIPPED  %d stages not selected (--only)\n' "$not_selected"
+printf 'test.sh: %d passed, %d failed, %d skipped\n' "${#passed[@]}" "${#failed[@]}" "${#skipped[@]}"
+[ "${#failed[@]}" -eq 0 ]
