@@ -23,16 +23,32 @@ need_linux_tools() {
     install_packages "for the Linux tests (pkg-config check, generators, case-folding drift check)" "${missing[@]}"
 }
 
+# The one nightly Rust toolchain every nightly build uses (the Windows 7 builds, ThreadSanitizer, Miri,
+# the fuzz targets), named so that a build can be repeated: a new nightly is taken on purpose, by
+# changing this line, never by whatever is current on the day. OPCCOMN_NIGHTLY overrides it.
+OPCCOMN_NIGHTLY=${OPCCOMN_NIGHTLY:-nightly-2026-10-30}
+
+# need_nightly [COMPONENT...]: the pinned nightly toolchain with these components.
+need_nightly() {
+    if ! rustup toolchain list | grep -q "^$OPCCOMN_NIGHTLY-"; then
+        echo "== installing: Rust $OPCCOMN_NIGHTLY (rustup, minimal profile${1:+, with $*})"
+        rustup toolchain install "$OPCCOMN_NIGHTLY" --profile minimal
+    fi
+    local installed component
+    installed=$(rustup +"$OPCCOMN_NIGHTLY" component list --installed 2>/dev/null || true)
+    for component in "$@"; do
+        if ! grep -q "^$component" <<<"$installed"; then
+            echo "== installing: $component for Rust $OPCCOMN_NIGHTLY (rustup)"
+            rustup component add "$component" --toolchain "$OPCCOMN_NIGHTLY"
+        fi
+    done
+}
+
 # valgrind, and the nightly toolchain with the standard library's sources (ThreadSanitizer needs an
 # instrumented standard library, built with -Zbuild-std).
 need_soundness_tools() {
     command -v valgrind >/dev/null || install_packages "for the leak checks" valgrind
-    local installed
-    installed=$(rustup +nightly component list --installed 2>/dev/null || true)
-    if ! grep -q '^rust-src' <<<"$installed"; then
-        echo "== installing: Rust nightly toolchain with rust-src (rustup), for the ThreadSanitizer stage"
-        rustup toolchain install nightly --profile minimal --component rust-src
-    fi
+    need_nightly rust-src
 }
 
 need_windows_tools() {
@@ -106,25 +122,15 @@ need_wine32() {
 # The nightly toolchain with the standard library's sources, for the tier-3 Windows 7 targets
 # (x86_64-win7-windows-gnu, i686-win7-windows-gnu are built with -Zbuild-std).
 need_nightly_rust_src() {
-    if ! rustup toolchain list | grep -q '^nightly-'; then
-        echo "== installing: Rust nightly toolchain with rust-src (rustup), for the Windows 7 builds (-Zbuild-std)"
-        rustup toolchain install nightly --profile minimal --component rust-src
-    elif ! rustup +nightly component list --installed 2>/dev/null | grep -q '^rust-src'; then
-        echo "== installing: rust-src for the nightly toolchain (rustup)"
-        rustup component add rust-src --toolchain nightly
-    fi
+    need_nightly rust-src
 }
 
 # Miri: the nightly toolchain with its miri component and the standard library's sources (Miri builds
 # its own sysroot from them). A component that cannot be installed fails the caller (set -e): the Miri
 # stage never passes without Miri.
 need_miri() {
-    need_nightly_rust_src
-    if ! rustup +nightly component list --installed 2>/dev/null | grep -q '^miri'; then
-        echo "== installing: Miri for the nightly toolchain (rustup)"
-        rustup component add miri --toolchain nightly
-    fi
-    cargo +nightly miri --version >/dev/null
+    need_nightly rust-src miri
+    cargo +"$OPCCOMN_NIGHTLY" miri --version >/dev/null
 }
 
 # install_packages WHY PACKAGE...: installs the Debian packages, saying which and why first.
@@ -143,8 +149,5 @@ install_packages() {
 
 # Nightly Rust for the fuzz targets (libFuzzer instrumentation with AddressSanitizer).
 need_fuzz_tools() {
-    if ! rustup toolchain list | grep -q '^nightly'; then
-        echo "== installing: Rust nightly toolchain (rustup), for the fuzz targets"
-        rustup toolchain install nightly --profile minimal
-    fi
+    need_nightly
 }

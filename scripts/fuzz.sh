@@ -27,7 +27,7 @@ triple=x86_64-unknown-linux-gnu
 export RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
 -Cllvm-args=-sanitizer-coverage-inline-8bit-counters -Cllvm-args=-sanitizer-coverage-pc-table \
 -Cllvm-args=-sanitizer-coverage-trace-compares -Zsanitizer=address -Cdebug-assertions -Coverflow-checks"
-cargo +nightly build --release --locked -j2 --manifest-path fuzz/Cargo.toml --target "$triple" \
+cargo +"$OPCCOMN_NIGHTLY" build --release --locked -j2 --manifest-path fuzz/Cargo.toml --target "$triple" \
     --target-dir "$out/target" --bins
 unset RUSTFLAGS
 

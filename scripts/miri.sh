@@ -23,15 +23,15 @@ out="$root/build/miri"
 mkdir -p "$out"
 started=$SECONDS
 # The sysroot and the crate, built once for both runs (at most 2 jobs).
-cargo +nightly miri setup >/dev/null 2>&1 || cargo +nightly miri setup
-cargo +nightly miri test -q --lib -j2 --no-run
+cargo +"$OPCCOMN_NIGHTLY" miri setup >/dev/null 2>&1 || cargo +"$OPCCOMN_NIGHTLY" miri setup
+cargo +"$OPCCOMN_NIGHTLY" miri test -q --lib -j2 --no-run
 
 declare -A pid
 for m in "${models[@]}"; do
     rm -f "$out/$m.log" "$out/$m.rc" "$out/$m.seconds"
     (
         t=$SECONDS rc=0
-        MIRIFLAGS="${flags[$m]} ${MIRIFLAGS:-}" cargo +nightly miri test --lib -j2 -- --test-threads=1 \
+        MIRIFLAGS="${flags[$m]} ${MIRIFLAGS:-}" cargo +"$OPCCOMN_NIGHTLY" miri test --lib -j2 -- --test-threads=1 \
             >"$out/$m.log" 2>&1 || rc=$?
         echo "$rc" >"$out/$m.rc"
         echo $((SECONDS - t)) >"$out/$m.seconds"

@@ -16,7 +16,7 @@ build="$root/build"
 out=${1:-$build/package}
 version=$(sed -nE 's/^version = "([^"]+)"$/\1/p' Cargo.toml | head -1)
 name="opccomn-$version-windows"
-win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind")
+win7_args=(-DOPCCOMN_RUST_TOOLCHAIN="$OPCCOMN_NIGHTLY" "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind")
 
 # build DIR TOOLCHAIN_FILE [CMAKE_ARGS...]: the library, opccomn.lib and opccomn-check.exe, in DIR.
 build_variant() {

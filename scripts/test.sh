@@ -131,7 +131,7 @@ build_windows_x86() {
     cmake -S . -B "$build/windows-x86" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-i686.cmake" >/dev/null
     cmake --build "$build/windows-x86" -j2
 }
-win7_args=(-DOPCCOMN_RUST_TOOLCHAIN=nightly "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind"
+win7_args=(-DOPCCOMN_RUST_TOOLCHAIN="$OPCCOMN_NIGHTLY" "-DOPCCOMN_CARGO_ARGS=-Zbuild-std=std,panic_unwind"
     -DOPCCOMN_BUILD_CHECKER=OFF)   # the checker and its test servers run from the x64 and x86 builds
 build_win7() {   # build_win7 x64|x86
     need_nightly_rust_src
@@ -237,7 +237,7 @@ stage_tsan() {
     # 8 threads on one IOPCCommon, one shutdown object whose sinks unadvise themselves during a notify,
     # one compiled pattern (src/stress_tests.rs). Any report fails the run (halt_on_error).
     RUSTFLAGS="-Zsanitizer=thread" TSAN_OPTIONS="halt_on_error=1" CARGO_TARGET_DIR="$root/target/tsan" \
-        cargo +nightly test -Zbuild-std --target x86_64-unknown-linux-gnu --lib stress_tests
+        cargo +"$OPCCOMN_NIGHTLY" test -Zbuild-std --target x86_64-unknown-linux-gnu --lib stress_tests
 }
 
 stage_miri() {
