@@ -36,6 +36,7 @@ tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
 miri|linux|Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system
 package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
+msvc-build-script|linux|the build script for Visual Studio (x86_64-pc-windows-msvc): stops naming missing tools; with stand-ins, calls cl, lib, rc, mc
 fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target)
 rust-windows|wine|Rust tests (Windows x64, under Wine)
 acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
@@ -270,6 +271,10 @@ stage_no_dll_exports() {
         return 1
     fi
     echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
+}
+
+stage_msvc_build_script() {
+    scripts/check-msvc-build-script.sh
 }
 
 stage_fuzz() {
