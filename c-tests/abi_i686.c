@@ -58,6 +58,7 @@ OPCCOMN_CONVENTION(&OpcTaskMemAlloc, void * (__attribute__((cdecl)) *)(size_t si
 OPCCOMN_CONVENTION(&OpcTaskMemFree, void (__attribute__((cdecl)) *)(void *p), "OpcTaskMemFree must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonCreate, HRESULT (__attribute__((cdecl)) *)(const struct OpcCommonOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcCommonCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonGetClientName, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LPWSTR *ppName), "OpcCommonGetClientName must be cdecl");
+OPCCOMN_CONVENTION(&OpcCommonGetLocale, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LCID *lcid), "OpcCommonGetLocale must be cdecl");
 OPCCOMN_CONVENTION(&OpcGetErrorString, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, LPWSTR *ppString), "OpcGetErrorString must be cdecl");
 OPCCOMN_CONVENTION(&OpcGetErrorStringEx, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString), "OpcGetErrorStringEx must be cdecl");
 OPCCOMN_CONVENTION(&OpcErrorCodesOfKind, HRESULT (__attribute__((cdecl)) *)(uint32_t kind, DWORD *pdwCount, HRESULT **ppCodes), "OpcErrorCodesOfKind must be cdecl");
@@ -109,6 +110,9 @@ OPCCOMN_CONVENTION(&OpcShutdownUnadvise, HRESULT (__attribute__((cdecl)) *)(IUnk
 /* Callback types. */
 OPCCOMN_CONVENTION((OpcVendorErrorStringFn)0, HRESULT (__attribute__((cdecl)) *)(void *context, HRESULT code, LCID locale, LPCWSTR *text), "OpcVendorErrorStringFn must be cdecl");
 OPCCOMN_CONVENTION((OpcClientNameFn)0, void (__attribute__((cdecl)) *)(void *context, LPCWSTR name), "OpcClientNameFn must be cdecl");
+OPCCOMN_CONVENTION((OpcAcceptLocaleFn)0, int32_t (__attribute__((cdecl)) *)(void *context, LCID locale, int32_t listed), "OpcAcceptLocaleFn must be cdecl");
+OPCCOMN_CONVENTION((OpcLocaleChangedFn)0, void (__attribute__((cdecl)) *)(void *context, LCID locale), "OpcLocaleChangedFn must be cdecl");
+OPCCOMN_CONVENTION((OpcVendorErrorTextFn)0, HRESULT (__attribute__((cdecl)) *)(void *context, HRESULT code, LCID locale, LPWSTR *text), "OpcVendorErrorTextFn must be cdecl");
 OPCCOMN_CONVENTION((OpcShutdownCallback)0, void (__attribute__((cdecl)) *)(void *context, LPCWSTR reason), "OpcShutdownCallback must be cdecl");
 
 /* The check can fail: a vtable entry is not __cdecl. */

@@ -408,6 +408,94 @@ static void test_allocator(void) {
     OpcTaskMemFree(NULL);
 }
 
+/* The server decides each locale (listed or not) and is told of every change; it reads the session's
+ * locale cheaply through the IOPCCommon pointer. */
+struct locale_log {
+    int asked, changes;
+    LCID last_asked, last_changed;
+    int32_t last_listed;
+};
+
+static int32_t OPCCOMN_CDECL accept_locale(void *context, LCID locale, int32_t listed) {
+    struct locale_log *log = (struct locale_log *)context;
+    log->asked++;
+    log->last_asked = locale;
+    log->last_listed = listed;
+    return locale == 0x0411 ? 1 : locale == 0x0407 ? 0 : listed;
+}
+
+static void OPCCOMN_CDECL locale_changed(void *context, LCID locale) {
+    struct locale_log *log = (struct locale_log *)context;
+    log->changes++;
+    log->last_changed = locale;
+}
+
+static void test_locale_hooks(void) {
+    static const LCID declared[] = {0x0409, 0x0407};
+    struct locale_log log;
+    OpcCommonOptions o;
+    IOPCCommon *c;
+    LCID lcid = 0x1234;
+    memset(&log, 0, sizeof log);
+    memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
+    o.locales = declared;
+    o.locale_count = 2;
+    o.accept_locale = accept_locale;
+    o.accept_locale_context = &log;
+    o.locale_changed = locale_changed;
+    o.locale_changed_context = &log;
+    c = create_common(&o);
+    if (!c) return;
+
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0411), S_OK);
+    CHECK(log.asked == 1 && log.last_asked == 0x0411 && log.last_listed == 0);
+    CHECK(log.changes == 1 && log.last_changed == 0x0411);
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0407), E_INVALIDARG);
+    CHECK(log.asked == 2 && log.last_listed == 1);
+    CHECK(log.changes == 1);
+    CHECK_HR(OpcCommonGetLocale((IUnknown *)c, &lcid), S_OK);
+    CHECK(lcid == 0x0411);
+
+    lcid = 0x1234;
+    CHECK_HR(OpcCommonGetLocale(NULL, &lcid), E_INVALIDARG);
+    CHECK(lcid == 0);
+    CHECK_HR(OpcCommonGetLocale((IUnknown *)c, NULL), E_INVALIDARG);
+    c->lpVtbl->Release(c);
+}
+
+/* Vendor texts handed over in task memory: the client receives the server's own allocation. */
+static LPWSTR handed_text;
+
+static HRESULT OPCCOMN_CDECL vendor_text_handed_over(void *context, HRESULT code, LCID locale, LPWSTR *text) {
+    static const char message[] = "driver 7: link down";
+    size_t i;
+    (void)context;
+    (void)locale;
+    if (code != (HRESULT)0xE0000007) return S_FALSE;
+    handed_text = (LPWSTR)OpcTaskMemAlloc(sizeof message * sizeof(WCHAR));
+    if (!handed_text) return E_OUTOFMEMORY;
+    for (i = 0; i < sizeof message; i++) handed_text[i] = (WCHAR)message[i];
+    *text = handed_text;
+    return S_OK;
+}
+
+static void test_vendor_text_in_task_memory(void) {
+    OpcCommonOptions o;
+    IOPCCommon *c;
+    LPWSTR text = (LPWSTR)GARBAGE_PTR;
+    memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
+    o.vendor_error_text = vendor_text_handed_over;
+    c = create_common(&o);
+    if (!c) return;
+    CHECK_HR(c->lpVtbl->GetErrorString(c, (HRESULT)0xE0000007, &text), S_OK);
+    CHECK(text == handed_text);
+    CHECK(wstr_is(text, "driver 7: link down"));
+    OpcTaskMemFree(text);
+    c->lpVtbl->Release(c);
+}
+
 int main(void) {
     test_create_errors();
     test_locale();
@@ -415,6 +503,8 @@ int main(void) {
     test_error_string();
     test_vendor_callback();
     test_client_name();
+    test_locale_hooks();
+    test_vendor_text_in_task_memory();
     test_sessions_apart();
     test_refcount_and_identity();
     test_aggregation();

@@ -721,6 +721,24 @@ static void case_OpcCommonGetClientName__ppName(void) {
     cases++;
 }
 
+static void case_OpcCommonGetLocale__common(void) {
+    nr_setup();
+    LCID out_lcid;
+    memset(&out_lcid, 0xA5, sizeof out_lcid);
+    CHECK_HR(OpcCommonGetLocale(NULL, &out_lcid), E_INVALIDARG);
+    if (!nr_is_zero(&out_lcid, sizeof out_lcid)) fprintf(stderr, "OpcCommonGetLocale(common = NULL): `lcid` not reset\n");
+    CHECK(nr_is_zero(&out_lcid, sizeof out_lcid));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcCommonGetLocale__lcid(void) {
+    nr_setup();
+    CHECK_HR(OpcCommonGetLocale(nr_common_unknown(), NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
 static void case_OpcGetErrorString__ppString(void) {
     nr_setup();
     CHECK_HR(OpcGetErrorString((HRESULT)0x80004005L, 0x409, NULL), E_INVALIDARG);
@@ -1386,6 +1404,8 @@ int main(void) {
     case_OpcCommonCreate__ppv();
     case_OpcCommonGetClientName__common();
     case_OpcCommonGetClientName__ppName();
+    case_OpcCommonGetLocale__common();
+    case_OpcCommonGetLocale__lcid();
     case_OpcGetErrorString__ppString();
     case_OpcGetErrorStringEx__ppString();
     case_OpcErrorCodesOfKind__pdwCount();

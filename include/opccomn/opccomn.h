@@ -250,6 +250,35 @@ typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorStringFn)(void *context, HRESULT c
 // thread; never called while the library holds a lock.
 typedef void (OPCCOMN_CDECL *OpcClientNameFn)(void *context, LPCWSTR name);
 
+// Decides whether a session may use a locale: called by SetLocaleID with the locale and whether it is
+// one the session declared (`listed` nonzero: in `locales`, or one of the four special locales).
+// Return nonzero to accept it, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
+// locale). May be called from any thread, concurrently; never while the library holds a lock.
+typedef int32_t (OPCCOMN_CDECL *OpcAcceptLocaleFn)(void *context, LCID locale, int32_t listed);
+
+// Called after a client changed the session's locale with SetLocaleID, with the new locale (as the
+// client gave it, e.g. LOCALE_SYSTEM_DEFAULT). May be called from any thread; never called while the
+// library holds a lock. When two clients' calls race, the calls may arrive in either order: read
+// the current value with `OpcCommonGetLocale` if the order matters.
+typedef void (OPCCOMN_CDECL *OpcLocaleChangedFn)(void *context, LCID locale);
+
+#if !defined(_WIN32)
+// A NUL-terminated UTF-16 string the callee may write or the caller must free.
+typedef WCHAR *LPWSTR;
+#endif
+
+// A server's own texts for its vendor-specific codes, handed over as task memory: the form for a
+// server that formats its texts into a new buffer (no thread-local storage, no lifetime to keep).
+//
+// Called as `OpcVendorErrorStringFn`, with `*text` NULL on entry. To answer, store a NUL-terminated
+// string allocated with `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows) in `*text` and return S_OK: the
+// library takes ownership and hands that very string to the client. Any other return (S_FALSE to
+// decline) lets the library look the code up itself. A string stored in `*text` is the library's
+// whatever the return, and it frees it when it does not use it (also when it is longer than the
+// library's string bound, 2^19 code units, which is then treated as declined). May be called from any
+// thread, concurrently.
+typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorTextFn)(void *context, HRESULT code, LCID locale, LPWSTR *text);
+
 // How a server configures an IOPCCommon object. Zero-initialise it, set `struct_size` to
 // `sizeof(OpcCommonOptions)`, then set what you need: fields added in later versions go at the end,
 // and the library reads only the first `struct_size` bytes, so code built against an older header
@@ -273,6 +302,19 @@ typedef struct OpcCommonOptions {
   OpcClientNameFn client_name_changed;
   // Passed to `client_name_changed`.
   void *client_name_context;
+  // Decides each SetLocaleID (optional, since 0.2): with it, a locale is accepted when the callback
+  // says so, listed or not (QueryAvailableLocaleIDs still returns the declared list); without it,
+  // exactly the declared locales are.
+  OpcAcceptLocaleFn accept_locale;
+  // Passed to `accept_locale`.
+  void *accept_locale_context;
+  // Told of every locale set through SetLocaleID (optional, since 0.2).
+  OpcLocaleChangedFn locale_changed;
+  // Passed to `locale_changed`.
+  void *locale_changed_context;
+  // Texts for the server's own error codes, handed over as task memory (optional, since 0.2;
+  // called with `vendor_error_context`). Set this or `vendor_error_string`, not both.
+  OpcVendorErrorTextFn vendor_error_text;
 } OpcCommonOptions;
 
 #if !defined(_WIN32)
@@ -297,11 +339,6 @@ typedef const IID &REFIID;
 #else
 typedef const IID *REFIID;
 #endif
-#endif
-
-#if !defined(_WIN32)
-// A NUL-terminated UTF-16 string the callee may write or the caller must free.
-typedef WCHAR *LPWSTR;
 #endif
 
 #if !defined(_WIN32)
@@ -1840,6 +1877,18 @@ HRESULT OPCCOMN_CDECL OpcCommonCreate(const struct OpcCommonOptions *options, IU
 // # Safety
 // `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
 HRESULT OPCCOMN_CDECL OpcCommonGetClientName(IUnknown *common, LPWSTR *ppName);
+
+// Gives a server the current locale of one of its IOPCCommon sessions (what GetLocaleID returns).
+//
+// `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
+// pointer itself is the cheap form: the library recognises its own object and reads the locale
+// without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
+// interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
+// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+//
+// # Safety
+// `common` must be NULL or a valid COM interface pointer; `lcid` NULL or writable.
+HRESULT OPCCOMN_CDECL OpcCommonGetLocale(IUnknown *common, LCID *lcid);
 
 // Returns the text for an OPC, COM or system error code in the given locale, for servers that
 // implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).

@@ -17,7 +17,10 @@ use crate::com::object::{
 };
 use crate::com::options::read_sized;
 use crate::com::{IUnknown, DWORD, E_INVALIDARG, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR};
-use crate::errors::{error_string, OpcServerKind, OpcVendorErrorStringFn, VendorTexts, CATALOG_LOCALES};
+use crate::errors::{
+    error_string, OpcServerKind, OpcVendorErrorStringFn, OpcVendorErrorTextFn, VendorCallback, VendorTexts,
+    CATALOG_LOCALES,
+};
 use crate::locale::{LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
 
 /// The methods of IOPCCommon, in the order of the specification's IDL.
@@ -47,6 +50,18 @@ pub struct IOPCCommon {
 /// thread; never called while the library holds a lock.
 pub type OpcClientNameFn = Option<unsafe extern "C" fn(context: *mut c_void, name: LPCWSTR)>;
 
+/// Decides whether a session may use a locale: called by SetLocaleID with the locale and whether it is
+/// one the session declared (`listed` nonzero: in `locales`, or one of the four special locales).
+/// Return nonzero to accept it, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
+/// locale). May be called from any thread, concurrently; never while the library holds a lock.
+pub type OpcAcceptLocaleFn = Option<unsafe extern "C" fn(context: *mut c_void, locale: LCID, listed: i32) -> i32>;
+
+/// Called after a client changed the session's locale with SetLocaleID, with the new locale (as the
+/// client gave it, e.g. LOCALE_SYSTEM_DEFAULT). May be called from any thread; never called while the
+/// library holds a lock. When two clients' calls race, the calls may arrive in either order: read
+/// the current value with `OpcCommonGetLocale` if the order matters.
+pub type OpcLocaleChangedFn = Option<unsafe extern "C" fn(context: *mut c_void, locale: LCID)>;
+
 /// How a server configures an IOPCCommon object. Zero-initialise it, set `struct_size` to
 /// `sizeof(OpcCommonOptions)`, then set what you need: fields added in later versions go at the end,
 /// and the library reads only the first `struct_size` bytes, so code built against an older header
@@ -72,6 +87,19 @@ pub struct OpcCommonOptions {
     pub client_name_changed: OpcClientNameFn,
     /// Passed to `client_name_changed`.
     pub client_name_context: *mut c_void,
+    /// Decides each SetLocaleID (optional, since 0.2): with it, a locale is accepted when the callback
+    /// says so, listed or not (QueryAvailableLocaleIDs still returns the declared list); without it,
+    /// exactly the declared locales are.
+    pub accept_locale: OpcAcceptLocaleFn,
+    /// Passed to `accept_locale`.
+    pub accept_locale_context: *mut c_void,
+    /// Told of every locale set through SetLocaleID (optional, since 0.2).
+    pub locale_changed: OpcLocaleChangedFn,
+    /// Passed to `locale_changed`.
+    pub locale_changed_context: *mut c_void,
+    /// Texts for the server's own error codes, handed over as task memory (optional, since 0.2;
+    /// called with `vendor_error_context`). Set this or `vendor_error_string`, not both.
+    pub vendor_error_text: OpcVendorErrorTextFn,
 }
 
 /// The most locales a server may declare.
@@ -79,7 +107,7 @@ const MAX_LOCALES: u32 = 4096;
 
 /// Every size `sizeof(OpcCommonOptions)` is or was in some version: the struct ends after a whole
 /// field (with or without the padding C adds).
-fn options_sizes() -> [usize; 9] {
+fn options_sizes() -> [usize; 14] {
     use core::mem::{offset_of, size_of};
     type O = OpcCommonOptions;
     let ptr = size_of::<*const c_void>();
@@ -92,6 +120,11 @@ fn options_sizes() -> [usize; 9] {
         offset_of!(O, vendor_error_context),
         offset_of!(O, client_name_changed),
         offset_of!(O, client_name_context),
+        offset_of!(O, accept_locale),
+        offset_of!(O, accept_locale_context),
+        offset_of!(O, locale_changed),
+        offset_of!(O, locale_changed_context),
+        offset_of!(O, vendor_error_text),
         size_of::<O>(),
     ]
 }
@@ -102,7 +135,30 @@ struct Settings {
     available: Vec<LCID>,
     vendor: Option<VendorTexts>,
     observer: Option<NameObserver>,
+    accept_locale: Option<LocaleJudge>,
+    locale_observer: Option<LocaleObserver>,
 }
+
+#[derive(Clone, Copy)]
+struct LocaleJudge {
+    callback: unsafe extern "C" fn(context: *mut c_void, locale: LCID, listed: i32) -> i32,
+    context: *mut c_void,
+}
+
+#[derive(Clone, Copy)]
+struct LocaleObserver {
+    callback: unsafe extern "C" fn(context: *mut c_void, locale: LCID),
+    context: *mut c_void,
+}
+
+// SAFETY: the options contract says these callbacks may be called from any thread with their context.
+unsafe impl Send for LocaleJudge {}
+// SAFETY: as above.
+unsafe impl Sync for LocaleJudge {}
+// SAFETY: as above.
+unsafe impl Send for LocaleObserver {}
+// SAFETY: as above.
+unsafe impl Sync for LocaleObserver {}
 
 #[derive(Clone, Copy)]
 struct NameObserver {
@@ -127,6 +183,11 @@ impl Settings {
             server_kind: 0,
             locales: ptr::null(),
             locale_count: 0,
+            accept_locale: None,
+            accept_locale_context: ptr::null_mut(),
+            locale_changed: None,
+            locale_changed_context: ptr::null_mut(),
+            vendor_error_text: None,
             vendor_error_string: None,
             vendor_error_context: ptr::null_mut(),
             client_name_changed: None,
@@ -151,12 +212,26 @@ impl Settings {
                 available.push(lcid);
             }
         }
+        let vendor = match (o.vendor_error_string, o.vendor_error_text) {
+            (Some(_), Some(_)) => return Err(E_INVALIDARG),
+            (Some(borrowed), None) => Some(VendorCallback::Borrowed(borrowed)),
+            (None, Some(owned)) => Some(VendorCallback::Owned(owned)),
+            (None, None) => None,
+        };
         Ok(Settings {
             kind,
             available,
-            vendor: o.vendor_error_string.map(|callback| VendorTexts {
+            vendor: vendor.map(|callback| VendorTexts {
                 callback,
                 context: o.vendor_error_context,
+            }),
+            accept_locale: o.accept_locale.map(|callback| LocaleJudge {
+                callback,
+                context: o.accept_locale_context,
+            }),
+            locale_observer: o.locale_changed.map(|callback| LocaleObserver {
+                callback,
+                context: o.locale_changed_context,
             }),
             observer: o.client_name_changed.map(|callback| NameObserver {
                 callback,
@@ -195,10 +270,23 @@ impl OpcCommon {
     }
 
     fn set_locale(&self, lcid: LCID) -> Result<HRESULT, HRESULT> {
-        if !self.settings.available.contains(&lcid) {
+        let listed = self.settings.available.contains(&lcid);
+        let accepted = match self.settings.accept_locale {
+            Some(judge) => {
+                // SAFETY: the server registered the callback for this; no lock is held.
+                let verdict = unsafe { (judge.callback)(judge.context, lcid, i32::from(listed)) };
+                verdict != 0
+            }
+            None => listed,
+        };
+        if !accepted {
             return Err(E_INVALIDARG);
         }
         self.locale.store(lcid, Ordering::Relaxed);
+        if let Some(observer) = self.settings.locale_observer {
+            // SAFETY: the server registered the observer for this; no lock is held.
+            unsafe { (observer.callback)(observer.context, lcid) };
+        }
         Ok(S_OK)
     }
 
@@ -355,6 +443,44 @@ pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *
         // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not; it stays counted meanwhile.
         let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.as_ptr(), &IOPCCOMMON_VTBL) } {
             Some(obj) => alloc_wstr(&obj.client_name()),
+            None => Err(E_INVALIDARG),
+        };
+        drop(iface);
+        out.write(result?);
+        Ok(S_OK)
+    })
+}
+
+/// Gives a server the current locale of one of its IOPCCommon sessions (what GetLocaleID returns).
+///
+/// `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
+/// pointer itself is the cheap form: the library recognises its own object and reads the locale
+/// without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
+/// interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
+/// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+///
+/// # Safety
+/// `common` must be NULL or a valid COM interface pointer; `lcid` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcCommonGetLocale(common: *mut IUnknown, lcid: *mut LCID) -> Hr {
+    ffi::boundary!(Opc, [lcid], {
+        // SAFETY: the caller vouches a non-NULL out-parameter is writable.
+        let out = unsafe { ffi::out(lcid) }?;
+        let common = ffi::in_ptr(common)?;
+        // The cheap form: the session's own IOPCCommon pointer.
+        let own = common.as_ptr().cast::<IOPCCommon>();
+        // SAFETY: `common` is a valid COM pointer per the contract.
+        let own = unsafe { ComObject::<OpcCommon>::from_foreign(own, &IOPCCOMMON_VTBL) };
+        if let Some(obj) = own {
+            out.write(obj.locale.load(Ordering::Relaxed));
+            return Ok(S_OK);
+        }
+        // SAFETY: `common` is a valid COM pointer per the contract.
+        let iface = unsafe { crate::com::unknown::query::<IOPCCommon>(common.as_ptr(), &IID_IOPCCommon) }
+            .map_err(|_| E_INVALIDARG)?;
+        // SAFETY: `iface` is a valid IOPCCommon pointer, ours or not; it stays counted meanwhile.
+        let result = match unsafe { ComObject::<OpcCommon>::from_foreign(iface.as_ptr(), &IOPCCOMMON_VTBL) } {
+            Some(obj) => Ok(obj.locale.load(Ordering::Relaxed)),
             None => Err(E_INVALIDARG),
         };
         drop(iface);

@@ -44,11 +44,30 @@ pub(crate) use catalog::CATALOG_LOCALES;
 pub type OpcVendorErrorStringFn =
     Option<unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT>;
 
+/// A server's own texts for its vendor-specific codes, handed over as task memory: the form for a
+/// server that formats its texts into a new buffer (no thread-local storage, no lifetime to keep).
+///
+/// Called as `OpcVendorErrorStringFn`, with `*text` NULL on entry. To answer, store a NUL-terminated
+/// string allocated with `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows) in `*text` and return S_OK: the
+/// library takes ownership and hands that very string to the client. Any other return (S_FALSE to
+/// decline) lets the library look the code up itself. A string stored in `*text` is the library's
+/// whatever the return, and it frees it when it does not use it (also when it is longer than the
+/// library's string bound, 2^19 code units, which is then treated as declined). May be called from any
+/// thread, concurrently.
+pub type OpcVendorErrorTextFn =
+    Option<unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPWSTR) -> HRESULT>;
+
+/// How a vendor callback answers: with a string the server keeps, or with task memory it hands over.
+#[derive(Clone, Copy)]
+pub(crate) enum VendorCallback {
+    Borrowed(unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT),
+    Owned(unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPWSTR) -> HRESULT),
+}
+
 /// A vendor callback with its context pointer.
 #[derive(Clone, Copy)]
 pub(crate) struct VendorTexts {
-    pub callback:
-        unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT,
+    pub callback: VendorCallback,
     pub context: *mut c_void,
 }
 
@@ -60,15 +79,35 @@ unsafe impl Sync for VendorTexts {}
 impl VendorTexts {
     /// The vendor's text for `code`, copied into task memory, or `None` when the vendor declines.
     fn lookup(&self, code: HRESULT, locale: LCID) -> Option<Result<LPWSTR, HRESULT>> {
-        let mut text: LPCWSTR = ptr::null();
-        // SAFETY: the server registered this callback and context for exactly this call.
-        let hr = unsafe { (self.callback)(self.context, code, locale, &mut text) };
-        if hr != S_OK || text.is_null() {
-            return None;
+        match self.callback {
+            VendorCallback::Borrowed(callback) => {
+                let mut text: LPCWSTR = ptr::null();
+                // SAFETY: the server registered this callback and context for exactly this call.
+                let hr = unsafe { callback(self.context, code, locale, &mut text) };
+                if hr != S_OK || text.is_null() {
+                    return None;
+                }
+                // SAFETY: the callback contract: a NUL-terminated string valid until it is called again.
+                let units = unsafe { wstr_units(text, MAX_STRING_UNITS) }?;
+                Some(alloc_wstr(units))
+            }
+            VendorCallback::Owned(callback) => {
+                let mut text: LPWSTR = ptr::null_mut();
+                // SAFETY: the server registered this callback and context for exactly this call.
+                let hr = unsafe { callback(self.context, code, locale, &mut text) };
+                if text.is_null() {
+                    return None;
+                }
+                // SAFETY: the callback contract: a NUL-terminated string in task memory, now ours.
+                let fits = unsafe { wstr_units(text, MAX_STRING_UNITS) }.is_some();
+                if hr == S_OK && fits {
+                    return Some(Ok(text));
+                }
+                // SAFETY: the string is ours (see above) and not handed on.
+                unsafe { crate::com::alloc::task_free(text.cast()) };
+                None
+            }
         }
-        // SAFETY: the callback contract: a NUL-terminated string valid until it is called again.
-        let units = unsafe { wstr_units(text, MAX_STRING_UNITS) }?;
-        Some(alloc_wstr(units))
     }
 }
 
@@ -396,7 +435,7 @@ mod tests {
     fn vendor_callback_is_asked_first_with_the_resolved_locale() {
         let seen = core::cell::Cell::new(0 as LCID);
         let texts = VendorTexts {
-            callback: vendor,
+            callback: VendorCallback::Borrowed(vendor),
             context: ptr::from_ref(&seen).cast_mut().cast(),
         };
         let p = error_string(
