@@ -21,7 +21,10 @@
 //!   a 128-bit number). On 64-bit Windows both registry views are read.
 //! - **GetClassDetails** reads `CLSID\{clsid}` (first view that has it): the ProgID, the user type
 //!   (the key's default value, else the ProgID key's, else "") and, for IOPCServerList2, the
-//!   version-independent ProgID, falling back to the ProgID.
+//!   version-independent ProgID: the registry's `VersionIndependentProgID`, an empty string for a
+//!   class that registers none (not its ProgID: a client told a versioned ProgID is the
+//!   version-independent one would bind to that version for good; the specification describes the
+//!   value as the registry's, and opccomn-check compares it with the registry).
 //! - **CLSIDFromProgID** reads `<ProgID>\CLSID`: REGDB_E_CLASSNOTREG when the ProgID (or its `CLSID`
 //!   key) is not registered, CO_E_CLASSSTRING when the text cannot be a ProgID or the registered CLSID
 //!   is malformed.
@@ -279,7 +282,7 @@ pub(crate) fn class_details(
             .find_map(|v| nonempty(v.value(&prog_id, "").and_then(|v| v.as_str().map(str::to_string))))
             .unwrap_or_default(),
     };
-    let version_independent_prog_id = nonempty(found.version_independent_prog_id).unwrap_or(prog_id.clone());
+    let version_independent_prog_id = found.version_independent_prog_id.unwrap_or_default();
     Ok(ClassDetails {
         prog_id,
         user_type,

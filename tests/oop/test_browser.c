@@ -103,7 +103,7 @@ static void browse(void) {
     }
     CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &one, &prog, &user, &vi), S_OK);
     CHECK(wstr_is(prog, "Oop.Browse1.1") && wstr_is(user, "Oop browse test server"));
-    CHECK(wstr_is(vi, "Oop.Browse1.1")); /* no version-independent ProgID: the ProgID */
+    CHECK(wstr_is(vi, "")); /* no version-independent ProgID registered: an empty string */
     CoTaskMemFree(prog);
     CoTaskMemFree(user);
     CoTaskMemFree(vi);
