@@ -1,23 +1,17 @@
-//! For Windows targets built with mingw, the proxy/stub of the OPC Common interfaces: compiles
+//! For Windows targets, the proxy/stub of the OPC Common interfaces: compiles
 //! `src/proxy/opccomn_ps.c` (with the NDR tables `tools/gen-proxy.py` generated from
-//! `idl/opccomn.idl` into `src/proxy/generated/`) with `<triple>-gcc` (or OPCCOMN_CC) into a static
-//! library (`<triple>-ar` or OPCCOMN_AR), links it and rpcrt4 (the NDR engine that interprets the
-//! tables), and sets `cfg(opccomn_proxy_stub)` for src/proxy. MSVC builds get no proxy/stub (a build
-//! warning says so).
+//! `idl/opccomn.idl` into `src/proxy/generated/`) into a static library, links it and rpcrt4 (the NDR
+//! engine that interprets the tables), and sets `cfg(opccomn_proxy_stub)` for src/proxy. With mingw
+//! the tools are `<triple>-gcc` and `<triple>-ar` (or OPCCOMN_CC / OPCCOMN_AR), with MSVC `cl` and
+//! `lib` (or OPCCOMN_CL / OPCCOMN_LIB), see [`crate::toolchain`].
 
+use std::fs;
 use std::path::Path;
 use std::process::Command;
-use std::{env, fs};
 
-use crate::resources::{run, tool};
+use crate::toolchain::{run, Toolchain};
 
-pub fn build(manifest_dir: &Path, out_dir: &Path) {
-    println!("cargo:rerun-if-env-changed=OPCCOMN_CC");
-    println!("cargo:rerun-if-env-changed=OPCCOMN_AR");
-    if env::var("CARGO_CFG_TARGET_ENV").as_deref() != Ok("gnu") {
-        println!("cargo:warning=opccomn: the proxy/stub (src/proxy) is built only with mingw");
-        return;
-    }
+pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
     let src = manifest_dir.join("src/proxy");
     for file in [
         "opccomn_ps.c",
@@ -29,16 +23,36 @@ pub fn build(manifest_dir: &Path, out_dir: &Path) {
     }
     let dir = out_dir.join("proxy");
     fs::create_dir_all(&dir).expect("create proxy dir");
-    let object = dir.join("opccomn_ps.o");
-    let mut cc = Command::new(tool("OPCCOMN_CC", "gcc"));
-    cc.args(["-c", "-O2", "-Wall", "-Werror", "-o"])
-        .arg(&object)
-        .arg(src.join("opccomn_ps.c"));
+    let (object, library) = match toolchain {
+        Toolchain::Mingw => (dir.join("opccomn_ps.o"), dir.join("libopccomn_ps.a")),
+        Toolchain::Msvc => (dir.join("opccomn_ps.obj"), dir.join("opccomn_ps.lib")),
+    };
+    let mut cc = Command::new(toolchain.c_compiler());
+    match toolchain {
+        Toolchain::Mingw => {
+            cc.args(["-c", "-O2", "-Wall", "-Werror", "-o"]).arg(&object);
+        }
+        Toolchain::Msvc => {
+            let mut fo = std::ffi::OsString::from("/Fo");
+            fo.push(&object);
+            cc.args(["/nologo", "/c", "/O2", "/W3", "/WX"]).arg(fo);
+        }
+    }
+    cc.arg(src.join("opccomn_ps.c"));
     run(cc);
-    let library = dir.join("libopccomn_ps.a");
     let _ = fs::remove_file(&library);
-    let mut ar = Command::new(tool("OPCCOMN_AR", "ar"));
-    ar.arg("crs").arg(&library).arg(&object);
+    let mut ar = Command::new(toolchain.archiver());
+    match toolchain {
+        Toolchain::Mingw => {
+            ar.arg("crs").arg(&library);
+        }
+        Toolchain::Msvc => {
+            let mut out = std::ffi::OsString::from("/OUT:");
+            out.push(&library);
+            ar.arg("/nologo").arg(out);
+        }
+    }
+    ar.arg(&object);
     run(ar);
     println!("cargo:rustc-link-search=native={}", dir.display());
     println!("cargo:rustc-link-lib=static=opccomn_ps");

@@ -1,9 +1,10 @@
-//! For Windows targets built with mingw, the DLL's resources, compiled from the catalog: a message
-//! table (so `FormatMessage(FORMAT_MESSAGE_FROM_HMODULE, opccomn.dll, code)` returns the catalog texts,
-//! in every language of the catalog) and a VERSIONINFO following the specification's version convention
+//! For Windows targets, the DLL's resources, compiled from the catalog: a message table (so
+//! `FormatMessage(FORMAT_MESSAGE_FROM_HMODULE, opccomn.dll, code)` returns the catalog texts, in every
+//! language of the catalog) and a VERSIONINFO following the specification's version convention
 //! (section 6.4: version MM.mm.bb is written FILEVERSION MM,mm,0,bb, the same for PRODUCTVERSION), taken
-//! from Cargo.toml. The tools are `<triple>-windmc` and `<triple>-windres` from binutils-mingw-w64, or
-//! the programs named by OPCCOMN_WINDMC / OPCCOMN_WINDRES.
+//! from Cargo.toml. With mingw the tools are `<triple>-windmc` and `<triple>-windres` from
+//! binutils-mingw-w64 (or OPCCOMN_WINDMC / OPCCOMN_WINDRES); with MSVC they are the Windows SDK's `mc`
+//! and `rc` (or OPCCOMN_MC / OPCCOMN_RC), see [`crate::toolchain`].
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -12,43 +13,17 @@ use std::process::Command;
 use std::{env, fs};
 
 use crate::catalog::{Entry, Spec, LANGUAGES};
+use crate::toolchain::{run, Toolchain};
 
-/// Links the resources into the DLL (mingw only; MSVC builds get none, with a warning).
-pub fn build(out_dir: &Path, catalogs: &[Vec<Entry>]) {
-    println!("cargo:rerun-if-env-changed=OPCCOMN_WINDMC");
-    println!("cargo:rerun-if-env-changed=OPCCOMN_WINDRES");
-    if env::var("CARGO_CFG_TARGET_ENV").as_deref() == Ok("gnu") {
-        let object = compile(out_dir, catalogs);
-        println!("cargo:rustc-link-arg-cdylib={}", object.display());
-    } else {
-        println!("cargo:warning=opccomn: resources (message table, VERSIONINFO) are built only with mingw");
-    }
+/// Links the resources into the DLL.
+pub fn build(out_dir: &Path, catalogs: &[Vec<Entry>], toolchain: &Toolchain) {
+    let object = compile(out_dir, catalogs, toolchain);
+    println!("cargo:rustc-link-arg-cdylib={}", object.display());
 }
 
-/// The mingw tool `name` for the target (e.g. x86_64-w64-mingw32-windres), or the override from `var`.
-pub(crate) fn tool(var: &str, name: &str) -> String {
-    if let Ok(program) = env::var(var) {
-        return program;
-    }
-    let arch = env::var("CARGO_CFG_TARGET_ARCH").unwrap();
-    let prefix = match arch.as_str() {
-        "x86" => "i686",
-        other => other,
-    };
-    format!("{prefix}-w64-mingw32-{name}")
-}
-
-pub(crate) fn run(mut command: Command) {
-    let shown = format!("{command:?}");
-    match command.status() {
-        Ok(status) if status.success() => {}
-        Ok(status) => panic!("{shown} failed: {status}"),
-        Err(e) => panic!("cannot run {shown}: {e} (install binutils-mingw-w64, or set OPCCOMN_WINDMC/OPCCOMN_WINDRES)"),
-    }
-}
-
-/// Builds the message table and version resources into one COFF object and returns its path.
-fn compile(out_dir: &Path, catalogs: &[Vec<Entry>]) -> PathBuf {
+/// Builds the message table and version resources into one object the linker takes (a COFF object
+/// with mingw, a `.res` file with MSVC) and returns its path.
+fn compile(out_dir: &Path, catalogs: &[Vec<Entry>], toolchain: &Toolchain) -> PathBuf {
     let dir = out_dir.join("resources");
     fs::create_dir_all(&dir).expect("create resources dir");
 
@@ -96,15 +71,16 @@ fn compile(out_dir: &Path, catalogs: &[Vec<Entry>]) -> PathBuf {
             writeln!(mc, "Language={name}\n{text}%0\n.").unwrap();
         }
     }
-    // windmc reads UTF-16LE (-u) so the texts keep their non-ASCII characters.
+    // The message compiler reads UTF-16LE (-u) so the texts keep their non-ASCII characters; windmc
+    // and the SDK's mc take the same arguments.
     let utf16: Vec<u8> = mc.encode_utf16().flat_map(u16::to_le_bytes).collect();
     fs::write(dir.join("opccomn_messages.mc"), utf16).expect("write .mc");
-    let mut windmc = Command::new(tool("OPCCOMN_WINDMC", "windmc"));
-    windmc
+    let mut message_compiler = Command::new(toolchain.message_compiler());
+    message_compiler
         .current_dir(&dir)
         .args(["-u", "-U", "-r", ".", "-h", ".", "opccomn_messages.mc"]);
-    run(windmc);
-    let messages_rc = fs::read_to_string(dir.join("opccomn_messages.rc")).expect("windmc wrote no .rc");
+    run(message_compiler);
+    let messages_rc = fs::read_to_string(dir.join("opccomn_messages.rc")).expect("the message compiler wrote no .rc");
 
     let major: u32 = env::var("CARGO_PKG_VERSION_MAJOR").unwrap().parse().unwrap();
     let minor: u32 = env::var("CARGO_PKG_VERSION_MINOR").unwrap().parse().unwrap();
@@ -151,10 +127,18 @@ END
     )
     .unwrap();
     fs::write(dir.join("opccomn.rc"), rc).expect("write .rc");
-    let mut windres = Command::new(tool("OPCCOMN_WINDRES", "windres"));
-    windres
-        .current_dir(&dir)
-        .args(["-O", "coff", "-i", "opccomn.rc", "-o", "opccomn_res.o"]);
-    run(windres);
-    dir.join("opccomn_res.o")
+    let mut resource_compiler = Command::new(toolchain.resource_compiler());
+    resource_compiler.current_dir(&dir);
+    let output = match toolchain {
+        Toolchain::Mingw => {
+            resource_compiler.args(["-O", "coff", "-i", "opccomn.rc", "-o", "opccomn_res.o"]);
+            "opccomn_res.o"
+        }
+        Toolchain::Msvc => {
+            resource_compiler.args(["/nologo", "/fo", "opccomn.res", "opccomn.rc"]);
+            "opccomn.res"
+        }
+    };
+    run(resource_compiler);
+    dir.join(output)
 }

@@ -36,6 +36,7 @@ tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
 miri|linux|Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system
 package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
+msvc-build-script|linux|the build script for Visual Studio (x86_64-pc-windows-msvc): stops naming missing tools; with stand-ins, calls cl, lib, rc, mc
 fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target)
 rust-windows|wine|Rust tests (Windows x64, under Wine)
 acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
@@ -272,6 +273,10 @@ stage_no_dll_exports() {
     echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
 }
 
+stage_msvc_build_script() {
+    scripts/check-msvc-build-script.sh
+}
+
 stage_fuzz() {
     echo "${OPCCOMN_FUZZ_SECONDS:-30} s per target"
     scripts/fuzz.sh "${OPCCOMN_FUZZ_SECONDS:-30}"
@@ -383,7 +388,37 @@ stage_c_win7_x86() {
 
 stage_package_windows() {
     unpack_package
-    local variant arch toolchain win7 dir want
+    local variant arch toolchain win7 dir want folder file
+    # It holds what its README names: checksums that match, every file in every folder, stripped DLLs
+    # that name their debug files, and a browser service that runs.
+    (cd "$pkg" && sha256sum --quiet -c SHA256SUMS)
+    [ "$(cat "$pkg/VERSION")" = "$version" ]
+    for file in README.md LICENSE-MIT LICENSE-APACHE include/opccomn/opccomn.h cmake/opccomnConfig.cmake \
+        docs/migration.md examples/cpp-server/CMakeLists.txt; do
+        [ -f "$pkg/$file" ] || { echo "package: no $file" >&2; return 1; }
+    done
+    for folder in x64 x86 win7/x64 win7/x86; do
+        for file in opccomn.dll opccomn.dll.debug opccomn.lib opccomn.def libopccomn.dll.a libopccomn.a opccomn_browser.exe; do
+            [ -f "$pkg/$folder/$file" ] || { echo "package: no $folder/$file" >&2; return 1; }
+        done
+        if objdump -h "$pkg/$folder/opccomn.dll" | grep -q '\.debug_info'; then
+            echo "package: $folder/opccomn.dll is not stripped" >&2
+            return 1
+        fi
+        objdump -h "$pkg/$folder/opccomn.dll" | grep -q '\.gnu_debuglink' ||
+            { echo "package: $folder/opccomn.dll does not name its debug file" >&2; return 1; }
+        objdump -h "$pkg/$folder/opccomn.dll.debug" | grep -q '\.debug_info' ||
+            { echo "package: $folder/opccomn.dll.debug holds no debug information" >&2; return 1; }
+    done
+    for folder in x64 x86; do
+        [ -f "$pkg/$folder/opccomn-check.exe" ] || { echo "package: no $folder/opccomn-check.exe" >&2; return 1; }
+    done
+    # The browser from the package runs beside the package's DLL: /Status exits 0 (it is the active
+    # browser) or 2 (another one, or none), 1 only on an error.
+    local status_rc=0
+    (cd "$pkg/x64" && wine opccomn_browser.exe /Status >/dev/null) || status_rc=$?
+    [ "$status_rc" = 0 ] || [ "$status_rc" = 2 ] || { echo "package: x64/opccomn_browser.exe /Status exited $status_rc" >&2; return 1; }
+    echo "package: every file its README names is there, the DLLs are stripped with their debug files beside them, the browser runs"
     for variant in x64:x86_64:OFF x86:i686:OFF x64:x86_64:ON; do
         IFS=: read -r arch toolchain win7 <<<"$variant"
         dir="$build/package-test/consumer-$arch-win7-$win7"
