@@ -1,5 +1,5 @@
 /* The MatchPattern sample of the specification's Appendix B, for the MatchPattern benchmark only (it
-   reads past an unclosed `[`, answers some lists wrongly and takes exponential time: see the README).
+   reads past an unclosed `[`, answers some lists wrongly and takes exponential time: see docs/guide/matchpattern.md).
    The text is the specification's, with the printing errors of the document corrected as the OPC
    Foundation's sample code has it (the range checks `if (p == 0 || p == ']') return FALSE;`).
 

@@ -52,7 +52,7 @@ static int shutdown_demo(void) {
     static const char *reason = "Server is shutting down for maintenance";
     size_t i;
 
-    /* Server side: a real server aggregates this into its server object (see README). */
+    /* Server side: a real server aggregates this into its server object (see docs/guide/shutdown.md). */
     if (OpcShutdownCreate(NULL, &IID_IConnectionPointContainer, (void **)&server) != S_OK) return 1;
 
     /* Client side: a sink that calls back, advised on the server's IOPCShutdown connection point. */

@@ -2,7 +2,7 @@
 # Runs the library's tests under Miri, once under Stacked Borrows and once under Tree Borrows
 # (`-Zmiri-tree-borrows`), the two at once (one process each), with isolation on: every test that
 # does not call the operating system (those that do are `#[cfg_attr(miri, ignore)]` with the reason,
-# and fewer cases run under `cfg(miri)`; see README, Tests). Any report of undefined behaviour, a leak,
+# and fewer cases run under `cfg(miri)`; see docs/dev/testing.md). Any report of undefined behaviour, a leak,
 # a failed or missing test fails the run. Prints, per model, how many tests ran and how long it took.
 #
 # Usage: scripts/miri.sh [stacked|tree]...     (both when none is given; test.sh runs both)

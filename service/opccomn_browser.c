@@ -18,8 +18,8 @@
  *
  * DCOM security: CoInitializeSecurity with EOAC_APPID, so the access and launch permissions of the
  * AppID {CCD63ADF-D02D-46DD-B170-FA6E0F086FE3} decide (AccessPermission / LaunchPermission values,
- * editable with dcomcnfg); registration writes none, so the machine-wide defaults apply. See the README
- * section "Out of process and remote clients". */
+ * editable with dcomcnfg); registration writes none, so the machine-wide defaults apply. See
+ * docs/guide/out-of-process.md. */
 #include <stdio.h>
 #include <string.h>
 #include <wchar.h>

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes c-tests/test_null_rule.c from the public header: for every export and every vtable method,
 one case per pointer argument that must not be NULL, calling it with NULL there and valid values
-everywhere else, and checking the code the NULL rule prescribes (README, "API conventions") and that
+everywhere else, and checking the code the NULL rule prescribes (docs/api-conventions.md) and that
 every out-parameter is NULL/zero afterwards (pre-filled with garbage before the call).
 
 The rule, as the library implements it in src/com/ffi.rs:

@@ -1,5 +1,5 @@
 //! MatchPattern: every entry point (MatchPatternW/A, the compiled filter in both widths) against the
-//! reference matcher of the tests (dynamic programming over the rules of match-pattern.md).
+//! reference matcher of the tests (dynamic programming over the rules of docs/guide/matchpattern.md).
 //!
 //! Input: one flags byte (bit 0: case sensitive; bit 1: the rest is UTF-16LE units, else bytes), then
 //! the pattern, a NUL, the string (a missing NUL: empty string). Bytes go to the narrow functions as

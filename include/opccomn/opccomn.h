@@ -6,9 +6,9 @@
 #include <stddef.h>
 #include <stdint.h>
 #define OPCCOMN_VERSION_MAJOR 0
-#define OPCCOMN_VERSION_MINOR 1
+#define OPCCOMN_VERSION_MINOR 2
 #define OPCCOMN_VERSION_PATCH 0
-#define OPCCOMN_VERSION "0.1.0"
+#define OPCCOMN_VERSION "0.2.0"
 
 /* On Windows the COM base types (GUID, HRESULT, IUnknown, ...) come from the system headers; elsewhere
    this header defines them, with UTF-16 WCHAR as COM requires. */

@@ -14,13 +14,16 @@
 //! in-array. A NULL argument gives [`Fail::Null`], which the boundary turns into the function's NULL
 //! code, so the rule is written once per function and cannot drift between functions of one kind.
 //!
-//! Both macros return a [`Crossed<T>`] ([`Hr`] for an HRESULT), which only they can make. Every
-//! vtable's methods (AddRef and Release included) and every export that returns something are typed
-//! to return it, so a method or an export whose body skipped the boundary does not compile; C sees the
-//! plain `T` (`#[repr(transparent)]`). A test in this module reads the crate's sources and also fails
-//! when an export does not declare that type, or is not written with one of the two macros.
+//! Both macros return a [`Crossed<T>`] ([`Hr`] for an HRESULT), which code outside this module cannot
+//! make from a value of its own. Every vtable's methods (AddRef and Release included) and every export
+//! that returns something are typed to return it, so a method or an export whose body returns a value
+//! it made itself does not compile; C sees the plain `T` (`#[repr(transparent)]`). The compiler does
+//! not catch a body that only forwards a call through another object's vtable (the vtable structs
+//! are used to call as well, so that call returns a `Crossed<T>` too): a test in this module reads the
+//! crate's sources and fails when a function is not written with one of the two macros, or when an
+//! export does not declare that type.
 //!
-//! The rule (README, "API conventions"): COM plumbing (IUnknown, IClassFactory, the enumerators,
+//! The rule (docs/api-conventions.md): COM plumbing (IUnknown, IClassFactory, the enumerators,
 //! connection points, and the creation functions that follow CoCreateInstance's `riid, ppv`
 //! protocol) answers NULL with E_POINTER, as COM does; OPC methods and the library's helper functions
 //! answer it with E_INVALIDARG, as the OPC specifications do. Invalid content (over-long or invalid

@@ -1,7 +1,7 @@
 //! MatchPattern: the string filter of the specification's Appendix B (Visual Basic `Like` syntax),
 //! exact, safe on any input and fast.
 //!
-//! Semantics (see the README): `?` one character, `*` zero or more, `#` one ASCII digit, `[list]` /
+//! Semantics (see docs/guide/matchpattern.md): `?` one character, `*` zero or more, `#` one ASCII digit, `[list]` /
 //! `[!list]` one character in / not in the list (ranges `a-z` by code point), `[]` the empty string,
 //! `[!]` a literal `!`, a `-` first, last or right after a range is itself. An unclosed `[` or a
 //! reversed range makes the pattern malformed: it never matches. Case-insensitive comparison uses

@@ -1,6 +1,6 @@
-//! The reference matcher the tests and the fuzz target compare every entry point with: the rules of
-//! match-pattern.md read as directly as possible (a token list, then dynamic programming over it),
-//! with none of the library's cleverness. Strings and patterns are sequences of code points, where an
+//! The reference matcher the tests and the fuzz target compare every entry point with: the rules
+//! table of docs/guide/matchpattern.md read as directly as possible (a token list, then dynamic
+//! programming over it), with none of the library's cleverness. Strings and patterns are sequences of code points, where an
 //! unpaired surrogate (or, from narrow text, the byte `x` of an invalid UTF-8 sequence, as 0xDC00 + x)
 //! stands for itself.
 
@@ -18,7 +18,7 @@ pub enum RefToken {
     Set(bool, Vec<(u32, u32)>),
 }
 
-/// The pattern rules read straight off match-pattern.md: a list ends at the first `]`.
+/// The pattern rules read straight off docs/guide/matchpattern.md: a list ends at the first `]`.
 pub fn ref_parse(p: &[u32]) -> Option<Vec<RefToken>> {
     let ch = |c: char| c as u32;
     let mut out = Vec::new();

@@ -4,7 +4,7 @@
 // defects.txt with -DOPCCOMN_DEFECT=<number> -DOPCCOMN_DEFECT_NAME=L"<name>"; each build registers
 // its own class, {7E57DEF0-C0DE-4C0D-9000-0000000000<number, hex>}, as OpcComnTest.Defect.<name>.1.
 //
-// The defects are those known from widely used implementations (shared/reference/opc-facts.md):
+// The defects are those known from widely used implementations (defects.txt lists them, one a line):
 // a cookie of 0, S_OK and a text for an unknown code, locales accepted that are not listed,
 // EnumConnections that crashes, E_NOINTERFACE where COM says CONNECT_E_NOCONNECTION, S_OK for an
 // unknown cookie, no CurVer, an LCID array not in task memory, the sink's QueryInterface failure
