@@ -79,6 +79,9 @@ cp packaging/windows/README.md LICENSE-MIT LICENSE-APACHE "$stage/"
 mkdir -p "$stage/docs" "$stage/examples"
 cp -r docs/. "$stage/docs/"
 rm -rf "$stage/docs/dev"
+# The C API reference, built from the header (scripts/docs.sh fails on any undocumented item).
+scripts/docs.sh >/dev/null
+cp -r "$build/docs/html" "$stage/docs/reference/"
 cp -r examples/cpp-server "$stage/examples/"
 printf '%s\n' "$version" >"$stage/VERSION"
 (cd "$stage" && find . -type f ! -name SHA256SUMS | sort | sed 's|^\./||' | xargs sha256sum >SHA256SUMS)

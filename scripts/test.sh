@@ -36,6 +36,7 @@ tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
 miri|linux|Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system
 package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
+docs|linux|C API reference (Doxygen): 0 undocumented items, every function listed, rendered in headless Chromium
 msvc-build-script|linux|the build script for Visual Studio (x86_64-pc-windows-msvc): stops naming missing tools; with stand-ins, calls cl, lib, rc, mc
 fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target)
 rust-windows|wine|Rust tests (Windows x64, under Wine)
@@ -273,6 +274,10 @@ stage_no_dll_exports() {
     echo "OPCCOMN_DLL_EXPORTS=OFF: Dll* absent, OpcDll* present"
 }
 
+stage_docs() {
+    scripts/docs.sh --check
+}
+
 stage_msvc_build_script() {
     scripts/check-msvc-build-script.sh
 }
@@ -394,7 +399,7 @@ stage_package_windows() {
     (cd "$pkg" && sha256sum --quiet -c SHA256SUMS)
     [ "$(cat "$pkg/VERSION")" = "$version" ]
     for file in README.md LICENSE-MIT LICENSE-APACHE include/opccomn/opccomn.h cmake/opccomnConfig.cmake \
-        docs/migration.md examples/cpp-server/CMakeLists.txt; do
+        docs/migration.md docs/reference/html/index.html examples/cpp-server/CMakeLists.txt; do
         [ -f "$pkg/$file" ] || { echo "package: no $file" >&2; return 1; }
     done
     for folder in x64 x86 win7/x64 win7/x86; do

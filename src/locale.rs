@@ -20,12 +20,16 @@
 
 use crate::com::LCID;
 
+/// The system's default locale (a session starts with it).
 #[cfg(not(system_com_headers))]
 pub const LOCALE_SYSTEM_DEFAULT: LCID = 0x0800;
+/// The user's default locale.
 #[cfg(not(system_com_headers))]
 pub const LOCALE_USER_DEFAULT: LCID = 0x0400;
+/// The neutral locale.
 #[cfg(not(system_com_headers))]
 pub const LOCALE_NEUTRAL: LCID = 0x0000;
+/// The invariant locale (English texts).
 #[cfg(not(system_com_headers))]
 pub const LOCALE_INVARIANT: LCID = 0x007F;
 /// English (United States).

@@ -5,9 +5,25 @@
 
 #include <stddef.h>
 #include <stdint.h>
+/**
+ * @file opccomn/opccomn.h
+ * @brief opccomn, the OPC Common Definitions and Interfaces: the whole C and C++ API in one header.
+ *
+ * IOPCCommon sessions (OpcCommonCreate()), shutdown on both sides (OpcShutdownCreate(),
+ * OpcShutdownAdvise()), the server browser and registration (OpcRegisterServer(), CLSID_OPCServerList),
+ * error texts (OpcGetErrorString()) and MatchPattern (MatchPatternW()), with the OPC Common interfaces
+ * declared as MIDL declares them (IOPCCommon, IOPCShutdown, IOPCServerList, IOPCServerList2,
+ * IOPCEnumGUID). Include it beside or instead of the OPC Foundation's headers, in either order.
+ * docs/api-conventions.md states the rules every function follows.
+ */
+
+/** The library's major version (from Cargo.toml). */
 #define OPCCOMN_VERSION_MAJOR 0
+/** The library's minor version. */
 #define OPCCOMN_VERSION_MINOR 2
+/** The library's patch version. */
 #define OPCCOMN_VERSION_PATCH 0
+/** The library's version as text, "MAJOR.MINOR.PATCH". */
 #define OPCCOMN_VERSION "0.2.0"
 
 /* On Windows the COM base types (GUID, HRESULT, IUnknown, ...) come from the system headers; elsewhere
@@ -31,6 +47,7 @@
 #define STDMETHODCALLTYPE
 #endif
 #ifndef MIDL_INTERFACE
+/** An interface's class declaration (C++), as the Windows SDK spells it: a struct off Windows. */
 #define MIDL_INTERFACE(x) struct
 #endif
 #ifndef BEGIN_INTERFACE
@@ -52,7 +69,9 @@
 #define OPCCOMN_CDECL __cdecl
 #define OPCCOMN_STDCALL __stdcall
 #else
+/** The calling convention of the exported functions and callbacks with `extern "C"` definitions. */
 #define OPCCOMN_CDECL
+/** The calling convention of the exports with `extern "system"` definitions (__stdcall on x86). */
 #define OPCCOMN_STDCALL
 #endif
 
@@ -62,6 +81,7 @@
 #ifdef __cplusplus
 #define OPCCOMN_RIID(iid) (iid)
 #else
+/** An interface identifier as a REFIID argument, for C and C++ alike: `OPCCOMN_RIID(IID_IOPCCommon)`. */
 #define OPCCOMN_RIID(iid) (&(iid))
 #endif
 
@@ -126,214 +146,324 @@ typedef struct IOPCServerList2 IOPCServerList2;
 
 
 
-// `OpcRegisterProxyStub` flag: also take over interfaces another installed proxy/stub serves (the
-// previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
+/**
+ * `OpcRegisterProxyStub` flag: also take over interfaces another installed proxy/stub serves (the
+ * previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
+ */
 #define OPC_PROXY_STUB_TAKE_OVER 1
 
-// `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing
-// them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
-// another product registers too (opccomn's own server list under the CLSID of OpcEnum).
+/**
+ * `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing
+ * them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
+ * another product registers too (opccomn's own server list under the CLSID of OpcEnum).
+ */
 #define OPC_REGISTRATION_KEEP_EXISTING 1
 
-// The kind of OPC server asking for a text; it decides which specification's text a colliding code
-// gets (other codes get their text whatever the kind).
+/**
+ * The kind of OPC server asking for a text; it decides which specification's text a colliding code
+ * gets (other codes get their text whatever the kind).
+ */
 enum OpcServerKind
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
   : uint32_t
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
-  // Data Access (and Complex Data): the default.
+  /**
+   * Data Access (and Complex Data): the default.
+   */
   OPC_SERVER_KIND_DATA_ACCESS = 0,
-  // Alarms & Events.
+  /**
+   * Alarms & Events.
+   */
   OPC_SERVER_KIND_ALARMS_EVENTS = 1,
-  // Historical Data Access.
+  /**
+   * Historical Data Access.
+   */
   OPC_SERVER_KIND_HISTORICAL_DATA = 2,
-  // Batch.
+  /**
+   * Batch.
+   */
   OPC_SERVER_KIND_BATCH = 3,
-  // Data eXchange.
+  /**
+   * Data eXchange.
+   */
   OPC_SERVER_KIND_DATA_EXCHANGE = 4,
-  // Command Execution.
+  /**
+   * Command Execution.
+   */
   OPC_SERVER_KIND_COMMAND_EXECUTION = 5,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
+/** The type of enum OpcServerKind's values. */
 typedef enum OpcServerKind OpcServerKind;
 #else
+/** The type of enum OpcServerKind's values. */
 typedef uint32_t OpcServerKind;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
-// What an EXE server's command line asks it to do.
+/**
+ * What an EXE server's command line asks it to do.
+ */
 enum OpcServerCommand
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
   : uint32_t
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
-  // No switch the library knows: the server was started by hand.
+  /**
+   * No switch the library knows: the server was started by hand.
+   */
   OPC_SERVER_COMMAND_NONE = 0,
-  // `/RegServer` or `-RegServer`: register and exit.
+  /**
+   * `/RegServer` or `-RegServer`: register and exit.
+   */
   OPC_SERVER_COMMAND_REGISTER = 1,
-  // `/UnregServer` or `-UnregServer`: unregister and exit.
+  /**
+   * `/UnregServer` or `-UnregServer`: unregister and exit.
+   */
   OPC_SERVER_COMMAND_UNREGISTER = 2,
-  // `-Embedding`, `/Embedding`, `-Automation` or `/Automation`: COM started the server for a client.
+  /**
+   * `-Embedding`, `/Embedding`, `-Automation` or `/Automation`: COM started the server for a client.
+   */
   OPC_SERVER_COMMAND_EMBEDDING = 3,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
+/** The type of enum OpcServerCommand's values. */
 typedef enum OpcServerCommand OpcServerCommand;
 #else
+/** The type of enum OpcServerCommand's values. */
 typedef uint32_t OpcServerCommand;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
-// How a server is packaged.
+/**
+ * How a server is packaged.
+ */
 enum OpcServerType
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
   : uint32_t
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
-  // A DLL loaded into the client: `InprocServer32`.
+  /**
+   * A DLL loaded into the client: `InprocServer32`.
+   */
   OPC_SERVER_TYPE_INPROC = 0,
-  // An EXE started by COM: `LocalServer32`.
+  /**
+   * An EXE started by COM: `LocalServer32`.
+   */
   OPC_SERVER_TYPE_LOCAL = 1,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
+/** The type of enum OpcServerType's values. */
 typedef enum OpcServerType OpcServerType;
 #else
+/** The type of enum OpcServerType's values. */
 typedef uint32_t OpcServerType;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
-// A compiled filter: a pattern checked and prepared once by `OpcPatternCompileW` or
-// `OpcPatternCompileA`, then tested against many strings with `OpcPatternMatchW` / `OpcPatternMatchA`,
-// and released with `OpcPatternFree`. It is never modified after compilation, so several threads may
-// use one filter at the same time.
+/**
+ * A compiled filter: a pattern checked and prepared once by `OpcPatternCompileW` or
+ * `OpcPatternCompileA`, then tested against many strings with `OpcPatternMatchW` / `OpcPatternMatchA`,
+ * and released with `OpcPatternFree`. It is never modified after compilation, so several threads may
+ * use one filter at the same time.
+ */
 typedef struct OpcPattern OpcPattern;
 
-// A registry the C API works on: the system registry, or one held in memory (for tests and for
-// preparing `.reg` files). Create with `OpcRegistryCreateMemory` or `OpcRegistryOpenSystem`, free
-// with `OpcRegistryRelease`. Objects made over a registry (server lists) keep it alive themselves,
-// so the handle may be released while they live. A handle may be used from several threads.
+/**
+ * A registry the C API works on: the system registry, or one held in memory (for tests and for
+ * preparing `.reg` files). Create with `OpcRegistryCreateMemory` or `OpcRegistryOpenSystem`, free
+ * with `OpcRegistryRelease`. Objects made over a registry (server lists) keep it alive themselves,
+ * so the handle may be released while they live. A handle may be used from several threads.
+ */
 typedef struct OpcRegistry OpcRegistry;
 
 #if !defined(_WIN32)
-// A locale identifier.
+/**
+ * A locale identifier.
+ */
 typedef uint32_t LCID;
 #endif
 
 #if !defined(_WIN32)
-// A COM result code. Negative values are failures (`FAILED(hr)`).
+/**
+ * A COM result code. Negative values are failures (`FAILED(hr)`).
+ */
 typedef int32_t HRESULT;
 #endif
 
 #if !defined(_WIN32)
-// A UTF-16 code unit.
+/**
+ * A UTF-16 code unit.
+ */
 typedef uint16_t WCHAR;
 #endif
 
 #if !defined(_WIN32)
-// A NUL-terminated UTF-16 string that is only read.
+/**
+ * A NUL-terminated UTF-16 string that is only read.
+ */
 typedef const WCHAR *LPCWSTR;
 #endif
 
-// A server's own texts for its vendor-specific codes, asked before the catalog.
-//
-// Called with the code and the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete
-// locale, e.g. 0x0407). To answer, store a NUL-terminated string in `*text` and return S_OK; the
-// library copies it into task memory before the callback is called again, so a static string or one
-// the server keeps is fine. Any other return (S_FALSE to decline) lets the library look the code up
-// itself. May be called from any thread, concurrently.
+/**
+ * A server's own texts for its vendor-specific codes, asked before the catalog.
+ *
+ * Called with the code and the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete
+ * locale, e.g. 0x0407). To answer, store a NUL-terminated string in `*text` and return S_OK; the
+ * library copies it into task memory before the callback is called again, so a static string or one
+ * the server keeps is fine. Any other return (S_FALSE to decline) lets the library look the code up
+ * itself. May be called from any thread, concurrently.
+ */
 typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorStringFn)(void *context, HRESULT code, LCID locale, LPCWSTR *text);
 
-// Called after a client set its name; `name` is valid only during the call. May be called from any
-// thread; never called while the library holds a lock.
+/**
+ * Called after a client set its name; `name` is valid only during the call. May be called from any
+ * thread; never called while the library holds a lock.
+ */
 typedef void (OPCCOMN_CDECL *OpcClientNameFn)(void *context, LPCWSTR name);
 
-// Decides whether a session may use a locale: called by SetLocaleID with the locale and whether it is
-// one the session declared (`listed` nonzero: in `locales`, or one of the four special locales).
-// Return nonzero to accept it, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
-// locale). May be called from any thread, concurrently; never while the library holds a lock.
+/**
+ * Decides whether a session may use a locale: called by SetLocaleID with the locale and whether it is
+ * one the session declared (`listed` nonzero: in `locales`, or one of the four special locales).
+ * Return nonzero to accept it, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
+ * locale). May be called from any thread, concurrently; never while the library holds a lock.
+ */
 typedef int32_t (OPCCOMN_CDECL *OpcAcceptLocaleFn)(void *context, LCID locale, int32_t listed);
 
-// Called after a client changed the session's locale with SetLocaleID, with the new locale (as the
-// client gave it, e.g. LOCALE_SYSTEM_DEFAULT). May be called from any thread; never called while the
-// library holds a lock. When two clients' calls race, the calls may arrive in either order: read
-// the current value with `OpcCommonGetLocale` if the order matters.
+/**
+ * Called after a client changed the session's locale with SetLocaleID, with the new locale (as the
+ * client gave it, e.g. LOCALE_SYSTEM_DEFAULT). May be called from any thread; never called while the
+ * library holds a lock. When two clients' calls race, the calls may arrive in either order: read
+ * the current value with `OpcCommonGetLocale` if the order matters.
+ */
 typedef void (OPCCOMN_CDECL *OpcLocaleChangedFn)(void *context, LCID locale);
 
 #if !defined(_WIN32)
-// A NUL-terminated UTF-16 string the callee may write or the caller must free.
+/**
+ * A NUL-terminated UTF-16 string the callee may write or the caller must free.
+ */
 typedef WCHAR *LPWSTR;
 #endif
 
-// A server's own texts for its vendor-specific codes, handed over as task memory: the form for a
-// server that formats its texts into a new buffer (no thread-local storage, no lifetime to keep).
-//
-// Called as `OpcVendorErrorStringFn`, with `*text` NULL on entry. To answer, store a NUL-terminated
-// string allocated with `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows) in `*text` and return S_OK: the
-// library takes ownership and hands that very string to the client. Any other return (S_FALSE to
-// decline) lets the library look the code up itself. A string stored in `*text` is the library's
-// whatever the return, and it frees it when it does not use it (also when it is longer than the
-// library's string bound, 2^19 code units, which is then treated as declined). May be called from any
-// thread, concurrently.
+/**
+ * A server's own texts for its vendor-specific codes, handed over as task memory: the form for a
+ * server that formats its texts into a new buffer (no thread-local storage, no lifetime to keep).
+ *
+ * Called as `OpcVendorErrorStringFn`, with `*text` NULL on entry. To answer, store a NUL-terminated
+ * string allocated with `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows) in `*text` and return S_OK: the
+ * library takes ownership and hands that very string to the client. Any other return (S_FALSE to
+ * decline) lets the library look the code up itself. A string stored in `*text` is the library's
+ * whatever the return, and it frees it when it does not use it (also when it is longer than the
+ * library's string bound, 2^19 code units, which is then treated as declined). May be called from any
+ * thread, concurrently.
+ */
 typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorTextFn)(void *context, HRESULT code, LCID locale, LPWSTR *text);
 
-// How a server configures an IOPCCommon object. Zero-initialise it, set `struct_size` to
-// `sizeof(OpcCommonOptions)`, then set what you need: fields added in later versions go at the end,
-// and the library reads only the first `struct_size` bytes, so code built against an older header
-// keeps working.
+/**
+ * How a server configures an IOPCCommon object. Zero-initialise it, set `struct_size` to
+ * `sizeof(OpcCommonOptions)`, then set what you need: fields added in later versions go at the end,
+ * and the library reads only the first `struct_size` bytes, so code built against an older header
+ * keeps working.
+ */
 typedef struct OpcCommonOptions {
-  // `sizeof(OpcCommonOptions)` as the caller's header declares it.
+  /**
+   * `sizeof(OpcCommonOptions)` as the caller's header declares it.
+   */
   uint32_t struct_size;
-  // Which kind of server this session belongs to (`OpcServerKind`); 0 is Data Access.
+  /**
+   * Which kind of server this session belongs to (`OpcServerKind`); 0 is Data Access.
+   */
   uint32_t server_kind;
-  // The concrete locales the server supports (e.g. 0x0409, 0x0407); NULL with a count of 0 means
-  // the languages the library's catalog ships. LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT,
-  // LOCALE_NEUTRAL and LOCALE_INVARIANT are always available in addition.
+  /**
+   * The concrete locales the server supports (e.g. 0x0409, 0x0407); NULL with a count of 0 means
+   * the languages the library's catalog ships. LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT,
+   * LOCALE_NEUTRAL and LOCALE_INVARIANT are always available in addition.
+   */
   const LCID *locales;
-  // Number of entries in `locales` (at most 4096).
+  /**
+   * Number of entries in `locales` (at most 4096).
+   */
   uint32_t locale_count;
-  // Texts for the server's own error codes, asked before the catalog (optional).
+  /**
+   * Texts for the server's own error codes, asked before the catalog (optional).
+   */
   OpcVendorErrorStringFn vendor_error_string;
-  // Passed to `vendor_error_string`.
+  /**
+   * Passed to `vendor_error_string`.
+   */
   void *vendor_error_context;
-  // Told of every client name set through SetClientName (optional).
+  /**
+   * Told of every client name set through SetClientName (optional).
+   */
   OpcClientNameFn client_name_changed;
-  // Passed to `client_name_changed`.
+  /**
+   * Passed to `client_name_changed`.
+   */
   void *client_name_context;
-  // Decides each SetLocaleID (optional, since 0.2): with it, a locale is accepted when the callback
-  // says so, listed or not (QueryAvailableLocaleIDs still returns the declared list); without it,
-  // exactly the declared locales are.
+  /**
+   * Decides each SetLocaleID (optional, since 0.2): with it, a locale is accepted when the callback
+   * says so, listed or not (QueryAvailableLocaleIDs still returns the declared list); without it,
+   * exactly the declared locales are.
+   */
   OpcAcceptLocaleFn accept_locale;
-  // Passed to `accept_locale`.
+  /**
+   * Passed to `accept_locale`.
+   */
   void *accept_locale_context;
-  // Told of every locale set through SetLocaleID (optional, since 0.2).
+  /**
+   * Told of every locale set through SetLocaleID (optional, since 0.2).
+   */
   OpcLocaleChangedFn locale_changed;
-  // Passed to `locale_changed`.
+  /**
+   * Passed to `locale_changed`.
+   */
   void *locale_changed_context;
-  // Texts for the server's own error codes, handed over as task memory (optional, since 0.2;
-  // called with `vendor_error_context`). Set this or `vendor_error_string`, not both.
+  /**
+   * Texts for the server's own error codes, handed over as task memory (optional, since 0.2;
+   * called with `vendor_error_context`). Set this or `vendor_error_string`, not both.
+   */
   OpcVendorErrorTextFn vendor_error_text;
 } OpcCommonOptions;
 
 #if !defined(_WIN32)
-// A globally unique identifier, laid out exactly as Windows' `GUID`.
+/**
+ * A globally unique identifier, laid out exactly as Windows' `GUID`.
+ */
 typedef struct GUID {
+  /**
+   * The first 8 hexadecimal digits.
+   */
   uint32_t Data1;
+  /**
+   * The next 4 digits.
+   */
   uint16_t Data2;
+  /**
+   * The next 4 digits.
+   */
   uint16_t Data3;
+  /**
+   * The last 16 digits, as bytes in the order written.
+   */
   uint8_t Data4[8];
 } GUID;
 #endif
 
 #if !defined(_WIN32)
-// An interface identifier.
+/**
+ * An interface identifier.
+ */
 typedef struct GUID IID;
 #endif
 
 #if !defined(_WIN32)
-// A pointer to an interface identifier (a reference in C++ on Windows; the same ABI).
+/**
+ * A pointer to an interface identifier (a reference in C++ on Windows; the same ABI).
+ */
 #if defined(__cplusplus)
 typedef const IID &REFIID;
 #else
@@ -342,32 +472,44 @@ typedef const IID *REFIID;
 #endif
 
 #if !defined(_WIN32)
-// A 32-bit unsigned integer.
+/**
+ * A 32-bit unsigned integer.
+ */
 typedef uint32_t DWORD;
 #endif
 
 #if !defined(_WIN32)
-// A Win32 boolean: 0 is FALSE, 1 is TRUE.
+/**
+ * A Win32 boolean: 0 is FALSE, 1 is TRUE.
+ */
 typedef int32_t BOOL;
 #endif
 
 #if !defined(_WIN32)
-// A NUL-terminated narrow string (UTF-8, or the ANSI code page on Windows).
+/**
+ * A NUL-terminated narrow string (UTF-8, or the ANSI code page on Windows).
+ */
 typedef const char *LPCSTR;
 #endif
 
 #if !defined(_WIN32)
-// A component category identifier.
+/**
+ * A component category identifier.
+ */
 typedef struct GUID CATID;
 #endif
 
 #if !defined(_WIN32)
-// A class identifier.
+/**
+ * A class identifier.
+ */
 typedef struct GUID CLSID;
 #endif
 
 #if !defined(_WIN32)
-// A pointer to a class identifier.
+/**
+ * A pointer to a class identifier.
+ */
 #if defined(__cplusplus)
 typedef const CLSID &REFCLSID;
 #else
@@ -375,215 +517,363 @@ typedef const CLSID *REFCLSID;
 #endif
 #endif
 
-// A server's registration, described once and passed to `OpcRegisterServer`,
-// `OpcUnregisterServer` and `OpcRegistrationExport`. Zero-initialise it, set `struct_size` to
-// `sizeof(OpcServerRegistration)` and fill what applies; NULL strings and arrays mean "none". Fields
-// added in later versions go at the end; the library reads only `struct_size` bytes.
+/**
+ * A server's registration, described once and passed to `OpcRegisterServer`,
+ * `OpcUnregisterServer` and `OpcRegistrationExport`. Zero-initialise it, set `struct_size` to
+ * `sizeof(OpcServerRegistration)` and fill what applies; NULL strings and arrays mean "none". Fields
+ * added in later versions go at the end; the library reads only `struct_size` bytes.
+ */
 typedef struct OpcServerRegistration {
-  // `sizeof(OpcServerRegistration)` as the caller's header declares it.
+  /**
+   * `sizeof(OpcServerRegistration)` as the caller's header declares it.
+   */
   uint32_t struct_size;
-  // `OpcServerType`: in-process (0, `InprocServer32`) or local (1, `LocalServer32`).
+  /**
+   * `OpcServerType`: in-process (0, `InprocServer32`) or local (1, `LocalServer32`).
+   */
   uint32_t server_type;
-  // The server's class identifier.
+  /**
+   * The server's class identifier.
+   */
   CLSID clsid;
-  // The ProgID, `Vendor.Server.1` (required; no backslash, at most 255 characters).
+  /**
+   * The ProgID, `Vendor.Server.1` (required; no backslash, at most 255 characters).
+   */
   LPCWSTR prog_id;
-  // The version-independent ProgID, `Vendor.Server` (optional).
+  /**
+   * The version-independent ProgID, `Vendor.Server` (optional).
+   */
   LPCWSTR version_independent_prog_id;
-  // The description users see (required), for example "My OPC Server".
+  /**
+   * The description users see (required), for example "My OPC Server".
+   */
   LPCWSTR user_type;
-  // Full path of the server's DLL or EXE. NULL means: for a local server the executable of the
-  // calling process (what an EXE server handling `/RegServer` wants); for an in-process server the
-  // module that contains the opccomn code (the server DLL when it links opccomn statically; opccomn
-  // itself when it is loaded as opccomn.dll, so a server DLL using opccomn.dll must pass its path).
+  /**
+   * Full path of the server's DLL or EXE. NULL means: for a local server the executable of the
+   * calling process (what an EXE server handling `/RegServer` wants); for an in-process server the
+   * module that contains the opccomn code (the server DLL when it links opccomn statically; opccomn
+   * itself when it is loaded as opccomn.dll, so a server DLL using opccomn.dll must pass its path).
+   */
   LPCWSTR module_path;
-  // `ThreadingModel` of an in-process server: "Apartment", "Free", "Both" or "Neutral"; NULL writes
-  // none (COM then uses the main apartment). Ignored for local servers.
+  /**
+   * `ThreadingModel` of an in-process server: "Apartment", "Free", "Both" or "Neutral"; NULL writes
+   * none (COM then uses the main apartment). Ignored for local servers.
+   */
   LPCWSTR threading_model;
-  // The categories the server implements (for example `CATID_OPCDAServer20`).
+  /**
+   * The categories the server implements (for example `CATID_OPCDAServer20`).
+   */
   const CATID *implemented_categories;
-  // Number of entries in `implemented_categories` (at most 256).
+  /**
+   * Number of entries in `implemented_categories` (at most 256).
+   */
   uint32_t implemented_category_count;
-  // Descriptions of the implemented categories, parallel to `implemented_categories`: used to
-  // create a category that does not exist yet. NULL (the array or an entry) uses the standard text
-  // for OPC categories; a category with no description is registered without being created.
+  /**
+   * Descriptions of the implemented categories, parallel to `implemented_categories`: used to
+   * create a category that does not exist yet. NULL (the array or an entry) uses the standard text
+   * for OPC categories; a category with no description is registered without being created.
+   */
   const LPCWSTR *implemented_category_descriptions;
-  // The categories a client must support to use the server (`Required Categories`).
+  /**
+   * The categories a client must support to use the server (`Required Categories`).
+   */
   const CATID *required_categories;
-  // Number of entries in `required_categories` (at most 256).
+  /**
+   * Number of entries in `required_categories` (at most 256).
+   */
   uint32_t required_category_count;
-  // For Data Access 1.0 servers only: the vendor name written to `<ProgID>\OPC\Vendor`, by which
-  // OpcEnum and DA 1.0 clients find servers registered the old way.
+  /**
+   * For Data Access 1.0 servers only: the vendor name written to `<ProgID>\OPC\Vendor`, by which
+   * OpcEnum and DA 1.0 clients find servers registered the old way.
+   */
   LPCWSTR da10_vendor;
-  // The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+  /**
+   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+   */
   const CLSID *app_id;
-  // `RunAs` of the AppID ("Interactive User", an account), or NULL.
+  /**
+   * `RunAs` of the AppID ("Interactive User", an account), or NULL.
+   */
   LPCWSTR app_id_run_as;
-  // `LocalService` of the AppID (the Windows service that hosts the server), or NULL.
+  /**
+   * `LocalService` of the AppID (the Windows service that hosts the server), or NULL.
+   */
   LPCWSTR app_id_local_service;
-  // `DllSurrogate` of the AppID ("" for the system surrogate), or NULL.
+  /**
+   * `DllSurrogate` of the AppID ("" for the system surrogate), or NULL.
+   */
   LPCWSTR app_id_dll_surrogate;
-  // `OPC_REGISTRATION_KEEP_EXISTING` or 0.
+  /**
+   * `OPC_REGISTRATION_KEEP_EXISTING` or 0.
+   */
   uint32_t flags;
 } OpcServerRegistration;
 
-// A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
+/**
+ * A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
+ */
 typedef struct OpcVersion {
+  /**
+   * MM: the major version.
+   */
   uint16_t major;
+  /**
+   * mm: the minor version.
+   */
   uint16_t minor;
+  /**
+   * bb: the build number.
+   */
   uint16_t build;
 } OpcVersion;
 
-// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
-// `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
-// `struct_size` bytes, so code built against an older header keeps working.
+/**
+ * How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
+ * `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
+ * `struct_size` bytes, so code built against an older header keeps working.
+ */
 typedef struct OpcShutdownOptions {
-  // `sizeof(OpcShutdownOptions)` as the caller's header declares it.
+  /**
+   * `sizeof(OpcShutdownOptions)` as the caller's header declares it.
+   */
   uint32_t struct_size;
-  // The most sinks that may be advised at the same time; 0 means the default, 1 (the
-  // specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
+  /**
+   * The most sinks that may be advised at the same time; 0 means the default, 1 (the
+   * specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
+   */
   uint32_t advise_limit;
 } OpcShutdownOptions;
 
 #if !defined(_WIN32)
-// A 32-bit unsigned integer (reference counts, element counts).
+/**
+ * A 32-bit unsigned integer (reference counts, element counts).
+ */
 typedef uint32_t ULONG;
 #endif
 
-// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
-// the server gave no reason) and is valid only during the call. Runs on the thread that called
-// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
-// in-process server in another apartment calls it directly); the library holds no lock, so the
-// callback may unadvise the sink and release the server.
+/**
+ * Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
+ * the server gave no reason) and is valid only during the call. Runs on the thread that called
+ * ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
+ * in-process server in another apartment calls it directly); the library holds no lock, so the
+ * callback may unadvise the sink and release the server.
+ */
 typedef void (OPCCOMN_CDECL *OpcShutdownCallback)(void *context, LPCWSTR reason);
 
 #if !defined(_WIN32)
-// One connection of a connection point: the sink and the cookie Advise returned for it.
+/**
+ * One connection of a connection point: the sink and the cookie Advise returned for it.
+ */
 typedef struct CONNECTDATA {
+  /**
+   * The connected sink (AddRef'ed for whoever received it from IEnumConnections::Next).
+   */
   IUnknown *pUnk;
+  /**
+   * The cookie IConnectionPoint::Advise returned for the sink.
+   */
   DWORD dwCookie;
 } CONNECTDATA;
 #endif
 
 #if !defined(_WIN32)
-// A pointer to a class identifier the callee writes.
+/**
+ * A pointer to a class identifier the callee writes.
+ */
 typedef CLSID *LPCLSID;
 #endif
 
 #if !defined(_WIN32)
-// A COM string allocated with the task allocator (same as `LPWSTR`).
+/**
+ * A COM string allocated with the task allocator (same as `LPWSTR`).
+ */
 typedef WCHAR *LPOLESTR;
 #endif
 
 #if !defined(_WIN32)
-// A read-only COM string (same as `LPCWSTR`).
+/**
+ * A read-only COM string (same as `LPCWSTR`).
+ */
 typedef const WCHAR *LPCOLESTR;
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Success.
+ */
 #define S_OK 0
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Success, with a negative answer (fewer elements than asked, a declined request).
+ */
 #define S_FALSE 1
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Not implemented.
+ */
 #define E_NOTIMPL ((HRESULT)0x80004001L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The object has no such interface.
+ */
 #define E_NOINTERFACE ((HRESULT)0x80004002L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * A NULL pointer where COM requires one (the COM methods' rule; OPC methods use E_INVALIDARG).
+ */
 #define E_POINTER ((HRESULT)0x80004003L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Unspecified failure.
+ */
 #define E_FAIL ((HRESULT)0x80004005L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Unexpected failure (opccomn: a panic caught at the boundary).
+ */
 #define E_UNEXPECTED ((HRESULT)0x8000FFFFL)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Out of memory.
+ */
 #define E_OUTOFMEMORY ((HRESULT)0x8007000EL)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * An argument is invalid (OPC methods: also a NULL pointer).
+ */
 #define E_INVALIDARG ((HRESULT)0x80070057L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The class cannot be aggregated this way (an outer object with an IID other than IUnknown).
+ */
 #define CLASS_E_NOAGGREGATION ((HRESULT)0x80040110L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The class object does not serve this CLSID.
+ */
 #define CLASS_E_CLASSNOTAVAILABLE ((HRESULT)0x80040111L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * No such connection (an unknown cookie, or no such connection point).
+ */
 #define CONNECT_E_NOCONNECTION ((HRESULT)0x80040200L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The connection point takes no more sinks.
+ */
 #define CONNECT_E_ADVISELIMIT ((HRESULT)0x80040201L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The sink does not implement the connection point's interface.
+ */
 #define CONNECT_E_CANNOTCONNECT ((HRESULT)0x80040202L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The class is not registered.
+ */
 #define REGDB_E_CLASSNOTREG ((HRESULT)0x80040154L)
 #endif
 
 #if !defined(_WIN32)
+/**
+ * Not a valid ProgID or CLSID string.
+ */
 #define CO_E_CLASSSTRING ((HRESULT)0x800401F3L)
 #endif
 
+/**
+ * The filter string was not valid (MatchPattern's compiled filter).
+ */
 #define OPC_E_INVALIDFILTER ((HRESULT)0xC0040009L)
 
 #if !defined(_WIN32)
-// `FALSE`.
+/**
+ * `FALSE`.
+ */
 #define FALSE 0
 #endif
 
 #if !defined(_WIN32)
-// `TRUE`.
+/**
+ * `TRUE`.
+ */
 #define TRUE 1
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The system's default locale (a session starts with it).
+ */
 #define LOCALE_SYSTEM_DEFAULT 2048
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The user's default locale.
+ */
 #define LOCALE_USER_DEFAULT 1024
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The neutral locale.
+ */
 #define LOCALE_NEUTRAL 0
 #endif
 
 #if !defined(_WIN32)
+/**
+ * The invariant locale (English texts).
+ */
 #define LOCALE_INVARIANT 127
 #endif
 
 #if !defined(_WIN32)
-// `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
+/**
+ * `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
+ */
 #define REGDB_E_KEYMISSING ((HRESULT)0x80040152L)
 #endif
 
 #if !defined(_WIN32)
-// `REGDB_E_INVALIDVALUE`: a registry value is not of the expected type or form.
+/**
+ * `REGDB_E_INVALIDVALUE`: a registry value is not of the expected type or form.
+ */
 #define REGDB_E_INVALIDVALUE ((HRESULT)0x80040153L)
 #endif
 
 #if !defined(_WIN32)
-// `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
+/**
+ * `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
+ */
 #define SELFREG_E_CLASS ((HRESULT)0x80040201L)
 #endif
 
@@ -601,21 +891,34 @@ extern "C" {
 #ifndef __IUnknown_INTERFACE_DEFINED__
 #define __IUnknown_INTERFACE_DEFINED__
 
+/** The interface identifier of IUnknown, {00000000-0000-0000-C000-000000000046}. */
 EXTERN_C const IID IID_IUnknown;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * COM's base interface: identity and reference counting (declared here off Windows).
+ */
 MIDL_INTERFACE("00000000-0000-0000-c000-000000000046")
 IUnknown
 {
 public:
     BEGIN_INTERFACE
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     virtual HRESULT STDMETHODCALLTYPE QueryInterface(
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject) = 0;
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     virtual ULONG STDMETHODCALLTYPE AddRef(void) = 0;
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     virtual ULONG STDMETHODCALLTYPE Release(void) = 0;
 
     END_INTERFACE
@@ -627,27 +930,41 @@ __CRT_UUID_DECL(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0
 
 #else /* C style interface */
 
+/** The methods of IUnknown in vtable order, its own first (the C form of the interface). */
 typedef struct IUnknownVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IUnknown *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IUnknown *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IUnknown *This);
 
     END_INTERFACE
 } IUnknownVtbl;
 
+/**
+ * COM's base interface: identity and reference counting (declared here off Windows).
+ */
 struct IUnknown
 {
+    /** The interface's methods (IUnknownVtbl). */
     CONST_VTBL struct IUnknownVtbl *lpVtbl;
 };
 
@@ -668,24 +985,40 @@ struct IUnknown
 #ifndef __IEnumGUID_INTERFACE_DEFINED__
 #define __IEnumGUID_INTERFACE_DEFINED__
 
+/** The interface identifier of IEnumGUID, {0002E000-0000-0000-C000-000000000046}. */
 EXTERN_C const IID IID_IEnumGUID;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * COM's enumerator of GUIDs (returned by IOPCServerList::EnumClassesOfCategories).
+ */
 MIDL_INTERFACE("0002e000-0000-0000-c000-000000000046")
 IEnumGUID : public IUnknown
 {
 public:
+    /**
+     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+     */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG celt,
         /* [out, size_is(celt), length_is(*pceltFetched)] */ GUID *rgelt,
         /* [out] */ ULONG *pceltFetched) = 0;
 
+    /**
+     * Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+     */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG celt) = 0;
 
+    /**
+     * Starts the enumeration again from the first element.
+     */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
+    /**
+     * A new enumerator over the same elements at the same position.
+     */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IEnumGUID **ppenum) = 0;
 
@@ -697,36 +1030,58 @@ __CRT_UUID_DECL(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,
 
 #else /* C style interface */
 
+/** The methods of IEnumGUID in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IEnumGUIDVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IEnumGUID *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IEnumGUID *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IEnumGUID *This);
 
     /* IEnumGUID methods */
+    /**
+     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+     */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IEnumGUID *This,
         /* [in] */ ULONG celt,
         /* [out, size_is(celt), length_is(*pceltFetched)] */ GUID *rgelt,
         /* [out] */ ULONG *pceltFetched);
 
+    /**
+     * Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+     */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IEnumGUID *This,
         /* [in] */ ULONG celt);
 
+    /**
+     * Starts the enumeration again from the first element.
+     */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IEnumGUID *This);
 
+    /**
+     * A new enumerator over the same elements at the same position.
+     */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IEnumGUID *This,
         /* [out] */ IEnumGUID **ppenum);
@@ -734,8 +1089,12 @@ typedef struct IEnumGUIDVtbl
     END_INTERFACE
 } IEnumGUIDVtbl;
 
+/**
+ * COM's enumerator of GUIDs (returned by IOPCServerList::EnumClassesOfCategories).
+ */
 struct IEnumGUID
 {
+    /** The interface's methods (IEnumGUIDVtbl). */
     CONST_VTBL struct IEnumGUIDVtbl *lpVtbl;
 };
 
@@ -764,24 +1123,40 @@ struct IEnumGUID
 #ifndef __IEnumConnections_INTERFACE_DEFINED__
 #define __IEnumConnections_INTERFACE_DEFINED__
 
+/** The interface identifier of IEnumConnections, {B196B287-BAB4-101A-B69C-00AA00341D07}. */
 EXTERN_C const IID IID_IEnumConnections;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * COM's enumerator of a connection point's connections (CONNECTDATA: the sink and its cookie).
+ */
 MIDL_INTERFACE("b196b287-bab4-101a-b69c-00aa00341d07")
 IEnumConnections : public IUnknown
 {
 public:
+    /**
+     * Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+     */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG cConnections,
         /* [out, size_is(cConnections), length_is(*pcFetched)] */ CONNECTDATA *rgcd,
         /* [out] */ ULONG *pcFetched) = 0;
 
+    /**
+     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG cConnections) = 0;
 
+    /**
+     * Starts the enumeration again from the first element.
+     */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
+    /**
+     * A new enumerator over the same elements at the same position.
+     */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IEnumConnections **ppEnum) = 0;
 
@@ -793,36 +1168,58 @@ __CRT_UUID_DECL(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xa
 
 #else /* C style interface */
 
+/** The methods of IEnumConnections in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IEnumConnectionsVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IEnumConnections *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IEnumConnections *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IEnumConnections *This);
 
     /* IEnumConnections methods */
+    /**
+     * Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+     */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IEnumConnections *This,
         /* [in] */ ULONG cConnections,
         /* [out, size_is(cConnections), length_is(*pcFetched)] */ CONNECTDATA *rgcd,
         /* [out] */ ULONG *pcFetched);
 
+    /**
+     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IEnumConnections *This,
         /* [in] */ ULONG cConnections);
 
+    /**
+     * Starts the enumeration again from the first element.
+     */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IEnumConnections *This);
 
+    /**
+     * A new enumerator over the same elements at the same position.
+     */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IEnumConnections *This,
         /* [out] */ IEnumConnections **ppEnum);
@@ -830,8 +1227,12 @@ typedef struct IEnumConnectionsVtbl
     END_INTERFACE
 } IEnumConnectionsVtbl;
 
+/**
+ * COM's enumerator of a connection point's connections (CONNECTDATA: the sink and its cookie).
+ */
 struct IEnumConnections
 {
+    /** The interface's methods (IEnumConnectionsVtbl). */
     CONST_VTBL struct IEnumConnectionsVtbl *lpVtbl;
 };
 
@@ -860,27 +1261,46 @@ struct IEnumConnections
 #ifndef __IConnectionPoint_INTERFACE_DEFINED__
 #define __IConnectionPoint_INTERFACE_DEFINED__
 
+/** The interface identifier of IConnectionPoint, {B196B286-BAB4-101A-B69C-00AA00341D07}. */
 EXTERN_C const IID IID_IConnectionPoint;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * COM's connection point: where a client advises its sink for one outgoing interface (IOPCShutdown for OPC servers).
+ */
 MIDL_INTERFACE("b196b286-bab4-101a-b69c-00aa00341d07")
 IConnectionPoint : public IUnknown
 {
 public:
+    /**
+     * The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+     */
     virtual HRESULT STDMETHODCALLTYPE GetConnectionInterface(
         /* [out] */ IID *pIID) = 0;
 
+    /**
+     * The container (the server object) this point belongs to, AddRef'ed.
+     */
     virtual HRESULT STDMETHODCALLTYPE GetConnectionPointContainer(
         /* [out] */ IConnectionPointContainer **ppCPC) = 0;
 
+    /**
+     * Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+     */
     virtual HRESULT STDMETHODCALLTYPE Advise(
         /* [in] */ IUnknown *pUnkSink,
         /* [out] */ DWORD *pdwCookie) = 0;
 
+    /**
+     * Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+     */
     virtual HRESULT STDMETHODCALLTYPE Unadvise(
         /* [in] */ DWORD dwCookie) = 0;
 
+    /**
+     * An enumerator of the current connections.
+     */
     virtual HRESULT STDMETHODCALLTYPE EnumConnections(
         /* [out] */ IEnumConnections **ppEnum) = 0;
 
@@ -892,40 +1312,65 @@ __CRT_UUID_DECL(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xa
 
 #else /* C style interface */
 
+/** The methods of IConnectionPoint in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IConnectionPointVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IConnectionPoint *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IConnectionPoint *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IConnectionPoint *This);
 
     /* IConnectionPoint methods */
+    /**
+     * The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+     */
     HRESULT (STDMETHODCALLTYPE *GetConnectionInterface)(
         IConnectionPoint *This,
         /* [out] */ IID *pIID);
 
+    /**
+     * The container (the server object) this point belongs to, AddRef'ed.
+     */
     HRESULT (STDMETHODCALLTYPE *GetConnectionPointContainer)(
         IConnectionPoint *This,
         /* [out] */ IConnectionPointContainer **ppCPC);
 
+    /**
+     * Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+     */
     HRESULT (STDMETHODCALLTYPE *Advise)(
         IConnectionPoint *This,
         /* [in] */ IUnknown *pUnkSink,
         /* [out] */ DWORD *pdwCookie);
 
+    /**
+     * Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+     */
     HRESULT (STDMETHODCALLTYPE *Unadvise)(
         IConnectionPoint *This,
         /* [in] */ DWORD dwCookie);
 
+    /**
+     * An enumerator of the current connections.
+     */
     HRESULT (STDMETHODCALLTYPE *EnumConnections)(
         IConnectionPoint *This,
         /* [out] */ IEnumConnections **ppEnum);
@@ -933,8 +1378,12 @@ typedef struct IConnectionPointVtbl
     END_INTERFACE
 } IConnectionPointVtbl;
 
+/**
+ * COM's connection point: where a client advises its sink for one outgoing interface (IOPCShutdown for OPC servers).
+ */
 struct IConnectionPoint
 {
+    /** The interface's methods (IConnectionPointVtbl). */
     CONST_VTBL struct IConnectionPointVtbl *lpVtbl;
 };
 
@@ -965,24 +1414,40 @@ struct IConnectionPoint
 #ifndef __IEnumConnectionPoints_INTERFACE_DEFINED__
 #define __IEnumConnectionPoints_INTERFACE_DEFINED__
 
+/** The interface identifier of IEnumConnectionPoints, {B196B285-BAB4-101A-B69C-00AA00341D07}. */
 EXTERN_C const IID IID_IEnumConnectionPoints;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * COM's enumerator of a container's connection points.
+ */
 MIDL_INTERFACE("b196b285-bab4-101a-b69c-00aa00341d07")
 IEnumConnectionPoints : public IUnknown
 {
 public:
+    /**
+     * Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+     */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG cConnections,
         /* [out, size_is(cConnections), length_is(*pcFetched)] */ IConnectionPoint **ppCP,
         /* [out] */ ULONG *pcFetched) = 0;
 
+    /**
+     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG cConnections) = 0;
 
+    /**
+     * Starts the enumeration again from the first element.
+     */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
+    /**
+     * A new enumerator over the same elements at the same position.
+     */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IEnumConnectionPoints **ppEnum) = 0;
 
@@ -994,36 +1459,58 @@ __CRT_UUID_DECL(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x0
 
 #else /* C style interface */
 
+/** The methods of IEnumConnectionPoints in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IEnumConnectionPointsVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IEnumConnectionPoints *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IEnumConnectionPoints *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IEnumConnectionPoints *This);
 
     /* IEnumConnectionPoints methods */
+    /**
+     * Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+     */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IEnumConnectionPoints *This,
         /* [in] */ ULONG cConnections,
         /* [out, size_is(cConnections), length_is(*pcFetched)] */ IConnectionPoint **ppCP,
         /* [out] */ ULONG *pcFetched);
 
+    /**
+     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IEnumConnectionPoints *This,
         /* [in] */ ULONG cConnections);
 
+    /**
+     * Starts the enumeration again from the first element.
+     */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IEnumConnectionPoints *This);
 
+    /**
+     * A new enumerator over the same elements at the same position.
+     */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IEnumConnectionPoints *This,
         /* [out] */ IEnumConnectionPoints **ppEnum);
@@ -1031,8 +1518,12 @@ typedef struct IEnumConnectionPointsVtbl
     END_INTERFACE
 } IEnumConnectionPointsVtbl;
 
+/**
+ * COM's enumerator of a container's connection points.
+ */
 struct IEnumConnectionPoints
 {
+    /** The interface's methods (IEnumConnectionPointsVtbl). */
     CONST_VTBL struct IEnumConnectionPointsVtbl *lpVtbl;
 };
 
@@ -1061,17 +1552,27 @@ struct IEnumConnectionPoints
 #ifndef __IConnectionPointContainer_INTERFACE_DEFINED__
 #define __IConnectionPointContainer_INTERFACE_DEFINED__
 
+/** The interface identifier of IConnectionPointContainer, {B196B284-BAB4-101A-B69C-00AA00341D07}. */
 EXTERN_C const IID IID_IConnectionPointContainer;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * COM's connection point container: an OPC server object offers its IOPCShutdown connection point through it (specification 4.1).
+ */
 MIDL_INTERFACE("b196b284-bab4-101a-b69c-00aa00341d07")
 IConnectionPointContainer : public IUnknown
 {
 public:
+    /**
+     * An enumerator of the container's connection points.
+     */
     virtual HRESULT STDMETHODCALLTYPE EnumConnectionPoints(
         /* [out] */ IEnumConnectionPoints **ppEnum) = 0;
 
+    /**
+     * The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+     */
     virtual HRESULT STDMETHODCALLTYPE FindConnectionPoint(
         /* [in] */ REFIID riid,
         /* [out] */ IConnectionPoint **ppCP) = 0;
@@ -1084,27 +1585,43 @@ __CRT_UUID_DECL(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c
 
 #else /* C style interface */
 
+/** The methods of IConnectionPointContainer in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IConnectionPointContainerVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IConnectionPointContainer *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IConnectionPointContainer *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IConnectionPointContainer *This);
 
     /* IConnectionPointContainer methods */
+    /**
+     * An enumerator of the container's connection points.
+     */
     HRESULT (STDMETHODCALLTYPE *EnumConnectionPoints)(
         IConnectionPointContainer *This,
         /* [out] */ IEnumConnectionPoints **ppEnum);
 
+    /**
+     * The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+     */
     HRESULT (STDMETHODCALLTYPE *FindConnectionPoint)(
         IConnectionPointContainer *This,
         /* [in] */ REFIID riid,
@@ -1113,8 +1630,12 @@ typedef struct IConnectionPointContainerVtbl
     END_INTERFACE
 } IConnectionPointContainerVtbl;
 
+/**
+ * COM's connection point container: an OPC server object offers its IOPCShutdown connection point through it (specification 4.1).
+ */
 struct IConnectionPointContainer
 {
+    /** The interface's methods (IConnectionPointContainerVtbl). */
     CONST_VTBL struct IConnectionPointContainerVtbl *lpVtbl;
 };
 
@@ -1141,14 +1662,26 @@ struct IConnectionPointContainer
 #ifndef __IOPCShutdown_INTERFACE_DEFINED__
 #define __IOPCShutdown_INTERFACE_DEFINED__
 
+/** The interface identifier of IOPCShutdown, {F31DFDE1-07B6-11d2-B2D8-0060083BA1FB}. */
 EXTERN_C const IID IID_IOPCShutdown;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * The client's shutdown sink (specification 4.2): a client advises an object with this interface on the
+ * server's IConnectionPointContainer (connection point IID_IOPCShutdown), and the server calls it before it
+ * shuts down. opccomn implements the server side (OpcShutdownCreate(), OpcShutdownNotify()) and a client
+ * sink (OpcShutdownAdvise()).
+ */
 MIDL_INTERFACE("f31dfde1-07b6-11d2-b2d8-0060083ba1fb")
 IOPCShutdown : public IUnknown
 {
 public:
+    /**
+     * The server asks the client to release every reference to the server's objects; `szReason` is an
+     * optional text saying why (NULL or empty allowed). The client should return S_OK at once and
+     * release its references afterwards, not from inside the call.
+     */
     virtual HRESULT STDMETHODCALLTYPE ShutdownRequest(
         /* [in, string] */ LPCWSTR szReason) = 0;
 
@@ -1160,23 +1693,38 @@ __CRT_UUID_DECL(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x
 
 #else /* C style interface */
 
+/** The methods of IOPCShutdown in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IOPCShutdownVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCShutdown *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCShutdown *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCShutdown *This);
 
     /* IOPCShutdown methods */
+    /**
+     * The server asks the client to release every reference to the server's objects; `szReason` is an
+     * optional text saying why (NULL or empty allowed). The client should return S_OK at once and
+     * release its references afterwards, not from inside the call.
+     */
     HRESULT (STDMETHODCALLTYPE *ShutdownRequest)(
         IOPCShutdown *This,
         /* [in, string] */ LPCWSTR szReason);
@@ -1184,8 +1732,15 @@ typedef struct IOPCShutdownVtbl
     END_INTERFACE
 } IOPCShutdownVtbl;
 
+/**
+ * The client's shutdown sink (specification 4.2): a client advises an object with this interface on the
+ * server's IConnectionPointContainer (connection point IID_IOPCShutdown), and the server calls it before it
+ * shuts down. opccomn implements the server side (OpcShutdownCreate(), OpcShutdownNotify()) and a client
+ * sink (OpcShutdownAdvise()).
+ */
 struct IOPCShutdown
 {
+    /** The interface's methods (IOPCShutdownVtbl). */
     CONST_VTBL struct IOPCShutdownVtbl *lpVtbl;
 };
 
@@ -1208,28 +1763,55 @@ struct IOPCShutdown
 #ifndef __IOPCCommon_INTERFACE_DEFINED__
 #define __IOPCCommon_INTERFACE_DEFINED__
 
+/** The interface identifier of IOPCCommon, {F31DFDE2-07B6-11d2-B2D8-0060083BA1FB}. */
 EXTERN_C const IID IID_IOPCCommon;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * The per-client session of every OPC server but DA 1.0 (specification chapter 5): the client's locale,
+ * its name, and texts for error codes. opccomn's implementation is created by OpcCommonCreate() and
+ * configured with OpcCommonOptions; each object is one client's session.
+ */
 MIDL_INTERFACE("f31dfde2-07b6-11d2-b2d8-0060083ba1fb")
 IOPCCommon : public IUnknown
 {
 public:
+    /**
+     * Sets the locale the server uses for this client's strings (error texts, and whatever else the server
+     * localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
+     * QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+     */
     virtual HRESULT STDMETHODCALLTYPE SetLocaleID(
         /* [in] */ LCID dwLcid) = 0;
 
+    /**
+     * Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
+     * E_INVALIDARG for a NULL `pdwLcid`.
+     */
     virtual HRESULT STDMETHODCALLTYPE GetLocaleID(
         /* [out] */ LCID *pdwLcid) = 0;
 
+    /**
+     * Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
+     * with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+     */
     virtual HRESULT STDMETHODCALLTYPE QueryAvailableLocaleIDs(
         /* [out] */ DWORD *pdwCount,
         /* [out, size_is(, *pdwCount)] */ LCID **pdwLcid) = 0;
 
+    /**
+     * Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
+     * CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+     */
     virtual HRESULT STDMETHODCALLTYPE GetErrorString(
         /* [in] */ HRESULT dwError,
         /* [out, string] */ LPWSTR *ppString) = 0;
 
+    /**
+     * The client tells the server its name (for the server's diagnostics; opccomn:
+     * OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+     */
     virtual HRESULT STDMETHODCALLTYPE SetClientName(
         /* [in, string] */ LPCWSTR szName) = 0;
 
@@ -1241,41 +1823,72 @@ __CRT_UUID_DECL(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08
 
 #else /* C style interface */
 
+/** The methods of IOPCCommon in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IOPCCommonVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCCommon *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCCommon *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCCommon *This);
 
     /* IOPCCommon methods */
+    /**
+     * Sets the locale the server uses for this client's strings (error texts, and whatever else the server
+     * localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
+     * QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+     */
     HRESULT (STDMETHODCALLTYPE *SetLocaleID)(
         IOPCCommon *This,
         /* [in] */ LCID dwLcid);
 
+    /**
+     * Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
+     * E_INVALIDARG for a NULL `pdwLcid`.
+     */
     HRESULT (STDMETHODCALLTYPE *GetLocaleID)(
         IOPCCommon *This,
         /* [out] */ LCID *pdwLcid);
 
+    /**
+     * Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
+     * with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryAvailableLocaleIDs)(
         IOPCCommon *This,
         /* [out] */ DWORD *pdwCount,
         /* [out, size_is(, *pdwCount)] */ LCID **pdwLcid);
 
+    /**
+     * Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
+     * CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+     */
     HRESULT (STDMETHODCALLTYPE *GetErrorString)(
         IOPCCommon *This,
         /* [in] */ HRESULT dwError,
         /* [out, string] */ LPWSTR *ppString);
 
+    /**
+     * The client tells the server its name (for the server's diagnostics; opccomn:
+     * OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *SetClientName)(
         IOPCCommon *This,
         /* [in, string] */ LPCWSTR szName);
@@ -1283,8 +1896,14 @@ typedef struct IOPCCommonVtbl
     END_INTERFACE
 } IOPCCommonVtbl;
 
+/**
+ * The per-client session of every OPC server but DA 1.0 (specification chapter 5): the client's locale,
+ * its name, and texts for error codes. opccomn's implementation is created by OpcCommonCreate() and
+ * configured with OpcCommonOptions; each object is one client's session.
+ */
 struct IOPCCommon
 {
+    /** The interface's methods (IOPCCommonVtbl). */
     CONST_VTBL struct IOPCCommonVtbl *lpVtbl;
 };
 
@@ -1315,14 +1934,25 @@ struct IOPCCommon
 #ifndef __IOPCServerList_INTERFACE_DEFINED__
 #define __IOPCServerList_INTERFACE_DEFINED__
 
+/** The interface identifier of IOPCServerList, {13486D50-4821-11D2-A494-3CB306C10000}. */
 EXTERN_C const IID IID_IOPCServerList;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * The server browser (specification chapter 7): finds the OPC servers of a machine by component
+ * category. CLSID_OPCServerList is served by the Foundation's OpcEnum or by opccomn (in process, or
+ * out of process by opccomn_browser.exe).
+ */
 MIDL_INTERFACE("13486d50-4821-11d2-a494-3cb306c10000")
 IOPCServerList : public IUnknown
 {
 public:
+    /**
+     * Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
+     * require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
+     * the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+     */
     virtual HRESULT STDMETHODCALLTYPE EnumClassesOfCategories(
         /* [in] */ ULONG cImplemented,
         /* [in, size_is(cImplemented)] */ CATID rgcatidImpl[],
@@ -1330,11 +1960,19 @@ public:
         /* [in, size_is(cRequired)] */ CATID rgcatidReq[],
         /* [out] */ IEnumGUID **ppenumClsid) = 0;
 
+    /**
+     * Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
+     * REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+     */
     virtual HRESULT STDMETHODCALLTYPE GetClassDetails(
         /* [in] */ REFCLSID clsid,
         /* [out] */ LPOLESTR *ppszProgID,
         /* [out] */ LPOLESTR *ppszUserType) = 0;
 
+    /**
+     * Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
+     * is not registered, CO_E_CLASSSTRING when it cannot be one.
+     */
     virtual HRESULT STDMETHODCALLTYPE CLSIDFromProgID(
         /* [in] */ LPCOLESTR szProgId,
         /* [out] */ LPCLSID clsid) = 0;
@@ -1347,23 +1985,38 @@ __CRT_UUID_DECL(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,
 
 #else /* C style interface */
 
+/** The methods of IOPCServerList in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IOPCServerListVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCServerList *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCServerList *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCServerList *This);
 
     /* IOPCServerList methods */
+    /**
+     * Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
+     * require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
+     * the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+     */
     HRESULT (STDMETHODCALLTYPE *EnumClassesOfCategories)(
         IOPCServerList *This,
         /* [in] */ ULONG cImplemented,
@@ -1372,12 +2025,20 @@ typedef struct IOPCServerListVtbl
         /* [in, size_is(cRequired)] */ CATID rgcatidReq[],
         /* [out] */ IEnumGUID **ppenumClsid);
 
+    /**
+     * Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
+     * REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+     */
     HRESULT (STDMETHODCALLTYPE *GetClassDetails)(
         IOPCServerList *This,
         /* [in] */ REFCLSID clsid,
         /* [out] */ LPOLESTR *ppszProgID,
         /* [out] */ LPOLESTR *ppszUserType);
 
+    /**
+     * Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
+     * is not registered, CO_E_CLASSSTRING when it cannot be one.
+     */
     HRESULT (STDMETHODCALLTYPE *CLSIDFromProgID)(
         IOPCServerList *This,
         /* [in] */ LPCOLESTR szProgId,
@@ -1386,8 +2047,14 @@ typedef struct IOPCServerListVtbl
     END_INTERFACE
 } IOPCServerListVtbl;
 
+/**
+ * The server browser (specification chapter 7): finds the OPC servers of a machine by component
+ * category. CLSID_OPCServerList is served by the Foundation's OpcEnum or by opccomn (in process, or
+ * out of process by opccomn_browser.exe).
+ */
 struct IOPCServerList
 {
+    /** The interface's methods (IOPCServerListVtbl). */
     CONST_VTBL struct IOPCServerListVtbl *lpVtbl;
 };
 
@@ -1414,25 +2081,44 @@ struct IOPCServerList
 #ifndef __IOPCEnumGUID_INTERFACE_DEFINED__
 #define __IOPCEnumGUID_INTERFACE_DEFINED__
 
+/** MIDL's pointer type for IOPCEnumGUID. */
 typedef IOPCEnumGUID *LPOPCENUMGUID;
+/** The interface identifier of IOPCEnumGUID, {55C382C8-21C7-4e88-96C1-BECFB1E3F483}. */
 EXTERN_C const IID IID_IOPCEnumGUID;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * An enumerator of GUIDs with IEnumGUID's layout (OPC Common 1.10), returned by
+ * IOPCServerList2::EnumClassesOfCategories.
+ */
 MIDL_INTERFACE("55c382c8-21c7-4e88-96c1-becfb1e3f483")
 IOPCEnumGUID : public IUnknown
 {
 public:
+    /**
+     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
+     * when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+     */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG celt,
         /* [out, size_is(celt), length_is(*pceltFetched)] */ GUID *rgelt,
         /* [out] */ ULONG *pceltFetched) = 0;
 
+    /**
+     * Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+     */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG celt) = 0;
 
+    /**
+     * Starts the enumeration again from the first GUID.
+     */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
+    /**
+     * A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+     */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IOPCEnumGUID **ppenum) = 0;
 
@@ -1444,36 +2130,59 @@ __CRT_UUID_DECL(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0x
 
 #else /* C style interface */
 
+/** The methods of IOPCEnumGUID in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IOPCEnumGUIDVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCEnumGUID *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCEnumGUID *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCEnumGUID *This);
 
     /* IOPCEnumGUID methods */
+    /**
+     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
+     * when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+     */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IOPCEnumGUID *This,
         /* [in] */ ULONG celt,
         /* [out, size_is(celt), length_is(*pceltFetched)] */ GUID *rgelt,
         /* [out] */ ULONG *pceltFetched);
 
+    /**
+     * Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+     */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IOPCEnumGUID *This,
         /* [in] */ ULONG celt);
 
+    /**
+     * Starts the enumeration again from the first GUID.
+     */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IOPCEnumGUID *This);
 
+    /**
+     * A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+     */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IOPCEnumGUID *This,
         /* [out] */ IOPCEnumGUID **ppenum);
@@ -1481,8 +2190,13 @@ typedef struct IOPCEnumGUIDVtbl
     END_INTERFACE
 } IOPCEnumGUIDVtbl;
 
+/**
+ * An enumerator of GUIDs with IEnumGUID's layout (OPC Common 1.10), returned by
+ * IOPCServerList2::EnumClassesOfCategories.
+ */
 struct IOPCEnumGUID
 {
+    /** The interface's methods (IOPCEnumGUIDVtbl). */
     CONST_VTBL struct IOPCEnumGUIDVtbl *lpVtbl;
 };
 
@@ -1511,14 +2225,22 @@ struct IOPCEnumGUID
 #ifndef __IOPCServerList2_INTERFACE_DEFINED__
 #define __IOPCServerList2_INTERFACE_DEFINED__
 
+/** The interface identifier of IOPCServerList2, {9DD0B56C-AD9E-43ee-8305-487F3188BF7A}. */
 EXTERN_C const IID IID_IOPCServerList2;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
+/**
+ * IOPCServerList of OPC Common 1.10: the same services, with IOPCEnumGUID as the enumerator and the
+ * version-independent ProgID in GetClassDetails.
+ */
 MIDL_INTERFACE("9dd0b56c-ad9e-43ee-8305-487f3188bf7a")
 IOPCServerList2 : public IUnknown
 {
 public:
+    /**
+     * As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+     */
     virtual HRESULT STDMETHODCALLTYPE EnumClassesOfCategories(
         /* [in] */ ULONG cImplemented,
         /* [in, size_is(cImplemented)] */ CATID rgcatidImpl[],
@@ -1526,12 +2248,19 @@ public:
         /* [in, size_is(cRequired)] */ CATID rgcatidReq[],
         /* [out] */ IOPCEnumGUID **ppenumClsid) = 0;
 
+    /**
+     * As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
+     * registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+     */
     virtual HRESULT STDMETHODCALLTYPE GetClassDetails(
         /* [in] */ REFCLSID clsid,
         /* [out] */ LPOLESTR *ppszProgID,
         /* [out] */ LPOLESTR *ppszUserType,
         /* [out] */ LPOLESTR *ppszVerIndProgID) = 0;
 
+    /**
+     * As IOPCServerList::CLSIDFromProgID.
+     */
     virtual HRESULT STDMETHODCALLTYPE CLSIDFromProgID(
         /* [in] */ LPCOLESTR szProgId,
         /* [out] */ LPCLSID clsid) = 0;
@@ -1544,23 +2273,36 @@ __CRT_UUID_DECL(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f
 
 #else /* C style interface */
 
+/** The methods of IOPCServerList2 in vtable order, IUnknown first (the C form of the interface). */
 typedef struct IOPCServerList2Vtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCServerList2 *This,
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject);
 
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCServerList2 *This);
 
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCServerList2 *This);
 
     /* IOPCServerList2 methods */
+    /**
+     * As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+     */
     HRESULT (STDMETHODCALLTYPE *EnumClassesOfCategories)(
         IOPCServerList2 *This,
         /* [in] */ ULONG cImplemented,
@@ -1569,6 +2311,10 @@ typedef struct IOPCServerList2Vtbl
         /* [in, size_is(cRequired)] */ CATID rgcatidReq[],
         /* [out] */ IOPCEnumGUID **ppenumClsid);
 
+    /**
+     * As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
+     * registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+     */
     HRESULT (STDMETHODCALLTYPE *GetClassDetails)(
         IOPCServerList2 *This,
         /* [in] */ REFCLSID clsid,
@@ -1576,6 +2322,9 @@ typedef struct IOPCServerList2Vtbl
         /* [out] */ LPOLESTR *ppszUserType,
         /* [out] */ LPOLESTR *ppszVerIndProgID);
 
+    /**
+     * As IOPCServerList::CLSIDFromProgID.
+     */
     HRESULT (STDMETHODCALLTYPE *CLSIDFromProgID)(
         IOPCServerList2 *This,
         /* [in] */ LPCOLESTR szProgId,
@@ -1584,8 +2333,13 @@ typedef struct IOPCServerList2Vtbl
     END_INTERFACE
 } IOPCServerList2Vtbl;
 
+/**
+ * IOPCServerList of OPC Common 1.10: the same services, with IOPCEnumGUID as the enumerator and the
+ * version-independent ProgID in GetClassDetails.
+ */
 struct IOPCServerList2
 {
+    /** The interface's methods (IOPCServerList2Vtbl). */
     CONST_VTBL struct IOPCServerList2Vtbl *lpVtbl;
 };
 
@@ -1617,8 +2371,10 @@ typedef struct CATID_OPCDAServer10 CATID_OPCDAServer10;
 #endif
 #ifndef __CATID_OPCDAServer10_INTERFACE_DEFINED__
 #define __CATID_OPCDAServer10_INTERFACE_DEFINED__
+/** The category OPC Data Access Servers Version 1.0, {63D5F430-CFE4-11d1-B2C8-0060083BA1FB} (`CATID_OPCDAServer10` names it; declared as an interface, as opcda.h does). */
 EXTERN_C const IID IID_CATID_OPCDAServer10;
 #if defined(__cplusplus) && !defined(CINTERFACE)
+/** The category OPC Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
 MIDL_INTERFACE("63d5f430-cfe4-11d1-b2c8-0060083ba1fb")
 CATID_OPCDAServer10 : public IUnknown
 {
@@ -1628,21 +2384,28 @@ public:
 __CRT_UUID_DECL(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif
 #else
+/** The vtable of the category's interface form: IUnknown's methods only. */
 typedef struct CATID_OPCDAServer10Vtbl
 {
     BEGIN_INTERFACE
+    /** IUnknown::QueryInterface. */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer10 *This, REFIID riid, void **ppvObject);
+    /** IUnknown::AddRef. */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCDAServer10 *This);
+    /** IUnknown::Release. */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCDAServer10 *This);
     END_INTERFACE
 } CATID_OPCDAServer10Vtbl;
+/** The category OPC Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
 struct CATID_OPCDAServer10
 {
+    /** IUnknown's methods. */
     CONST_VTBL struct CATID_OPCDAServer10Vtbl *lpVtbl;
 };
 #endif
 #endif /* __CATID_OPCDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer10
+/** The category OPC Data Access Servers Version 1.0: `IID_CATID_OPCDAServer10` under the name code uses. */
 #define CATID_OPCDAServer10 IID_CATID_OPCDAServer10
 #endif
 
@@ -1653,8 +2416,10 @@ typedef struct CATID_OPCDAServer20 CATID_OPCDAServer20;
 #endif
 #ifndef __CATID_OPCDAServer20_INTERFACE_DEFINED__
 #define __CATID_OPCDAServer20_INTERFACE_DEFINED__
+/** The category OPC Data Access Servers Version 2.0, {63D5F432-CFE4-11d1-B2C8-0060083BA1FB} (`CATID_OPCDAServer20` names it; declared as an interface, as opcda.h does). */
 EXTERN_C const IID IID_CATID_OPCDAServer20;
 #if defined(__cplusplus) && !defined(CINTERFACE)
+/** The category OPC Data Access Servers Version 2.0 in the interface form of the Foundation's headers: no methods. */
 MIDL_INTERFACE("63d5f432-cfe4-11d1-b2c8-0060083ba1fb")
 CATID_OPCDAServer20 : public IUnknown
 {
@@ -1664,21 +2429,28 @@ public:
 __CRT_UUID_DECL(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif
 #else
+/** The vtable of the category's interface form: IUnknown's methods only. */
 typedef struct CATID_OPCDAServer20Vtbl
 {
     BEGIN_INTERFACE
+    /** IUnknown::QueryInterface. */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer20 *This, REFIID riid, void **ppvObject);
+    /** IUnknown::AddRef. */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCDAServer20 *This);
+    /** IUnknown::Release. */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCDAServer20 *This);
     END_INTERFACE
 } CATID_OPCDAServer20Vtbl;
+/** The category OPC Data Access Servers Version 2.0 in the interface form of the Foundation's headers: no methods. */
 struct CATID_OPCDAServer20
 {
+    /** IUnknown's methods. */
     CONST_VTBL struct CATID_OPCDAServer20Vtbl *lpVtbl;
 };
 #endif
 #endif /* __CATID_OPCDAServer20_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer20
+/** The category OPC Data Access Servers Version 2.0: `IID_CATID_OPCDAServer20` under the name code uses. */
 #define CATID_OPCDAServer20 IID_CATID_OPCDAServer20
 #endif
 
@@ -1689,8 +2461,10 @@ typedef struct CATID_OPCDAServer30 CATID_OPCDAServer30;
 #endif
 #ifndef __CATID_OPCDAServer30_INTERFACE_DEFINED__
 #define __CATID_OPCDAServer30_INTERFACE_DEFINED__
+/** The category OPC Data Access Servers Version 3.0, {CC603642-66D7-48f1-B69A-B625E73652D7} (`CATID_OPCDAServer30` names it; declared as an interface, as opcda.h does). */
 EXTERN_C const IID IID_CATID_OPCDAServer30;
 #if defined(__cplusplus) && !defined(CINTERFACE)
+/** The category OPC Data Access Servers Version 3.0 in the interface form of the Foundation's headers: no methods. */
 MIDL_INTERFACE("cc603642-66d7-48f1-b69a-b625e73652d7")
 CATID_OPCDAServer30 : public IUnknown
 {
@@ -1700,21 +2474,28 @@ public:
 __CRT_UUID_DECL(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
 #endif
 #else
+/** The vtable of the category's interface form: IUnknown's methods only. */
 typedef struct CATID_OPCDAServer30Vtbl
 {
     BEGIN_INTERFACE
+    /** IUnknown::QueryInterface. */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer30 *This, REFIID riid, void **ppvObject);
+    /** IUnknown::AddRef. */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCDAServer30 *This);
+    /** IUnknown::Release. */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCDAServer30 *This);
     END_INTERFACE
 } CATID_OPCDAServer30Vtbl;
+/** The category OPC Data Access Servers Version 3.0 in the interface form of the Foundation's headers: no methods. */
 struct CATID_OPCDAServer30
 {
+    /** IUnknown's methods. */
     CONST_VTBL struct CATID_OPCDAServer30Vtbl *lpVtbl;
 };
 #endif
 #endif /* __CATID_OPCDAServer30_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer30
+/** The category OPC Data Access Servers Version 3.0: `IID_CATID_OPCDAServer30` under the name code uses. */
 #define CATID_OPCDAServer30 IID_CATID_OPCDAServer30
 #endif
 
@@ -1725,8 +2506,10 @@ typedef struct CATID_XMLDAServer10 CATID_XMLDAServer10;
 #endif
 #ifndef __CATID_XMLDAServer10_INTERFACE_DEFINED__
 #define __CATID_XMLDAServer10_INTERFACE_DEFINED__
+/** The category OPC XML Data Access Servers Version 1.0, {3098EDA4-A006-48b2-A27F-247453959408} (`CATID_XMLDAServer10` names it; declared as an interface, as opcda.h does). */
 EXTERN_C const IID IID_CATID_XMLDAServer10;
 #if defined(__cplusplus) && !defined(CINTERFACE)
+/** The category OPC XML Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
 MIDL_INTERFACE("3098eda4-a006-48b2-a27f-247453959408")
 CATID_XMLDAServer10 : public IUnknown
 {
@@ -1736,26 +2519,34 @@ public:
 __CRT_UUID_DECL(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
 #endif
 #else
+/** The vtable of the category's interface form: IUnknown's methods only. */
 typedef struct CATID_XMLDAServer10Vtbl
 {
     BEGIN_INTERFACE
+    /** IUnknown::QueryInterface. */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_XMLDAServer10 *This, REFIID riid, void **ppvObject);
+    /** IUnknown::AddRef. */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_XMLDAServer10 *This);
+    /** IUnknown::Release. */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_XMLDAServer10 *This);
     END_INTERFACE
 } CATID_XMLDAServer10Vtbl;
+/** The category OPC XML Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
 struct CATID_XMLDAServer10
 {
+    /** IUnknown's methods. */
     CONST_VTBL struct CATID_XMLDAServer10Vtbl *lpVtbl;
 };
 #endif
 #endif /* __CATID_XMLDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_XMLDAServer10
+/** The category OPC XML Data Access Servers Version 1.0: `IID_CATID_XMLDAServer10` under the name code uses. */
 #define CATID_XMLDAServer10 IID_CATID_XMLDAServer10
 #endif
 
 /* CATID_OPCAEServer10 {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0 */
 #ifndef CATID_OPCAEServer10
+/** {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0. */
 EXTERN_C const CATID CATID_OPCAEServer10;
 #endif
 
@@ -1766,8 +2557,10 @@ typedef struct CATID_OPCHDAServer10 CATID_OPCHDAServer10;
 #endif
 #ifndef __CATID_OPCHDAServer10_INTERFACE_DEFINED__
 #define __CATID_OPCHDAServer10_INTERFACE_DEFINED__
+/** The category OPC History Data Access Servers Version 1.0, {7DE5B060-E089-11d2-A5E6-000086339399} (`CATID_OPCHDAServer10` names it; declared as an interface, as opcda.h does). */
 EXTERN_C const IID IID_CATID_OPCHDAServer10;
 #if defined(__cplusplus) && !defined(CINTERFACE)
+/** The category OPC History Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
 MIDL_INTERFACE("7de5b060-e089-11d2-a5e6-000086339399")
 CATID_OPCHDAServer10 : public IUnknown
 {
@@ -1777,51 +2570,64 @@ public:
 __CRT_UUID_DECL(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
 #endif
 #else
+/** The vtable of the category's interface form: IUnknown's methods only. */
 typedef struct CATID_OPCHDAServer10Vtbl
 {
     BEGIN_INTERFACE
+    /** IUnknown::QueryInterface. */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCHDAServer10 *This, REFIID riid, void **ppvObject);
+    /** IUnknown::AddRef. */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCHDAServer10 *This);
+    /** IUnknown::Release. */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCHDAServer10 *This);
     END_INTERFACE
 } CATID_OPCHDAServer10Vtbl;
+/** The category OPC History Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
 struct CATID_OPCHDAServer10
 {
+    /** IUnknown's methods. */
     CONST_VTBL struct CATID_OPCHDAServer10Vtbl *lpVtbl;
 };
 #endif
 #endif /* __CATID_OPCHDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCHDAServer10
+/** The category OPC History Data Access Servers Version 1.0: `IID_CATID_OPCHDAServer10` under the name code uses. */
 #define CATID_OPCHDAServer10 IID_CATID_OPCHDAServer10
 #endif
 
 /* CATID_OPCBatchServer10 {A8080DA0-E23E-11D2-AFA7-00C04F539421}: OPC Batch Server Version 1.0 */
 #ifndef CATID_OPCBatchServer10
+/** {A8080DA0-E23E-11D2-AFA7-00C04F539421}: OPC Batch Server Version 1.0. */
 EXTERN_C const CATID CATID_OPCBatchServer10;
 #endif
 
 /* CATID_OPCBatchServer20 {843DE67B-B0C9-11d4-A0B7-000102A980B1}: OPC Batch Server Version 2.0 */
 #ifndef CATID_OPCBatchServer20
+/** {843DE67B-B0C9-11d4-A0B7-000102A980B1}: OPC Batch Server Version 2.0. */
 EXTERN_C const CATID CATID_OPCBatchServer20;
 #endif
 
 /* CATID_OPCDXServer10 {A0C85BB8-4161-4fd6-8655-BB584601C9E0}: OPC Data Exchange Servers Version 1.0 */
 #ifndef CATID_OPCDXServer10
+/** {A0C85BB8-4161-4fd6-8655-BB584601C9E0}: OPC Data Exchange Servers Version 1.0. */
 EXTERN_C const CATID CATID_OPCDXServer10;
 #endif
 
 /* CATID_OPCCMDServer10 {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution Servers Version 1.0 */
 #ifndef CATID_OPCCMDServer10
+/** {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution Servers Version 1.0. */
 EXTERN_C const CATID CATID_OPCCMDServer10;
 #endif
 
 /* CLSID_OPCServerList {13486D51-4821-11D2-A494-3CB306C10000}: the class OPC.ServerList.1 */
 #ifndef CLSID_OPCServerList
+/** {13486D51-4821-11D2-A494-3CB306C10000}: the class OPC.ServerList.1. */
 EXTERN_C const CLSID CLSID_OPCServerList;
 #endif
 
 /* CLSID_OpcComnProxyStub {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces) */
 #ifndef CLSID_OpcComnProxyStub
+/** {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces). */
 EXTERN_C const CLSID CLSID_OpcComnProxyStub;
 #endif
 
@@ -1833,579 +2639,685 @@ EXTERN_C const CLSID CLSID_OpcComnProxyStub;
 extern "C" {
 #endif // __cplusplus
 
-// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
-// connection points, enumerators, ...). Meant for leak checks in tests.
+/**
+ * How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
+ * connection points, enumerators, ...). Meant for leak checks in tests.
+ */
 uint32_t OPCCOMN_CDECL OpcObjectCount(void);
 
-// Allocates `size` bytes with the allocator the library uses for all memory it hands to callers:
-// CoTaskMemAlloc on Windows, malloc elsewhere. Returns NULL when out of memory; a size of 0 returns
-// a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
+/**
+ * Allocates `size` bytes with the allocator the library uses for all memory it hands to callers:
+ * CoTaskMemAlloc on Windows, malloc elsewhere. Returns NULL when out of memory; a size of 0 returns
+ * a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
+ */
 void * OPCCOMN_CDECL OpcTaskMemAlloc(size_t size);
 
-// Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`. NULL is ignored.
-//
-// # Safety
-// `p` must be NULL or memory from the library's task allocator that has not been freed yet.
+/**
+ * Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`. NULL is ignored.
+ *
+ * @par Safety
+ * `p` must be NULL or memory from the library's task allocator that has not been freed yet.
+ */
 void OPCCOMN_CDECL OpcTaskMemFree(void *p);
 
-// Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
-// first) and client name.
-//
-// `options` may be NULL for the defaults (a Data Access server supporting the catalog's languages).
-// With `outer` NULL, `riid` may be IID_IOPCCommon or IID_IUnknown. To aggregate the object into a
-// server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown as `riid`: the
-// result is the inner, non-delegating IUnknown, which the server keeps, releases when it is
-// destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
-//
-// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
-// `riid` other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown
-// `server_kind`, more than 4096 locales, or a count without an array); E_NOINTERFACE. `*ppv` is NULL
-// on failure.
-//
-// # Safety
-// `options` must be NULL or valid as documented on OpcCommonOptions; `outer` NULL or a valid
-// IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or writable.
+/**
+ * Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
+ * first) and client name.
+ *
+ * `options` may be NULL for the defaults (a Data Access server supporting the catalog's languages).
+ * With `outer` NULL, `riid` may be IID_IOPCCommon or IID_IUnknown. To aggregate the object into a
+ * server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown as `riid`: the
+ * result is the inner, non-delegating IUnknown, which the server keeps, releases when it is
+ * destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
+ *
+ * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
+ * `riid` other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown
+ * `server_kind`, more than 4096 locales, or a count without an array); E_NOINTERFACE. `*ppv` is NULL
+ * on failure.
+ *
+ * @par Safety
+ * `options` must be NULL or valid as documented on OpcCommonOptions; `outer` NULL or a valid
+ * IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcCommonCreate(const struct OpcCommonOptions *options, IUnknown *outer, REFIID riid, void **ppv);
 
-// Gives a server the client name of one of its IOPCCommon sessions.
-//
-// `common` is any interface of the session: the IOPCCommon pointer, the inner IUnknown from
-// `OpcCommonCreate`, or the server object that aggregates it. `*ppName` receives a new string (an
-// empty one while the client has set no name; free it with `OpcTaskMemFree`), or NULL on failure.
-// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
-//
-// # Safety
-// `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
+/**
+ * Gives a server the client name of one of its IOPCCommon sessions.
+ *
+ * `common` is any interface of the session: the IOPCCommon pointer, the inner IUnknown from
+ * `OpcCommonCreate`, or the server object that aggregates it. `*ppName` receives a new string (an
+ * empty one while the client has set no name; free it with `OpcTaskMemFree`), or NULL on failure.
+ * Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+ *
+ * @par Safety
+ * `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcCommonGetClientName(IUnknown *common, LPWSTR *ppName);
 
-// Gives a server the current locale of one of its IOPCCommon sessions (what GetLocaleID returns).
-//
-// `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
-// pointer itself is the cheap form: the library recognises its own object and reads the locale
-// without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
-// interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
-// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
-//
-// # Safety
-// `common` must be NULL or a valid COM interface pointer; `lcid` NULL or writable.
+/**
+ * Gives a server the current locale of one of its IOPCCommon sessions (what GetLocaleID returns).
+ *
+ * `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
+ * pointer itself is the cheap form: the library recognises its own object and reads the locale
+ * without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
+ * interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
+ * Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+ *
+ * @par Safety
+ * `common` must be NULL or a valid COM interface pointer; `lcid` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcCommonGetLocale(IUnknown *common, LCID *lcid);
 
-// Returns the text for an OPC, COM or system error code in the given locale, for servers that
-// implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
-// Texts are those of a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
-//
-// `locale` may be a concrete LCID or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
-// LOCALE_INVARIANT. `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree
-// on Windows), or NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
-//
-// # Safety
-// `ppString` must be NULL or writable.
+/**
+ * Returns the text for an OPC, COM or system error code in the given locale, for servers that
+ * implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
+ * Texts are those of a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
+ *
+ * `locale` may be a concrete LCID or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
+ * LOCALE_INVARIANT. `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree
+ * on Windows), or NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
+ *
+ * @par Safety
+ * `ppString` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcGetErrorString(HRESULT code, LCID locale, LPWSTR *ppString);
 
-// `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
-// server passes OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized
-// as an area name." rather than the Data Access text.
-//
-// Returns E_INVALIDARG, with `*ppString` NULL, for an unknown `kind`, a NULL `ppString` or a code
-// without a text.
-//
-// # Safety
-// `ppString` must be NULL or writable.
+/**
+ * `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
+ * server passes OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized
+ * as an area name." rather than the Data Access text.
+ *
+ * Returns E_INVALIDARG, with `*ppString` NULL, for an unknown `kind`, a NULL `ppString` or a code
+ * without a text.
+ *
+ * @par Safety
+ * `ppString` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString);
 
-// The error codes the specification of a kind of server publishes (an `OpcServerKind` value): the
-// codes whose text that kind of server answers with its own specification's text, in ascending
-// order (as unsigned numbers: success codes first). For a client or a test tool that checks a server's GetErrorString against the published
-// list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind, ...)`, its
-// name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data Access 15.
-//
-// `*ppCodes` receives a new array of `*pdwCount` codes (free it with `OpcTaskMemFree`).
-// Returns S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument (`*pdwCount` 0 and `*ppCodes`
-// NULL on failure).
-//
-// # Safety
-// `pdwCount` and `ppCodes` must be NULL or writable.
+/**
+ * The error codes the specification of a kind of server publishes (an `OpcServerKind` value): the
+ * codes whose text that kind of server answers with its own specification's text, in ascending
+ * order (as unsigned numbers: success codes first). For a client or a test tool that checks a server's GetErrorString against the published
+ * list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind, ...)`, its
+ * name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data Access 15.
+ *
+ * `*ppCodes` receives a new array of `*pdwCount` codes (free it with `OpcTaskMemFree`).
+ * Returns S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument (`*pdwCount` 0 and `*ppCodes`
+ * NULL on failure).
+ *
+ * @par Safety
+ * `pdwCount` and `ppCodes` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcErrorCodesOfKind(uint32_t kind, DWORD *pdwCount, HRESULT **ppCodes);
 
-// The name of an error code as the header of its specification spells it (`OPC_E_INVALIDHANDLE`,
-// `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of `kind` (C0040203 is
-// `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events), into
-// `*ppSymbol`, freed with `OpcTaskMemFree`.
-//
-// Returns S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL
-// `ppSymbol` (`*ppSymbol` NULL on failure).
-//
-// # Safety
-// `ppSymbol` must be NULL or writable.
+/**
+ * The name of an error code as the header of its specification spells it (`OPC_E_INVALIDHANDLE`,
+ * `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of `kind` (C0040203 is
+ * `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events), into
+ * `*ppSymbol`, freed with `OpcTaskMemFree`.
+ *
+ * Returns S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL
+ * `ppSymbol` (`*ppSymbol` NULL on failure).
+ *
+ * @par Safety
+ * `ppSymbol` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcErrorSymbol(HRESULT code, uint32_t kind, LPWSTR *ppSymbol);
 
-// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
-//
-// The pattern syntax is that of Visual Basic's `Like` operator:
-// `?` any one character; `*` zero or more characters; `#` one digit `0`-`9`;
-// `[list]` one character in the list and `[!list]` one not in it, where `a-z` is a range by code point,
-// `-` first, last or right after a range stands for itself and `!` negates only right after `[`;
-// `[]` matches the empty string and `[!]` a literal `!`; `[*]`, `[?]`, `[#]` and `[[]` match the
-// special character itself; `]` outside a list and every other character match themselves.
-//
-// A character is one Unicode scalar value (a surrogate pair is one character; an unpaired surrogate is
-// one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
-// in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
-//
-// Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
-// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
-// reads past either terminating NUL (strings have no length limit). Time is at most proportional to
-// len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
-// read in place and allocate no memory; longer ones with a `*` are compiled first, as
-// `OpcPatternCompileW` does. Thread-safe.
-//
-// # Safety
-// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
+/**
+ * Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
+ *
+ * The pattern syntax is that of Visual Basic's `Like` operator:
+ * `?` any one character; `*` zero or more characters; `#` one digit `0`-`9`;
+ * `[list]` one character in the list and `[!list]` one not in it, where `a-z` is a range by code point,
+ * `-` first, last or right after a range stands for itself and `!` negates only right after `[`;
+ * `[]` matches the empty string and `[!]` a literal `!`; `[*]`, `[?]`, `[#]` and `[[]` match the
+ * special character itself; `]` outside a list and every other character match themselves.
+ *
+ * A character is one Unicode scalar value (a surrogate pair is one character; an unpaired surrogate is
+ * one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
+ * in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
+ *
+ * Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
+ * reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
+ * reads past either terminating NUL (strings have no length limit). Time is at most proportional to
+ * len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
+ * read in place and allocate no memory; longer ones with a `*` are compiled first, as
+ * `OpcPatternCompileW` does. Thread-safe.
+ *
+ * @par Safety
+ * `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
+ */
 BOOL OPCCOMN_CDECL MatchPatternW(LPCWSTR string, LPCWSTR pattern, BOOL bCaseSensitive);
 
-// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
-// strings, with the same syntax and rules.
-//
-// Narrow strings are UTF-8, except on Windows where they are in the process's ANSI code page (as for
-// every `...A` Win32 function). A byte that does not decode is one character of its own, matched only
-// by itself, `?`, `*` or a list containing that same byte; it is never rejected and never causes a
-// read past the terminating NUL.
-//
-// # Safety
-// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
+/**
+ * Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
+ * strings, with the same syntax and rules.
+ *
+ * Narrow strings are UTF-8, except on Windows where they are in the process's ANSI code page (as for
+ * every `...A` Win32 function). A byte that does not decode is one character of its own, matched only
+ * by itself, `?`, `*` or a list containing that same byte; it is never rejected and never causes a
+ * read past the terminating NUL.
+ *
+ * @par Safety
+ * `string` and `pattern` must each be NULL or point at a NUL-terminated string.
+ */
 BOOL OPCCOMN_CDECL MatchPatternA(LPCSTR string, LPCSTR pattern, BOOL bCaseSensitive);
 
-// Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
-//
-// `*ppPattern` receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
-// `caseSensitive` FALSE makes matches compare by Unicode simple case folding.
-//
-// Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
-// as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
-// `pattern` or `ppPattern`.
-//
-// # Safety
-// `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
-// writable.
+/**
+ * Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
+ *
+ * `*ppPattern` receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
+ * `caseSensitive` FALSE makes matches compare by Unicode simple case folding.
+ *
+ * Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
+ * as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
+ * `pattern` or `ppPattern`.
+ *
+ * @par Safety
+ * `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
+ * writable.
+ */
 HRESULT OPCCOMN_CDECL OpcPatternCompileW(LPCWSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
 
-// `OpcPatternCompileW` for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
-// filter matches wide and narrow strings alike.
-//
-// # Safety
-// `pattern` must be NULL or point at a NUL-terminated string; `ppPattern` must be NULL or writable.
+/**
+ * `OpcPatternCompileW` for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
+ * filter matches wide and narrow strings alike.
+ *
+ * @par Safety
+ * `pattern` must be NULL or point at a NUL-terminated string; `ppPattern` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcPatternCompileA(LPCSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
 
-// Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
-// NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
-// Allocates nothing; thread-safe.
-//
-// # Safety
-// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
-// or point at a NUL-terminated UTF-16 string.
+/**
+ * Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
+ * NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
+ * Allocates nothing; thread-safe.
+ *
+ * @par Safety
+ * `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
+ * or point at a NUL-terminated UTF-16 string.
+ */
 BOOL OPCCOMN_CDECL OpcPatternMatchW(const struct OpcPattern *pattern, LPCWSTR string);
 
-// `OpcPatternMatchW` for a narrow string (UTF-8; the ANSI code page on Windows).
-//
-// # Safety
-// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
-// or point at a NUL-terminated string.
+/**
+ * `OpcPatternMatchW` for a narrow string (UTF-8; the ANSI code page on Windows).
+ *
+ * @par Safety
+ * `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
+ * or point at a NUL-terminated string.
+ */
 BOOL OPCCOMN_CDECL OpcPatternMatchA(const struct OpcPattern *pattern, LPCSTR string);
 
-// Frees a filter from `OpcPatternCompileW`/`A`. NULL is allowed and ignored.
-//
-// # Safety
-// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
-// other thread may be using it.
+/**
+ * Frees a filter from `OpcPatternCompileW`/`A`. NULL is allowed and ignored.
+ *
+ * @par Safety
+ * `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
+ * other thread may be using it.
+ */
 void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *pattern);
 
-// Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
-// IOPCEnumGUID in `reg` (NULL: the system registry; on 64-bit Windows the view of the calling
-// process, so a 32-bit opccomn.dll registers the 32-bit view). Writes `CLSID_OpcComnProxyStub` with
-// this module as its `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}`
-// with `NumMethods` and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another
-// installed proxy/stub (the OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has
-// `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
-// exactly that. Registering twice is harmless.
-//
-// Returns S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with
-// another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
-//
-// # Safety
-// `reg` must be NULL or a live registry handle.
+/**
+ * Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
+ * IOPCEnumGUID in `reg` (NULL: the system registry; on 64-bit Windows the view of the calling
+ * process, so a 32-bit opccomn.dll registers the 32-bit view). Writes `CLSID_OpcComnProxyStub` with
+ * this module as its `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}`
+ * with `NumMethods` and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another
+ * installed proxy/stub (the OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has
+ * `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
+ * exactly that. Registering twice is harmless.
+ *
+ * Returns S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with
+ * another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+ *
+ * @par Safety
+ * `reg` must be NULL or a live registry handle.
+ */
 HRESULT OPCCOMN_CDECL OpcRegisterProxyStub(const struct OpcRegistry *reg, uint32_t flags);
 
-// Removes what `OpcRegisterProxyStub` added to `reg` (NULL: the system registry) and restores the
-// `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
-// are left as they are. Unregistering what is not registered succeeds. Returns S_OK or a registry
-// error.
-//
-// # Safety
-// `reg` must be NULL or a live registry handle.
+/**
+ * Removes what `OpcRegisterProxyStub` added to `reg` (NULL: the system registry) and restores the
+ * `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
+ * are left as they are. Unregistering what is not registered succeeds. Returns S_OK or a registry
+ * error.
+ *
+ * @par Safety
+ * `reg` must be NULL or a live registry handle.
+ */
 HRESULT OPCCOMN_CDECL OpcUnregisterProxyStub(const struct OpcRegistry *reg);
 
-// `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
-// registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
-// takes over from another installed proxy/stub; with `install` FALSE (`regsvr32 /u /i:ProxyStub`) it
-// unregisters it. Words are case-insensitive and separated by commas or blanks. regsvr32 also calls
-// DllRegisterServer / DllUnregisterServer unless given `/n`.
-//
-// Returns what the registration function returns; E_INVALIDARG for a NULL, empty or unknown command
-// line.
-//
-// # Safety
-// `command_line` must be NULL or a NUL-terminated UTF-16 string.
+/**
+ * `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
+ * registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
+ * takes over from another installed proxy/stub; with `install` FALSE (`regsvr32 /u /i:ProxyStub`) it
+ * unregisters it. Words are case-insensitive and separated by commas or blanks. regsvr32 also calls
+ * DllRegisterServer / DllUnregisterServer unless given `/n`.
+ *
+ * Returns what the registration function returns; E_INVALIDARG for a NULL, empty or unknown command
+ * line.
+ *
+ * @par Safety
+ * `command_line` must be NULL or a NUL-terminated UTF-16 string.
+ */
 HRESULT OPCCOMN_CDECL OpcDllInstall(BOOL install, LPCWSTR command_line);
 
-// Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
-// the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
-//
-// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
-//
-// # Safety
-// `out` must be NULL or writable.
+/**
+ * Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
+ * the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
+ *
+ * Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
+ *
+ * @par Safety
+ * `out` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcRegistryCreateMemory(struct OpcRegistry **out);
 
-// Opens the system registry: on Windows `HKEY_CLASSES_ROOT`, where registration writes to the
-// registry view of the calling process and the server list reads both the 64-bit and the 32-bit view;
-// elsewhere the process-wide in-memory registry that `DllRegisterServer` and the server list created by
-// `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
-// the same registry.
-//
-// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
-//
-// # Safety
-// `out` must be NULL or writable.
+/**
+ * Opens the system registry: on Windows `HKEY_CLASSES_ROOT`, where registration writes to the
+ * registry view of the calling process and the server list reads both the 64-bit and the 32-bit view;
+ * elsewhere the process-wide in-memory registry that `DllRegisterServer` and the server list created by
+ * `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
+ * the same registry.
+ *
+ * Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
+ *
+ * @par Safety
+ * `out` must be NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcRegistryOpenSystem(struct OpcRegistry **out);
 
-// Frees a registry handle. NULL is ignored. Objects created over the registry stay usable.
-//
-// # Safety
-// `reg` must be NULL or a live handle that is not used again.
+/**
+ * Frees a registry handle. NULL is ignored. Objects created over the registry stay usable.
+ *
+ * @par Safety
+ * `reg` must be NULL or a live handle that is not used again.
+ */
 void OPCCOMN_CDECL OpcRegistryRelease(struct OpcRegistry *reg);
 
-// Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
-// HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
-// UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
-// is not a string. `*data` is NULL on failure.
-//
-// # Safety
-// `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.
+/**
+ * Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
+ * HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
+ * UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
+ * is not a string. `*data` is NULL on failure.
+ *
+ * @par Safety
+ * `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcRegistryGetString(const struct OpcRegistry *reg, LPCWSTR key, LPCWSTR name, LPWSTR *data);
 
-// Creates the component category `catid` with `description` in English (0x409), as the
-// specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
-// `description` uses the standard text of an OPC category. On Windows this goes through the Component
-// Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
-// is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
-//
-// # Safety
-// `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
+/**
+ * Creates the component category `catid` with `description` in English (0x409), as the
+ * specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
+ * `description` uses the standard text of an OPC category. On Windows this goes through the Component
+ * Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
+ * is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
+ *
+ * @par Safety
+ * `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
+ */
 HRESULT OPCCOMN_CDECL OpcCreateComponentCategory(const struct OpcRegistry *reg, const CATID *catid, LPCWSTR description);
 
-// Registers `clsid` as implementing the category `catid` (the specification's
-// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
-// Categories Manager on Windows.
-//
-// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
-//
-// # Safety
-// `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
+/**
+ * Registers `clsid` as implementing the category `catid` (the specification's
+ * RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
+ * Categories Manager on Windows.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+ *
+ * @par Safety
+ * `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
+ */
 HRESULT OPCCOMN_CDECL OpcRegisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
 
-// Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
-// `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
-//
-// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
-//
-// # Safety
-// As for `OpcRegisterClassInCategory`.
+/**
+ * Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
+ * `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+ *
+ * @par Safety
+ * As for `OpcRegisterClassInCategory`.
+ */
 HRESULT OPCCOMN_CDECL OpcUnregisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
 
-// The standard English description of an OPC component category (for example "OPC Data Access
-// Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
-//
-// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
-// `*description` is NULL on failure.
-//
-// # Safety
-// `catid` NULL or readable; `description` NULL or writable.
+/**
+ * The standard English description of an OPC component category (for example "OPC Data Access
+ * Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
+ * `*description` is NULL on failure.
+ *
+ * @par Safety
+ * `catid` NULL or readable; `description` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcCategoryDescription(const CATID *catid, LPWSTR *description);
 
-// Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
-// program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
-// `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
-// `OpcServerCommand` value: register, unregister, embedding or none.
-//
-// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and
-// unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
-//
-// # Safety
-// `command_line` NULL or NUL-terminated; `command` NULL or writable.
+/**
+ * Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
+ * program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
+ * `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
+ * `OpcServerCommand` value: register, unregister, embedding or none.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and
+ * unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
+ *
+ * @par Safety
+ * `command_line` NULL or NUL-terminated; `command` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcParseCommandLine(LPCWSTR command_line, uint32_t *command);
 
-// Exports the subtree at `key` (relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry,
-// which for the system registry is all of HKEY_CLASSES_ROOT and slow) as the text of a `.reg` file,
-// "Windows Registry Editor Version 5.00", into `*text` (free it with `OpcTaskMemFree`). On Windows the
-// registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
-// regedit.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
-// REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
-//
-// # Safety
-// `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
+/**
+ * Exports the subtree at `key` (relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry,
+ * which for the system registry is all of HKEY_CLASSES_ROOT and slow) as the text of a `.reg` file,
+ * "Windows Registry Editor Version 5.00", into `*text` (free it with `OpcTaskMemFree`). On Windows the
+ * registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
+ * regedit.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
+ * REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
+ *
+ * @par Safety
+ * `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcRegistryExport(const struct OpcRegistry *reg, LPCWSTR key, LPWSTR *text);
 
-// Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
-// and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
-// HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
-// case the changes before it remain.
-//
-// # Safety
-// `reg` NULL or a live handle; `text` NULL or NUL-terminated.
+/**
+ * Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
+ * and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
+ * HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
+ * case the changes before it remain.
+ *
+ * @par Safety
+ * `reg` NULL or a live handle; `text` NULL or NUL-terminated.
+ */
 HRESULT OPCCOMN_CDECL OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR text);
 
-// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
-// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
-// (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
-// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
-// on the calling thread, else by writing the same keys) and, for Data Access
-// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
-// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
-// reports OPC_SERVER_COMMAND_REGISTER.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
-// wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
-// categories or a count without an array, strings that are not valid UTF-16; a registry error (for
-// example E_ACCESSDENIED without administrator rights) when a write fails.
-//
-// # Safety
-// `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
+/**
+ * Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
+ * registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
+ * (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
+ * descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
+ * on the calling thread, else by writing the same keys) and, for Data Access
+ * 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+ * that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
+ * reports OPC_SERVER_COMMAND_REGISTER.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
+ * wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
+ * categories or a count without an array, strings that are not valid UTF-16; a registry error (for
+ * example E_ACCESSDENIED without administrator rights) when a write fails.
+ *
+ * @par Safety
+ * `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
+ */
 HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *server, const struct OpcRegistry *reg);
 
-// Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
-// values and keys that registration added and restores values it replaced, leaving everything that
-// was there before and everything other products wrote. A category's description stays while another
-// class implements the category.
-//
-// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
-// `OpcRegisterServer` for a bad description or a failing registry write.
-//
-// # Safety
-// As for `OpcRegisterServer`.
+/**
+ * Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
+ * values and keys that registration added and restores values it replaced, leaving everything that
+ * was there before and everything other products wrote. A category's description stays while another
+ * class implements the category.
+ *
+ * Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
+ * `OpcRegisterServer` for a bad description or a failing registry write.
+ *
+ * @par Safety
+ * As for `OpcRegisterServer`.
+ */
 HRESULT OPCCOMN_CDECL OpcUnregisterServer(const struct OpcServerRegistration *server, const struct OpcRegistry *reg);
 
-// Writes the registration `server` describes as the text of a `.reg` file ("Windows Registry Editor
-// Version 5.00") into `*text` (free with `OpcTaskMemFree`), for installers that register servers by
-// importing a file. It holds what `OpcRegisterServer` writes into an empty registry, including the
-// record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
-// module.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
-// `*text` is NULL on failure.
-//
-// # Safety
-// `server` as for `OpcRegisterServer`; `text` NULL or writable.
+/**
+ * Writes the registration `server` describes as the text of a `.reg` file ("Windows Registry Editor
+ * Version 5.00") into `*text` (free with `OpcTaskMemFree`), for installers that register servers by
+ * importing a file. It holds what `OpcRegisterServer` writes into an empty registry, including the
+ * record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
+ * module.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
+ * `*text` is NULL on failure.
+ *
+ * @par Safety
+ * `server` as for `OpcRegisterServer`; `text` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcRegistrationExport(const struct OpcServerRegistration *server, LPWSTR *text);
 
-// Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
-//
-// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
-// failure.
-//
-// # Safety
-// `text` NULL or NUL-terminated; `version` NULL or writable.
+/**
+ * Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
+ * failure.
+ *
+ * @par Safety
+ * `text` NULL or NUL-terminated; `version` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcVersionParse(LPCWSTR text, struct OpcVersion *version);
 
-// Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
-//
-// Returns S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
-//
-// # Safety
-// `version` NULL or readable; `text` NULL or writable.
+/**
+ * Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
+ *
+ * @par Safety
+ * `version` NULL or readable; `text` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcVersionFormat(const struct OpcVersion *version, LPWSTR *text);
 
-// The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
-// `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
-//
-// Returns S_OK, or E_INVALIDARG for a NULL argument (the outputs that are not NULL are 0 then).
-//
-// # Safety
-// `version` NULL or readable; `ms` and `ls` NULL or writable.
+/**
+ * The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
+ * `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
+ *
+ * Returns S_OK, or E_INVALIDARG for a NULL argument (the outputs that are not NULL are 0 then).
+ *
+ * @par Safety
+ * `version` NULL or readable; `ms` and `ls` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcVersionToFileVersion(const struct OpcVersion *version, DWORD *ms, DWORD *ls);
 
-// The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
-// convention.
-//
-// Returns S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
-// does not follow the convention). `*version` is 0.0.0 on failure.
-//
-// # Safety
-// `version` NULL or writable.
+/**
+ * The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
+ * convention.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
+ * does not follow the convention). `*version` is 0.0.0 on failure.
+ *
+ * @par Safety
+ * `version` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcVersionFromFileVersion(DWORD ms, DWORD ls, struct OpcVersion *version);
 
-// Compares two versions: negative when `a` is older than `b`, 0 when equal, positive when newer
-// (major first, then minor, then build). A NULL argument counts as older than any version.
-//
-// # Safety
-// `a` and `b` NULL or readable.
+/**
+ * Compares two versions: negative when `a` is older than `b`, 0 when equal, positive when newer
+ * (major first, then minor, then build). A NULL argument counts as older than any version.
+ *
+ * @par Safety
+ * `a` and `b` NULL or readable.
+ */
 int32_t OPCCOMN_CDECL OpcVersionCompare(const struct OpcVersion *a, const struct OpcVersion *b);
 
-// TRUE when `candidate` is strictly newer than `installed`, so an installer may replace the installed
-// file with it (specification section 6.5); FALSE otherwise, and when `candidate` is NULL. A NULL
-// `installed` (nothing installed) makes any candidate newer.
-//
-// # Safety
-// `candidate` and `installed` NULL or readable.
+/**
+ * TRUE when `candidate` is strictly newer than `installed`, so an installer may replace the installed
+ * file with it (specification section 6.5); FALSE otherwise, and when `candidate` is NULL. A NULL
+ * `installed` (nothing installed) makes any candidate newer.
+ *
+ * @par Safety
+ * `candidate` and `installed` NULL or readable.
+ */
 BOOL OPCCOMN_CDECL OpcVersionIsNewer(const struct OpcVersion *candidate, const struct OpcVersion *installed);
 
-// Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
-// (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
-// IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
-// (aggregation).
-//
-// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION; E_NOINTERFACE. `*ppv` is
-// NULL on failure.
-//
-// # Safety
-// `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
-// writable.
+/**
+ * Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
+ * (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
+ * IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
+ * (aggregation).
+ *
+ * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION; E_NOINTERFACE. `*ppv` is
+ * NULL on failure.
+ *
+ * @par Safety
+ * `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
+ * writable.
+ */
 HRESULT OPCCOMN_CDECL OpcServerListCreate(IUnknown *outer, REFIID riid, void **ppv);
 
-// As `OpcServerListCreate`, over the registry `reg` (for example one from `OpcRegistryCreateMemory`,
-// to test a client's browsing against known contents). The object keeps the registry alive.
-//
-// # Safety
-// `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.
+/**
+ * As `OpcServerListCreate`, over the registry `reg` (for example one from `OpcRegistryCreateMemory`,
+ * to test a client's browsing against known contents). The object keeps the registry alive.
+ *
+ * @par Safety
+ * `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.
+ */
 HRESULT OPCCOMN_CDECL OpcServerListCreateOver(const struct OpcRegistry *reg, IUnknown *outer, REFIID riid, void **ppv);
 
-// The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
-// over the system registry, and which honours LockServer), as DllGetClassObject returns it; on
-// Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
-// servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
-//
-// Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
-// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
-// IID_IUnknown. `*ppv` is NULL on failure.
-//
-// # Safety
-// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+/**
+ * The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
+ * over the system registry, and which honours LockServer), as DllGetClassObject returns it; on
+ * Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
+ * servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
+ *
+ * Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
+ * CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
+ * IID_IUnknown. `*ppv` is NULL on failure.
+ *
+ * @par Safety
+ * `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcDllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv);
 
-// S_OK when no object of the library is alive, no server lock is held and no proxy or stub is in use,
-// so COM may unload the DLL;
-// S_FALSE otherwise.
+/**
+ * S_OK when no object of the library is alive, no server lock is held and no proxy or stub is in use,
+ * so COM may unload the DLL;
+ * S_FALSE otherwise.
+ */
 HRESULT OPCCOMN_CDECL OpcDllCanUnloadNow(void);
 
-// Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
-// ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
-// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
-// changing it. Returns S_OK or SELFREG_E_CLASS.
+/**
+ * Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
+ * ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
+ * ServerList Class") in the system registry, adding to an existing OpcEnum registration without
+ * changing it. Returns S_OK or SELFREG_E_CLASS.
+ */
 HRESULT OPCCOMN_CDECL OpcDllRegisterServer(void);
 
-// Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
-// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
-// SELFREG_E_CLASS.
+/**
+ * Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
+ * the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
+ * SELFREG_E_CLASS.
+ */
 HRESULT OPCCOMN_CDECL OpcDllUnregisterServer(void);
 
-// Creates a shutdown object with the default options (at most one advised sink): the
-// IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
-//
-// With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
-// object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
-// as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
-// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
-//
-// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
-// `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
-//
-// # Safety
-// `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
-// NULL or writable.
+/**
+ * Creates a shutdown object with the default options (at most one advised sink): the
+ * IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
+ *
+ * With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
+ * object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
+ * as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
+ * it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+ *
+ * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
+ * `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
+ *
+ * @par Safety
+ * `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
+ * NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownCreate(IUnknown *outer, REFIID riid, void **ppv);
 
-// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
-//
-// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
-// `OpcShutdownOptions` (4, or 8 as of this version).
-//
-// # Safety
-// `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
-// `OpcShutdownCreate`.
+/**
+ * As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
+ *
+ * Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
+ * `OpcShutdownOptions` (4, or 8 as of this version).
+ *
+ * @par Safety
+ * `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
+ * `OpcShutdownCreate`.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv);
 
-// Asks every client advised on `shutdown` to disconnect: calls IOPCShutdown::ShutdownRequest on
-// each advised sink with `reason` (a NUL string when `reason` is NULL).
-//
-// `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
-// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
-// from a snapshot made under the object's lock and called without holding it, one after the other
-// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
-// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
-// not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
-// not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
-// fetched from the Global Interface Table for the calling apartment.
-//
-// Returns S_OK when every advised sink accepted the request (also when none is advised), S_FALSE
-// when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
-// library. Use `OpcShutdownNotifyEx` for the counts.
-//
-// # Safety
-// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
-// UTF-16 string.
+/**
+ * Asks every client advised on `shutdown` to disconnect: calls IOPCShutdown::ShutdownRequest on
+ * each advised sink with `reason` (a NUL string when `reason` is NULL).
+ *
+ * `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
+ * IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+ * from a snapshot made under the object's lock and called without holding it, one after the other
+ * on the calling thread, so a sink may Unadvise, release the server or call back in from inside
+ * ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
+ * not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
+ * not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
+ * fetched from the Global Interface Table for the calling apartment.
+ *
+ * Returns S_OK when every advised sink accepted the request (also when none is advised), S_FALSE
+ * when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
+ * library. Use `OpcShutdownNotifyEx` for the counts.
+ *
+ * @par Safety
+ * `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
+ * UTF-16 string.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownNotify(IUnknown *shutdown, LPCWSTR reason);
 
-// As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
-// many failed (`*pFailed`). Either pointer may be NULL; both are set (to 0 on failure) before
-// anything else happens.
-//
-// # Safety
-// As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
+/**
+ * As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
+ * many failed (`*pFailed`). Either pointer may be NULL; both are set (to 0 on failure) before
+ * anything else happens.
+ *
+ * @par Safety
+ * As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed);
 
-// Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
-// ShutdownRequest calls `callback(context, reason)` and returns S_OK.
-//
-// `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
-// IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
-// client may release its reference at any time. `context` must stay valid until the sink is
-// destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
-//
-// Returns S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`;
-// E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
-//
-// # Safety
-// `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
-// `ppv` NULL or writable.
+/**
+ * Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
+ * ShutdownRequest calls `callback(context, reason)` and returns S_OK.
+ *
+ * `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
+ * IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
+ * client may release its reference at any time. `context` must stay valid until the sink is
+ * destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
+ *
+ * Returns S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`;
+ * E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
+ *
+ * @par Safety
+ * `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
+ * `ppv` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownSinkCreate(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv);
 
-// Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
-// IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
-//
-// `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
-// three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
-// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
-// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
-// E_INVALIDARG for a NULL argument.
-//
-// # Safety
-// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
+/**
+ * Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
+ * IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
+ *
+ * `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
+ * three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
+ * IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
+ * gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
+ * E_INVALIDARG for a NULL argument.
+ *
+ * @par Safety
+ * `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownAdvise(IUnknown *server, IUnknown *sink, DWORD *pdwCookie);
 
-// Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
-//
-// Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
-// gives CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
-//
-// # Safety
-// `server` must be NULL or a valid COM interface pointer.
+/**
+ * Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
+ *
+ * Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
+ * gives CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
+ *
+ * @par Safety
+ * `server` must be NULL or a valid COM interface pointer.
+ */
 HRESULT OPCCOMN_CDECL OpcShutdownUnadvise(IUnknown *server, DWORD cookie);
 
 #ifdef __cplusplus
@@ -2416,14 +3328,18 @@ HRESULT OPCCOMN_CDECL OpcShutdownUnadvise(IUnknown *server, DWORD cookie);
 
 /* MatchPattern picks the wide or the narrow function as Win32 does for TCHAR functions. */
 #if !defined(OPCCOMN_TCHAR_MACROS)
+/** Defined once the TCHAR-style macros below are (define it first to have none). */
 #define OPCCOMN_TCHAR_MACROS
 #if defined(UNICODE)
 #define MatchPattern MatchPatternW
 #define OpcPatternCompile OpcPatternCompileW
 #define OpcPatternMatch OpcPatternMatchW
 #else
+/** MatchPatternW() with UNICODE defined, MatchPatternA() without (MBCS builds): prefer naming one. */
 #define MatchPattern MatchPatternA
+/** OpcPatternCompileW() or OpcPatternCompileA(), as MatchPattern. */
 #define OpcPatternCompile OpcPatternCompileA
+/** OpcPatternMatchW() or OpcPatternMatchA(), as MatchPattern. */
 #define OpcPatternMatch OpcPatternMatchA
 #endif
 #endif

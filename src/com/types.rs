@@ -45,9 +45,13 @@ pub type LPCOLESTR = *const WCHAR;
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
 #[allow(non_snake_case)]
 pub struct GUID {
+    /// The first 8 hexadecimal digits.
     pub Data1: u32,
+    /// The next 4 digits.
     pub Data2: u16,
+    /// The next 4 digits.
     pub Data3: u16,
+    /// The last 16 digits, as bytes in the order written.
     pub Data4: [u8; 8],
 }
 

@@ -12,8 +12,11 @@ use crate::com::{BOOL, DWORD, E_INVALIDARG, FALSE, LPCWSTR, LPWSTR, S_OK, TRUE};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Default)]
 pub struct OpcVersion {
+    /// MM: the major version.
     pub major: u16,
+    /// mm: the minor version.
     pub minor: u16,
+    /// bb: the build number.
     pub build: u16,
 }
 

@@ -33,7 +33,9 @@ pub struct IOPCShutdown {
 #[allow(non_snake_case)]
 #[derive(Clone, Copy)]
 pub struct CONNECTDATA {
+    /// The connected sink (AddRef'ed for whoever received it from IEnumConnections::Next).
     pub pUnk: *mut IUnknown,
+    /// The cookie IConnectionPoint::Advise returned for the sink.
     pub dwCookie: DWORD,
 }
 

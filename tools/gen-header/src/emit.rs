@@ -10,6 +10,24 @@ use std::fmt::Write as _;
 use crate::guids::{crt_uuid_args, Entry, Form};
 use crate::idl::{Interface, Method, Param};
 
+/// A documentation comment (`/** ... */`, which Doxygen reads) with `indent` in front of each line;
+/// nothing for no lines.
+pub fn doc_block(lines: &[String], indent: &str) -> String {
+    if lines.is_empty() {
+        return String::new();
+    }
+    let mut s = format!("{indent}/**\n");
+    for l in lines {
+        if l.is_empty() {
+            let _ = writeln!(s, "{indent} *");
+        } else {
+            let _ = writeln!(s, "{indent} * {l}");
+        }
+    }
+    let _ = writeln!(s, "{indent} */");
+    s
+}
+
 /// All interfaces by name, to walk base interfaces.
 pub struct Catalog<'a> {
     by_name: HashMap<&'a str, &'a Interface>,
@@ -86,11 +104,13 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
         "#ifndef __{n}_INTERFACE_DEFINED__\n#define __{n}_INTERFACE_DEFINED__\n"
     );
     for t in &i.typedefs {
-        let _ = writeln!(s, "typedef {t};");
+        let _ = writeln!(s, "/** MIDL's pointer type for {n}. */\ntypedef {t};");
     }
+    let _ = writeln!(s, "/** The interface identifier of {n}, {{{}}}. */", i.uuid);
     let _ = writeln!(s, "EXTERN_C const IID IID_{n};\n");
     // C++
     let _ = writeln!(s, "#if defined(__cplusplus) && !defined(CINTERFACE)\n");
+    s += &doc_block(&i.doc, "");
     match &i.base {
         Some(b) => {
             let _ = writeln!(
@@ -108,6 +128,7 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
         }
     }
     for m in &i.methods {
+        s += &doc_block(&m.doc, "    ");
         let _ = writeln!(
             s,
             "    virtual {} STDMETHODCALLTYPE {}({}) = 0;\n",
@@ -127,6 +148,11 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
     );
     // C
     let _ = writeln!(s, "#else /* C style interface */\n");
+    let _ = writeln!(
+        s,
+        "/** The methods of {n} in vtable order, {} first (the C form of the interface). */",
+        i.base.as_deref().unwrap_or("its own")
+    );
     let _ = writeln!(s, "typedef struct {n}Vtbl\n{{\n    BEGIN_INTERFACE\n");
     let vtable = catalog.vtable(i);
     let mut last_owner = "";
@@ -135,6 +161,7 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
             let _ = writeln!(s, "    /* {owner} methods */");
             last_owner = owner;
         }
+        s += &doc_block(&m.doc, "    ");
         let _ = writeln!(
             s,
             "    {} (STDMETHODCALLTYPE *{})({});\n",
@@ -144,7 +171,11 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
         );
     }
     let _ = writeln!(s, "    END_INTERFACE\n}} {n}Vtbl;\n");
-    let _ = writeln!(s, "struct {n}\n{{\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n");
+    s += &doc_block(&i.doc, "");
+    let _ = writeln!(
+        s,
+        "struct {n}\n{{\n    /** The interface's methods ({n}Vtbl). */\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n"
+    );
     let _ = writeln!(s, "#ifdef COBJMACROS");
     for (_, m) in &vtable {
         let args: Vec<&str> = std::iter::once("This")
@@ -172,19 +203,26 @@ fn category_interface(e: &Entry) -> String {
         "/* {n} {{{g}}}: {d} */\n\
          #ifndef __{n}_FWD_DEFINED__\n#define __{n}_FWD_DEFINED__\ntypedef struct {n} {n};\n#endif\n\
          #ifndef __{n}_INTERFACE_DEFINED__\n#define __{n}_INTERFACE_DEFINED__\n\
+         /** The category {d}, {{{g}}} (`{n}` names it; declared as an interface, as opcda.h does). */\n\
          EXTERN_C const IID IID_{n};\n\
          #if defined(__cplusplus) && !defined(CINTERFACE)\n\
+         /** The category {d} in the interface form of the Foundation's headers: no methods. */\n\
          MIDL_INTERFACE(\"{gl}\")\n{n} : public IUnknown\n{{\npublic:\n}};\n\
          #ifdef __CRT_UUID_DECL\n__CRT_UUID_DECL({n}, {crt})\n#endif\n\
          #else\n\
+         /** The vtable of the category's interface form: IUnknown's methods only. */\n\
          typedef struct {n}Vtbl\n{{\n    BEGIN_INTERFACE\n\
+         \x20   /** IUnknown::QueryInterface. */\n\
          \x20   HRESULT (STDMETHODCALLTYPE *QueryInterface)({n} *This, REFIID riid, void **ppvObject);\n\
+         \x20   /** IUnknown::AddRef. */\n\
          \x20   ULONG (STDMETHODCALLTYPE *AddRef)({n} *This);\n\
+         \x20   /** IUnknown::Release. */\n\
          \x20   ULONG (STDMETHODCALLTYPE *Release)({n} *This);\n\
          \x20   END_INTERFACE\n}} {n}Vtbl;\n\
-         struct {n}\n{{\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n\
+         /** The category {d} in the interface form of the Foundation's headers: no methods. */\n\
+         struct {n}\n{{\n    /** IUnknown's methods. */\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n\
          #endif\n#endif /* __{n}_INTERFACE_DEFINED__ */\n\
-         #ifndef {n}\n#define {n} IID_{n}\n#endif\n\n",
+         #ifndef {n}\n/** The category {d}: `IID_{n}` under the name code uses. */\n#define {n} IID_{n}\n#endif\n\n",
         g = e.guid,
         gl = e.guid.to_lowercase(),
         d = e.note,
@@ -207,7 +245,7 @@ pub fn table_declarations(table: &[Entry]) -> String {
                 };
                 let _ = write!(
                     s,
-                    "/* {n} {{{g}}}: {what} */\n#ifndef {n}\nEXTERN_C const {ty} {n};\n#endif\n\n",
+                    "/* {n} {{{g}}}: {what} */\n#ifndef {n}\n/** {{{g}}}: {what}. */\nEXTERN_C const {ty} {n};\n#endif\n\n",
                     n = e.name,
                     g = e.guid
                 );

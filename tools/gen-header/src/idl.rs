@@ -1,6 +1,7 @@
 //! A reader for the subset of MIDL that `idl/*.idl` use: `import`, `cpp_quote`, `library` blocks
 //! (skipped), and `[attributes] interface Name : Base { typedefs and methods }`.
 
+use std::collections::HashMap;
 use std::fmt;
 
 /// One parameter of a method.
@@ -35,6 +36,8 @@ pub struct Method {
     pub ret: String,
     pub name: String,
     pub params: Vec<Param>,
+    /// The `///` comment lines in front of the method, without the slashes: its documentation.
+    pub doc: Vec<String>,
 }
 
 #[derive(Debug, Clone)]
@@ -45,6 +48,8 @@ pub struct Interface {
     /// Typedefs inside the interface, as C: `IOPCEnumGUID *LPOPCENUMGUID`.
     pub typedefs: Vec<String>,
     pub methods: Vec<Method>,
+    /// The `///` comment lines in front of the interface's attributes: its documentation.
+    pub doc: Vec<String>,
 }
 
 #[derive(Debug)]
@@ -63,9 +68,14 @@ enum Tok {
     Punct(char),
 }
 
-fn tokenize(text: &str) -> Result<Vec<(Tok, usize)>, Error> {
+/// The tokens with their lines, and the documentation (`///` lines) in front of each token that has
+/// some, by token index.
+type Tokens = (Vec<(Tok, usize)>, HashMap<usize, Vec<String>>);
+
+fn tokenize(text: &str) -> Result<Tokens, Error> {
     let bytes: Vec<char> = text.chars().collect();
     let mut out = Vec::new();
+    let mut docs: HashMap<usize, Vec<String>> = HashMap::new();
     let mut i = 0;
     let mut line = 1;
     while i < bytes.len() {
@@ -76,8 +86,14 @@ fn tokenize(text: &str) -> Result<Vec<(Tok, usize)>, Error> {
         } else if c.is_whitespace() {
             i += 1;
         } else if c == '/' && bytes.get(i + 1) == Some(&'/') {
+            let start = i;
             while i < bytes.len() && bytes[i] != '\n' {
                 i += 1;
+            }
+            let comment: String = bytes[start..i].iter().collect();
+            if let Some(doc) = comment.strip_prefix("///") {
+                let doc = doc.strip_prefix(' ').unwrap_or(doc).trim_end();
+                docs.entry(out.len()).or_default().push(doc.to_string());
             }
         } else if c == '/' && bytes.get(i + 1) == Some(&'*') {
             i += 2;
@@ -114,16 +130,21 @@ fn tokenize(text: &str) -> Result<Vec<(Tok, usize)>, Error> {
             i += 1;
         }
     }
-    Ok(out)
+    Ok((out, docs))
 }
 
 struct Parser {
     toks: Vec<(Tok, usize)>,
+    docs: HashMap<usize, Vec<String>>,
     pos: usize,
     file: String,
 }
 
 impl Parser {
+    /// The documentation in front of the token at `pos`, taken (each comment documents one thing).
+    fn take_doc(&mut self, pos: usize) -> Vec<String> {
+        self.docs.remove(&pos).unwrap_or_default()
+    }
     fn err<T>(&self, what: &str) -> Result<T, Error> {
         let line = self.toks.get(self.pos).or(self.toks.last()).map_or(0, |t| t.1);
         Err(Error(format!("{}:{line}: {what}", self.file)))
@@ -218,16 +239,22 @@ fn uuid_of(attributes: &str) -> Option<String> {
 
 /// Parses an IDL file's interfaces.
 pub fn parse(file: &str, text: &str) -> Result<Vec<Interface>, Error> {
+    let (toks, docs) = tokenize(text)?;
     let mut p = Parser {
-        toks: tokenize(text)?,
+        toks,
+        docs,
         pos: 0,
         file: file.to_string(),
     };
     let mut out = Vec::new();
     let mut attributes = String::new();
+    let mut doc = Vec::new();
     while let Some(t) = p.next() {
         match t {
-            Tok::Punct('[') => attributes = p.group_text('[', ']')?,
+            Tok::Punct('[') => {
+                doc = p.take_doc(p.pos - 1);
+                attributes = p.group_text('[', ']')?;
+            }
             Tok::Punct(';') => {}
             Tok::Ident(word) if word == "import" => {
                 while !p.eat(';') {
@@ -265,6 +292,7 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Interface>, Error> {
                     uuid,
                     typedefs,
                     methods,
+                    doc: std::mem::take(&mut doc),
                 });
             }
             _ => {
@@ -279,9 +307,14 @@ pub fn parse(file: &str, text: &str) -> Result<Vec<Interface>, Error> {
 fn parse_body(p: &mut Parser) -> Result<(Vec<String>, Vec<Method>), Error> {
     let mut typedefs = Vec::new();
     let mut methods = Vec::new();
+    let mut doc = Vec::new();
     loop {
         if p.eat('}') {
             return Ok((typedefs, methods));
+        }
+        let here = p.take_doc(p.pos);
+        if !here.is_empty() {
+            doc = here;
         }
         if p.eat('[') {
             p.group_text('[', ']')?; // method attributes: nothing in the C declaration
@@ -289,6 +322,7 @@ fn parse_body(p: &mut Parser) -> Result<(Vec<String>, Vec<Method>), Error> {
         }
         let first = p.ident()?;
         if first == "typedef" {
+            doc.clear();
             let mut words = Vec::new();
             loop {
                 match p.next() {
@@ -362,7 +396,12 @@ fn parse_body(p: &mut Parser) -> Result<(Vec<String>, Vec<Method>), Error> {
             }
         }
         p.expect(';')?;
-        methods.push(Method { ret, name, params });
+        methods.push(Method {
+            ret,
+            name,
+            params,
+            doc: std::mem::take(&mut doc),
+        });
     }
 }
 
@@ -410,6 +449,28 @@ mod tests {
         assert_eq!(i.methods[0].params[1].attributes, "out, size_is(, *pdwCount)");
         assert_eq!(i.methods[1].params[1].declaration(), "CATID rg[]");
         assert!(i.methods[2].params.is_empty());
+    }
+
+    #[test]
+    fn keeps_the_documentation_of_interfaces_and_methods() {
+        let text = r#"// A plain comment documents nothing.
+            /// The session.
+            ///
+            /// Second paragraph.
+            [object, uuid(F31DFDE2-07B6-11d2-B2D8-0060083BA1FB)]
+            interface IOPCCommon : IUnknown {
+                /// Sets the locale.
+                HRESULT SetLocaleID([in] LCID dwLcid);
+                typedef [unique] IOPCCommon *LPX;
+                HRESULT Undocumented();
+                /// With attributes.
+                [local] HRESULT Local();
+            }"#;
+        let i = &parse("t.idl", text).unwrap()[0];
+        assert_eq!(i.doc, ["The session.", "", "Second paragraph."]);
+        assert_eq!(i.methods[0].doc, ["Sets the locale."]);
+        assert!(i.methods[1].doc.is_empty(), "a method takes no documentation from the one before");
+        assert_eq!(i.methods[2].doc, ["With attributes."]);
     }
 
     #[test]

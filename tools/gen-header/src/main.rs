@@ -129,6 +129,25 @@ fn generate_header(
     let mut generated = Vec::new();
     bindings.write(&mut generated);
     let text = String::from_utf8(generated).expect("UTF-8 header");
+    // The Rust doc comments' `# Safety` heading, as a titled paragraph of the function's documentation
+    // (as a Markdown heading Doxygen would make it a section of the whole page).
+    let text = text.replace("\n * # Safety\n", "\n * @par Safety\n");
+    // cbindgen declares a C enum's type as `uint32_t` before C23 (its values are the enum's): say so.
+    let text = text
+        .lines()
+        .map(|line| {
+            let typedef = line
+                .strip_prefix("typedef uint32_t ")
+                .or_else(|| line.strip_prefix("typedef enum ").and_then(|r| r.split(' ').nth(1)))
+                .and_then(|r| r.strip_suffix(';'));
+            match typedef {
+                Some(name) if text.contains(&format!("\nenum {name}\n")) => {
+                    format!("/** The type of enum {name}'s values. */\n{line}\n")
+                }
+                _ => format!("{line}\n"),
+            }
+        })
+        .collect::<String>();
 
     // The interface section goes after the types cbindgen declares and before the functions.
     let mut section = String::from(
