@@ -4,8 +4,9 @@
 # the Foundation's opccomn_ps.dll, in the same run (benches/cross_process_bench.c; goal <= 1.1x, a GOAL
 # line per goal; exit code 1 when one is missed).
 #
-# Usage: scripts/bench-cross-process.sh [N]   (N GetErrorString and N/5 Enum+Next per contender in all, in 51
-# interleaved rounds; default 10200)
+# Usage: scripts/bench-cross-process.sh [--record] [N]   (N GetErrorString and N/5 Enum+Next per contender in
+# all, in 51 interleaved rounds; default 10200). --record also writes the output, with the commit and the
+# machine's load, to docs/dev/figures/bench-cross-process.txt, the figures docs/dev/benchmarks.md shows.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -15,5 +16,25 @@ build="$root/build/windows"
 cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake" >/dev/null
 cmake --build "$build" -j2 --target cross_process_bench >/dev/null
 . scripts/wine-env.sh "$build"
-cd "$build/bin"
-wine cross_process_bench.exe "$@"
+record=0
+if [ "${1:-}" = --record ]; then
+    record=1
+    shift
+fi
+measure() {
+    echo "machine: $(nproc) cores, $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
+    local rc=0
+    (cd "$build/bin" && wine cross_process_bench.exe "$@") | tr -d '\r' || rc=$?
+    echo "end: $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
+    return "$rc"
+}
+if [ "$record" = 1 ]; then
+    mkdir -p docs/dev/figures
+    {
+        echo "# Printed by: scripts/bench-cross-process.sh --record $*"
+        echo "# commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src benches tests/oop || echo ', with uncommitted changes in src/, benches/ or tests/oop/')"
+        measure "$@" 2>&1
+    } | tee docs/dev/figures/bench-cross-process.txt
+else
+    measure "$@"
+fi

@@ -3,7 +3,10 @@
 # one GOAL line per goal with "met" or "NOT MET", and exits with 1 when a goal is missed; this script
 # exits with 1 when any benchmark did.
 #
-# Usage: scripts/bench.sh [--wine | --wine32] [NAME...] [WORD...]
+# Usage: scripts/bench.sh [--record] [--wine | --wine32] [NAME...] [WORD...]
+#   --record the run's output, with the commit, the machine and its load, also goes to
+#            docs/dev/figures/bench-<linux|windows-x64|windows-x86>.txt, the figures the docs show
+#            (docs/dev/benchmarks.md): commit it; figures are never copied into the docs by hand
 #   NAME     match-pattern, error-string, server-list (default: match-pattern and error-string on
 #            Linux; all three under Wine, as server-list needs the Windows registry)
 #   WORD     passed to the benchmarks: `scripts/bench.sh match-pattern typical Device` runs only the
@@ -19,11 +22,13 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 wine=0
+record=0
 arch=x86_64
 names=()
 words=()
 for arg in "$@"; do
     case "$arg" in
+        --record) record=1 ;;
         --wine) wine=1 ;;
         --wine32) wine=1; arch=x86 ;;
         match-pattern | error-string | server-list) names+=("$arg") ;;
@@ -83,16 +88,33 @@ for name in "${names[@]}"; do
 done
 cmake --build "$build" -j2 --target "${targets[@]}" >/dev/null
 
-echo "machine: $(nproc) cores, $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
-status=0
-log=$(mktemp)
-for target in "${targets[@]}"; do
-    printf '\n==== %s%s\n' "$target" "$([ "$wine" = 1 ] && echo " (Windows $arch DLL under Wine)")"
-    run "$target" | tee "$log" || status=1
-    if ! tr -d '\r' <"$log" | grep -qE "^$target: [0-9]+ goals"; then
-        echo "scripts/bench.sh: $target printed no closing line: it did not run to its end" >&2
-        status=1
-    fi
-done
-rm -f "$log"
-exit "$status"
+measure() {
+    echo "machine: $(nproc) cores, $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
+    local status=0 log target
+    log=$(mktemp)
+    for target in "${targets[@]}"; do
+        printf '\n==== %s%s\n' "$target" "$([ "$wine" = 1 ] && echo " (Windows $arch DLL under Wine)")"
+        run "$target" | tee "$log" || status=1
+        if ! tr -d '\r' <"$log" | grep -qE "^$target: [0-9]+ goals"; then
+            echo "scripts/bench.sh: $target printed no closing line: it did not run to its end" >&2
+            status=1
+        fi
+    done
+    rm -f "$log"
+    echo "end: $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
+    return "$status"
+}
+
+if [ "$record" = 1 ]; then
+    variant=linux
+    [ "$wine" = 1 ] && variant="windows-$([ "$arch" = x86 ] && echo x86 || echo x64)"
+    mkdir -p docs/dev/figures
+    figures="docs/dev/figures/bench-$variant.txt"
+    {
+        echo "# Printed by: scripts/bench.sh $*"
+        echo "# commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet HEAD -- src benches 2>/dev/null || echo ', with uncommitted changes in src/ or benches/')"
+        measure 2>&1
+    } | tee "$figures"
+else
+    measure
+fi
