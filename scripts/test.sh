@@ -37,6 +37,7 @@ miri|linux|Miri (Stacked Borrows and Tree Borrows): every test that does not cal
 package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
 docs|linux|C API reference (Doxygen): 0 undocumented items, every function listed, rendered in headless Chromium
+cmake-msvc|linux|CMake'"'"'s Visual Studio paths (stand-in MSVC toolchain, x64 and Win32): the project and add_subdirectory configure
 msvc-build-script|linux|the build script for Visual Studio (x86_64-pc-windows-msvc): stops naming missing tools; with stand-ins, calls cl, lib, rc, mc
 fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target)
 rust-windows|wine|Rust tests (Windows x64, under Wine)
@@ -276,6 +277,10 @@ stage_no_dll_exports() {
 
 stage_docs() {
     scripts/docs.sh --check
+}
+
+stage_cmake_msvc() {
+    scripts/check-cmake-msvc.sh
 }
 
 stage_msvc_build_script() {

@@ -1,0 +1,37 @@
+# A stand-in for a Visual Studio toolchain, for configuring only (scripts/check-cmake-msvc.sh): CMake
+# believes it has MSVC (cl, link, lib, rc) for Windows, so the project's MSVC code paths run on a
+# machine without Visual Studio. Nothing configured with it can be built. OPCCOMN_STUB_POINTER_SIZE
+# (8 or 4) stands for the generator's platform (-A x64 or -A Win32).
+set(CMAKE_SYSTEM_NAME Windows)
+set(CMAKE_C_COMPILER_FORCED TRUE)
+set(CMAKE_CXX_COMPILER_FORCED TRUE)
+set(CMAKE_C_COMPILER /bin/true)
+set(CMAKE_CXX_COMPILER /bin/true)
+set(CMAKE_C_COMPILER_ID MSVC)
+set(CMAKE_CXX_COMPILER_ID MSVC)
+set(CMAKE_C_COMPILER_VERSION 19.38.33130)
+set(CMAKE_CXX_COMPILER_VERSION 19.38.33130)
+set(MSVC 1)
+set(MSVC_VERSION 1938)
+if(NOT DEFINED OPCCOMN_STUB_POINTER_SIZE)
+  set(OPCCOMN_STUB_POINTER_SIZE 8)
+endif()
+set(CMAKE_SIZEOF_VOID_P ${OPCCOMN_STUB_POINTER_SIZE})
+set(CMAKE_C_SIZEOF_DATA_PTR ${OPCCOMN_STUB_POINTER_SIZE})
+set(CMAKE_CXX_SIZEOF_DATA_PTR ${OPCCOMN_STUB_POINTER_SIZE})
+if(OPCCOMN_STUB_POINTER_SIZE EQUAL 4)
+  set(CMAKE_SYSTEM_PROCESSOR X86)
+else()
+  set(CMAKE_SYSTEM_PROCESSOR AMD64)
+endif()
+# lib.exe, link.exe, rc.exe as Visual Studio names them (never run here).
+set(CMAKE_AR lib.exe)
+set(CMAKE_LINKER link.exe)
+set(CMAKE_RC_COMPILER rc.exe)
+set(CMAKE_MT mt.exe)
+# No binutils or LLVM: as on a Visual Studio machine.
+set(CMAKE_OBJCOPY "")
+set(CMAKE_NM "")
+set(OPCCOMN_LLVM_AR OPCCOMN_LLVM_AR-NOTFOUND CACHE FILEPATH "" FORCE)
+set(OPCCOMN_LLVM_DLLTOOL OPCCOMN_LLVM_DLLTOOL-NOTFOUND CACHE FILEPATH "" FORCE)
+set(OPCCOMN_LLVM_LIB OPCCOMN_LLVM_LIB-NOTFOUND CACHE FILEPATH "" FORCE)
