@@ -192,9 +192,6 @@ if [ "$wine_stage" = 1 ]; then
     ctest --test-dir "$build/windows" --output-on-failure --timeout 300
     scripts/check-exports.sh "$build/windows/cargo/x86_64-pc-windows-gnu/release/opccomn.dll"
 
-    stage "header and library beside the OPC Foundation's headers and *_i.c (x64, x86 compile-only, Linux)"
-    scripts/test-coexistence.sh "$build/windows" "$build/linux"
-
     stage "C++ example server and client (x64, under Wine, against the installed package)"
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
 
@@ -220,6 +217,11 @@ if [ "$wine_stage" = 1 ]; then
             wine32_missing="wine32:i386 is installed, but a 32-bit program did not run (it printed: '$canary')"
         fi
     fi
+    # Run after the x86 build: the x86 link matrix and the x86 server with its own .def need it (they
+    # are linked but not run without 32-bit Wine).
+    stage "header and library beside the OPC Foundation's MIDL headers and *_i.c; a server DLL with its own .def (x64, x86, Linux)"
+    scripts/test-coexistence.sh "$build/windows" "$build/linux" "$build/windows-x86" "$([ "$wine32_ok" = 1 ] && echo run || echo link)"
+
     if [ "$wine32_ok" = 1 ]; then
         stage "Rust tests (Windows x86, under 32-bit Wine)"
         # RUST_BACKTRACE=0: with backtraces on (RUST_BACKTRACE=1 in the environment), taking the
