@@ -3,8 +3,9 @@
 # Visual Studio projects, and the opccomn.def it comes from. Nothing is kept by hand:
 # - the names are the export table of the built DLL (the standard COM entry points PRIVATE);
 # - whether a name is a function or data (DATA in the .def), and on x86 the __stdcall decoration the
-#   callers' object files use (`_DllGetClassObject@12`; the import name stays undecorated), come from
-#   the symbols the same build's static library defines, i.e. from the implementation;
+#   callers' object files would use (`_DllGetClassObject@12`, though that one is PRIVATE; the import
+#   name stays undecorated), come from the symbols the same build's static library defines, i.e. from
+#   the implementation;
 # - the identifiers (IID_..., CATID_..., CLSID_...) are also put into opccomn.lib as ordinary members,
 #   one object file per symbol, compiled from src/c/opccomn_guids.c (generated with the header). A
 #   program whose headers declare them as MIDL does (`EXTERN_C const IID IID_IOPCCommon;`, no
