@@ -7,7 +7,8 @@ this machine, writes the declarations, from idl/opccomn.idl and from small IDL f
 declare the categories as the Foundation's IDL does; each header is then given the traits of MIDL's
 output that a program including it beside opccomn/opccomn.h can see, and widl's own additions are
 taken out. docs/header-coexistence.md lists the traits; check() asserts each one, so a stand-in that
-lost a trait fails the coexistence stage instead of passing it for the wrong reason.
+lost a trait fails the coexistence stage instead of passing it for the wrong reason. widl's own
+headers are left in OUT_DIR/widl (the stage includes its opccomn.h first to test OPCCOMN_FOREIGN_UUIDOF).
 
 Usage: midl_standins.py ROOT OUT_DIR WIDL_INCLUDE_DIR   (runs x86_64-w64-mingw32-widl)
 """
@@ -28,11 +29,10 @@ CATEGORIES = {
     "opc_ae": [("CATID_OPCAEServer10", "OPCEventServerCATID")],
     "opchda": [("CATID_OPCHDAServer10", "CATID_OPCHDAServer10")],
 }
-# Each of the three declares OPCHANDLE itself (the same typedef, repeated when two are included).
-LIBIDS = {"opcda": None, "opc_ae": None, "opchda": None}
+# Each of the three also declares OPCHANDLE itself (the same typedef, repeated when two are included).
 
-# The error headers (message-compiler output): name, HRESULT. From docs of the specifications; the
-# texts are not needed.
+# The error headers (message-compiler output): guard, then name and HRESULT of each code of the
+# specifications (the texts are not needed here).
 ERRORS = {
     "opcerror.h": ("__OPCERROR_H", [
         ("OPC_E_INVALIDHANDLE", 0xC0040001), ("OPC_E_BADTYPE", 0xC0040004), ("OPC_E_PUBLIC", 0xC0040005),
