@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Makes opccomn.lib, the import library in the format Microsoft's linker (link.exe, lld-link) reads, for
 # Visual Studio projects, and the opccomn.def it comes from. Nothing is kept by hand:
-# - the names are the export table of the built DLL;
+# - the names are the export table of the built DLL (the standard COM entry points PRIVATE);
 # - whether a name is a function or data (DATA in the .def), and on x86 the __stdcall decoration the
-#   callers' object files use (`_DllGetClassObject@12`; the import name stays undecorated), come from
-#   the symbols the same build's static library defines, i.e. from the implementation;
+#   callers' object files would use (`_DllGetClassObject@12`, though that one is PRIVATE; the import
+#   name stays undecorated), come from the symbols the same build's static library defines, i.e. from
+#   the implementation;
 # - the identifiers (IID_..., CATID_..., CLSID_...) are also put into opccomn.lib as ordinary members,
 #   one object file per symbol, compiled from src/c/opccomn_guids.c (generated with the header). A
 #   program whose headers declare them as MIDL does (`EXTERN_C const IID IID_IOPCCommon;`, no
@@ -41,7 +42,9 @@ trap 'rm -rf "$work"' EXIT
 [ -s "$work/exports" ] || { echo "$0: $dll has no exports" >&2; exit 1; }
 "$nm" --defined-only "$staticlib" 2>/dev/null | awk 'NF == 3 { print $2, $3 }' >"$work/symbols"
 
-# One .def line per export: `Name`, `Name@N` (x86 __stdcall) or `Name DATA`.
+# One .def line per export: `Name`, `Name@N` (x86 __stdcall) or `Name DATA`; the standard COM entry
+# points PRIVATE (exported by the DLL, not offered for linking: a server with its own .def naming
+# DllRegisterServer must bind its own function, never opccomn's; the OpcDll* names stay linkable).
 awk -v prefix="$prefix" -v lib="$staticlib" '
     NR == FNR { order[++n] = $0; want[$0] = 1; next }
     {
@@ -58,7 +61,9 @@ awk -v prefix="$prefix" -v lib="$staticlib" '
         print "EXPORTS"
         for (i = 1; i <= n; i++) {
             name = order[i]
-            if (name in function_of) print "    " name function_of[name]
+            if (name ~ /^Dll(GetClassObject|CanUnloadNow|RegisterServer|UnregisterServer|Install)$/ && name in function_of)
+                print "    " name function_of[name] " PRIVATE"
+            else if (name in function_of) print "    " name function_of[name]
             else if (name in data) print "    " name " DATA"
             else { print "msvc-implib: " name " is exported but not defined in " lib > "/dev/stderr"; failed = 1 }
         }

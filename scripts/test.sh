@@ -43,10 +43,10 @@ fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target
 rust-windows|wine|Rust tests (Windows x64, under Wine)
 acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
 c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
-coexistence|wine|header and library beside the OPC Foundation'"'"'s headers and *_i.c (x64, x86, Linux)
 example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
+coexistence|wine|header and library beside the OPC Foundation'"'"'s MIDL headers and *_i.c; a server DLL with its own .def (x64, x86, Linux)
 rust-x86|wine32|Rust tests (Windows x86, under 32-bit Wine)
 c-x86|wine32|C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)
 conformance-x86|wine32|conformance checker (x86) against the x86 seeded-defect servers, under 32-bit Wine
@@ -318,7 +318,13 @@ stage_c_windows() {
 stage_coexistence() {
     build_windows
     build_linux
-    scripts/test-coexistence.sh "$build/windows" "$build/linux"
+    build_windows_x86
+    # The x86 link matrix and the x86 server with its own .def are linked, and run under 32-bit Wine
+    # when it is there.
+    local x86_mode=link
+    [ "$wine32_ok" = 1 ] && x86_mode=run
+    [ "$x86_mode" = run ] || skip_part "coexistence: the x86 programs (linked)" "32-bit Wine is not available: $wine32_missing"
+    scripts/test-coexistence.sh "$build/windows" "$build/linux" "$build/windows-x86" "$x86_mode"
 }
 
 stage_example_x64() {

@@ -2,8 +2,8 @@
 #include "example_server.h"
 
 // The four exports under their undecorated names, also on 32-bit Windows where STDAPI is __stdcall
-// (`DllRegisterServer@0`): with mingw, dllexport and -Wl,--kill-at (a .def naming them would bind
-// to the same names in opccomn's import library instead); with Visual Studio, dll_exports.def.
+// (`DllRegisterServer@0`): with mingw, dllexport and -Wl,--kill-at (a .def naming them works as well:
+// opccomn's import libraries keep its own Dll* entry points private); with Visual Studio, dll_exports.def.
 #if defined(__GNUC__)
 #define EXAMPLE_EXPORT(type) EXTERN_C __declspec(dllexport) type STDAPICALLTYPE
 #else

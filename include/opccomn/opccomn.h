@@ -979,6 +979,9 @@ struct IUnknown
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IUnknown)
+/* IUnknown was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
 #endif /* __IUnknown_INTERFACE_DEFINED__ */
 
 /* IEnumGUID (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1117,6 +1120,9 @@ struct IEnumGUID
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumGUID)
+/* IEnumGUID was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
 #endif /* __IEnumGUID_INTERFACE_DEFINED__ */
 
 /* IEnumConnections (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1255,6 +1261,9 @@ struct IEnumConnections
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumConnections)
+/* IEnumConnections was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
 #endif /* __IEnumConnections_INTERFACE_DEFINED__ */
 
 /* IConnectionPoint (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1408,6 +1417,9 @@ struct IConnectionPoint
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IConnectionPoint)
+/* IConnectionPoint was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
 #endif /* __IConnectionPoint_INTERFACE_DEFINED__ */
 
 /* IEnumConnectionPoints (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1546,6 +1558,9 @@ struct IEnumConnectionPoints
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumConnectionPoints)
+/* IEnumConnectionPoints was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
 #endif /* __IEnumConnectionPoints_INTERFACE_DEFINED__ */
 
 /* IConnectionPointContainer (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1654,6 +1669,9 @@ struct IConnectionPointContainer
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IConnectionPointContainer)
+/* IConnectionPointContainer was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
 #endif /* __IConnectionPointContainer_INTERFACE_DEFINED__ */
 
 #endif /* !defined(_WIN32) */
@@ -1757,6 +1775,9 @@ struct IOPCShutdown
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCShutdown)
+/* IOPCShutdown was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif /* __IOPCShutdown_INTERFACE_DEFINED__ */
 
 /* IOPCCommon (OPC Common, idl/opccomn.idl) */
@@ -1928,6 +1949,9 @@ struct IOPCCommon
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCCommon)
+/* IOPCCommon was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif /* __IOPCCommon_INTERFACE_DEFINED__ */
 
 /* IOPCServerList (OPC Common, idl/opccomn.idl) */
@@ -2075,6 +2099,9 @@ struct IOPCServerList
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCServerList)
+/* IOPCServerList was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,0x06,0xc1,0x00,0x00)
 #endif /* __IOPCServerList_INTERFACE_DEFINED__ */
 
 /* IOPCEnumGUID (OPC Common, idl/opccomn.idl) */
@@ -2219,6 +2246,9 @@ struct IOPCEnumGUID
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCEnumGUID)
+/* IOPCEnumGUID was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0xb1,0xe3,0xf4,0x83)
 #endif /* __IOPCEnumGUID_INTERFACE_DEFINED__ */
 
 /* IOPCServerList2 (OPC Common, idl/opccomn.idl) */
@@ -2360,6 +2390,9 @@ struct IOPCServerList2
 
 #endif /* C style interface */
 
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCServerList2)
+/* IOPCServerList2 was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f,0x31,0x88,0xbf,0x7a)
 #endif /* __IOPCServerList2_INTERFACE_DEFINED__ */
 
 /* ---- The component categories and classes (idl/opcguids.txt). ---- */
@@ -2403,6 +2436,9 @@ struct CATID_OPCDAServer10
     CONST_VTBL struct CATID_OPCDAServer10Vtbl *lpVtbl;
 };
 #endif
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer10)
+/* CATID_OPCDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif /* __CATID_OPCDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer10
 /** The category OPC Data Access Servers Version 1.0: `IID_CATID_OPCDAServer10` under the name code uses. */
@@ -2448,6 +2484,9 @@ struct CATID_OPCDAServer20
     CONST_VTBL struct CATID_OPCDAServer20Vtbl *lpVtbl;
 };
 #endif
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer20)
+/* CATID_OPCDAServer20 was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif /* __CATID_OPCDAServer20_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer20
 /** The category OPC Data Access Servers Version 2.0: `IID_CATID_OPCDAServer20` under the name code uses. */
@@ -2493,6 +2532,9 @@ struct CATID_OPCDAServer30
     CONST_VTBL struct CATID_OPCDAServer30Vtbl *lpVtbl;
 };
 #endif
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer30)
+/* CATID_OPCDAServer30 was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
 #endif /* __CATID_OPCDAServer30_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer30
 /** The category OPC Data Access Servers Version 3.0: `IID_CATID_OPCDAServer30` under the name code uses. */
@@ -2538,6 +2580,9 @@ struct CATID_XMLDAServer10
     CONST_VTBL struct CATID_XMLDAServer10Vtbl *lpVtbl;
 };
 #endif
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_XMLDAServer10)
+/* CATID_XMLDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
 #endif /* __CATID_XMLDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_XMLDAServer10
 /** The category OPC XML Data Access Servers Version 1.0: `IID_CATID_XMLDAServer10` under the name code uses. */
@@ -2545,9 +2590,51 @@ struct CATID_XMLDAServer10
 #endif
 
 /* CATID_OPCAEServer10 {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0 */
+#ifndef __OPCEventServerCATID_FWD_DEFINED__
+#define __OPCEventServerCATID_FWD_DEFINED__
+typedef struct OPCEventServerCATID OPCEventServerCATID;
+#endif
+#ifndef __OPCEventServerCATID_INTERFACE_DEFINED__
+#define __OPCEventServerCATID_INTERFACE_DEFINED__
+/** The category OPC Alarm & Event Server Version 1.0, {58E13251-AC87-11d1-84D5-00608CB8A7E9} (`CATID_OPCAEServer10` names it; declared as an interface, as opcda.h does). */
+EXTERN_C const IID IID_OPCEventServerCATID;
+#if defined(__cplusplus) && !defined(CINTERFACE)
+/** The category OPC Alarm & Event Server Version 1.0 in the interface form of the Foundation's headers: no methods. */
+MIDL_INTERFACE("58e13251-ac87-11d1-84d5-00608cb8a7e9")
+OPCEventServerCATID : public IUnknown
+{
+public:
+};
+#ifdef __CRT_UUID_DECL
+__CRT_UUID_DECL(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
+#endif
+#else
+/** The vtable of the category's interface form: IUnknown's methods only. */
+typedef struct OPCEventServerCATIDVtbl
+{
+    BEGIN_INTERFACE
+    /** IUnknown::QueryInterface. */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(OPCEventServerCATID *This, REFIID riid, void **ppvObject);
+    /** IUnknown::AddRef. */
+    ULONG (STDMETHODCALLTYPE *AddRef)(OPCEventServerCATID *This);
+    /** IUnknown::Release. */
+    ULONG (STDMETHODCALLTYPE *Release)(OPCEventServerCATID *This);
+    END_INTERFACE
+} OPCEventServerCATIDVtbl;
+/** The category OPC Alarm & Event Server Version 1.0 in the interface form of the Foundation's headers: no methods. */
+struct OPCEventServerCATID
+{
+    /** IUnknown's methods. */
+    CONST_VTBL struct OPCEventServerCATIDVtbl *lpVtbl;
+};
+#endif
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(OPCEventServerCATID)
+/* OPCEventServerCATID was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
+#endif /* __OPCEventServerCATID_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCAEServer10
-/** {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0. */
-EXTERN_C const CATID CATID_OPCAEServer10;
+/** The category OPC Alarm & Event Server Version 1.0: `IID_OPCEventServerCATID` under the name code uses. */
+#define CATID_OPCAEServer10 IID_OPCEventServerCATID
 #endif
 
 /* CATID_OPCHDAServer10 {7DE5B060-E089-11d2-A5E6-000086339399}: OPC History Data Access Servers Version 1.0 */
@@ -2589,6 +2676,9 @@ struct CATID_OPCHDAServer10
     CONST_VTBL struct CATID_OPCHDAServer10Vtbl *lpVtbl;
 };
 #endif
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCHDAServer10)
+/* CATID_OPCHDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
 #endif /* __CATID_OPCHDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCHDAServer10
 /** The category OPC History Data Access Servers Version 1.0: `IID_CATID_OPCHDAServer10` under the name code uses. */

@@ -10,7 +10,7 @@ _WIN32") are left out on Windows, where programs get them from uuid.lib.
 
 Self-contained (no system header), so any C compiler for the target builds it, MSVC's included;
 the type has the layout of GUID. */
-#define OPCCOMN_GUID_COUNT 23
+#define OPCCOMN_GUID_COUNT 24
 
 typedef struct opccomn_guid {
     unsigned int Data1;
@@ -73,7 +73,7 @@ const opccomn_guid IID_CATID_XMLDAServer10 = {0x3098EDA4, 0xA006, 0x48B2, {0xA2,
 
 /* `CATID_OPCAEServer10` {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0. */
 #if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 10)
-const opccomn_guid CATID_OPCAEServer10 = {0x58E13251, 0xAC87, 0x11D1, {0x84, 0xD5, 0x00, 0x60, 0x8C, 0xB8, 0xA7, 0xE9}};
+const opccomn_guid IID_OPCEventServerCATID = {0x58E13251, 0xAC87, 0x11D1, {0x84, 0xD5, 0x00, 0x60, 0x8C, 0xB8, 0xA7, 0xE9}};
 #endif
 
 /* `CATID_OPCHDAServer10` {7DE5B060-E089-11d2-A5E6-000086339399}: OPC History Data Access Servers Version 1.0. */
@@ -111,33 +111,38 @@ const opccomn_guid CLSID_OPCServerList = {0x13486D51, 0x4821, 0x11D2, {0xA4, 0x9
 const opccomn_guid CLSID_OpcComnProxyStub = {0x3D738B71, 0x0B9D, 0x4337, {0xA7, 0x25, 0xE8, 0x54, 0x1A, 0x96, 0xD1, 0xC9}};
 #endif
 
+/* `CATID_OPCAEServer10` {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0 (the symbol of earlier versions of the header) */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 18)
+const opccomn_guid CATID_OPCAEServer10 = {0x58E13251, 0xAC87, 0x11D1, {0x84, 0xD5, 0x00, 0x60, 0x8C, 0xB8, 0xA7, 0xE9}};
+#endif
+
 /* IID of `IUnknown` {00000000-0000-0000-C000-000000000046} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 18) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 19) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IUnknown = {0x00000000, 0x0000, 0x0000, {0xC0, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x46}};
 #endif
 
 /* IID of `IEnumGUID` {0002E000-0000-0000-C000-000000000046} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 19) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 20) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IEnumGUID = {0x0002E000, 0x0000, 0x0000, {0xC0, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x46}};
 #endif
 
 /* IID of `IEnumConnections` {B196B287-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 20) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 21) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IEnumConnections = {0xB196B287, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 
 /* IID of `IConnectionPoint` {B196B286-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 21) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 22) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IConnectionPoint = {0xB196B286, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 
 /* IID of `IEnumConnectionPoints` {B196B285-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 22) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 23) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IEnumConnectionPoints = {0xB196B285, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 
 /* IID of `IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
-#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 23) && !defined(_WIN32) /* not _WIN32 */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 24) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IConnectionPointContainer = {0xB196B284, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
 #endif
 

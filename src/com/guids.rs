@@ -114,8 +114,8 @@ pub mod exported {
     pub static EXPORTED_IID_CATID_XMLDAServer10: GUID = CATID_XMLDAServer10;
 
     /// `CATID_OPCAEServer10` {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0.
-    #[export_name = "CATID_OPCAEServer10"]
-    pub static EXPORTED_CATID_OPCAEServer10: GUID = CATID_OPCAEServer10;
+    #[export_name = "IID_OPCEventServerCATID"]
+    pub static EXPORTED_IID_OPCEventServerCATID: GUID = CATID_OPCAEServer10;
 
     /// `CATID_OPCHDAServer10` {7DE5B060-E089-11d2-A5E6-000086339399}: OPC History Data Access Servers Version 1.0.
     #[export_name = "IID_CATID_OPCHDAServer10"]
@@ -144,6 +144,10 @@ pub mod exported {
     /// `CLSID_OpcComnProxyStub` {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class `PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces)`.
     #[export_name = "CLSID_OpcComnProxyStub"]
     pub static EXPORTED_CLSID_OpcComnProxyStub: GUID = CLSID_OpcComnProxyStub;
+
+    /// `CATID_OPCAEServer10` {58E13251-AC87-11d1-84D5-00608CB8A7E9}: OPC Alarm & Event Server Version 1.0 (the symbol of earlier versions of the header)
+    #[export_name = "CATID_OPCAEServer10"]
+    pub static EXPORTED_CATID_OPCAEServer10: GUID = CATID_OPCAEServer10;
 
     /// IID of `IUnknown` {00000000-0000-0000-C000-000000000046} (exported on systems without uuid.lib).
     #[cfg(not(windows))]

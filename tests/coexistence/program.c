@@ -1,18 +1,27 @@
-/* Includes opccomn/opccomn.h and the (stand-in) OPC Foundation headers opccomn.h, opcda.h, opcerror.h, in
-   the order OURS_FIRST says, and uses what both declare: the interfaces (C++ classes or C vtables), the
-   IIDs, a category and an error code. Built as C and C++, with and without CINTERFACE / COBJMACROS,
-   with -Wall -Wextra -pedantic-errors -Werror; linked against the static library or the DLL's import
-   library, with and without the Foundation's opccomn_i.c / opcda_i.c; run under Wine it checks the
-   values the linker bound. */
+/* Includes opccomn/opccomn.h and the stand-ins for the OPC Foundation's MIDL-generated headers (opccomn.h,
+   opcda.h, opc_ae.h, opchda.h, opcerror.h, opcae_er.h, opchda_error.h; see docs/header-coexistence.md),
+   in the order OURS_FIRST says, and uses what both declare: the interfaces (C++ classes or C vtables),
+   the IIDs, every category, error codes and, in C++, __uuidof of the OPC Common interfaces. Built as C
+   and C++, with and without CINTERFACE / COBJMACROS, with -Wall -Wextra -pedantic-errors -Werror;
+   linked against the static library or the DLL's import library, with and without the Foundation's
+   *_i.c files; run under Wine it checks the values the linker bound. */
 #if OURS_FIRST
 #include <opccomn/opccomn.h>
 #include <opccomn.h>
 #include <opcda.h>
+#include <opc_ae.h>
+#include <opchda.h>
 #include <opcerror.h>
+#include <opcae_er.h>
+#include <opchda_error.h>
 #else
 #include <opccomn.h>
 #include <opcda.h>
+#include <opc_ae.h>
+#include <opchda.h>
 #include <opcerror.h>
+#include <opcae_er.h>
+#include <opchda_error.h>
 #include <opccomn/opccomn.h>
 #endif
 
@@ -60,11 +69,26 @@ int main(void) {
     failures += !same(category, 0x63D5F432, 0xCFE4, 0x11D1);
     failures += !same(&CATID_OPCDAServer10, 0x63D5F430, 0xCFE4, 0x11D1);
     failures += !same(&CLSID_OPCServerList, 0x13486D51, 0x4821, 0x11D2);
+    /* Every category, under the names the Foundation's headers give them (opc_ae.h: CATID_OPCAEServer10
+       is IID_OPCEventServerCATID), with or without the *_i.c files. */
+    failures += !same(&CATID_OPCDAServer30, 0xCC603642, 0x66D7, 0x48F1);
+    failures += !same(&CATID_XMLDAServer10, 0x3098EDA4, 0xA006, 0x48B2);
+    failures += !same(&CATID_OPCAEServer10, 0x58E13251, 0xAC87, 0x11D1);
+    failures += !same(&IID_OPCEventServerCATID, 0x58E13251, 0xAC87, 0x11D1);
+    failures += !same(&CATID_OPCHDAServer10, 0x7DE5B060, 0xE089, 0x11D2);
+    failures += !same(&CATID_OPCBatchServer20, 0x843DE67B, 0xB0C9, 0x11D4);
     failures += OPC_E_INVALIDFILTER != (HRESULT)0xC0040009L;
+    failures += OPC_E_INVALIDBRANCHNAME != (HRESULT)0xC0040203L;
+    failures += OPC_S_NODATA != (HRESULT)0x40041002L;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-    /* mingw g++ and clang know the interfaces' IIDs through __uuidof, from whichever header declared them. */
+    /* mingw g++ and clang know the interfaces' IIDs through __uuidof, whichever header declared them
+       first (MIDL's output declares none; opccomn/opccomn.h does). */
     failures += !same(&__uuidof(IOPCCommon), 0xF31DFDE2, 0x07B6, 0x11D2);
     failures += !same(&__uuidof(IOPCShutdown), 0xF31DFDE1, 0x07B6, 0x11D2);
+    failures += !same(&__uuidof(IOPCServerList), 0x13486D50, 0x4821, 0x11D2);
+    failures += !same(&__uuidof(IOPCEnumGUID), 0x55C382C8, 0x21C7, 0x4E88);
+    failures += !same(&__uuidof(IOPCServerList2), 0x9DD0B56C, 0xAD9E, 0x43EE);
+    failures += !same(&__uuidof(common), 0xF31DFDE2, 0x07B6, 0x11D2);
 #endif
     printf("coexistence program: %d failure(s)\n", failures);
     return failures != 0;

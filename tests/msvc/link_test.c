@@ -3,8 +3,8 @@
  * no C runtime at all (its own entry point). It declares what it uses itself, the way MIDL-generated
  * headers and the Windows SDK declare them, because mingw's headers do not compile in MSVC mode:
  * - functions with the calling convention opccomn.h states (cdecl for the library's own functions,
- *   __stdcall, i.e. STDAPI, for the standard Dll* exports: on x86 the linker then needs the decorated
- *   `_DllGetClassObject@12` that opccomn.lib maps to the undecorated export);
+ *   OpcDllGetClassObject included: opccomn.lib keeps the standard Dll* exports PRIVATE, so a server
+ *   with its own .def binds its own DllGetClassObject, never opccomn's);
  * - IID_IOPCCommon as MIDL's opccomn_i.c users declare it (`EXTERN_C const IID`, no dllimport): it
  *   links from an ordinary member of opccomn.lib;
  * - IID_IOPCShutdown declared __declspec(dllimport): it links through the import, from the DLL.
@@ -57,8 +57,8 @@ BOOL __cdecl MatchPatternW(const WCHAR *string, const WCHAR *pattern, BOOL case_
 HRESULT __cdecl OpcGetErrorString(HRESULT code, LCID locale, WCHAR **text);
 HRESULT __cdecl OpcCommonCreate(const void *options, void *outer, const IID *riid, void **ppv);
 void __cdecl OpcTaskMemFree(void *p);
-HRESULT WINAPI DllGetClassObject(const CLSID *clsid, const IID *riid, void **ppv);
-HRESULT WINAPI DllCanUnloadNow(void);
+HRESULT __cdecl OpcDllGetClassObject(const CLSID *clsid, const IID *riid, void **ppv);
+HRESULT __cdecl OpcDllCanUnloadNow(void);
 
 static int passed, failed;
 static HANDLE out;
@@ -142,9 +142,9 @@ void __cdecl entry(void) {
         if (again) again->lpVtbl->Release(again);
         check(common->lpVtbl->Release(common) == 0, "Release");
     }
-    check(DllGetClassObject(&bogus, &IID_IOPCCommon, &factory) == CLASS_E_CLASSNOTAVAILABLE && factory == 0,
-          "DllGetClassObject (stdcall) of an unknown class");
-    check(DllCanUnloadNow() == S_OK, "DllCanUnloadNow");
+    check(OpcDllGetClassObject(&bogus, &IID_IOPCCommon, &factory) == CLASS_E_CLASSNOTAVAILABLE && factory == 0,
+          "OpcDllGetClassObject of an unknown class");
+    check(OpcDllCanUnloadNow() == S_OK, "OpcDllCanUnloadNow");
 
     print("msvc link test (");
     print_number((unsigned long)(sizeof(void *) * 8));

@@ -192,18 +192,35 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
     }
     let _ = writeln!(s, "#endif /* COBJMACROS */\n");
     let _ = writeln!(s, "#endif /* C style interface */\n");
+    s += &foreign_uuidof(n, &i.uuid);
     let _ = writeln!(s, "#endif /* __{n}_INTERFACE_DEFINED__ */\n");
     s
 }
 
+/// The `#elif` branch of an interface's `__{n}_INTERFACE_DEFINED__` guard, taken when another header
+/// declared the interface first: the C++ `__uuidof` declaration (mingw's `__CRT_UUID_DECL`), which
+/// MIDL's output (the OPC Foundation's headers) does not have. Without it `__uuidof(IOPCCommon)`
+/// compiles and fails to link. widl's output has it: a program that includes such a header first
+/// defines OPCCOMN_FOREIGN_UUIDOF (a second declaration would be a redefinition). Skipped when the
+/// name is a macro: opcda.h `#define`s CATID_OPCDAServer20, its category interface, to the IID.
+fn foreign_uuidof(n: &str, uuid: &str) -> String {
+    format!(
+        "#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined({n})\n\
+         /* {n} was declared by another header (MIDL's output declares no __uuidof) */\n\
+         __CRT_UUID_DECL({n}, {})\n",
+        crt_uuid_args(uuid)
+    )
+}
+
 /// A category of the interface form: an interface without methods (opcda.h's declaration).
 fn category_interface(e: &Entry) -> String {
-    let n = &e.name;
+    let n = e.interface_name();
+    let name = &e.name;
     format!(
-        "/* {n} {{{g}}}: {d} */\n\
+        "/* {name} {{{g}}}: {d} */\n\
          #ifndef __{n}_FWD_DEFINED__\n#define __{n}_FWD_DEFINED__\ntypedef struct {n} {n};\n#endif\n\
          #ifndef __{n}_INTERFACE_DEFINED__\n#define __{n}_INTERFACE_DEFINED__\n\
-         /** The category {d}, {{{g}}} (`{n}` names it; declared as an interface, as opcda.h does). */\n\
+         /** The category {d}, {{{g}}} (`{name}` names it; declared as an interface, as opcda.h does). */\n\
          EXTERN_C const IID IID_{n};\n\
          #if defined(__cplusplus) && !defined(CINTERFACE)\n\
          /** The category {d} in the interface form of the Foundation's headers: no methods. */\n\
@@ -221,12 +238,13 @@ fn category_interface(e: &Entry) -> String {
          \x20   END_INTERFACE\n}} {n}Vtbl;\n\
          /** The category {d} in the interface form of the Foundation's headers: no methods. */\n\
          struct {n}\n{{\n    /** IUnknown's methods. */\n    CONST_VTBL struct {n}Vtbl *lpVtbl;\n}};\n\
-         #endif\n#endif /* __{n}_INTERFACE_DEFINED__ */\n\
-         #ifndef {n}\n/** The category {d}: `IID_{n}` under the name code uses. */\n#define {n} IID_{n}\n#endif\n\n",
+         #endif\n{foreign}#endif /* __{n}_INTERFACE_DEFINED__ */\n\
+         #ifndef {name}\n/** The category {d}: `IID_{n}` under the name code uses. */\n#define {name} IID_{n}\n#endif\n\n",
         g = e.guid,
         gl = e.guid.to_lowercase(),
         d = e.note,
         crt = crt_uuid_args(&e.guid),
+        foreign = foreign_uuidof(n, &e.guid),
     )
 }
 

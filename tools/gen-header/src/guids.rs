@@ -6,7 +6,9 @@ use crate::idl::Interface;
 /// How the C header declares an identifier.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Form {
-    /// An empty interface whose IID is the value, and `#define NAME IID_NAME` (opcda.h's form).
+    /// An empty interface whose IID is the value, and `#define NAME IID_<interface>` (opcda.h's,
+    /// opchda.h's and opc_ae.h's form). The interface is named NAME (`interface` in the table) or
+    /// otherwise (`interface=OPCEventServerCATID`, as opc_ae.h names the Alarms & Events category).
     Interface,
     /// `EXTERN_C const CATID NAME;`.
     Constant,
@@ -21,13 +23,22 @@ pub struct Entry {
     pub name: String,
     pub guid: String,
     pub note: String,
+    /// The interface's name when the form is `interface=NAME`.
+    pub interface: Option<String>,
 }
 
 impl Entry {
-    /// The data symbol the C API exports (IID_CATID_OPCDAServer20 for the interface form).
+    /// The name of the empty interface of the interface form (`CATID_OPCDAServer20`,
+    /// `OPCEventServerCATID`).
+    pub fn interface_name(&self) -> &str {
+        self.interface.as_deref().unwrap_or(&self.name)
+    }
+
+    /// The data symbol the C API exports (IID_CATID_OPCDAServer20, IID_OPCEventServerCATID for the
+    /// interface form).
     pub fn symbol(&self) -> String {
         match self.form {
-            Form::Interface => format!("IID_{}", self.name),
+            Form::Interface => format!("IID_{}", self.interface_name()),
             _ => self.name.clone(),
         }
     }
@@ -48,11 +59,16 @@ pub fn parse_table(text: &str) -> Result<Vec<Entry>, String> {
                 .ok_or_else(|| format!("idl/opcguids.txt:{}: missing {what}", n + 1))
         };
         let kind = field("kind")?;
-        let form = match field("form")?.as_str() {
+        let form_field = field("form")?;
+        let (form_name, interface) = match form_field.split_once('=') {
+            Some((f, i)) => (f, Some(i.to_string())),
+            None => (form_field.as_str(), None),
+        };
+        let form = match form_name {
             "interface" => Form::Interface,
-            "constant" => Form::Constant,
-            "internal" => Form::Internal,
-            other => return Err(format!("idl/opcguids.txt:{}: unknown form {other}", n + 1)),
+            "constant" if interface.is_none() => Form::Constant,
+            "internal" if interface.is_none() => Form::Internal,
+            _ => return Err(format!("idl/opcguids.txt:{}: unknown form {form_field}", n + 1)),
         };
         let name = field("name")?;
         let guid = field("GUID")?;
@@ -68,6 +84,7 @@ pub fn parse_table(text: &str) -> Result<Vec<Entry>, String> {
             name,
             guid,
             note: rest,
+            interface,
         });
     }
     Ok(out)
@@ -148,6 +165,20 @@ pub fn exported_data(opc: &[Interface], base: &[Interface], table: &[Entry]) -> 
             symbol: e.symbol(),
             guid: e.guid.clone(),
             comment: describe(e),
+            unix_only: false,
+        });
+    }
+    // The identifiers earlier versions of the header declared as constants under their own name, and
+    // that programs built with those headers import: still exported (the header now declares them as
+    // the Foundation's header does, e.g. CATID_OPCAEServer10 as IID_OPCEventServerCATID).
+    for e in table.iter().filter(|e| e.interface.is_some()) {
+        out.push(Datum {
+            symbol: e.name.clone(),
+            guid: e.guid.clone(),
+            comment: format!(
+                "{} (the symbol of earlier versions of the header)",
+                describe(e).trim_end_matches('.')
+            ),
             unix_only: false,
         });
     }

@@ -469,7 +469,10 @@ mod tests {
         let i = &parse("t.idl", text).unwrap()[0];
         assert_eq!(i.doc, ["The session.", "", "Second paragraph."]);
         assert_eq!(i.methods[0].doc, ["Sets the locale."]);
-        assert!(i.methods[1].doc.is_empty(), "a method takes no documentation from the one before");
+        assert!(
+            i.methods[1].doc.is_empty(),
+            "a method takes no documentation from the one before"
+        );
         assert_eq!(i.methods[2].doc, ["With attributes."]);
     }
 
