@@ -102,6 +102,7 @@ OPCCOMN_CONVENTION(&OpcShutdownCreate, HRESULT (__attribute__((cdecl)) *)(IUnkno
 OPCCOMN_CONVENTION(&OpcShutdownCreateEx, HRESULT (__attribute__((cdecl)) *)(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcShutdownCreateEx must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownNotify, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason), "OpcShutdownNotify must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownNotifyEx, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed), "OpcShutdownNotifyEx must be cdecl");
+OPCCOMN_CONVENTION(&OpcShutdownNotifyBounded, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *pNotified, ULONG *pFailed, ULONG *pTimedOut), "OpcShutdownNotifyBounded must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownSinkCreate, HRESULT (__attribute__((cdecl)) *)(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv), "OpcShutdownSinkCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownAdvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, IUnknown *sink, DWORD *pdwCookie), "OpcShutdownAdvise must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownUnadvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, DWORD cookie), "OpcShutdownUnadvise must be cdecl");
