@@ -56,6 +56,7 @@ OPCCOMN_STDCALL_ENTRY(IOPCServerList2, CLSIDFromProgID, HRESULT (__attribute__((
 OPCCOMN_CONVENTION(&OpcObjectCount, uint32_t (__attribute__((cdecl)) *)(void), "OpcObjectCount must be cdecl");
 OPCCOMN_CONVENTION(&OpcTaskMemAlloc, void * (__attribute__((cdecl)) *)(size_t size), "OpcTaskMemAlloc must be cdecl");
 OPCCOMN_CONVENTION(&OpcTaskMemFree, void (__attribute__((cdecl)) *)(void *p), "OpcTaskMemFree must be cdecl");
+OPCCOMN_CONVENTION(&OpcSetModuleLock, HRESULT (__attribute__((cdecl)) *)(const struct OpcModuleLock *lock), "OpcSetModuleLock must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonCreate, HRESULT (__attribute__((cdecl)) *)(const struct OpcCommonOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcCommonCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonGetClientName, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LPWSTR *ppName), "OpcCommonGetClientName must be cdecl");
 OPCCOMN_CONVENTION(&OpcGetErrorString, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, LPWSTR *ppString), "OpcGetErrorString must be cdecl");

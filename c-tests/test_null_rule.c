@@ -1270,70 +1270,6 @@ static void case_OpcShutdownNotifyBounded__shutdown(void) {
     cases++;
 }
 
-static void case_OpcShutdownNotifyBounded__reason(void) {
-    nr_setup();
-    ULONG out_pNotified;
-    memset(&out_pNotified, 0xA5, sizeof out_pNotified);
-    ULONG out_pFailed;
-    memset(&out_pFailed, 0xA5, sizeof out_pFailed);
-    ULONG out_pTimedOut;
-    memset(&out_pTimedOut, 0xA5, sizeof out_pTimedOut);
-    CHECK_HR(OpcShutdownNotifyBounded(nr_container_unknown(), NULL, NULL, &out_pNotified, &out_pFailed, &out_pTimedOut), E_INVALIDARG);
-    if (!nr_is_zero(&out_pNotified, sizeof out_pNotified)) fprintf(stderr, "OpcShutdownNotifyBounded(reason = NULL): `pNotified` not reset\n");
-    CHECK(nr_is_zero(&out_pNotified, sizeof out_pNotified));
-    if (!nr_is_zero(&out_pFailed, sizeof out_pFailed)) fprintf(stderr, "OpcShutdownNotifyBounded(reason = NULL): `pFailed` not reset\n");
-    CHECK(nr_is_zero(&out_pFailed, sizeof out_pFailed));
-    if (!nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut)) fprintf(stderr, "OpcShutdownNotifyBounded(reason = NULL): `pTimedOut` not reset\n");
-    CHECK(nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut));
-    nr_teardown();
-    cases++;
-}
-
-static void case_OpcShutdownNotifyBounded__pNotified(void) {
-    nr_setup();
-    ULONG out_pFailed;
-    memset(&out_pFailed, 0xA5, sizeof out_pFailed);
-    ULONG out_pTimedOut;
-    memset(&out_pTimedOut, 0xA5, sizeof out_pTimedOut);
-    CHECK_HR(OpcShutdownNotifyBounded(nr_container_unknown(), W("abc"), NULL, NULL, &out_pFailed, &out_pTimedOut), E_INVALIDARG);
-    if (!nr_is_zero(&out_pFailed, sizeof out_pFailed)) fprintf(stderr, "OpcShutdownNotifyBounded(pNotified = NULL): `pFailed` not reset\n");
-    CHECK(nr_is_zero(&out_pFailed, sizeof out_pFailed));
-    if (!nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut)) fprintf(stderr, "OpcShutdownNotifyBounded(pNotified = NULL): `pTimedOut` not reset\n");
-    CHECK(nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut));
-    nr_teardown();
-    cases++;
-}
-
-static void case_OpcShutdownNotifyBounded__pFailed(void) {
-    nr_setup();
-    ULONG out_pNotified;
-    memset(&out_pNotified, 0xA5, sizeof out_pNotified);
-    ULONG out_pTimedOut;
-    memset(&out_pTimedOut, 0xA5, sizeof out_pTimedOut);
-    CHECK_HR(OpcShutdownNotifyBounded(nr_container_unknown(), W("abc"), NULL, &out_pNotified, NULL, &out_pTimedOut), E_INVALIDARG);
-    if (!nr_is_zero(&out_pNotified, sizeof out_pNotified)) fprintf(stderr, "OpcShutdownNotifyBounded(pFailed = NULL): `pNotified` not reset\n");
-    CHECK(nr_is_zero(&out_pNotified, sizeof out_pNotified));
-    if (!nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut)) fprintf(stderr, "OpcShutdownNotifyBounded(pFailed = NULL): `pTimedOut` not reset\n");
-    CHECK(nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut));
-    nr_teardown();
-    cases++;
-}
-
-static void case_OpcShutdownNotifyBounded__pTimedOut(void) {
-    nr_setup();
-    ULONG out_pNotified;
-    memset(&out_pNotified, 0xA5, sizeof out_pNotified);
-    ULONG out_pFailed;
-    memset(&out_pFailed, 0xA5, sizeof out_pFailed);
-    CHECK_HR(OpcShutdownNotifyBounded(nr_container_unknown(), W("abc"), NULL, &out_pNotified, &out_pFailed, NULL), E_INVALIDARG);
-    if (!nr_is_zero(&out_pNotified, sizeof out_pNotified)) fprintf(stderr, "OpcShutdownNotifyBounded(pTimedOut = NULL): `pNotified` not reset\n");
-    CHECK(nr_is_zero(&out_pNotified, sizeof out_pNotified));
-    if (!nr_is_zero(&out_pFailed, sizeof out_pFailed)) fprintf(stderr, "OpcShutdownNotifyBounded(pTimedOut = NULL): `pFailed` not reset\n");
-    CHECK(nr_is_zero(&out_pFailed, sizeof out_pFailed));
-    nr_teardown();
-    cases++;
-}
-
 static void case_OpcShutdownSinkCreate__callback(void) {
     nr_setup();
     void * out_ppv;
@@ -1533,10 +1469,6 @@ int main(void) {
     case_OpcShutdownNotify__shutdown();
     case_OpcShutdownNotifyEx__shutdown();
     case_OpcShutdownNotifyBounded__shutdown();
-    case_OpcShutdownNotifyBounded__reason();
-    case_OpcShutdownNotifyBounded__pNotified();
-    case_OpcShutdownNotifyBounded__pFailed();
-    case_OpcShutdownNotifyBounded__pTimedOut();
     case_OpcShutdownSinkCreate__callback();
     case_OpcShutdownSinkCreate__riid();
     case_OpcShutdownSinkCreate__ppv();

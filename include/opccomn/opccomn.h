@@ -223,6 +223,20 @@ typedef struct OpcPattern OpcPattern;
 // so the handle may be released while they live. A handle may be used from several threads.
 typedef struct OpcRegistry OpcRegistry;
 
+// The functions an EXE server's module lock consists of. Zero-initialise it, set `struct_size` to
+// `sizeof(OpcModuleLock)`, then set `lock`, `unlock` and `context`.
+typedef struct OpcModuleLock {
+  // `sizeof(OpcModuleLock)` as the caller's header declares it.
+  uint32_t struct_size;
+  // Called with `context` when an object of the library has been made, on the thread making it.
+  void (*lock)(void *context);
+  // Called with `context` when an object that called `lock` has been freed, on the thread of its
+  // last Release (an RPC thread for a remote client's release), after the object is gone.
+  void (*unlock)(void *context);
+  // Passed to `lock` and `unlock`.
+  void *context;
+} OpcModuleLock;
+
 #if !defined(_WIN32)
 // A locale identifier.
 typedef uint32_t LCID;
@@ -1830,6 +1844,24 @@ void * OPCCOMN_CDECL OpcTaskMemAlloc(size_t size);
 // # Safety
 // `p` must be NULL or memory from the library's task allocator that has not been freed yet.
 void OPCCOMN_CDECL OpcTaskMemFree(void *p);
+
+// Sets the module lock of an EXE server (see `OpcModuleLock`): from now on, every object the library
+// makes (server lists, enumerators, IOPCCommon sessions, shutdown objects, sinks, ...) calls `lock`
+// when it is made and `unlock` once it has been freed, so an EXE server that counts them exits only
+// when the last of the objects it handed out, directly or not, is released (COM's rule for local
+// servers). Objects made before the call are not counted; each object calls the `unlock` of the
+// module lock that counted it, even when another was set since. NULL stops the counting for objects
+// made from then on. Set it once, before registering the class objects; an in-process (DLL) server
+// has no need of it.
+//
+// Returns S_OK; E_INVALIDARG when `lock` is not NULL and `struct_size` is not the size of some
+// version of `OpcModuleLock`, or `lock` or `unlock` is NULL.
+//
+// # Safety
+// `lock` must be NULL or point at `struct_size` readable bytes laid out as `OpcModuleLock`; its
+// functions must be callable with its context from any thread, at any time until the process ends,
+// and must not call into the library.
+HRESULT OPCCOMN_CDECL OpcSetModuleLock(const struct OpcModuleLock *lock);
 
 // Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
 // first) and client name.
