@@ -109,6 +109,7 @@ OPCCOMN_CONVENTION(&OpcShutdownAdvise, HRESULT (__attribute__((cdecl)) *)(IUnkno
 OPCCOMN_CONVENTION(&OpcShutdownUnadvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, DWORD cookie), "OpcShutdownUnadvise must be cdecl");
 
 /* Callback types. */
+OPCCOMN_CONVENTION((OpcModuleLockFn)0, void (__attribute__((cdecl)) *)(void *context), "OpcModuleLockFn must be cdecl");
 OPCCOMN_CONVENTION((OpcVendorErrorStringFn)0, HRESULT (__attribute__((cdecl)) *)(void *context, HRESULT code, LCID locale, LPCWSTR *text), "OpcVendorErrorStringFn must be cdecl");
 OPCCOMN_CONVENTION((OpcClientNameFn)0, void (__attribute__((cdecl)) *)(void *context, LPCWSTR name), "OpcClientNameFn must be cdecl");
 OPCCOMN_CONVENTION((OpcShutdownCallback)0, void (__attribute__((cdecl)) *)(void *context, LPCWSTR reason), "OpcShutdownCallback must be cdecl");

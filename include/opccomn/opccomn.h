@@ -223,16 +223,20 @@ typedef struct OpcPattern OpcPattern;
 // so the handle may be released while they live. A handle may be used from several threads.
 typedef struct OpcRegistry OpcRegistry;
 
+// One function of a module lock: called with the lock's `context`. May be called from any thread,
+// concurrently; must not call into the library.
+typedef void (OPCCOMN_CDECL *OpcModuleLockFn)(void *context);
+
 // The functions an EXE server's module lock consists of. Zero-initialise it, set `struct_size` to
 // `sizeof(OpcModuleLock)`, then set `lock`, `unlock` and `context`.
 typedef struct OpcModuleLock {
   // `sizeof(OpcModuleLock)` as the caller's header declares it.
   uint32_t struct_size;
   // Called with `context` when an object of the library has been made, on the thread making it.
-  void (*lock)(void *context);
+  OpcModuleLockFn lock;
   // Called with `context` when an object that called `lock` has been freed, on the thread of its
   // last Release (an RPC thread for a remote client's release), after the object is gone.
-  void (*unlock)(void *context);
+  OpcModuleLockFn unlock;
   // Passed to `lock` and `unlock`.
   void *context;
 } OpcModuleLock;

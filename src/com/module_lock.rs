@@ -14,6 +14,10 @@ use super::ffi::{self, Hr};
 use super::options::read_sized;
 use super::S_OK;
 
+/// One function of a module lock: called with the lock's `context`. May be called from any thread,
+/// concurrently; must not call into the library.
+pub type OpcModuleLockFn = Option<unsafe extern "C" fn(context: *mut c_void)>;
+
 /// The functions an EXE server's module lock consists of. Zero-initialise it, set `struct_size` to
 /// `sizeof(OpcModuleLock)`, then set `lock`, `unlock` and `context`.
 #[repr(C)]
@@ -22,10 +26,10 @@ pub struct OpcModuleLock {
     /// `sizeof(OpcModuleLock)` as the caller's header declares it.
     pub struct_size: u32,
     /// Called with `context` when an object of the library has been made, on the thread making it.
-    pub lock: Option<unsafe extern "C" fn(context: *mut c_void)>,
+    pub lock: OpcModuleLockFn,
     /// Called with `context` when an object that called `lock` has been freed, on the thread of its
     /// last Release (an RPC thread for a remote client's release), after the object is gone.
-    pub unlock: Option<unsafe extern "C" fn(context: *mut c_void)>,
+    pub unlock: OpcModuleLockFn,
     /// Passed to `lock` and `unlock`.
     pub context: *mut c_void,
 }
