@@ -302,6 +302,10 @@ static void check_bounded_shutdown(IOPCCommon *c) {
     blocking.calls = 0;
 
     CHECK(advise_from_a_client_that_dies(c));
+    /* The notification that waits for every sink does not hang on a dead client either. */
+    answer = ask(c, OOP_CODE_SHUTDOWN);
+    CHECK(wstr_is(answer, "hr=00000001 notified=0 failed=1"));
+    free(answer);
     CHECK_HR(OpcShutdownSinkCreate(on_shutdown_blocking, &blocking, &IID_IUnknown, (void **)&blocking_sink), S_OK);
     CHECK_HR(OpcShutdownSinkCreate(on_shutdown_counting, &quick_calls, &IID_IUnknown, (void **)&quick_sink), S_OK);
     CHECK_HR(OpcShutdownAdvise((IUnknown *)c, blocking_sink, &blocking_cookie), S_OK);
