@@ -56,6 +56,7 @@ OPCCOMN_STDCALL_ENTRY(IOPCServerList2, CLSIDFromProgID, HRESULT (__attribute__((
 OPCCOMN_CONVENTION(&OpcObjectCount, uint32_t (__attribute__((cdecl)) *)(void), "OpcObjectCount must be cdecl");
 OPCCOMN_CONVENTION(&OpcTaskMemAlloc, void * (__attribute__((cdecl)) *)(size_t size), "OpcTaskMemAlloc must be cdecl");
 OPCCOMN_CONVENTION(&OpcTaskMemFree, void (__attribute__((cdecl)) *)(void *p), "OpcTaskMemFree must be cdecl");
+OPCCOMN_CONVENTION(&OpcSetModuleLock, HRESULT (__attribute__((cdecl)) *)(const struct OpcModuleLock *lock), "OpcSetModuleLock must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonCreate, HRESULT (__attribute__((cdecl)) *)(const struct OpcCommonOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcCommonCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonGetClientName, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LPWSTR *ppName), "OpcCommonGetClientName must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonGetLocale, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LCID *lcid), "OpcCommonGetLocale must be cdecl");
@@ -103,11 +104,13 @@ OPCCOMN_CONVENTION(&OpcShutdownCreate, HRESULT (__attribute__((cdecl)) *)(IUnkno
 OPCCOMN_CONVENTION(&OpcShutdownCreateEx, HRESULT (__attribute__((cdecl)) *)(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcShutdownCreateEx must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownNotify, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason), "OpcShutdownNotify must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownNotifyEx, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed), "OpcShutdownNotifyEx must be cdecl");
+OPCCOMN_CONVENTION(&OpcShutdownNotifyBounded, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *pNotified, ULONG *pFailed, ULONG *pTimedOut), "OpcShutdownNotifyBounded must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownSinkCreate, HRESULT (__attribute__((cdecl)) *)(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv), "OpcShutdownSinkCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownAdvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, IUnknown *sink, DWORD *pdwCookie), "OpcShutdownAdvise must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownUnadvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, DWORD cookie), "OpcShutdownUnadvise must be cdecl");
 
 /* Callback types. */
+OPCCOMN_CONVENTION((OpcModuleLockFn)0, void (__attribute__((cdecl)) *)(void *context), "OpcModuleLockFn must be cdecl");
 OPCCOMN_CONVENTION((OpcVendorErrorStringFn)0, HRESULT (__attribute__((cdecl)) *)(void *context, HRESULT code, LCID locale, LPCWSTR *text), "OpcVendorErrorStringFn must be cdecl");
 OPCCOMN_CONVENTION((OpcClientNameFn)0, void (__attribute__((cdecl)) *)(void *context, LPCWSTR name), "OpcClientNameFn must be cdecl");
 OPCCOMN_CONVENTION((OpcAcceptLocaleFn)0, int32_t (__attribute__((cdecl)) *)(void *context, LCID locale, int32_t listed), "OpcAcceptLocaleFn must be cdecl");

@@ -1269,6 +1269,25 @@ static void case_OpcShutdownNotifyEx__shutdown(void) {
     cases++;
 }
 
+static void case_OpcShutdownNotifyBounded__shutdown(void) {
+    nr_setup();
+    ULONG out_pNotified;
+    memset(&out_pNotified, 0xA5, sizeof out_pNotified);
+    ULONG out_pFailed;
+    memset(&out_pFailed, 0xA5, sizeof out_pFailed);
+    ULONG out_pTimedOut;
+    memset(&out_pTimedOut, 0xA5, sizeof out_pTimedOut);
+    CHECK_HR(OpcShutdownNotifyBounded(NULL, W("abc"), NULL, &out_pNotified, &out_pFailed, &out_pTimedOut), E_INVALIDARG);
+    if (!nr_is_zero(&out_pNotified, sizeof out_pNotified)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `pNotified` not reset\n");
+    CHECK(nr_is_zero(&out_pNotified, sizeof out_pNotified));
+    if (!nr_is_zero(&out_pFailed, sizeof out_pFailed)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `pFailed` not reset\n");
+    CHECK(nr_is_zero(&out_pFailed, sizeof out_pFailed));
+    if (!nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `pTimedOut` not reset\n");
+    CHECK(nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut));
+    nr_teardown();
+    cases++;
+}
+
 static void case_OpcShutdownSinkCreate__callback(void) {
     nr_setup();
     void * out_ppv;
@@ -1469,6 +1488,7 @@ int main(void) {
     case_OpcShutdownCreateEx__ppv();
     case_OpcShutdownNotify__shutdown();
     case_OpcShutdownNotifyEx__shutdown();
+    case_OpcShutdownNotifyBounded__shutdown();
     case_OpcShutdownSinkCreate__callback();
     case_OpcShutdownSinkCreate__riid();
     case_OpcShutdownSinkCreate__ppv();

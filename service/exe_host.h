@@ -1,5 +1,10 @@
 /* The lifetime of an out-of-process COM server (an EXE started by COM as LocalServer32) whose objects
  * come from opccomn: class objects, the count of live objects, and the exit when the last one goes.
+ * The count covers every object a client can hold (COM's rule for local servers): the EXE's own and,
+ * through the library's module lock (OpcSetModuleLock), every object of the library, the ones the
+ * library makes for other objects included (a server list's enumerators, a connection point's
+ * IEnumConnections). A client that releases the server list and then walks the enumerator it got
+ * keeps the process until it releases the enumerator.
  * Used by the server browser service (opccomn_browser.c) and by the cross-process tests' server
  * (tests/oop/oop_server.c). One process, one set of these: include it in one file of the EXE.
  *
@@ -9,6 +14,8 @@
  * exiting one, and exe_host_serve() returns. */
 #ifndef OPCCOMN_EXE_HOST_H
 #define OPCCOMN_EXE_HOST_H
+
+#include <string.h>
 
 #include <opccomn/opccomn.h>
 
@@ -85,58 +92,24 @@ static IClassFactoryVtbl exe_host_factory_vtbl = {exe_host_factory_qi, exe_host_
 /* A class object for `create`, to pass to exe_host_serve(). */
 #define EXE_HOST_CLASS(create) {{&exe_host_factory_vtbl}, (create)}
 
-/* ---- The server list: the library's object inside an outer one that counts its lifetime. ---- */
-typedef struct ExeHostListHolder {
-    IUnknown unk;
-    LONG refs;
-    IUnknown *inner;
-} ExeHostListHolder;
-
-static HRESULT STDMETHODCALLTYPE exe_host_holder_qi(IUnknown *This, REFIID riid, void **ppv) {
-    ExeHostListHolder *h = (ExeHostListHolder *)This;
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (IsEqualIID(riid, &IID_IUnknown)) {
-        *ppv = This;
-        This->lpVtbl->AddRef(This);
-        return S_OK;
-    }
-    if (IsEqualIID(riid, &IID_IOPCServerList) || IsEqualIID(riid, &IID_IOPCServerList2))
-        return h->inner->lpVtbl->QueryInterface(h->inner, riid, ppv);
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE exe_host_holder_add_ref(IUnknown *This) {
-    return (ULONG)InterlockedIncrement(&((ExeHostListHolder *)This)->refs);
-}
-static ULONG STDMETHODCALLTYPE exe_host_holder_release(IUnknown *This) {
-    ExeHostListHolder *h = (ExeHostListHolder *)This;
-    LONG n = InterlockedDecrement(&h->refs);
-    if (n == 0) {
-        h->refs = 1; /* the inner object's release must not come back here */
-        if (h->inner) h->inner->lpVtbl->Release(h->inner);
-        HeapFree(GetProcessHeap(), 0, h);
-        exe_host_object_destroyed();
-    }
-    return (ULONG)n;
-}
-static IUnknownVtbl exe_host_holder_vtbl = {exe_host_holder_qi, exe_host_holder_add_ref, exe_host_holder_release};
-
-/* A server list over `registry` (NULL: the system registry, both views) for CreateInstance. */
-static HRESULT exe_host_create_server_list(OpcRegistry *registry, REFIID riid, void **ppv) {
-    HRESULT hr;
-    ExeHostListHolder *h = (ExeHostListHolder *)HeapAlloc(GetProcessHeap(), HEAP_ZERO_MEMORY, sizeof *h);
-    if (!h) return E_OUTOFMEMORY;
-    h->unk.lpVtbl = &exe_host_holder_vtbl;
-    h->refs = 1;
+/* ---- The module lock: every object of the library counts as one of this process's objects. ---- */
+static void OPCCOMN_CDECL exe_host_lock(void *context) {
+    (void)context;
     exe_host_object_created();
-    hr = registry ? OpcServerListCreateOver(registry, &h->unk, &IID_IUnknown, (void **)&h->inner)
-                  : OpcServerListCreate(&h->unk, &IID_IUnknown, (void **)&h->inner);
-    if (SUCCEEDED(hr)) hr = exe_host_holder_qi(&h->unk, riid, ppv);
-    exe_host_holder_release(&h->unk);
-    return hr;
+}
+static void OPCCOMN_CDECL exe_host_unlock(void *context) {
+    (void)context;
+    exe_host_object_destroyed();
 }
 
-/* Registers the class objects (COM must be initialized), then serves until the last object is gone:
+/* A server list over `registry` (NULL: the system registry, both views) for CreateInstance. It and
+ * everything it hands out (its enumerators and their clones) count through the module lock. */
+static HRESULT exe_host_create_server_list(OpcRegistry *registry, REFIID riid, void **ppv) {
+    return registry ? OpcServerListCreateOver(registry, NULL, riid, ppv) : OpcServerListCreate(NULL, riid, ppv);
+}
+
+/* Sets the module lock (OpcSetModuleLock), so that every object of the library made from now on
+ * counts, registers the class objects (COM must be initialized), then serves until the last object is gone:
  * a process no client comes to gives up after idle_ms, one in use after in_use_ms (INFINITE: never);
  * then the class objects are revoked and objects still alive get unreleased_ms (INFINITE: as long as
  * they live) to go. Returns the number of objects left (0: a clean end), or -1 when a class object
@@ -149,9 +122,14 @@ static LONG exe_host_serve(const CLSID *const *clsids, ExeHostClass *classes, LO
                            DWORD in_use_ms, DWORD unreleased_ms, HRESULT *failure) {
     DWORD waited;
     LONG i;
-    *failure = S_OK;
+    OpcModuleLock lock;
+    memset(&lock, 0, sizeof lock);
+    lock.struct_size = sizeof lock;
+    lock.lock = exe_host_lock;
+    lock.unlock = exe_host_unlock;
+    *failure = OpcSetModuleLock(&lock);
     exe_host_done = CreateEventW(NULL, TRUE, FALSE, NULL);
-    if (!exe_host_done || count > EXE_HOST_MAX_CLASSES) *failure = E_FAIL;
+    if (SUCCEEDED(*failure) && (!exe_host_done || count > EXE_HOST_MAX_CLASSES)) *failure = E_FAIL;
     for (i = 0; SUCCEEDED(*failure) && i < count; i++) {
         *failure = CoRegisterClassObject(clsids[i], (IUnknown *)&classes[i].factory, CLSCTX_LOCAL_SERVER,
                                          REGCLS_MULTIPLEUSE, &exe_host_cookies[i]);

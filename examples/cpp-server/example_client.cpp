@@ -423,6 +423,74 @@ void CrossProcessCalls(IOPCCommon *common) {
     CoDisconnectObject(static_cast<IOPCShutdown *>(&sink), 0);  // no stub may outlive the sink
 }
 
+// Waits until the EXE server's process is gone (10 s at most); whether it went.
+bool LocalServerExits() {
+    for (int i = 0; i < 100; i++) {
+        if (!ProcessRunning(L"opccomn_example_server.exe")) return true;
+        Sleep(100);
+    }
+    return !ProcessRunning(L"opccomn_example_server.exe");
+}
+
+// Whether the EXE server's process is still there after `ms` of looking (it must not exit meanwhile).
+bool LocalServerStays(DWORD ms) {
+    for (DWORD waited = 0; waited < ms; waited += 100) {
+        if (!ProcessRunning(L"opccomn_example_server.exe")) return false;
+        Sleep(100);
+    }
+    return ProcessRunning(L"opccomn_example_server.exe");
+}
+
+// COM's rule for local servers: every object the server hands out keeps its process until released,
+// not only the server object. Here the client keeps only the connection point's IEnumConnections
+// (an object of the library, made by the connection point the server aggregates).
+void EnumeratorKeepsTheServer() {
+    IOPCCommon *common = nullptr;
+    CHECK_HR(CoCreateInstance(CLSID_ExampleServer, nullptr, CLSCTX_LOCAL_SERVER, IID_IOPCCommon, reinterpret_cast<void **>(&common)), S_OK);
+    if (!common) return;
+    IConnectionPointContainer *container = nullptr;
+    IConnectionPoint *point = nullptr;
+    IEnumConnections *connections = nullptr;
+    CHECK_HR(common->QueryInterface(IID_IConnectionPointContainer, reinterpret_cast<void **>(&container)), S_OK);
+    if (container) CHECK_HR(container->FindConnectionPoint(IID_IOPCShutdown, &point), S_OK);
+    if (point) CHECK_HR(point->EnumConnections(&connections), S_OK);
+    if (point) point->Release();
+    if (container) container->Release();
+    common->Release();
+    if (!connections) return;
+    CHECK(LocalServerStays(2000));
+    CONNECTDATA data = {};
+    ULONG fetched = 99;
+    CHECK_HR(connections->Next(1, &data, &fetched), S_FALSE);  // reaches the server: nobody is advised
+    CHECK(fetched == 0);
+    connections->Release();
+    CHECK(LocalServerExits());
+}
+
+// A server built from this example exits every time its last client goes (it once could hang for
+// good in CoUninitialize under Wine): a run of clients, each starting the server, calling it and
+// letting go.
+void ServerExitsAfterEveryClient() {
+    const int kRuns = 10;
+    int exits = 0;
+    for (int run = 0; run < kRuns; run++) {
+        IOPCCommon *common = nullptr;
+        HRESULT hr = CoCreateInstance(CLSID_ExampleServer, nullptr, CLSCTX_LOCAL_SERVER, IID_IOPCCommon,
+                                      reinterpret_cast<void **>(&common));
+        if (FAILED(hr) || !common) {
+            CHECK_HR(hr, S_OK);
+            break;
+        }
+        LCID lcid = 0;
+        CHECK_HR(common->GetLocaleID(&lcid), S_OK);
+        common->Release();
+        if (!LocalServerExits()) break;
+        exits++;
+    }
+    CHECK(exits == kRuns);
+    if (exits != kRuns) printf("example_client: the server exited after %d of %d clients\n", exits, kRuns);
+}
+
 void TestLocalServer() {
     WCHAR exe[MAX_PATH], command[2 * MAX_PATH];
     ModulePath(L"opccomn_example_server.exe", exe);
@@ -485,6 +553,10 @@ void TestLocalServer() {
             if (!exited) Sleep(100);
         }
         CHECK(exited);
+        if (across || had_proxy_stub) {
+            EnumeratorKeepsTheServer();
+            ServerExitsAfterEveryClient();
+        }
     }
     if (across) {
         CHECK_HR(unregister_proxy_stub(nullptr), S_OK);

@@ -57,7 +57,7 @@ public:
     HRESULT STDMETHODCALLTYPE RequestShutdown(LPCWSTR szReason) override;
 
     // Notifies the clients of every live server object; see ExampleNotifyAllServers.
-    static HRESULT NotifyAll(LPCWSTR reason, ULONG *servers);
+    static HRESULT NotifyAll(LPCWSTR reason, ULONG *servers, const OpcShutdownNotifyOptions *bounded);
 
 private:
     ExampleServer() { ExampleModuleLock(); }
@@ -206,9 +206,9 @@ HRESULT ExampleServer::ReadValue(LPCWSTR szItemID, double *pdblValue) {
     return OPC_E_UNKNOWNITEMID;
 }
 
-HRESULT ExampleServer::RequestShutdown(LPCWSTR szReason) { return NotifyAll(szReason, nullptr); }
+HRESULT ExampleServer::RequestShutdown(LPCWSTR szReason) { return NotifyAll(szReason, nullptr, nullptr); }
 
-HRESULT ExampleServer::NotifyAll(LPCWSTR reason, ULONG *servers) {
+HRESULT ExampleServer::NotifyAll(LPCWSTR reason, ULONG *servers, const OpcShutdownNotifyOptions *bounded) {
     if (servers) *servers = 0;
     // A snapshot with a reference on each object, taken under the lock; the clients are called
     // without it, since a client may release its server object from inside ShutdownRequest.
@@ -227,7 +227,9 @@ HRESULT ExampleServer::NotifyAll(LPCWSTR reason, ULONG *servers) {
     HRESULT result = S_OK;
     for (ULONG i = 0; i < taken; i++) {
         // IOPCShutdown::ShutdownRequest on every sink advised on this server object.
-        HRESULT hr = OpcShutdownNotify(static_cast<IExampleAddressSpace *>(snapshot[i]), reason);
+        IUnknown *server = static_cast<IExampleAddressSpace *>(snapshot[i]);
+        HRESULT hr = bounded ? OpcShutdownNotifyBounded(server, reason, bounded, nullptr, nullptr, nullptr)
+                             : OpcShutdownNotify(server, reason);
         if (hr != S_OK) result = S_FALSE;
         snapshot[i]->Release();
     }
@@ -281,7 +283,9 @@ IClassFactory *ExampleClassFactory() { return &g_factory; }
 
 LONG ExampleClassFactoryReferences() { return g_factory.References(); }
 
-HRESULT ExampleNotifyAllServers(LPCWSTR reason, ULONG *servers) { return ExampleServer::NotifyAll(reason, servers); }
+HRESULT ExampleNotifyAllServers(LPCWSTR reason, ULONG *servers, const OpcShutdownNotifyOptions *bounded) {
+    return ExampleServer::NotifyAll(reason, servers, bounded);
+}
 
 OpcServerRegistration ExampleRegistration(bool inproc, LPCWSTR module_path) {
     static const CATID categories[] = {CATID_ExampleServers};

@@ -85,7 +85,12 @@ void ExampleModuleUnlock();
 
 // Asks the clients of every live server object of this module to disconnect (RequestShutdown, and
 // the EXE when its operator stops it). `*servers` (optional) receives the number of server objects.
-// S_OK when every advised client accepted, S_FALSE when one failed. Call it with COM initialised.
-HRESULT ExampleNotifyAllServers(LPCWSTR reason, ULONG *servers);
+// S_OK when every advised client accepted, S_FALSE when one failed (or did not answer in time).
+// Call it with COM initialised. With `bounded` (the EXE, from its multithreaded apartment) the
+// clients are notified at once and waited for only until its deadlines (OpcShutdownNotifyBounded):
+// a hung client cannot keep the server from stopping. Without it each is waited for in turn
+// (OpcShutdownNotify), which a caller in a single-threaded apartment whose own sinks must be called
+// on its thread needs (the in-process server's RequestShutdown).
+HRESULT ExampleNotifyAllServers(LPCWSTR reason, ULONG *servers, const OpcShutdownNotifyOptions *bounded = nullptr);
 
 #endif

@@ -160,6 +160,16 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_REGISTRATION_KEEP_EXISTING 1
 
 /**
+ * A timeout that never ends: the notification waits for the answer however long it takes.
+ */
+#define OPC_SHUTDOWN_NO_TIMEOUT 4294967295
+
+/**
+ * The whole notification's deadline when the caller sets none (`timeout_ms` 0), in milliseconds.
+ */
+#define OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS 5000
+
+/**
  * The kind of OPC server asking for a text; it decides which specification's text a colliding code
  * gets (other codes get their text whatever the kind).
  */
@@ -280,6 +290,36 @@ typedef struct OpcPattern OpcPattern;
  * so the handle may be released while they live. A handle may be used from several threads.
  */
 typedef struct OpcRegistry OpcRegistry;
+
+/**
+ * One function of a module lock: called with the lock's `context`. May be called from any thread,
+ * concurrently; must not call into the library.
+ */
+typedef void (OPCCOMN_CDECL *OpcModuleLockFn)(void *context);
+
+/**
+ * The functions an EXE server's module lock consists of. Zero-initialise it, set `struct_size` to
+ * `sizeof(OpcModuleLock)`, then set `lock`, `unlock` and `context`.
+ */
+typedef struct OpcModuleLock {
+  /**
+   * `sizeof(OpcModuleLock)` as the caller's header declares it.
+   */
+  uint32_t struct_size;
+  /**
+   * Called with `context` when an object of the library has been made, on the thread making it.
+   */
+  OpcModuleLockFn lock;
+  /**
+   * Called with `context` when an object that called `lock` has been freed, on the thread of its
+   * last Release (an RPC thread for a remote client's release), after the object is gone.
+   */
+  OpcModuleLockFn unlock;
+  /**
+   * Passed to `lock` and `unlock`.
+   */
+  void *context;
+} OpcModuleLock;
 
 #if !defined(_WIN32)
 /**
@@ -650,6 +690,28 @@ typedef struct OpcShutdownOptions {
  */
 typedef uint32_t ULONG;
 #endif
+
+/**
+ * How long `OpcShutdownNotifyBounded` waits for the clients. Zero-initialise it, set `struct_size` to
+ * `sizeof(OpcShutdownNotifyOptions)`, then set what you need; NULL gives the defaults.
+ */
+typedef struct OpcShutdownNotifyOptions {
+  /**
+   * `sizeof(OpcShutdownNotifyOptions)` as the caller's header declares it.
+   */
+  uint32_t struct_size;
+  /**
+   * The deadline of the whole notification, in milliseconds from the call: when it passes, the
+   * call returns and every sink that has not answered counts as timed out. 0 means
+   * OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS; OPC_SHUTDOWN_NO_TIMEOUT waits for every answer.
+   */
+  uint32_t timeout_ms;
+  /**
+   * The longest one sink is waited for, in milliseconds from the moment its call starts (all
+   * start together), within the whole deadline. 0 or OPC_SHUTDOWN_NO_TIMEOUT: only the whole.
+   */
+  uint32_t sink_timeout_ms;
+} OpcShutdownNotifyOptions;
 
 /**
  * Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
@@ -2751,6 +2813,26 @@ void * OPCCOMN_CDECL OpcTaskMemAlloc(size_t size);
 void OPCCOMN_CDECL OpcTaskMemFree(void *p);
 
 /**
+ * Sets the module lock of an EXE server (see `OpcModuleLock`): from now on, every object the library
+ * makes (server lists, enumerators, IOPCCommon sessions, shutdown objects, sinks, ...) calls `lock`
+ * when it is made and `unlock` once it has been freed, so an EXE server that counts them exits only
+ * when the last of the objects it handed out, directly or not, is released (COM's rule for local
+ * servers). Objects made before the call are not counted; each object calls the `unlock` of the
+ * module lock that counted it, even when another was set since. NULL stops the counting for objects
+ * made from then on. Set it once, before registering the class objects; an in-process (DLL) server
+ * has no need of it.
+ *
+ * Returns S_OK; E_INVALIDARG when `lock` is not NULL and `struct_size` is not the size of some
+ * version of `OpcModuleLock`, or `lock` or `unlock` is NULL.
+ *
+ * @par Safety
+ * `lock` must be NULL or point at `struct_size` readable bytes laid out as `OpcModuleLock`; its
+ * functions must be callable with its context from any thread, at any time until the process ends,
+ * and must not call into the library.
+ */
+HRESULT OPCCOMN_CDECL OpcSetModuleLock(const struct OpcModuleLock *lock);
+
+/**
  * Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
  * first) and client name.
  *
@@ -3282,8 +3364,8 @@ HRESULT OPCCOMN_CDECL OpcServerListCreateOver(const struct OpcRegistry *reg, IUn
 HRESULT OPCCOMN_CDECL OpcDllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv);
 
 /**
- * S_OK when no object of the library is alive, no server lock is held and no proxy or stub is in use,
- * so COM may unload the DLL;
+ * S_OK when no object of the library is alive, no server lock is held, no proxy or stub is in use
+ * and no worker of `OpcShutdownNotifyBounded` is still calling a sink, so COM may unload the DLL;
  * S_FALSE otherwise.
  */
 HRESULT OPCCOMN_CDECL OpcDllCanUnloadNow(void);
@@ -3350,6 +3432,10 @@ HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *optio
  * when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
  * library. Use `OpcShutdownNotifyEx` for the counts.
  *
+ * This call waits for every sink, however long it takes: a client that hangs in ShutdownRequest
+ * holds it (and the sinks after it) for as long as it hangs. A server that must not wait without
+ * bound uses `OpcShutdownNotifyBounded`.
+ *
  * @par Safety
  * `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
  * UTF-16 string.
@@ -3365,6 +3451,40 @@ HRESULT OPCCOMN_CDECL OpcShutdownNotify(IUnknown *shutdown, LPCWSTR reason);
  * As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
  */
 HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed);
+
+/**
+ * Asks every client advised on `shutdown` to disconnect, as `OpcShutdownNotify`, but waits for them
+ * only until a deadline: every advised sink is called at the same time, each on a worker thread of
+ * its own, so a slow or hung client delays nobody else, and the call returns when every sink has
+ * answered or passed its deadline (`options`: the whole notification's deadline, by default
+ * OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS, and one per sink; NULL gives the defaults).
+ *
+ * The counts (each pointer may be NULL; all are set, to 0 on failure, before anything else happens)
+ * say what became of every sink advised when the call started: `*pNotified` accepted the request,
+ * `*pFailed` refused it or could not be reached (a client process that died), `*pTimedOut` had not
+ * answered at its deadline. A timed-out call may still return later on its worker thread; the worker
+ * holds its own reference to the sink and its own copy of `reason`, so the caller may release the
+ * server and free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow`
+ * says S_FALSE.
+ *
+ * A sink unadvised before its call starts is not called (a sink unadvised by another sink during
+ * the notification may already have been called: they run at the same time). On Windows each
+ * worker calls from the multithreaded apartment, fetching the sink from the Global Interface Table;
+ * a sink advised from a single-threaded apartment that the GIT could not take (no IOPCShutdown
+ * proxy/stub registered) cannot be called from there and counts as failed. Call it from a thread
+ * that has initialised COM.
+ *
+ * Returns S_OK when every sink accepted the request (also when none is advised), S_FALSE when at
+ * least one failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of
+ * this library, or `options->struct_size` is not the size of some version of
+ * `OpcShutdownNotifyOptions`.
+ *
+ * @par Safety
+ * `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated UTF-16
+ * string; `options` NULL or pointing at `options->struct_size` readable bytes; `pNotified`, `pFailed`
+ * and `pTimedOut` NULL or writable.
+ */
+HRESULT OPCCOMN_CDECL OpcShutdownNotifyBounded(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *pNotified, ULONG *pFailed, ULONG *pTimedOut);
 
 /**
  * Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose

@@ -7,6 +7,7 @@ pub mod ffi;
 pub mod guids;
 pub mod hresult;
 pub mod iids;
+pub mod module_lock;
 pub mod object;
 #[cfg(windows)]
 pub mod ole32;

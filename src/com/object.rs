@@ -37,6 +37,7 @@ use std::mem::MaybeUninit;
 use super::ffi::{guard, Crossed, Hr};
 use super::hresult::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, E_UNEXPECTED, S_OK};
 use super::iids::IID_IUNKNOWN;
+use super::module_lock::ModuleLock;
 use super::types::{GUID, HRESULT, REFIID, ULONG};
 use super::unknown::{add_ref, IUnknown, IUnknownVtbl};
 
@@ -109,6 +110,8 @@ pub struct ComHeader {
     outer: *mut IUnknown,
     query: unsafe fn(NonNull<ComHeader>, &GUID) -> *mut c_void,
     destroy: unsafe fn(NonNull<ComHeader>),
+    /// The EXE server's module lock that counted this object, unlocked once it is freed.
+    module_lock: Option<ModuleLock>,
 }
 
 impl ComHeader {
@@ -282,6 +285,7 @@ impl<T: ComClass> ComObject<T> {
                     outer,
                     query: query_thunk::<T>,
                     destroy: destroy_thunk::<T>,
+                    module_lock: ModuleLock::lock(),
                 },
                 state: value,
             })
@@ -423,8 +427,14 @@ unsafe fn query_thunk<T: ComClass>(header: NonNull<ComHeader>, iid: &GUID) -> *m
 /// `ComObject::try_new` from a Box), called once, when the last reference is gone.
 unsafe fn destroy_thunk<T: ComClass>(header: NonNull<ComHeader>) {
     // SAFETY: per the contract above.
-    drop(unsafe { Box::from_raw(header.cast::<ComObject<T>>().as_ptr()) });
+    let object = unsafe { Box::from_raw(header.cast::<ComObject<T>>().as_ptr()) };
+    let module_lock = object.header.module_lock;
+    drop(object);
     LIVE_OBJECTS.fetch_sub(1, Ordering::AcqRel);
+    // Last: an EXE server may exit as soon as its count reaches zero.
+    if let Some(m) = module_lock {
+        m.unlock();
+    }
 }
 
 /// The pointer of the object behind any slot pointer (its whole allocation).

@@ -121,13 +121,17 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
     })
 }
 
-/// S_OK when no object of the library is alive, no server lock is held and no proxy or stub is in use,
-/// so COM may unload the DLL;
+/// S_OK when no object of the library is alive, no server lock is held, no proxy or stub is in use
+/// and no worker of `OpcShutdownNotifyBounded` is still calling a sink, so COM may unload the DLL;
 /// S_FALSE otherwise.
 #[no_mangle]
 pub extern "C" fn OpcDllCanUnloadNow() -> Hr {
     ffi::guard!(S_FALSE, {
-        if live_objects() == 0 && LOCKS.load(Ordering::Acquire) == 0 && crate::proxy::can_unload() {
+        if live_objects() == 0
+            && LOCKS.load(Ordering::Acquire) == 0
+            && crate::proxy::can_unload()
+            && crate::shutdown::bounded::workers_running() == 0
+        {
             S_OK
         } else {
             S_FALSE

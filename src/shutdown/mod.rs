@@ -14,6 +14,7 @@
 #[cfg(windows)]
 mod agile;
 mod apartment;
+pub mod bounded;
 pub mod client;
 pub mod interfaces;
 pub mod server;
@@ -27,6 +28,7 @@ use core::ptr;
 use crate::com::ffi::{self, Hr};
 use crate::com::object::ComObject;
 use crate::com::{IUnknown, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
+use bounded::{read_notify_options, OpcShutdownNotifyOptions};
 use client::NUL_STRING;
 use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 
@@ -94,6 +96,10 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
 /// when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
 /// library. Use `OpcShutdownNotifyEx` for the counts.
 ///
+/// This call waits for every sink, however long it takes: a client that hangs in ShutdownRequest
+/// holds it (and the sinks after it) for as long as it hangs. A server that must not wait without
+/// bound uses `OpcShutdownNotifyBounded`.
+///
 /// # Safety
 /// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
 /// UTF-16 string.
@@ -131,5 +137,70 @@ pub unsafe extern "C" fn OpcShutdownNotifyEx(
             failed.write(done.failed);
         }
         Ok(if done.failed == 0 { S_OK } else { S_FALSE })
+    })
+}
+
+/// Asks every client advised on `shutdown` to disconnect, as `OpcShutdownNotify`, but waits for them
+/// only until a deadline: every advised sink is called at the same time, each on a worker thread of
+/// its own, so a slow or hung client delays nobody else, and the call returns when every sink has
+/// answered or passed its deadline (`options`: the whole notification's deadline, by default
+/// OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS, and one per sink; NULL gives the defaults).
+///
+/// The counts (each pointer may be NULL; all are set, to 0 on failure, before anything else happens)
+/// say what became of every sink advised when the call started: `*pNotified` accepted the request,
+/// `*pFailed` refused it or could not be reached (a client process that died), `*pTimedOut` had not
+/// answered at its deadline. A timed-out call may still return later on its worker thread; the worker
+/// holds its own reference to the sink and its own copy of `reason`, so the caller may release the
+/// server and free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow`
+/// says S_FALSE.
+///
+/// A sink unadvised before its call starts is not called (a sink unadvised by another sink during
+/// the notification may already have been called: they run at the same time). On Windows each
+/// worker calls from the multithreaded apartment, fetching the sink from the Global Interface Table;
+/// a sink advised from a single-threaded apartment that the GIT could not take (no IOPCShutdown
+/// proxy/stub registered) cannot be called from there and counts as failed. Call it from a thread
+/// that has initialised COM.
+///
+/// Returns S_OK when every sink accepted the request (also when none is advised), S_FALSE when at
+/// least one failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of
+/// this library, or `options->struct_size` is not the size of some version of
+/// `OpcShutdownNotifyOptions`.
+///
+/// # Safety
+/// `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated UTF-16
+/// string; `options` NULL or pointing at `options->struct_size` readable bytes; `pNotified`, `pFailed`
+/// and `pTimedOut` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcShutdownNotifyBounded(
+    shutdown: *mut IUnknown,
+    reason: LPCWSTR,
+    options: *const OpcShutdownNotifyOptions,
+    pNotified: *mut ULONG,
+    pFailed: *mut ULONG,
+    pTimedOut: *mut ULONG,
+) -> Hr {
+    ffi::boundary!(Opc, [pNotified, pFailed, pTimedOut], {
+        // SAFETY: the caller's contract: each count NULL or writable.
+        let (notified, failed, timed_out) =
+            unsafe { (ffi::out_opt(pNotified), ffi::out_opt(pFailed), ffi::out_opt(pTimedOut)) };
+        // SAFETY: the caller vouches for `options`.
+        let bounds = unsafe { read_notify_options(options) }?;
+        let reason = if reason.is_null() { NUL_STRING.as_ptr() } else { reason };
+        // SAFETY: `shutdown` is valid per the contract; `reason` is a NUL-terminated string.
+        let done = unsafe { with_object(shutdown, |obj| obj.notify_bounded(reason, bounds)) }?;
+        if let Some(notified) = notified {
+            notified.write(done.notified);
+        }
+        if let Some(failed) = failed {
+            failed.write(done.failed);
+        }
+        if let Some(timed_out) = timed_out {
+            timed_out.write(done.timed_out);
+        }
+        Ok(if done.failed == 0 && done.timed_out == 0 {
+            S_OK
+        } else {
+            S_FALSE
+        })
     })
 }

@@ -173,7 +173,7 @@ impl OpcShutdown {
     }
 
     /// The advised sinks, as counted references taken under the lock.
-    fn snapshot(&self) -> Vec<(DWORD, Arc<SinkRef>)> {
+    pub(super) fn snapshot(&self) -> Vec<(DWORD, Arc<SinkRef>)> {
         self.connections()
             .list
             .iter()
@@ -181,7 +181,7 @@ impl OpcShutdown {
             .collect()
     }
 
-    fn is_connected(&self, cookie: DWORD) -> bool {
+    pub(super) fn is_connected(&self, cookie: DWORD) -> bool {
         self.connections().list.iter().any(|c| c.cookie == cookie)
     }
 

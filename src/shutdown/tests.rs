@@ -918,3 +918,191 @@ fn sinks_go_through_the_global_interface_table_when_com_is_initialised() {
     .join()
     .unwrap();
 }
+
+// ---------------------------------------------------------------------------------------------
+// The bounded notification (OpcShutdownNotifyBounded).
+
+use super::bounded::{OpcShutdownNotifyOptions, OPC_SHUTDOWN_NO_TIMEOUT};
+
+/// Options for `OpcShutdownNotifyBounded`.
+fn bounds(timeout_ms: u32, sink_timeout_ms: u32) -> OpcShutdownNotifyOptions {
+    OpcShutdownNotifyOptions {
+        struct_size: core::mem::size_of::<OpcShutdownNotifyOptions>() as u32,
+        timeout_ms,
+        sink_timeout_ms,
+    }
+}
+
+impl Server {
+    /// `OpcShutdownNotifyBounded`: the result and the counts notified, failed, timed out.
+    fn notify_bounded(&self, reason: LPCWSTR, options: *const OpcShutdownNotifyOptions) -> (HRESULT, u32, u32, u32) {
+        let (mut n, mut f, mut t) = (99, 99, 99);
+        // SAFETY: a live object; valid pointers.
+        let hr = unsafe { OpcShutdownNotifyBounded(self.unk(), reason, options, &mut n, &mut f, &mut t) };
+        (hr.get(), n, f, t)
+    }
+}
+
+/// Waits (without a time limit of its own: the test harness has one) until `done` holds.
+fn wait_until(done: impl Fn() -> bool) {
+    while !done() {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn bounded_notification_checks_its_arguments() {
+    let (mut n, mut f, mut t) = (99, 99, 99);
+    let options = bounds(0, 0);
+    // SAFETY: NULL is allowed for the object; the counts are writable.
+    let hr = unsafe { OpcShutdownNotifyBounded(ptr::null_mut(), ptr::null(), &options, &mut n, &mut f, &mut t) };
+    assert_eq!((hr.get(), n, f, t), (E_INVALIDARG, 0, 0, 0));
+    let server = Server::new();
+    for size in [0u32, 4, 8, 16] {
+        let bad = OpcShutdownNotifyOptions {
+            struct_size: size,
+            ..options
+        };
+        assert_eq!(server.notify_bounded(ptr::null(), &bad), (E_INVALIDARG, 0, 0, 0));
+    }
+    // No sink advised: nothing to wait for.
+    assert_eq!(server.notify_bounded(ptr::null(), ptr::null()), (S_OK, 0, 0, 0));
+    // Every count may be NULL.
+    // SAFETY: a live object.
+    let hr = unsafe {
+        OpcShutdownNotifyBounded(
+            server.unk(),
+            ptr::null(),
+            ptr::null(),
+            ptr::null_mut(),
+            ptr::null_mut(),
+            ptr::null_mut(),
+        )
+    };
+    assert_eq!(hr.get(), S_OK);
+}
+
+#[test]
+fn bounded_notification_calls_every_sink_and_counts_failures() {
+    let server = Server::with_limit(Some(3));
+    let point = server.point();
+    let good = MockSink::new(true, S_OK);
+    let bad = MockSink::new(true, E_FAIL);
+    for s in [&good, &bad] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0);
+    assert_eq!(server.notify_bounded(w("Stop").as_ptr(), &options), (S_FALSE, 1, 1, 0));
+    assert_eq!(server.notify_bounded(ptr::null(), ptr::null()), (S_FALSE, 1, 1, 0));
+    assert_eq!((good.calls(), bad.calls()), (2, 2));
+    assert_eq!(*good.reasons.lock().unwrap(), vec![w("Stop")[..4].to_vec(), vec![]]);
+    drop(point);
+    drop(server);
+    wait_until(|| good.refs() == 1 && bad.refs() == 1); // the workers let go of their references
+}
+
+/// The sinks are called at once: the first sink sees the second called while it is still inside its
+/// own call, which a notification calling them one after the other never shows (the first sink
+/// gives up waiting after a generous while, so that such a notification fails instead of hanging).
+#[test]
+fn bounded_notification_calls_the_sinks_at_once() {
+    let server = Server::with_limit(Some(2));
+    let point = server.point();
+    let waiting = MockSink::new(true, S_OK);
+    let other = std::sync::Arc::new(MockSink::new(true, S_OK));
+    let saw_other = std::sync::Arc::new(core::sync::atomic::AtomicBool::new(false));
+    let (seen, saw) = (other.clone(), saw_other.clone());
+    waiting.set_hook(move || {
+        for _ in 0..2000 {
+            if seen.calls() >= 1 {
+                saw.store(true, Ordering::SeqCst);
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    });
+    for s in [waiting.unk(), other.unk()] {
+        assert_eq!(point.advise(s).0, S_OK);
+    }
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0);
+    assert_eq!(server.notify_bounded(ptr::null(), &options), (S_OK, 2, 0, 0));
+    drop(point);
+    drop(server);
+    wait_until(|| waiting.refs() == 1 && other.refs() == 1);
+    assert!(
+        saw_other.load(Ordering::SeqCst),
+        "the second sink was called while the first was inside its call"
+    );
+}
+
+/// A sink that blocks in ShutdownRequest does not hold the call: it times out, the others are counted
+/// as they answered, and when its call returns late, after the server and the caller's reason are
+/// gone, the worker finds what it holds alive and releases the sink.
+#[test]
+fn a_blocked_sink_times_out_and_its_late_return_is_harmless() {
+    let server = Server::with_limit(Some(3));
+    let point = server.point();
+    let good = MockSink::new(true, S_OK);
+    let bad = MockSink::new(true, E_FAIL);
+    let blocked = MockSink::new(true, S_OK);
+    let (release_sink, released) = std::sync::mpsc::channel::<()>();
+    let released = Mutex::new(released);
+    blocked.set_hook(move || {
+        let _ = released.lock().unwrap().recv(); // until the test lets it go
+    });
+    for s in [&blocked, &good, &bad] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    let reason = w("Maintenance");
+    let options = bounds(100, 0);
+    // Returns while the blocked sink is still inside ShutdownRequest: the test lets it go only after.
+    let (hr, notified, failed, timed_out) = server.notify_bounded(reason.as_ptr(), &options);
+    let worker_running = super::bounded::workers_running() >= 1;
+    let unload = crate::serverlist::server::OpcDllCanUnloadNow().get();
+    // Everything the caller had goes away before the late call returns.
+    drop(reason);
+    drop(point);
+    drop(server);
+    release_sink.send(()).unwrap();
+    wait_until(|| blocked.refs() == 1 && good.refs() == 1 && bad.refs() == 1);
+    // (Checked once every worker is done, so that a failure cannot free a sink under a worker.)
+    assert_eq!(hr, S_FALSE);
+    assert!(timed_out >= 1, "the blocked sink timed out");
+    // The others answered at once; on a loaded machine they might still miss the deadline, never
+    // be miscounted.
+    assert!(notified <= 1 && failed <= 1 && notified + failed + timed_out == 3);
+    assert!(
+        worker_running && unload == S_FALSE,
+        "the late worker keeps the DLL loaded"
+    );
+    assert_eq!((blocked.calls(), good.calls(), bad.calls()), (1, 1, 1));
+    assert_eq!(*blocked.reasons.lock().unwrap(), vec![w("Maintenance")[..11].to_vec()]);
+}
+
+/// A sink that never returns: the deadline per sink ends the wait for it even without a deadline for
+/// the whole notification.
+#[test]
+#[cfg_attr(miri, ignore)] // leaves a thread blocked for good
+fn a_sink_that_never_returns_does_not_hold_the_notification() {
+    let server = Server::with_limit(Some(2));
+    let point = server.point();
+    let good = MockSink::new(true, S_OK);
+    // Leaked: its calls never end, so its memory must stay valid for the rest of the process.
+    let stuck: &'static MockSink = Box::leak(MockSink::new(true, S_OK));
+    stuck.set_hook(|| loop {
+        std::thread::park();
+    });
+    for s in [stuck.unk(), good.unk()] {
+        assert_eq!(point.advise(s).0, S_OK);
+    }
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 100);
+    let (hr, notified, failed, timed_out) = server.notify_bounded(ptr::null(), &options);
+    drop(point);
+    drop(server);
+    wait_until(|| good.refs() == 1);
+    assert_eq!((hr, failed), (S_FALSE, 0));
+    // The stuck sink timed out; the other answered at once (on a loaded machine it might miss its
+    // deadline too, never be miscounted).
+    assert!(timed_out >= 1 && notified + timed_out == 2);
+    assert_eq!((good.calls(), stuck.calls()), (1, 1));
+}

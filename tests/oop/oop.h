@@ -12,6 +12,8 @@
 
 #include "test_util.h"
 
+#include <tlhelp32.h>
+
 /* The test EXE server: IOPCCommon and IConnectionPointContainer (IOPCShutdown) by aggregation. */
 static const CLSID CLSID_OopServer = {0xC3000000, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x01}};
 /* The same EXE's server list over a registry held in memory with OOP_FAKE_SERVERS classes. */
@@ -34,7 +36,38 @@ static CLSID oop_fake_clsid(unsigned n) {
 #define OOP_CODE_SHUTDOWN ((HRESULT)0xE0040202L)    /* sends OpcShutdownNotify; "notified=N failed=M" */
 #define OOP_CODE_PROXY_STUB ((HRESULT)0xE0040203L)  /* which proxy/stub the server's stubs come from */
 #define OOP_CODE_CPU_TIME ((HRESULT)0xE0040204L)    /* the server's process_cpu_time(), as text */
+/* sends OpcShutdownNotifyBounded (deadline OOP_BOUNDED_MS); "notified=N failed=M timed_out=T" */
+#define OOP_CODE_SHUTDOWN_BOUNDED ((HRESULT)0xE0040205L)
+#define OOP_BOUNDED_MS 3000
+/* The sinks a test server object takes at once (its advise limit). */
+#define OOP_ADVISE_LIMIT 4
 #define OOP_REASON "Maintenance at 12:00 \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac"
+
+/* Whether a process of the program `exe` (its file name) runs: 1, 0, or -1 when that cannot be told. */
+static int process_running(const WCHAR *exe) {
+    PROCESSENTRY32W e;
+    int found = 0;
+    HANDLE snap = CreateToolhelp32Snapshot(TH32CS_SNAPPROCESS, 0);
+    if (snap == INVALID_HANDLE_VALUE) return -1;
+    e.dwSize = sizeof e;
+    if (Process32FirstW(snap, &e)) {
+        do found |= _wcsicmp(e.szExeFile, exe) == 0;
+        while (Process32NextW(snap, &e));
+    }
+    CloseHandle(snap);
+    return found;
+}
+
+/* 1 when a process of `exe` is still there after `ms` milliseconds of looking (an EXE server that
+ * must not exit: one that does, exits within them), 0 when it went away meanwhile. */
+static int process_stays(const WCHAR *exe, DWORD ms) {
+    DWORD waited;
+    for (waited = 0; waited < ms; waited += 100) {
+        if (process_running(exe) != 1) return 0;
+        Sleep(100);
+    }
+    return process_running(exe) == 1;
+}
 
 /* The CPU time (user and kernel, 100 ns units) this process has used so far; 0 when unknown. Under
  * Wine it advances in clock ticks (10 ms): measure long stretches. */

@@ -101,6 +101,20 @@ static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *te
         *text = s->answer;
         return S_OK;
     }
+    if (code == OOP_CODE_SHUTDOWN_BOUNDED) {
+        ULONG notified = 99, failed = 99, timed_out = 99;
+        OpcShutdownNotifyOptions bounds;
+        HRESULT hr;
+        memset(&bounds, 0, sizeof bounds);
+        bounds.struct_size = sizeof bounds;
+        bounds.timeout_ms = OOP_BOUNDED_MS;
+        hr = OpcShutdownNotifyBounded(&s->unk, W(OOP_REASON), &bounds, &notified, &failed, &timed_out);
+        snprintf(buf, sizeof buf, "hr=%08lX notified=%lu failed=%lu timed_out=%lu", (unsigned long)hr,
+                 (unsigned long)notified, (unsigned long)failed, (unsigned long)timed_out);
+        set_answer(s, buf);
+        *text = s->answer;
+        return S_OK;
+    }
     if (code == OOP_CODE_CPU_TIME) {
         snprintf(buf, sizeof buf, "%llu", process_cpu_time());
         set_answer(s, buf);
@@ -119,6 +133,7 @@ static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *te
 
 static HRESULT create_server(REFIID riid, void **ppv) {
     OpcCommonOptions options;
+    OpcShutdownOptions shutdown_options;
     static LCID locales[OOP_LOCALES];
     unsigned i;
     HRESULT hr;
@@ -138,7 +153,10 @@ static HRESULT create_server(REFIID riid, void **ppv) {
     options.client_name_changed = client_name_changed;
     options.client_name_context = s;
     hr = OpcCommonCreate(&options, &s->unk, &IID_IUnknown, (void **)&s->common);
-    if (SUCCEEDED(hr)) hr = OpcShutdownCreate(&s->unk, &IID_IUnknown, (void **)&s->shutdown);
+    memset(&shutdown_options, 0, sizeof shutdown_options);
+    shutdown_options.struct_size = sizeof shutdown_options;
+    shutdown_options.advise_limit = OOP_ADVISE_LIMIT;
+    if (SUCCEEDED(hr)) hr = OpcShutdownCreateEx(&shutdown_options, &s->unk, &IID_IUnknown, (void **)&s->shutdown);
     if (SUCCEEDED(hr)) hr = server_qi(&s->unk, riid, ppv);
     server_release(&s->unk);
     return hr;

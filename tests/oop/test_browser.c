@@ -1,6 +1,7 @@
 /* The server browser service (service/opccomn_browser.c) under Wine: registered as LocalServer32 with
  * its AppID, a client in this process enumerates fake servers registered in the system registry
- * through CLSCTX_LOCAL_SERVER, the browser process exits when the client lets go, and next to an
+ * through CLSCTX_LOCAL_SERVER, the browser process exits when the client lets go (and not before: a
+ * client holding only the enumerator keeps it), and next to an
  * OpcEnum-style registration it stays inactive unless told to take over, after which unregistration
  * restores OpcEnum's registration exactly.
  *
@@ -10,8 +11,6 @@
  * proxy/stub and fakes 3..5 in the 32-bit view and browses through CLSCTX_LOCAL_SERVER, which only the
  * 64-bit browser serves, expecting all six; `test_browser wow64-cleanup` (64-bit) undoes the first. */
 #include "oop.h"
-
-#include <tlhelp32.h>
 
 static WCHAR dir[MAX_PATH];
 static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
@@ -40,19 +39,7 @@ static DWORD run(const WCHAR *args) {
     return code;
 }
 
-static int browser_running(void) {
-    PROCESSENTRY32W e;
-    int found = 0;
-    HANDLE snap = CreateToolhelp32Snapshot(TH32CS_SNAPPROCESS, 0);
-    if (snap == INVALID_HANDLE_VALUE) return -1;
-    e.dwSize = sizeof e;
-    if (Process32FirstW(snap, &e)) {
-        do found |= _wcsicmp(e.szExeFile, L"opccomn_browser.exe") == 0;
-        while (Process32NextW(snap, &e));
-    }
-    CloseHandle(snap);
-    return found;
-}
+static int browser_running(void) { return process_running(L"opccomn_browser.exe"); }
 
 static int wait_browser_gone(void) {
     int i;
@@ -119,6 +106,34 @@ static void browse(void) {
     }
     l2->lpVtbl->Release(l2);
     CHECK(wait_browser_gone()); /* it exits when its last client goes */
+}
+
+/* The client's way of many OPC clients (and of the opc_da crate's get_servers): it gets the
+ * enumerator, releases the server list and only then walks the enumerator. The browser must stay
+ * while the client holds the enumerator (COM's rule for local servers) and exit once it lets go. */
+static void walk_after_releasing_the_list(void) {
+    IOPCServerList2 *l2 = NULL;
+    IOPCEnumGUID *e = NULL, *clone = NULL;
+    GUID got[256];
+    ULONG n = 0;
+    CHECK_HR(CoCreateInstance(&CLSID_OPCServerList, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&l2), S_OK);
+    if (!l2) return;
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+    l2->lpVtbl->Release(l2);
+    if (!e) return;
+    CHECK(process_stays(L"opccomn_browser.exe", 2000)); /* the enumerator keeps it */
+    CHECK_HR(e->lpVtbl->Clone(e, &clone), S_OK);
+    CHECK_HR(e->lpVtbl->Next(e, 256, got, &n), S_FALSE);
+    CHECK(n >= FAKES);
+    e->lpVtbl->Release(e);
+    if (clone) { /* and so does a clone, alone */
+        CHECK(process_stays(L"opccomn_browser.exe", 1000));
+        n = 0;
+        CHECK_HR(clone->lpVtbl->Next(clone, 256, got, &n), S_FALSE);
+        CHECK(n >= FAKES);
+        clone->lpVtbl->Release(clone);
+    }
+    CHECK(wait_browser_gone()); /* it exits when the last object goes */
 }
 
 static LPWSTR snapshot(OpcRegistry *sys) {
@@ -277,6 +292,7 @@ int main(int argc, char **argv) {
     CHECK(run(L"/RegServer") == 0);
     CHECK(run(L"/Status") == 0);
     browse();
+    walk_after_releasing_the_list();
     CHECK(run(L"/UnregServer") == 0);
     CHECK(run(L"/Status") == 2);
     after = snapshot(sys);

@@ -11,7 +11,8 @@
  * it); strings up to the library's bound of 2^19 code units through, longer ones refused with a
  * defined error and both processes still answering; a shutdown sink in this process advised through
  * the connection point, OpcShutdownNotify in the server reaching it with the reason, Unadvise from
- * inside the callback; IOPCServerList2 / IOPCServerList over 100 fake servers with IOPCEnumGUID and
+ * inside the callback; OpcShutdownNotifyBounded with a client hung in ShutdownRequest, one that answers
+ * and one that was killed after advising (a child process of this program); IOPCServerList2 / IOPCServerList over 100 fake servers with IOPCEnumGUID and
  * IEnumGUID Next of several elements, Skip, Reset, Clone, GetClassDetails, CLSIDFromProgID, category
  * arrays up to the library's 4096 and beyond. Registration is undone at the end and checked. */
 #include "oop.h"
@@ -188,6 +189,156 @@ static void check_shutdown(IOPCCommon *c) {
     CHECK_HR(OpcShutdownUnadvise((IUnknown *)c, state.cookie), CONNECT_E_NOCONNECTION);
 }
 
+/* ---- The bounded notification: a client that blocks, a client that was killed ---- */
+#define OOP_ADVISED_EVENT L"Local\\OpcComnOopSinkAdvised"
+
+typedef struct BlockingSink {
+    HANDLE entered, release; /* set when ShutdownRequest came in; set by the test to let it return */
+    LONG calls;
+} BlockingSink;
+
+static void on_shutdown_blocking(void *context, LPCWSTR reason) {
+    BlockingSink *b = (BlockingSink *)context;
+    (void)reason;
+    InterlockedIncrement(&b->calls);
+    SetEvent(b->entered);
+    WaitForSingleObject(b->release, INFINITE); /* a hung client, until the test lets it go */
+}
+
+static void on_shutdown_counting(void *context, LPCWSTR reason) {
+    (void)reason;
+    InterlockedIncrement((LONG *)context);
+}
+
+/* The child process of the killed-client case: advises a sink of its own on the server object
+ * marshaled into `hex`, releases every reference to the server, says so and waits to be killed. */
+static int advise_and_wait_to_die(const char *hex) {
+    size_t n = strlen(hex) / 2, i;
+    HGLOBAL mem = GlobalAlloc(GMEM_MOVEABLE, n ? n : 1);
+    unsigned char *bytes = mem ? (unsigned char *)GlobalLock(mem) : NULL;
+    IStream *stream = NULL;
+    IUnknown *server = NULL, *sink = NULL;
+    DWORD cookie = 0;
+    LONG calls = 0;
+    HANDLE advised = OpenEventW(EVENT_MODIFY_STATE, FALSE, OOP_ADVISED_EVENT);
+    if (!bytes || !advised) return 10;
+    for (i = 0; i < n; i++) {
+        unsigned v = 0;
+        sscanf(hex + 2 * i, "%2x", &v);
+        bytes[i] = (unsigned char)v;
+    }
+    GlobalUnlock(mem);
+    if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED))) return 11;
+    if (FAILED(CreateStreamOnHGlobal(mem, TRUE, &stream))) return 12;
+    if (FAILED(CoUnmarshalInterface(stream, &IID_IUnknown, (void **)&server))) return 13;
+    stream->lpVtbl->Release(stream);
+    if (FAILED(OpcShutdownSinkCreate(on_shutdown_counting, &calls, &IID_IUnknown, (void **)&sink))) return 14;
+    if (FAILED(OpcShutdownAdvise(server, sink, &cookie))) return 15;
+    server->lpVtbl->Release(server); /* so that its death leaves no reference in the server */
+    SetEvent(advised);
+    Sleep(INFINITE);
+    return 0;
+}
+
+/* Starts the child of the killed-client case on the server object `c` and kills it once its sink is
+ * advised. Returns whether that happened. */
+static int advise_from_a_client_that_dies(IOPCCommon *c) {
+    IStream *stream = NULL;
+    HGLOBAL mem = NULL;
+    unsigned char *bytes;
+    SIZE_T size, i;
+    char *cmd;
+    WCHAR *wcmd, self[MAX_PATH];
+    STARTUPINFOW si;
+    PROCESS_INFORMATION pi;
+    HANDLE advised = CreateEventW(NULL, TRUE, FALSE, OOP_ADVISED_EVENT), both[2];
+    int ok = 0;
+    if (!advised) return 0;
+    if (FAILED(CreateStreamOnHGlobal(NULL, TRUE, &stream))) return 0;
+    if (FAILED(CoMarshalInterface(stream, &IID_IUnknown, (IUnknown *)c, MSHCTX_LOCAL, NULL, MSHLFLAGS_NORMAL)) ||
+        FAILED(GetHGlobalFromStream(stream, &mem))) {
+        stream->lpVtbl->Release(stream);
+        return 0;
+    }
+    size = GlobalSize(mem);
+    bytes = (unsigned char *)GlobalLock(mem);
+    GetModuleFileNameW(NULL, self, MAX_PATH);
+    cmd = (char *)malloc(2 * size + 1);
+    wcmd = (WCHAR *)malloc((2 * size + MAX_PATH + 32) * sizeof(WCHAR));
+    if (bytes && cmd && wcmd) {
+        for (i = 0; i < size; i++) snprintf(cmd + 2 * i, 3, "%02x", bytes[i]);
+        swprintf(wcmd, 2 * size + MAX_PATH + 32, L"\"%ls\" die-advised %hs", self, cmd);
+        memset(&si, 0, sizeof si);
+        si.cb = sizeof si;
+        if (CreateProcessW(NULL, wcmd, NULL, NULL, FALSE, 0, NULL, NULL, &si, &pi)) {
+            both[0] = advised;
+            both[1] = pi.hProcess;
+            ok = WaitForMultipleObjects(2, both, FALSE, 60000) == WAIT_OBJECT_0;
+            TerminateProcess(pi.hProcess, 9); /* killed: it never unadvises */
+            WaitForSingleObject(pi.hProcess, 60000);
+            CloseHandle(pi.hProcess);
+            CloseHandle(pi.hThread);
+        }
+    }
+    if (bytes) GlobalUnlock(mem);
+    free(cmd);
+    free(wcmd);
+    stream->lpVtbl->Release(stream);
+    CloseHandle(advised);
+    return ok;
+}
+
+/* OpcShutdownNotifyBounded in the server: a client hung in ShutdownRequest times out without
+ * holding up a client that answers, a killed client counts as failed (it neither hangs the
+ * notification nor is counted as notified), and the hung call returning late harms nobody. */
+static void check_bounded_shutdown(IOPCCommon *c) {
+    BlockingSink blocking;
+    LONG quick_calls = 0;
+    IUnknown *blocking_sink = NULL, *quick_sink = NULL;
+    DWORD blocking_cookie = 0, quick_cookie = 0;
+    WCHAR *answer;
+    blocking.entered = CreateEventW(NULL, TRUE, FALSE, NULL);
+    blocking.release = CreateEventW(NULL, TRUE, FALSE, NULL);
+    blocking.calls = 0;
+
+    CHECK(advise_from_a_client_that_dies(c));
+    /* The notification that waits for every sink does not hang on a dead client either. */
+    answer = ask(c, OOP_CODE_SHUTDOWN);
+    CHECK(wstr_is(answer, "hr=00000001 notified=0 failed=1"));
+    free(answer);
+    CHECK_HR(OpcShutdownSinkCreate(on_shutdown_blocking, &blocking, &IID_IUnknown, (void **)&blocking_sink), S_OK);
+    CHECK_HR(OpcShutdownSinkCreate(on_shutdown_counting, &quick_calls, &IID_IUnknown, (void **)&quick_sink), S_OK);
+    CHECK_HR(OpcShutdownAdvise((IUnknown *)c, blocking_sink, &blocking_cookie), S_OK);
+    CHECK_HR(OpcShutdownAdvise((IUnknown *)c, quick_sink, &quick_cookie), S_OK);
+
+    answer = ask(c, OOP_CODE_SHUTDOWN_BOUNDED);
+    /* The answer came while the blocking sink is still inside ShutdownRequest (released below). */
+    CHECK(WaitForSingleObject(blocking.entered, 0) == WAIT_OBJECT_0);
+    CHECK(wstr_is(answer, "hr=00000001 notified=1 failed=1 timed_out=1"));
+    if (answer && !wstr_is(answer, "hr=00000001 notified=1 failed=1 timed_out=1")) {
+        fputs("  bounded shutdown answer: ", stderr);
+        wprint(stderr, answer);
+        fputc('\n', stderr);
+    }
+    free(answer);
+    CHECK(quick_calls == 1 && blocking.calls == 1);
+
+    /* The late return: the server's worker gets the answer after the notification is over. The
+     * server goes on answering, and the hung client, once back, is notified normally. */
+    SetEvent(blocking.release);
+    answer = ask(c, OOP_CODE_SHUTDOWN_BOUNDED);
+    CHECK(wstr_is(answer, "hr=00000001 notified=2 failed=1 timed_out=0"));
+    free(answer);
+    CHECK(quick_calls == 2 && blocking.calls == 2);
+
+    CHECK_HR(OpcShutdownUnadvise((IUnknown *)c, blocking_cookie), S_OK);
+    CHECK_HR(OpcShutdownUnadvise((IUnknown *)c, quick_cookie), S_OK);
+    if (blocking_sink) blocking_sink->lpVtbl->Release(blocking_sink);
+    if (quick_sink) quick_sink->lpVtbl->Release(quick_sink);
+    CloseHandle(blocking.entered);
+    CloseHandle(blocking.release);
+}
+
 static int is_fake(const GUID *g, int *seen) {
     unsigned n;
     for (n = 0; n < OOP_FAKE_SERVERS; n++) {
@@ -302,12 +453,34 @@ static void check_server_list(void) {
     l2->lpVtbl->Release(l2);
 }
 
+/* A client that releases the server list and then walks the enumerator it got (as many OPC clients
+ * do) keeps the server process: every object an EXE server hands out counts until it is released. */
+static void check_enumerator_outlives_list(void) {
+    IOPCServerList2 *l2 = NULL;
+    IOPCEnumGUID *e = NULL;
+    GUID buf[128];
+    ULONG fetched = 0;
+    int waited;
+    CHECK_HR(CoCreateInstance(&CLSID_OopServerList, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&l2), S_OK);
+    if (!l2) return;
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+    l2->lpVtbl->Release(l2);
+    if (!e) return;
+    CHECK(process_stays(L"opccomn_test_server.exe", 2000));
+    CHECK_HR(e->lpVtbl->Next(e, 128, buf, &fetched), S_FALSE);
+    CHECK(fetched == OOP_FAKE_SERVERS);
+    e->lpVtbl->Release(e);
+    for (waited = 0; waited < 100 && process_running(L"opccomn_test_server.exe") == 1; waited++) Sleep(100);
+    CHECK(process_running(L"opccomn_test_server.exe") == 0); /* and exits once it is released */
+}
+
 int main(int argc, char **argv) {
     OpcServerRegistration server, list;
     IOPCCommon *c = NULL;
     WCHAR *which;
     WCHAR *slash;
     int i;
+    if (argc == 3 && strcmp(argv[1], "die-advised") == 0) return advise_and_wait_to_die(argv[2]);
     if (argc != 3) {
         fprintf(stderr, "usage: test_oop opccomn|widl opccomn|widl\n");
         return 2;
@@ -349,9 +522,11 @@ int main(int argc, char **argv) {
 
         check_common(c);
         check_shutdown(c);
+        check_bounded_shutdown(c);
         c->lpVtbl->Release(c);
     }
     check_server_list();
+    check_enumerator_outlives_list();
     CoUninitialize();
     CHECK(OpcObjectCount() == 0); /* the shutdown sink is gone in this process too */
     CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
