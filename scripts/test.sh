@@ -43,6 +43,7 @@ acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (
 c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
 coexistence|wine|header and library beside the OPC Foundation'"'"'s headers and *_i.c (x64, x86, Linux)
 example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
+third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
 rust-x86|wine32|Rust tests (Windows x86, under 32-bit Wine)
@@ -198,6 +199,8 @@ example_stage() {
 # ---- The stages --------------------------------------------------------------------------------------
 stage_lint() {
     cargo fmt --all -- --check
+    # The third-party client (tests/third-party/opc-da-client) is a Cargo project of its own.
+    cargo fmt --manifest-path tests/third-party/opc-da-client/Cargo.toml -- --check
     cargo clippy --all-targets -- -D warnings
     if [ -z "${disabled[wine]+set}" ]; then
         cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
@@ -314,6 +317,12 @@ stage_coexistence() {
 stage_example_x64() {
     build_windows
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
+}
+
+stage_third_party_client() {
+    build_windows
+    [ -f "$build/example-x64/CMakeCache.txt" ] || example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
+    scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64"
 }
 
 stage_conformance_x64() {
