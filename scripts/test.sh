@@ -43,7 +43,7 @@ acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (
 c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
 coexistence|wine|header and library beside the OPC Foundation'"'"'s headers and *_i.c (x64, x86, Linux)
 example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
-third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64, under Wine)
+third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64 and x86 clients, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
 rust-x86|wine32|Rust tests (Windows x86, under 32-bit Wine)
@@ -322,7 +322,15 @@ stage_example_x64() {
 stage_third_party_client() {
     build_windows
     [ -f "$build/example-x64/CMakeCache.txt" ] || example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
-    scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64"
+    # The x86 client (32-bit Wine) against the same x64 browser and example server, through the x86
+    # proxy/stub.
+    if [ "$wine32_ok" = 1 ]; then
+        build_windows_x86
+        scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64" "$build/windows-x86/bin"
+    else
+        scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64"
+        skip_part "third-party-client: the x86 client" "32-bit Wine is not available: $wine32_missing"
+    fi
 }
 
 stage_conformance_x64() {

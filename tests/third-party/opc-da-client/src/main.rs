@@ -33,8 +33,8 @@ use windows::Win32::System::Diagnostics::ToolHelp::{
     CreateToolhelp32Snapshot, PROCESSENTRY32W, Process32FirstW, Process32NextW, TH32CS_SNAPPROCESS,
 };
 use windows::Win32::System::Registry::{
-    HKEY, HKEY_CLASSES_ROOT, KEY_READ, RRF_NOEXPAND, RRF_RT_REG_EXPAND_SZ, RRF_RT_REG_SZ, RegCloseKey, RegGetValueW,
-    RegOpenKeyExW,
+    HKEY, HKEY_LOCAL_MACHINE, KEY_READ, KEY_WOW64_32KEY, KEY_WOW64_64KEY, RRF_NOEXPAND, RRF_RT_REG_EXPAND_SZ,
+    RRF_RT_REG_SZ, RegCloseKey, RegGetValueW, RegOpenKeyExW,
 };
 use windows::Win32::System::Threading::{EVENT_MODIFY_STATE, OpenEventW, SetEvent};
 use windows::core::{GUID, HRESULT, HSTRING, IUnknown, Interface, PCWSTR};
@@ -121,31 +121,52 @@ fn braced(g: &GUID) -> String {
     )
 }
 
-/// Whether HKEY_CLASSES_ROOT\`key` exists.
-fn key_exists(key: &str) -> bool {
+/// A registry view: a 32-bit client reads the 32-bit view of the classes unless told otherwise, and the
+/// x64 browser, example server and proxy/stub register in the 64-bit one.
+#[derive(Clone, Copy)]
+enum View {
+    /// This process's own view (what its COM uses).
+    Own,
+    Bits64,
+    Bits32,
+}
+
+/// Opens HKEY_LOCAL_MACHINE\Software\Classes\`key` (what HKEY_CLASSES_ROOT shows) in `view`.
+fn open_class_key(key: &str, view: View) -> Option<HKEY> {
+    let access = match view {
+        View::Own => KEY_READ,
+        View::Bits64 => KEY_READ | KEY_WOW64_64KEY,
+        View::Bits32 => KEY_READ | KEY_WOW64_32KEY,
+    };
     let mut hkey = HKEY::default();
-    // SAFETY: `key` lives for the call (HSTRING is NUL-terminated), `hkey` is a valid out-parameter
-    // and is closed below when the call opened it.
-    let opened = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, &HSTRING::from(key), None, KEY_READ, &mut hkey) };
-    if opened != ERROR_SUCCESS {
+    let path = HSTRING::from(format!("Software\\Classes\\{key}"));
+    // SAFETY: `path` lives for the call (HSTRING is NUL-terminated), `hkey` is a valid out-parameter.
+    let opened = unsafe { RegOpenKeyExW(HKEY_LOCAL_MACHINE, &path, None, access, &mut hkey) };
+    (opened == ERROR_SUCCESS).then_some(hkey)
+}
+
+/// Whether the class key `key` exists in `view`.
+fn key_exists(key: &str, view: View) -> bool {
+    let Some(hkey) = open_class_key(key, view) else {
         return false;
-    }
-    // SAFETY: `hkey` was opened above and is closed once.
+    };
+    // SAFETY: `hkey` was opened by open_class_key and is closed once.
     unsafe {
         let _ = RegCloseKey(hkey);
     }
     true
 }
 
-/// The default value of HKEY_CLASSES_ROOT\`key`, when it is a string.
-fn default_value(key: &str) -> Option<String> {
+/// The default value of the class key `key` in `view`, when it is a string.
+fn default_value(key: &str, view: View) -> Option<String> {
+    let hkey = open_class_key(key, view)?;
     let mut buffer = [0u16; 1024];
     let mut bytes = (buffer.len() * 2) as u32;
-    // SAFETY: `buffer` holds `bytes` bytes and outlives the call; the strings are NUL-terminated.
+    // SAFETY: `hkey` is open; `buffer` holds `bytes` bytes and outlives the call.
     let read = unsafe {
         RegGetValueW(
-            HKEY_CLASSES_ROOT,
-            &HSTRING::from(key),
+            hkey,
+            PCWSTR::null(),
             PCWSTR::null(),
             RRF_RT_REG_SZ | RRF_RT_REG_EXPAND_SZ | RRF_NOEXPAND,
             None,
@@ -153,6 +174,10 @@ fn default_value(key: &str) -> Option<String> {
             Some(&mut bytes),
         )
     };
+    // SAFETY: `hkey` was opened by open_class_key and is closed once.
+    unsafe {
+        let _ = RegCloseKey(hkey);
+    }
     if read != ERROR_SUCCESS {
         return None;
     }
@@ -251,7 +276,7 @@ fn browse_category<C: ClientTrait<v2::Server>>(t: &mut Tally, client: &C, name: 
     for guid in &servers {
         let key = format!("CLSID\\{}\\Implemented Categories\\{category}", braced(guid));
         t.check(
-            key_exists(&key),
+            key_exists(&key, View::Bits64) || key_exists(&key, View::Bits32),
             &format!("{name}: {} is a registered class of the category", braced(guid)),
         );
     }
@@ -262,13 +287,14 @@ fn browse(t: &mut Tally) {
     // Only the browser service can answer: CLSID_OPCServerList is a LocalServer32 naming
     // opccomn_browser.exe, with no InprocServer32 (the proxy/stub was registered with /n).
     let class_key = format!("CLSID\\{}", braced(&CLSID_OPC_SERVER_LIST));
-    let local_server = default_value(&format!("{class_key}\\LocalServer32")).unwrap_or_default();
+    let local_server = default_value(&format!("{class_key}\\LocalServer32"), View::Bits64).unwrap_or_default();
     t.check(
         local_server.to_ascii_lowercase().contains("opccomn_browser.exe"),
         &format!("CLSID_OPCServerList is served by opccomn_browser.exe (LocalServer32: {local_server:?})"),
     );
     t.check(
-        !key_exists(&format!("{class_key}\\InprocServer32")),
+        !key_exists(&format!("{class_key}\\InprocServer32"), View::Bits64)
+            && !key_exists(&format!("{class_key}\\InprocServer32"), View::Bits32),
         "CLSID_OPCServerList has no InprocServer32",
     );
     // SAFETY: a NUL-terminated literal.
@@ -523,11 +549,14 @@ fn shutdown_calls(t: &mut Tally, server: &ExampleServer) {
 fn example_server(t: &mut Tally) {
     let class_key = format!("CLSID\\{}", braced(&CLSID_EXAMPLE_SERVER));
     t.check(
-        key_exists(&format!("{class_key}\\LocalServer32")),
+        key_exists(&format!("{class_key}\\LocalServer32"), View::Bits64),
         "the example server is a LocalServer32",
     );
     t.check(
-        key_exists(&format!("Interface\\{}\\ProxyStubClsid32", braced(&IOPCCommon::IID))),
+        key_exists(
+            &format!("Interface\\{}\\ProxyStubClsid32", braced(&IOPCCommon::IID)),
+            View::Own,
+        ),
         "IOPCCommon has a proxy/stub registered",
     );
     // SAFETY: plain activation; the result owns its reference.
@@ -584,6 +613,10 @@ fn main() -> ExitCode {
         eprintln!("third-party-client: CoInitializeEx failed: {}", hex(hr));
         return ExitCode::from(2);
     }
+    println!(
+        "third-party-client: opc_da 0.3.1 / opc_comn_bindings 0.3.0, client built for {}",
+        std::env::consts::ARCH
+    );
     let mut t = Tally::default();
     browse(&mut t);
     example_server(&mut t);
