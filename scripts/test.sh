@@ -199,8 +199,9 @@ example_stage() {
 # ---- The stages --------------------------------------------------------------------------------------
 stage_lint() {
     cargo fmt --all -- --check
-    # The third-party client (tests/third-party/opc-da-client) is a Cargo project of its own.
-    cargo fmt --manifest-path tests/third-party/opc-da-client/Cargo.toml -- --check
+    # The third-party client (tests/third-party/opc-da-client) is a Cargo project of its own (rustfmt
+    # directly: cargo fmt would resolve its crates.io dependencies).
+    rustfmt --check --edition 2024 tests/third-party/opc-da-client/src/main.rs
     cargo clippy --all-targets -- -D warnings
     if [ -z "${disabled[wine]+set}" ]; then
         cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
