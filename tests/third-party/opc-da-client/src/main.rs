@@ -508,11 +508,12 @@ fn shutdown_calls(t: &mut Tally, server: &ExampleServer) {
     // SAFETY: a NUL-terminated name; the handle is closed below.
     let stop = unsafe { OpenEventW(EVENT_MODIFY_STATE, false, &HSTRING::from(EXAMPLE_STOP_EVENT)) };
     if let Some(stop) = t.ok(stop, "OpenEvent(the example server's stop event)") {
-        // SAFETY: `stop` is an open event handle, closed once.
+        // SAFETY: `stop` is an open event handle.
         t.ok(
             unsafe { SetEvent(stop) },
             "SetEvent(stop): the operator stops the server",
         );
+        // SAFETY: as above; closed once and not used after this.
         unsafe {
             let _ = CloseHandle(stop);
         }
