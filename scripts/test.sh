@@ -44,6 +44,7 @@ rust-windows|wine|Rust tests (Windows x64, under Wine)
 acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
 c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
 example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
+third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64 and x86 clients, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
 coexistence|wine|header and library beside the OPC Foundation'"'"'s MIDL headers and *_i.c; a server DLL with its own .def (x64, x86, Linux)
@@ -200,6 +201,9 @@ example_stage() {
 # ---- The stages --------------------------------------------------------------------------------------
 stage_lint() {
     cargo fmt --all -- --check
+    # The third-party client (tests/third-party/opc-da-client) is a Cargo project of its own (rustfmt
+    # directly: cargo fmt would resolve its crates.io dependencies).
+    rustfmt --check --edition 2024 tests/third-party/opc-da-client/src/main.rs
     cargo clippy --all-targets -- -D warnings
     if [ -z "${disabled[wine]+set}" ]; then
         cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings
@@ -330,6 +334,20 @@ stage_coexistence() {
 stage_example_x64() {
     build_windows
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
+}
+
+stage_third_party_client() {
+    build_windows
+    [ -f "$build/example-x64/CMakeCache.txt" ] || example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
+    # The x86 client (32-bit Wine) against the same x64 browser and example server, through the x86
+    # proxy/stub.
+    if [ "$wine32_ok" = 1 ]; then
+        build_windows_x86
+        scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64" "$build/windows-x86/bin"
+    else
+        scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64"
+        skip_part "third-party-client: the x86 client" "32-bit Wine is not available: $wine32_missing"
+    fi
 }
 
 stage_conformance_x64() {
