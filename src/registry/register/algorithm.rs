@@ -38,7 +38,7 @@ pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), H
         if let (None, Some(text)) = (reg.value(&key, &name), description) {
             rec.note_missing_keys(&key);
             rec.values.insert((RegPath::new(&key), RegPath::new(&name)));
-            rec.ledger.push(Entry::Added(key, name));
+            rec.ledger.push(Entry::Added(key, name, Some(text.to_string())));
             reg.register_category(catid, LCID_ENGLISH, text)?;
         }
         rec.note_missing_keys(&format!("{}\\{catid}", class_categories_key(&d.clsid, false)));
@@ -83,6 +83,15 @@ fn class_category_of(path: &str, prefixes: &[(String, bool); 2]) -> Option<(GUID
 }
 
 /// Unregisters the server `d` from `regs`, undoing what [`register`] recorded.
+///
+/// Only what still holds what this registration wrote is taken back: a value someone else wrote or
+/// rewrote since is left as it is (and a value it replaced is not written back over a newer
+/// registration). When the class now serves another server (its program in the own module key, or
+/// its other module key added after this registration: OpcEnum installed or re-registered later), the
+/// keys and values this registration added where the class shares them with that server (the class
+/// key, ProgIDs, categories) stay too, as they may be the other server's as well; its own entries (its
+/// AppID keys, its module key while it still names this server) go, and values it replaced that still
+/// hold its data get their previous data back.
 pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
     let reg = &*regs.write;
     let module_key = d.module_key();
@@ -90,15 +99,63 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         Some(ledger) => ledger,
         None => fallback_ledger(reg, d)?,
     };
-    // Another server registered the class after this one (OpcEnum installed later, say): the class
-    // key, ProgIDs and categories now serve it too. Take back only the own module key.
-    if !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key()) {
-        let own = RegPath::new(&module_key);
-        ledger.retain(|e| e.key().is_some_and(|k| RegPath::new(k) == own));
+    // What this registration writes, for the entries of ledgers that did not record it.
+    let values = d.values()?;
+    let categories: Vec<(String, String)> = d
+        .implemented
+        .iter()
+        .filter_map(|(catid, given)| {
+            let text = given.as_deref().or(standard_description(catid))?;
+            Some((category_key(catid), text.to_string()))
+        })
+        .collect();
+    let expected = |key: &str, name: &str| -> Option<String> {
+        let (key, name) = (RegPath::new(key), RegPath::new(name));
+        let value = values
+            .iter()
+            .find(|(k, n, ..)| RegPath::new(k.as_str()) == key && RegPath::new(n.as_str()) == name);
+        let category = || {
+            categories
+                .iter()
+                .find(|(k, _)| RegPath::new(k.as_str()) == key && name == RegPath::new(format!("{LCID_ENGLISH:x}")))
+                .map(|(_, text)| text.clone())
+        };
+        value.map(|(_, _, data, _)| data.clone()).or_else(category)
+    };
+    let own_module = RegPath::new(&module_key);
+    let module_entry = ledger
+        .iter()
+        .find(|e| matches!(e, Entry::Added(k, n, _) | Entry::Replaced(k, n, _, _) if RegPath::new(k.as_str()) == own_module && n.is_empty()))
+        .cloned()
+        .unwrap_or_else(|| Entry::Added(module_key.clone(), String::new(), None));
+    let module_still_ours = module_entry.still_written(reg, &expected);
+    let other_came = !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key());
+    if !module_still_ours || other_came {
+        let class = format!("{}\\", class_key(&d.clsid));
+        let shared = |key: &str| {
+            let path = RegPath::new(key);
+            let is_own_module = path == own_module || path.strip_prefix(&format!("{module_key}\\")).is_some();
+            if is_own_module {
+                return !module_still_ours;
+            }
+            path == RegPath::new(class_key(&d.clsid))
+                || path.strip_prefix(&class).is_some()
+                || path.strip_prefix("Component Categories\\").is_some()
+                || [Some(&d.prog_id), d.version_independent_prog_id.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .any(|p| path == RegPath::new(p.as_str()) || path.strip_prefix(&format!("{p}\\")).is_some())
+        };
+        // What it added there may be the other server's too (the same data): it stays. A value it
+        // replaced that still holds this registration's data gets its previous data back.
+        ledger.retain(|e| matches!(e, Entry::Replaced(..)) || e.key().is_some_and(|k| !shared(k)));
     }
     for entry in ledger.iter().rev() {
+        if !entry.still_written(reg, &expected) {
+            continue;
+        }
         match entry {
-            Entry::Added(key, name) => {
+            Entry::Added(key, name, _) => {
                 let category = RegPath::new(key)
                     .strip_prefix("Component Categories\\")
                     .and_then(parse_guid);
@@ -107,11 +164,13 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
                 }
                 reg.delete_value(key, name)?
             }
-            Entry::Replaced(key, name, old) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
             Entry::Key(_) | Entry::OtherServer => {}
         }
     }
-    reg.delete_value(&module_key, LEDGER)?;
+    if reg.value(&module_key, LEDGER).is_some() {
+        reg.delete_value(&module_key, LEDGER)?;
+    }
     let mut keys: Vec<&String> = ledger
         .iter()
         .filter_map(|e| match e {
@@ -143,7 +202,7 @@ fn fallback_ledger(reg: &dyn Registry, d: &ServerDescription) -> Result<Vec<Entr
     let mut ledger: Vec<Entry> = d.own_keys().into_iter().map(Entry::Key).collect();
     for (key, name, data, _) in d.values()? {
         if reg.value(&key, &name).as_ref().and_then(RegValue::as_str) == Some(data.as_str()) {
-            ledger.push(Entry::Added(key, name));
+            ledger.push(Entry::Added(key, name, Some(data)));
         }
     }
     Ok(ledger)
