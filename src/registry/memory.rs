@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::sync::{Mutex, MutexGuard};
 
-use super::{RegValue, Registry, MAX_NAME_UNITS};
+use super::{RegValue, Registry, MAX_KEY_DEPTH, MAX_NAME_UNITS};
 use crate::com::{E_INVALIDARG, HRESULT};
 
 #[derive(Default)]
@@ -22,12 +22,16 @@ pub struct MemoryRegistry {
     root: Mutex<Node>,
 }
 
-/// The key names of `path`; `None` when a name is empty or too long. The empty path is the root.
+/// The key names of `path`; `None` when a name is empty or too long, or the path deeper than the
+/// registry allows (MAX_KEY_DEPTH). The empty path is the root.
 fn split(path: &str) -> Option<Vec<&str>> {
     if path.is_empty() {
         return Some(Vec::new());
     }
     let parts: Vec<&str> = path.split('\\').collect();
+    if parts.len() > MAX_KEY_DEPTH {
+        return None;
+    }
     parts
         .iter()
         // (A name has at most as many UTF-16 units as UTF-8 bytes: most need no count.)
@@ -37,6 +41,19 @@ fn split(path: &str) -> Option<Vec<&str>> {
 
 fn fold(name: &str) -> String {
     super::path::folded(name)
+}
+
+impl Drop for Node {
+    /// Frees the subtree level by level, not by recursion: the depth of a tree costs no stack.
+    fn drop(&mut self) {
+        let mut pending: Vec<Node> = core::mem::take(&mut self.children)
+            .into_values()
+            .map(|(_, n)| n)
+            .collect();
+        while let Some(mut node) = pending.pop() {
+            pending.extend(core::mem::take(&mut node.children).into_values().map(|(_, n)| n));
+        }
+    }
 }
 
 impl Node {
@@ -195,5 +212,14 @@ mod tests {
         assert!(reg.subkeys("\\").is_empty());
         assert!(reg.subkeys("A\\").is_empty());
         assert_eq!(reg.subkeys("A"), vec!["B".to_string()]);
+        // As deep as the Windows registry goes (512 levels), and no deeper.
+        let deepest = vec!["k"; MAX_KEY_DEPTH].join("\\");
+        assert!(reg.create_key(&deepest).is_ok());
+        assert_eq!(reg.create_key(&format!("{deepest}\\k")), Err(E_INVALIDARG));
+        assert_eq!(
+            reg.set_value(&format!("{deepest}\\k"), "v", &RegValue::Dword(1)),
+            Err(E_INVALIDARG)
+        );
+        assert!(!reg.key_exists(&format!("{deepest}\\k")));
     }
 }
