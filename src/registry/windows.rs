@@ -10,7 +10,7 @@
 
 use core::ffi::c_void;
 use core::ptr;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use windows_sys::Win32::Foundation::{
     ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HMODULE, WIN32_ERROR,
@@ -25,6 +25,7 @@ use windows_sys::Win32::System::Registry::{
     RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_QUERY_VALUE, KEY_READ, KEY_SET_VALUE,
     KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
 };
+use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
 
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::unknown::{release, IUnknown};
@@ -45,6 +46,11 @@ fn wide(s: &str) -> Vec<u16> {
 
 /// An open registry key, closed when dropped.
 struct Key(HKEY);
+
+// SAFETY: a registry handle may be used and closed from any thread; `Key` only reads it.
+unsafe impl Send for Key {}
+// SAFETY: as above: the registry functions taking it are safe to call concurrently.
+unsafe impl Sync for Key {}
 
 impl Drop for Key {
     fn drop(&mut self) {
@@ -177,27 +183,55 @@ fn convert(kind: u32, bytes: Vec<u8>) -> RegValue {
 pub struct WindowsRegistry {
     /// `KEY_WOW64_64KEY`, `KEY_WOW64_32KEY`, or 0 for the view of the calling process.
     view: u32,
+    /// For a view flag other than 0: `HKEY_CLASSES_ROOT` opened once in that view, the key every
+    /// path is opened from. Wine gives each `RegOpenKeyExW(HKEY_CLASSES_ROOT, ..., KEY_WOW64_*)` a
+    /// new handle to the root that it never closes (one handle per server-list enumeration); an open
+    /// relative to a key already open costs none. `None` inside: the open failed, so paths are opened
+    /// from the predefined key as before.
+    root: OnceLock<Option<Key>>,
 }
 
 impl WindowsRegistry {
     /// The registry view of the calling process (where registration writes).
     pub fn native() -> WindowsRegistry {
-        WindowsRegistry { view: 0 }
+        WindowsRegistry::view(0)
+    }
+
+    /// `HKEY_CLASSES_ROOT` in the view `view` (`KEY_WOW64_64KEY`, `KEY_WOW64_32KEY` or 0).
+    fn view(view: u32) -> WindowsRegistry {
+        WindowsRegistry {
+            view,
+            root: OnceLock::new(),
+        }
+    }
+
+    /// The key paths are opened from: `HKEY_CLASSES_ROOT` in this view.
+    fn root(&self) -> HKEY {
+        if self.view == 0 {
+            return HKEY_CLASSES_ROOT;
+        }
+        let root = self.root.get_or_init(|| {
+            let mut h: HKEY = ptr::null_mut();
+            // SAFETY: predefined root, NULL sub key (the root itself); `h` is written on success.
+            let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, ptr::null(), 0, MAXIMUM_ALLOWED | self.view, &mut h) };
+            (e == ERROR_SUCCESS).then_some(Key(h))
+        });
+        root.as_ref().map_or(HKEY_CLASSES_ROOT, |k| k.0)
     }
 
     fn open(&self, path: &str, access: u32) -> Option<Key> {
         let mut h: HKEY = ptr::null_mut();
-        // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
-        let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), 0, access | self.view, &mut h) };
+        // SAFETY: an open root, NUL-terminated path; `h` is written on success.
+        let e = unsafe { RegOpenKeyExW(self.root(), wide(path).as_ptr(), 0, access | self.view, &mut h) };
         (e == ERROR_SUCCESS).then_some(Key(h))
     }
 
     fn create(&self, path: &str) -> Result<Key, HRESULT> {
         let mut h: HKEY = ptr::null_mut();
-        // SAFETY: predefined root, NUL-terminated path, optional arguments NULL; `h` written on success.
+        // SAFETY: an open root, NUL-terminated path, optional arguments NULL; `h` written on success.
         let e = unsafe {
             RegCreateKeyExW(
-                HKEY_CLASSES_ROOT,
+                self.root(),
                 wide(path).as_ptr(),
                 0,
                 ptr::null(),
@@ -290,8 +324,8 @@ impl Registry for WindowsRegistry {
         if path.is_empty() {
             return Err(crate::com::E_INVALIDARG);
         }
-        // SAFETY: predefined root, NUL-terminated path. Fails with access denied when subkeys exist.
-        let e = unsafe { RegDeleteKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), self.view, 0) };
+        // SAFETY: an open root, NUL-terminated path. Fails with access denied when subkeys exist.
+        let e = unsafe { RegDeleteKeyExW(self.root(), wide(path).as_ptr(), self.view, 0) };
         match e {
             ERROR_SUCCESS | ERROR_FILE_NOT_FOUND => Ok(()),
             e => Err(hr_from_win32(e)),
@@ -409,8 +443,8 @@ pub(crate) fn system_registries() -> Registries {
     Registries {
         write: native,
         views: vec![
-            Arc::new(WindowsRegistry { view: first }),
-            Arc::new(WindowsRegistry { view: second }),
+            Arc::new(WindowsRegistry::view(first)),
+            Arc::new(WindowsRegistry::view(second)),
         ],
     }
 }
@@ -556,7 +590,7 @@ mod tests {
         } else {
             (KEY_WOW64_64KEY, "64-bit only")
         };
-        let other = WindowsRegistry { view: other_view };
+        let other = WindowsRegistry::view(other_view);
         // What an earlier failed run may have left behind.
         let _ = native.delete_key(key);
         let _ = other.delete_key(key);
@@ -569,5 +603,35 @@ mod tests {
         assert_eq!(found.and_then(|s| s.user_type).as_deref(), Some(text));
         other.delete_key(key).unwrap();
         assert!(!other.key_exists(key));
+    }
+
+    #[test]
+    fn reading_the_other_view_costs_no_handle() {
+        use windows_sys::Win32::System::Threading::{GetCurrentProcess, GetProcessHandleCount};
+        let handles = || {
+            let mut n = 0u32;
+            // SAFETY: the pseudo-handle of this process and a writable count.
+            assert_ne!(unsafe { GetProcessHandleCount(GetCurrentProcess(), &mut n) }, 0);
+            n
+        };
+        let regs = system_registries();
+        // The kinds of reads a server-list enumeration and GetClassDetails make, in both views.
+        let browse = || {
+            for view in &regs.views {
+                let _ = view.scan("Component Categories", &["Missing"]);
+                let _ = view.class_strings(&GUID::from_u128(1), true);
+                let _ = view.key_exists("CLSID");
+                let _ = view.value("CLSID", "");
+            }
+        };
+        browse();
+        let before = handles();
+        for _ in 0..300 {
+            browse();
+        }
+        let after = handles();
+        // (Other tests of this process open and close handles meanwhile: a margin, far below the 300
+        // or more a handle per enumeration costs.)
+        assert!(after < before + 50, "{before} handles before, {after} after");
     }
 }
