@@ -206,7 +206,7 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
     };
     // Only what still holds what registration wrote is taken back (see `Entry::still_written`).
     for entry in ledger.iter().rev() {
-        if entry.key().is_some_and(keep) || !entry.still_written(reg, &expected) {
+        if entry.key().is_some_and(keep) || !entry.still_written(reg, expected) {
             continue;
         }
         match entry {

@@ -10,7 +10,7 @@
 
 use core::ffi::c_void;
 use core::ptr;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use windows_sys::Win32::Foundation::{
     ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HMODULE, WIN32_ERROR,
@@ -25,7 +25,6 @@ use windows_sys::Win32::System::Registry::{
     RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_QUERY_VALUE, KEY_READ, KEY_SET_VALUE,
     KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
 };
-use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
 
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::unknown::{release, IUnknown};
@@ -46,11 +45,6 @@ fn wide(s: &str) -> Vec<u16> {
 
 /// An open registry key, closed when dropped.
 struct Key(HKEY);
-
-// SAFETY: a registry handle may be used and closed from any thread; `Key` only reads it.
-unsafe impl Send for Key {}
-// SAFETY: as above: the registry functions taking it are safe to call concurrently.
-unsafe impl Sync for Key {}
 
 impl Drop for Key {
     fn drop(&mut self) {
@@ -179,59 +173,61 @@ fn convert(kind: u32, bytes: Vec<u8>) -> RegValue {
     RegValue::Other { kind, bytes }
 }
 
+/// Opens `path` from `HKEY_CLASSES_ROOT` with `access` (view flags included).
+fn open_from_root(path: &str, access: u32) -> Option<Key> {
+    let mut h: HKEY = ptr::null_mut();
+    // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
+    let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), 0, access, &mut h) };
+    (e == ERROR_SUCCESS).then_some(Key(h))
+}
+
+/// Opens `path` in the 32-bit view from a 64-bit process, without `KEY_WOW64_32KEY`: Wine gives every
+/// `RegOpenKeyExW(..., KEY_WOW64_32KEY)` of a 64-bit process a handle it never closes, one per read,
+/// so a Wine-hosted browser grew by a handle per enumeration. The 32-bit view of `HKEY_CLASSES_ROOT`
+/// is its `Wow6432Node` subkey for the keys Windows redirects (`CLSID`, `Interface`, ...) and the
+/// shared key for the others: a path whose first key exists under `Wow6432Node` is read there (as a
+/// whole, as the redirection does), any other from the shared key. What Windows and Wine read with
+/// the flag.
+fn open_32_bit_view(path: &str, access: u32) -> Option<Key> {
+    let (first, rest) = path.split_once('\\').unwrap_or((path, ""));
+    if first.eq_ignore_ascii_case("Wow6432Node") {
+        return open_from_root(path, access);
+    }
+    match open_from_root(
+        &format!("Wow6432Node\\{first}"),
+        if rest.is_empty() { access } else { KEY_READ },
+    ) {
+        Some(redirected) if rest.is_empty() => Some(redirected),
+        Some(redirected) => redirected.open(rest, access),
+        None => open_from_root(path, access),
+    }
+}
+
 /// `HKEY_CLASSES_ROOT` in one registry view.
 pub struct WindowsRegistry {
     /// `KEY_WOW64_64KEY`, `KEY_WOW64_32KEY`, or 0 for the view of the calling process.
     view: u32,
-    /// For a view flag other than 0: `HKEY_CLASSES_ROOT` opened once in that view, the key every
-    /// path is opened from. Wine gives each `RegOpenKeyExW(HKEY_CLASSES_ROOT, ..., KEY_WOW64_*)` a
-    /// new handle to the root that it never closes (one handle per server-list enumeration); an open
-    /// relative to a key already open costs none. `None` inside: the open failed, so paths are opened
-    /// from the predefined key as before.
-    root: OnceLock<Option<Key>>,
 }
 
 impl WindowsRegistry {
     /// The registry view of the calling process (where registration writes).
     pub fn native() -> WindowsRegistry {
-        WindowsRegistry::view(0)
-    }
-
-    /// `HKEY_CLASSES_ROOT` in the view `view` (`KEY_WOW64_64KEY`, `KEY_WOW64_32KEY` or 0).
-    fn view(view: u32) -> WindowsRegistry {
-        WindowsRegistry {
-            view,
-            root: OnceLock::new(),
-        }
-    }
-
-    /// The key paths are opened from: `HKEY_CLASSES_ROOT` in this view.
-    fn root(&self) -> HKEY {
-        if self.view == 0 {
-            return HKEY_CLASSES_ROOT;
-        }
-        let root = self.root.get_or_init(|| {
-            let mut h: HKEY = ptr::null_mut();
-            // SAFETY: predefined root, NULL sub key (the root itself); `h` is written on success.
-            let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, ptr::null(), 0, MAXIMUM_ALLOWED | self.view, &mut h) };
-            (e == ERROR_SUCCESS).then_some(Key(h))
-        });
-        root.as_ref().map_or(HKEY_CLASSES_ROOT, |k| k.0)
+        WindowsRegistry { view: 0 }
     }
 
     fn open(&self, path: &str, access: u32) -> Option<Key> {
-        let mut h: HKEY = ptr::null_mut();
-        // SAFETY: an open root, NUL-terminated path; `h` is written on success.
-        let e = unsafe { RegOpenKeyExW(self.root(), wide(path).as_ptr(), 0, access | self.view, &mut h) };
-        (e == ERROR_SUCCESS).then_some(Key(h))
+        if self.view == KEY_WOW64_32KEY && cfg!(target_pointer_width = "64") && !path.is_empty() {
+            return open_32_bit_view(path, access);
+        }
+        open_from_root(path, access | self.view)
     }
 
     fn create(&self, path: &str) -> Result<Key, HRESULT> {
         let mut h: HKEY = ptr::null_mut();
-        // SAFETY: an open root, NUL-terminated path, optional arguments NULL; `h` written on success.
+        // SAFETY: predefined root, NUL-terminated path, optional arguments NULL; `h` written on success.
         let e = unsafe {
             RegCreateKeyExW(
-                self.root(),
+                HKEY_CLASSES_ROOT,
                 wide(path).as_ptr(),
                 0,
                 ptr::null(),
@@ -246,6 +242,18 @@ impl WindowsRegistry {
             Ok(Key(h))
         } else {
             Err(hr_from_win32(e))
+        }
+    }
+
+    /// The view flag for opens relative to a key of this view: none for the 32-bit view of a 64-bit
+    /// process (the key is in the view already, and the flag would cost a handle under Wine, see
+    /// `open_32_bit_view`), else the view's flag (a 32-bit process reading the 64-bit view needs it,
+    /// or its relative opens would be redirected back to the 32-bit view).
+    fn relative_view(&self) -> u32 {
+        if self.view == KEY_WOW64_32KEY && cfg!(target_pointer_width = "64") {
+            0
+        } else {
+            self.view
         }
     }
 
@@ -324,8 +332,8 @@ impl Registry for WindowsRegistry {
         if path.is_empty() {
             return Err(crate::com::E_INVALIDARG);
         }
-        // SAFETY: an open root, NUL-terminated path. Fails with access denied when subkeys exist.
-        let e = unsafe { RegDeleteKeyExW(self.root(), wide(path).as_ptr(), self.view, 0) };
+        // SAFETY: predefined root, NUL-terminated path. Fails with access denied when subkeys exist.
+        let e = unsafe { RegDeleteKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), self.view, 0) };
         match e {
             ERROR_SUCCESS | ERROR_FILE_NOT_FOUND => Ok(()),
             e => Err(hr_from_win32(e)),
@@ -346,7 +354,7 @@ impl Registry for WindowsRegistry {
                     .iter()
                     .map(|child| {
                         parent_key
-                            .open(&format!("{name}\\{child}"), KEY_READ | self.view)
+                            .open(&format!("{name}\\{child}"), KEY_READ | self.relative_view())
                             .map(|k| k.subkeys())
                     })
                     .collect();
@@ -359,7 +367,13 @@ impl Registry for WindowsRegistry {
     fn class_strings(&self, clsid: &GUID, version_independent: bool) -> Option<ClassStrings> {
         let class = self.open(&class_key(clsid), KEY_READ)?;
         let text = |v: Option<RegValue>| v.and_then(|v| v.as_str().map(str::to_string));
-        let sub = |name: &str| text(class.open(name, KEY_QUERY_VALUE | self.view).and_then(|k| k.value("")));
+        let sub = |name: &str| {
+            text(
+                class
+                    .open(name, KEY_QUERY_VALUE | self.relative_view())
+                    .and_then(|k| k.value("")),
+            )
+        };
         Some(ClassStrings {
             user_type: text(class.value("")),
             prog_id: sub("ProgID"),
@@ -443,8 +457,8 @@ pub(crate) fn system_registries() -> Registries {
     Registries {
         write: native,
         views: vec![
-            Arc::new(WindowsRegistry::view(first)),
-            Arc::new(WindowsRegistry::view(second)),
+            Arc::new(WindowsRegistry { view: first }),
+            Arc::new(WindowsRegistry { view: second }),
         ],
     }
 }
@@ -590,7 +604,7 @@ mod tests {
         } else {
             (KEY_WOW64_64KEY, "64-bit only")
         };
-        let other = WindowsRegistry::view(other_view);
+        let other = WindowsRegistry { view: other_view };
         // What an earlier failed run may have left behind.
         let _ = native.delete_key(key);
         let _ = other.delete_key(key);
@@ -607,12 +621,17 @@ mod tests {
 
     #[test]
     fn reading_the_other_view_costs_no_handle() {
-        use windows_sys::Win32::System::Threading::{GetCurrentProcess, GetProcessHandleCount};
-        let handles = || {
-            let mut n = 0u32;
-            // SAFETY: the pseudo-handle of this process and a writable count.
-            assert_ne!(unsafe { GetProcessHandleCount(GetCurrentProcess(), &mut n) }, 0);
-            n
+        use windows_sys::Win32::Foundation::{GetHandleInformation, HANDLE};
+        // The handles of this process, counted by asking each possible value (Wine's
+        // GetProcessHandleCount says 0).
+        let open_handles = || {
+            (1..16384usize)
+                .filter(|slot| {
+                    let mut flags = 0u32;
+                    // SAFETY: asks about a handle value; an invalid one fails without effect.
+                    unsafe { GetHandleInformation((slot * 4) as HANDLE, &mut flags) != 0 }
+                })
+                .count()
         };
         let regs = system_registries();
         // The kinds of reads a server-list enumeration and GetClassDetails make, in both views.
@@ -625,13 +644,13 @@ mod tests {
             }
         };
         browse();
-        let before = handles();
+        let before = open_handles();
         for _ in 0..300 {
             browse();
         }
-        let after = handles();
-        // (Other tests of this process open and close handles meanwhile: a margin, far below the 300
-        // or more a handle per enumeration costs.)
+        let after = open_handles();
+        // (Other tests of this process open and close handles meanwhile: a margin, far below the
+        // 300 or more that a handle per read costs.)
         assert!(after < before + 50, "{before} handles before, {after} after");
     }
 }

@@ -128,7 +128,7 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         .find(|e| matches!(e, Entry::Added(k, n, _) | Entry::Replaced(k, n, _, _) if RegPath::new(k.as_str()) == own_module && n.is_empty()))
         .cloned()
         .unwrap_or_else(|| Entry::Added(module_key.clone(), String::new(), None));
-    let module_still_ours = module_entry.still_written(reg, &expected);
+    let module_still_ours = module_entry.still_written(reg, expected);
     let other_came = !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key());
     if !module_still_ours || other_came {
         let class = format!("{}\\", class_key(&d.clsid));
@@ -151,7 +151,7 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         ledger.retain(|e| matches!(e, Entry::Replaced(..)) || e.key().is_some_and(|k| !shared(k)));
     }
     for entry in ledger.iter().rev() {
-        if !entry.still_written(reg, &expected) {
+        if !entry.still_written(reg, expected) {
             continue;
         }
         match entry {
