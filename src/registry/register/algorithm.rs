@@ -99,55 +99,27 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         Some(ledger) => ledger,
         None => fallback_ledger(reg, d)?,
     };
-    // What this registration writes, for the entries of ledgers that did not record it.
-    let values = d.values()?;
-    let categories: Vec<(String, String)> = d
-        .implemented
-        .iter()
-        .filter_map(|(catid, given)| {
-            let text = given.as_deref().or(standard_description(catid))?;
-            Some((category_key(catid), text.to_string()))
-        })
-        .collect();
-    let expected = |key: &str, name: &str| -> Option<String> {
-        let (key, name) = (RegPath::new(key), RegPath::new(name));
-        let value = values
-            .iter()
-            .find(|(k, n, ..)| RegPath::new(k.as_str()) == key && RegPath::new(n.as_str()) == name);
-        let category = || {
-            categories
-                .iter()
-                .find(|(k, _)| RegPath::new(k.as_str()) == key && name == RegPath::new(format!("{LCID_ENGLISH:x}")))
-                .map(|(_, text)| text.clone())
-        };
-        value.map(|(_, _, data, _)| data.clone()).or_else(category)
-    };
-    let own_module = RegPath::new(&module_key);
+    let written = Written::new(d)?;
+    let expected = |key: &str, name: &str| written.data(key, name);
     let module_entry = ledger
         .iter()
-        .find(|e| matches!(e, Entry::Added(k, n, _) | Entry::Replaced(k, n, _, _) if RegPath::new(k.as_str()) == own_module && n.is_empty()))
+        .find(|e| e.is_value(&module_key, ""))
         .cloned()
         .unwrap_or_else(|| Entry::Added(module_key.clone(), String::new(), None));
     let module_still_ours = module_entry.still_written(reg, expected);
     let other_came = !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key());
     if !module_still_ours || other_came {
-        let class = format!("{}\\", class_key(&d.clsid));
+        // What it added where the class is shared may be the other server's too (the same data): it
+        // stays. A value it replaced that still holds this registration's data gets its previous data
+        // back.
+        let own_module = RegPath::new(&module_key);
         let shared = |key: &str| {
             let path = RegPath::new(key);
-            let is_own_module = path == own_module || path.strip_prefix(&format!("{module_key}\\")).is_some();
-            if is_own_module {
+            if path == own_module || path.strip_prefix(&format!("{module_key}\\")).is_some() {
                 return !module_still_ours;
             }
-            path == RegPath::new(class_key(&d.clsid))
-                || path.strip_prefix(&class).is_some()
-                || path.strip_prefix("Component Categories\\").is_some()
-                || [Some(&d.prog_id), d.version_independent_prog_id.as_ref()]
-                    .into_iter()
-                    .flatten()
-                    .any(|p| path == RegPath::new(p.as_str()) || path.strip_prefix(&format!("{p}\\")).is_some())
+            shared_by_the_class(d, &path)
         };
-        // What it added there may be the other server's too (the same data): it stays. A value it
-        // replaced that still holds this registration's data gets its previous data back.
         ledger.retain(|e| matches!(e, Entry::Replaced(..)) || e.key().is_some_and(|k| !shared(k)));
     }
     for entry in ledger.iter().rev() {
@@ -191,6 +163,47 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         }
     }
     Ok(())
+}
+
+/// What registration writes to each value, for the entries of ledgers that did not record it.
+struct Written {
+    /// (key, value name, data)
+    values: Vec<(RegPath, RegPath, String)>,
+}
+
+impl Written {
+    fn new(d: &ServerDescription) -> Result<Written, HRESULT> {
+        let mut values: Vec<(RegPath, RegPath, String)> = d
+            .values()?
+            .into_iter()
+            .map(|(key, name, data, _)| (RegPath::new(key), RegPath::new(name), data))
+            .collect();
+        for (catid, given) in &d.implemented {
+            if let Some(text) = given.as_deref().or(standard_description(catid)) {
+                let name = format!("{LCID_ENGLISH:x}");
+                values.push((RegPath::new(category_key(catid)), RegPath::new(name), text.to_string()));
+            }
+        }
+        Ok(Written { values })
+    }
+
+    fn data(&self, key: &str, name: &str) -> Option<String> {
+        let (key, name) = (RegPath::new(key), RegPath::new(name));
+        self.values
+            .iter()
+            .find(|(k, n, _)| *k == key && *n == name)
+            .map(|(_, _, data)| data.clone())
+    }
+}
+
+/// True when `key` is one a class shares with every server registered for it: the class key and
+/// its subkeys, the ProgIDs, the category descriptions.
+fn shared_by_the_class(d: &ServerDescription, key: &RegPath) -> bool {
+    let under = |root: &str| *key == RegPath::new(root) || key.strip_prefix(&format!("{root}\\")).is_some();
+    under(&class_key(&d.clsid))
+        || key.strip_prefix("Component Categories\\").is_some()
+        || under(&d.prog_id)
+        || d.version_independent_prog_id.as_deref().is_some_and(under)
 }
 
 /// What to undo when no ledger exists: the values that hold what registration would write, and the

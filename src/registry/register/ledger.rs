@@ -95,6 +95,11 @@ impl Entry {
         }
     }
 
+    /// True when this entry records the value `name` of `key`.
+    pub(crate) fn is_value(&self, key: &str, name: &str) -> bool {
+        self.value() == Some((RegPath::new(key), RegPath::new(name)))
+    }
+
     /// The key this entry is about (none for `OtherServer`).
     pub(crate) fn key(&self) -> Option<&str> {
         match self {
