@@ -466,6 +466,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(miri, ignore = "safe code only (no unsafe on its path), long under Miri")]
     fn keys_deeper_than_the_registry_are_refused_before_anything_changes() {
         // (Such files overflowed the stack: the export of 5,000 levels, `[-key]` of 20,000.)
         let reg = MemoryRegistry::new();
