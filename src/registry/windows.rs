@@ -10,21 +10,23 @@
 
 use core::ffi::c_void;
 use core::ptr;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use windows_sys::Win32::Foundation::{
     ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HMODULE, WIN32_ERROR,
 };
 use windows_sys::Win32::System::Com::{CoCreateInstance, CLSCTX_INPROC_SERVER};
 use windows_sys::Win32::System::LibraryLoader::{
-    GetModuleFileNameW, GetModuleHandleExW, GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS,
+    GetModuleFileNameW, GetModuleHandleExW, GetModuleHandleW, GetProcAddress, GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS,
     GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
 };
 use windows_sys::Win32::System::Registry::{
     RegCloseKey, RegCreateKeyExW, RegDeleteKeyExW, RegDeleteValueW, RegEnumKeyExW, RegEnumValueW, RegOpenKeyExW,
-    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_QUERY_VALUE, KEY_READ, KEY_SET_VALUE,
-    KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
+    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, HKEY_LOCAL_MACHINE, KEY_QUERY_VALUE, KEY_READ,
+    KEY_SET_VALUE, KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE,
+    REG_SZ,
 };
+use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
 
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::unknown::{release, IUnknown};
@@ -45,6 +47,12 @@ fn wide(s: &str) -> Vec<u16> {
 
 /// An open registry key, closed when dropped.
 struct Key(HKEY);
+
+// SAFETY: a registry handle may be used and closed from any thread; `Key` only passes it to the
+// registry functions.
+unsafe impl Send for Key {}
+// SAFETY: as above: the registry functions may be called on one handle from several threads.
+unsafe impl Sync for Key {}
 
 impl Drop for Key {
     fn drop(&mut self) {
@@ -173,61 +181,86 @@ fn convert(kind: u32, bytes: Vec<u8>) -> RegValue {
     RegValue::Other { kind, bytes }
 }
 
-/// Opens `path` from `HKEY_CLASSES_ROOT` with `access` (view flags included).
-fn open_from_root(path: &str, access: u32) -> Option<Key> {
-    let mut h: HKEY = ptr::null_mut();
-    // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
-    let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), 0, access, &mut h) };
-    (e == ERROR_SUCCESS).then_some(Key(h))
-}
-
-/// Opens `path` in the 32-bit view from a 64-bit process, without `KEY_WOW64_32KEY`: Wine gives every
-/// `RegOpenKeyExW(..., KEY_WOW64_32KEY)` of a 64-bit process a handle it never closes, one per read,
-/// so a Wine-hosted browser grew by a handle per enumeration. The 32-bit view of `HKEY_CLASSES_ROOT`
-/// is its `Wow6432Node` subkey for the keys Windows redirects (`CLSID`, `Interface`, ...) and the
-/// shared key for the others: a path whose first key exists under `Wow6432Node` is read there (as a
-/// whole, as the redirection does), any other from the shared key. What Windows and Wine read with
-/// the flag.
-fn open_32_bit_view(path: &str, access: u32) -> Option<Key> {
-    let (first, rest) = path.split_once('\\').unwrap_or((path, ""));
-    if first.eq_ignore_ascii_case("Wow6432Node") {
-        return open_from_root(path, access);
-    }
-    match open_from_root(
-        &format!("Wow6432Node\\{first}"),
-        if rest.is_empty() { access } else { KEY_READ },
-    ) {
-        Some(redirected) if rest.is_empty() => Some(redirected),
-        Some(redirected) => redirected.open(rest, access),
-        None => open_from_root(path, access),
-    }
+/// True when the library runs under Wine (its ntdll exports `wine_get_version`).
+fn under_wine() -> bool {
+    static WINE: OnceLock<bool> = OnceLock::new();
+    *WINE.get_or_init(|| {
+        let ntdll = wide("ntdll.dll");
+        // SAFETY: NUL-terminated names; ntdll is loaded in every process and stays loaded.
+        unsafe {
+            let module = GetModuleHandleW(ntdll.as_ptr());
+            !module.is_null() && GetProcAddress(module, c"wine_get_version".as_ptr().cast()).is_some()
+        }
+    })
 }
 
 /// `HKEY_CLASSES_ROOT` in one registry view.
 pub struct WindowsRegistry {
     /// `KEY_WOW64_64KEY`, `KEY_WOW64_32KEY`, or 0 for the view of the calling process.
     view: u32,
+    /// Under Wine, for a view flag other than 0: the classes root opened once in that view, the key
+    /// every path of the view is opened from. Wine gives every open from the predefined
+    /// `HKEY_CLASSES_ROOT` with `KEY_WOW64_32KEY` or `KEY_WOW64_64KEY` a handle it never closes (one
+    /// per read: a Wine-hosted browser grew by a handle per enumeration); opens relative to a key it
+    /// opened cost none. Its `HKEY_CLASSES_ROOT` is `HKEY_LOCAL_MACHINE\Software\Classes`, so that key
+    /// is opened. `None` inside (on Windows, or when the open failed): paths are opened from the
+    /// predefined key.
+    root: OnceLock<Option<Key>>,
 }
 
 impl WindowsRegistry {
     /// The registry view of the calling process (where registration writes).
     pub fn native() -> WindowsRegistry {
-        WindowsRegistry { view: 0 }
+        WindowsRegistry::view(0)
+    }
+
+    /// `HKEY_CLASSES_ROOT` in the view `view` (`KEY_WOW64_64KEY`, `KEY_WOW64_32KEY` or 0).
+    fn view(view: u32) -> WindowsRegistry {
+        WindowsRegistry {
+            view,
+            root: OnceLock::new(),
+        }
+    }
+
+    /// The key paths of this view are opened from (see `root`).
+    fn root(&self) -> HKEY {
+        if self.view == 0 {
+            return HKEY_CLASSES_ROOT;
+        }
+        let root = self.root.get_or_init(|| {
+            if !under_wine() {
+                return None;
+            }
+            let mut h: HKEY = ptr::null_mut();
+            let classes = wide("Software\\Classes");
+            // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
+            let e = unsafe {
+                RegOpenKeyExW(
+                    HKEY_LOCAL_MACHINE,
+                    classes.as_ptr(),
+                    0,
+                    MAXIMUM_ALLOWED | self.view,
+                    &mut h,
+                )
+            };
+            (e == ERROR_SUCCESS).then_some(Key(h))
+        });
+        root.as_ref().map_or(HKEY_CLASSES_ROOT, |k| k.0)
     }
 
     fn open(&self, path: &str, access: u32) -> Option<Key> {
-        if self.view == KEY_WOW64_32KEY && cfg!(target_pointer_width = "64") && !path.is_empty() {
-            return open_32_bit_view(path, access);
-        }
-        open_from_root(path, access | self.view)
+        let mut h: HKEY = ptr::null_mut();
+        // SAFETY: an open root, NUL-terminated path; `h` is written on success.
+        let e = unsafe { RegOpenKeyExW(self.root(), wide(path).as_ptr(), 0, access | self.view, &mut h) };
+        (e == ERROR_SUCCESS).then_some(Key(h))
     }
 
     fn create(&self, path: &str) -> Result<Key, HRESULT> {
         let mut h: HKEY = ptr::null_mut();
-        // SAFETY: predefined root, NUL-terminated path, optional arguments NULL; `h` written on success.
+        // SAFETY: an open root, NUL-terminated path, optional arguments NULL; `h` written on success.
         let e = unsafe {
             RegCreateKeyExW(
-                HKEY_CLASSES_ROOT,
+                self.root(),
                 wide(path).as_ptr(),
                 0,
                 ptr::null(),
@@ -242,18 +275,6 @@ impl WindowsRegistry {
             Ok(Key(h))
         } else {
             Err(hr_from_win32(e))
-        }
-    }
-
-    /// The view flag for opens relative to a key of this view: none for the 32-bit view of a 64-bit
-    /// process (the key is in the view already, and the flag would cost a handle under Wine, see
-    /// `open_32_bit_view`), else the view's flag (a 32-bit process reading the 64-bit view needs it,
-    /// or its relative opens would be redirected back to the 32-bit view).
-    fn relative_view(&self) -> u32 {
-        if self.view == KEY_WOW64_32KEY && cfg!(target_pointer_width = "64") {
-            0
-        } else {
-            self.view
         }
     }
 
@@ -332,8 +353,8 @@ impl Registry for WindowsRegistry {
         if path.is_empty() {
             return Err(crate::com::E_INVALIDARG);
         }
-        // SAFETY: predefined root, NUL-terminated path. Fails with access denied when subkeys exist.
-        let e = unsafe { RegDeleteKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), self.view, 0) };
+        // SAFETY: an open root, NUL-terminated path. Fails with access denied when subkeys exist.
+        let e = unsafe { RegDeleteKeyExW(self.root(), wide(path).as_ptr(), self.view, 0) };
         match e {
             ERROR_SUCCESS | ERROR_FILE_NOT_FOUND => Ok(()),
             e => Err(hr_from_win32(e)),
@@ -354,7 +375,7 @@ impl Registry for WindowsRegistry {
                     .iter()
                     .map(|child| {
                         parent_key
-                            .open(&format!("{name}\\{child}"), KEY_READ | self.relative_view())
+                            .open(&format!("{name}\\{child}"), KEY_READ | self.view)
                             .map(|k| k.subkeys())
                     })
                     .collect();
@@ -367,13 +388,7 @@ impl Registry for WindowsRegistry {
     fn class_strings(&self, clsid: &GUID, version_independent: bool) -> Option<ClassStrings> {
         let class = self.open(&class_key(clsid), KEY_READ)?;
         let text = |v: Option<RegValue>| v.and_then(|v| v.as_str().map(str::to_string));
-        let sub = |name: &str| {
-            text(
-                class
-                    .open(name, KEY_QUERY_VALUE | self.relative_view())
-                    .and_then(|k| k.value("")),
-            )
-        };
+        let sub = |name: &str| text(class.open(name, KEY_QUERY_VALUE | self.view).and_then(|k| k.value("")));
         Some(ClassStrings {
             user_type: text(class.value("")),
             prog_id: sub("ProgID"),
@@ -457,8 +472,8 @@ pub(crate) fn system_registries() -> Registries {
     Registries {
         write: native,
         views: vec![
-            Arc::new(WindowsRegistry { view: first }),
-            Arc::new(WindowsRegistry { view: second }),
+            Arc::new(WindowsRegistry::view(first)),
+            Arc::new(WindowsRegistry::view(second)),
         ],
     }
 }
@@ -604,7 +619,7 @@ mod tests {
         } else {
             (KEY_WOW64_64KEY, "64-bit only")
         };
-        let other = WindowsRegistry { view: other_view };
+        let other = WindowsRegistry::view(other_view);
         // What an earlier failed run may have left behind.
         let _ = native.delete_key(key);
         let _ = other.delete_key(key);
