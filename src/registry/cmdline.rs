@@ -157,4 +157,20 @@ mod tests {
         assert_eq!(parse_command_line("/RegServer -UnregServer"), Err(E_INVALIDARG));
         assert_eq!(parse_command_line("-Embedding /RegServer"), Ok(Register));
     }
+
+    #[test]
+    fn program_paths_are_quoted_and_read_back_either_way() {
+        let path = "C:\\Program Files\\OPC Tools\\x.exe";
+        let line = command_line_of(path);
+        assert_eq!(line, "\"C:\\Program Files\\OPC Tools\\x.exe\"");
+        assert_eq!(program_path(&line), path);
+        // Unquoted (as written before), with arguments, or given as a command line.
+        assert_eq!(program_path(path), path);
+        assert_eq!(program_path("\"C:\\a b\\x.exe\" -Embedding"), "C:\\a b\\x.exe");
+        assert_eq!(
+            command_line_of("\"C:\\a b\\x.exe\" -service"),
+            "\"C:\\a b\\x.exe\" -service"
+        );
+        assert_eq!(program_path("\"unterminated"), "unterminated");
+    }
 }
