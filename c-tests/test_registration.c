@@ -118,7 +118,8 @@ static void test_what_registration_writes(void) {
     snprintf(key, sizeof key, "%s\\VersionIndependentProgID", cls);
     expect_value(reg, key, NULL, "Vendor.TestServer");
     snprintf(key, sizeof key, "%s\\LocalServer32", cls);
-    expect_value(reg, key, NULL, "C:\\Program Files\\Vendor\\TestServer.exe");
+    /* A command line: the path in quotes (unquoted, a path with blanks could start C:\Program.exe). */
+    expect_value(reg, key, NULL, "\"C:\\Program Files\\Vendor\\TestServer.exe\"");
     snprintf(key, sizeof key, "%s\\InprocServer32", cls);
     expect_value(reg, key, NULL, NULL);
     expect_value(reg, cls, "AppID", "{C1000000-1111-2222-3333-444455556602}");
@@ -226,8 +227,8 @@ static void test_reg_file_round_trip(void) {
     CHECK_HR(OpcRegistrationExport(&r, &text), S_OK);
     CHECK(wcontains(text, "Windows Registry Editor Version 5.00\r\n"));
     CHECK(wcontains(text, "[HKEY_CLASSES_ROOT\\Vendor.TestServer.1\\OPC\\Vendor]\r\n@=\"Vendor Inc.\""));
-    /* Backslashes in data are escaped. */
-    CHECK(wcontains(text, "@=\"C:\\\\Program Files\\\\Vendor\\\\TestServer.exe\""));
+    /* Backslashes and quotes in data are escaped. */
+    CHECK(wcontains(text, "@=\"\\\"C:\\\\Program Files\\\\Vendor\\\\TestServer.exe\\\"\""));
     CHECK_HR(OpcRegistryApply(imported, text), S_OK);
     CHECK_HR(OpcRegisterServer(&r, direct), S_OK);
     a = dump(direct);

@@ -35,6 +35,8 @@ unset RUSTFLAGS
 max_len() {
     case "$1" in
         pattern) echo 512 ;;
+        # Room for keys deeper than the registry allows (a `[-key]` of 20,000 levels is a seed).
+        regfile) echo 45000 ;;
         *) echo 4096 ;;
     esac
 }

@@ -11,10 +11,15 @@
  *   opccomn_browser /Status                  print which browser is registered as active
  *   opccomn_browser -Embedding               (COM starts it so) serve until the last client is gone
  *
+ * Switches are read from the arguments after the program name, in any case, with / or -. The
+ * LocalServer32 command line registration writes holds the program's path in quotes (a path with
+ * blanks unquoted could start another program, CWE-428).
+ *
  * Coexistence: CLSID_OPCServerList is OpcEnum's CLSID. When its LocalServer32 names another program,
  * /RegServer leaves it (and every other value) as it is and says so; /TakeOver makes this browser the
- * active one, recording what it replaced, and /UnregServer puts it back. Nothing this program did not
- * write is ever deleted (the registration helpers keep a ledger in the LocalServer32 key).
+ * active one, recording what it replaced, and /UnregServer puts it back. /UnregServer takes back only
+ * what still holds what this program wrote (the registration helpers keep a ledger in the
+ * LocalServer32 key): an OpcEnum installed or re-registered since keeps its registration as it is.
  *
  * DCOM security: CoInitializeSecurity with EOAC_APPID, so the access and launch permissions of the
  * AppID {CCD63ADF-D02D-46DD-B170-FA6E0F086FE3} decide (AccessPermission / LaunchPermission values,
@@ -80,6 +85,40 @@ static int is_self(const WCHAR *command, const WCHAR *self) {
     return _wcsnicmp(command, self, n) == 0 && (command[n] == 0 || command[n] == L'"' || command[n] == L' ');
 }
 
+/* The arguments after the program name, by the rule Windows reads the program name with: up to the
+ * closing quote when it starts with one, else up to the first blank. (The program's path is no
+ * argument: a browser under C:\Plant-Status\ or "C:\OPC -TakeOver\" is no /Status or /TakeOver.) */
+static const WCHAR *arguments_of(const WCHAR *line) {
+    if (*line == L'"') {
+        line++;
+        while (*line && *line != L'"') line++;
+        if (*line) line++;
+    } else {
+        while (*line && *line != L' ' && *line != L'\t') line++;
+    }
+    return line;
+}
+
+/* True when `args` holds the switch `name` as a whole argument: /name or -name, in any case, as
+ * OpcParseCommandLine matches its switches. */
+static int has_switch(const WCHAR *args, const WCHAR *name) {
+    size_t n = wcslen(name);
+    while (*args) {
+        const WCHAR *start;
+        int quoted = 0;
+        while (*args == L' ' || *args == L'\t') args++;
+        start = args;
+        while (*args && (quoted || (*args != L' ' && *args != L'\t'))) {
+            if (*args == L'"') quoted = !quoted;
+            args++;
+        }
+        if ((size_t)(args - start) == n + 1 && (start[0] == L'/' || start[0] == L'-') &&
+            _wcsnicmp(start + 1, name, n) == 0)
+            return 1;
+    }
+    return 0;
+}
+
 static int status(const WCHAR *self) {
     const WCHAR *active = active_browser();
     if (!active[0]) printf("no out-of-process server browser is registered\n");
@@ -90,17 +129,17 @@ static int status(const WCHAR *self) {
 
 int main(void) {
     WCHAR self[MAX_PATH];
-    const WCHAR *line = GetCommandLineW();
+    const WCHAR *args = arguments_of(GetCommandLineW());
     uint32_t command = OPC_SERVER_COMMAND_NONE;
     OpcServerRegistration r;
     HRESULT hr;
     GetModuleFileNameW(NULL, self, MAX_PATH);
     r = registration(self);
-    if (wcsstr(line, L"/Status") || wcsstr(line, L"-Status")) return status(self);
-    if (FAILED(OpcParseCommandLine(line, &command))) command = OPC_SERVER_COMMAND_NONE;
+    if (has_switch(args, L"Status")) return status(self);
+    if (FAILED(OpcParseCommandLine(args, &command))) command = OPC_SERVER_COMMAND_NONE;
     if (command == OPC_SERVER_COMMAND_REGISTER) {
         const WCHAR *active = active_browser();
-        int take_over = wcsstr(line, L"/TakeOver") || wcsstr(line, L"-TakeOver");
+        int take_over = has_switch(args, L"TakeOver");
         if (active[0] && !is_self(active, self) && !take_over) {
             printf("not registered: another server browser is active (%ls); /TakeOver replaces it until "
                    "/UnregServer\n", active);

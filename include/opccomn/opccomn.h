@@ -589,7 +589,9 @@ typedef struct OpcServerRegistration {
    */
   LPCWSTR user_type;
   /**
-   * Full path of the server's DLL or EXE. NULL means: for a local server the executable of the
+   * Full path of the server's DLL or EXE, without quotes: `LocalServer32` gets it in quotes (a
+   * path with blanks unquoted could start another program), `InprocServer32` as it is. A value
+   * holding a quote is taken as a complete command line and written as given. NULL means: for a local server the executable of the
    * calling process (what an EXE server handling `/RegServer` wants); for an in-process server the
    * module that contains the opccomn code (the server DLL when it links opccomn statically; opccomn
    * itself when it is loaded as opccomn.dll, so a server DLL using opccomn.dll must pass its path).
@@ -3215,7 +3217,7 @@ HRESULT OPCCOMN_CDECL OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR te
 /**
  * Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
  * registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
- * (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
+ * (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the categories (created with their standard
  * descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
  * on the calling thread, else by writing the same keys) and, for Data Access
  * 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
@@ -3235,8 +3237,11 @@ HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *serv
 /**
  * Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
  * values and keys that registration added and restores values it replaced, leaving everything that
- * was there before and everything other products wrote. A category's description stays while another
- * class implements the category.
+ * was there before and everything other products wrote. Only what still holds the data registration
+ * wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
+ * re-registered after a take-over) is left as it is, never set back to older data, and while the
+ * class serves another server what it shares with it stays. A category's description stays while
+ * another class implements the category.
  *
  * Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
  * `OpcRegisterServer` for a bad description or a failing registry write.

@@ -31,6 +31,7 @@ use crate::com::ffi::{self, Hr};
 pub use crate::com::guids::CLSID_OpcComnProxyStub;
 use crate::com::iids::{IID_IOPCCommon, IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IOPCShutdown};
 use crate::com::{BOOL, E_INVALIDARG, GUID, HRESULT, IID, LPCWSTR, S_FALSE, S_OK};
+use crate::registry::path::RegPath;
 use crate::registry::register::{read_ledger, this_module_path, Entry, Recorder, LEDGER};
 use crate::registry::{class_key, parse_guid, registries, OpcRegistry, RegValue, Registry};
 
@@ -151,17 +152,16 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
             let mut ledger = vec![
                 Entry::Key(class.clone()),
                 Entry::Key(module_key.clone()),
-                Entry::Added(class.clone(), String::new()),
-                Entry::Added(module_key.clone(), String::new()),
-                Entry::Added(module_key.clone(), "ThreadingModel".into()),
+                Entry::Added(class.clone(), String::new(), None),
+                Entry::Added(module_key.clone(), String::new(), None),
+                Entry::Added(module_key.clone(), "ThreadingModel".into(), None),
             ];
             for (iid, ..) in interfaces() {
-                if proxy_stub_of(reg, iid) == Some(CLSID_OpcComnProxyStub) {
-                    ledger.push(Entry::Added(
-                        format!("{}\\ProxyStubClsid32", interface_key(iid)),
-                        String::new(),
-                    ));
-                }
+                ledger.push(Entry::Added(
+                    format!("{}\\ProxyStubClsid32", interface_key(iid)),
+                    String::new(),
+                    None,
+                ));
             }
             ledger
         }
@@ -178,10 +178,40 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
             .iter()
             .any(|f| key == *f || key.strip_prefix(f.as_str()).is_some_and(|rest| rest.starts_with('\\')))
     };
+    // What registration writes, for entries of ledgers that did not record it (the module path of
+    // our own class: whatever it is).
+    let ours = CLSID_OpcComnProxyStub.to_string();
+    let expected = |key: &str, name: &str| -> Option<String> {
+        let (key, name) = (RegPath::new(key), RegPath::new(name));
+        if key == RegPath::new(class.as_str()) && name == RegPath::new("") {
+            return Some("PSFactoryBuffer".into());
+        }
+        if key == RegPath::new(module_key.as_str()) {
+            return (name == RegPath::new("ThreadingModel")).then(|| "Both".into());
+        }
+        interfaces().into_iter().find_map(|(iid, iname, methods)| {
+            let k = interface_key(iid);
+            if name != RegPath::new("") {
+                None
+            } else if key == RegPath::new(k.as_str()) {
+                Some(iname.to_string())
+            } else if key == RegPath::new(format!("{k}\\NumMethods")) {
+                Some(methods.to_string())
+            } else if key == RegPath::new(format!("{k}\\ProxyStubClsid32")) {
+                Some(ours.clone())
+            } else {
+                None
+            }
+        })
+    };
+    // Only what still holds what registration wrote is taken back (see `Entry::still_written`).
     for entry in ledger.iter().rev() {
+        if entry.key().is_some_and(keep) || !entry.still_written(reg, expected) {
+            continue;
+        }
         match entry {
-            Entry::Added(key, name) if !keep(key) && reg.value(key, name).is_some() => reg.delete_value(key, name)?,
-            Entry::Replaced(key, name, old) if !keep(key) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            Entry::Added(key, name, _) => reg.delete_value(key, name)?,
+            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
             _ => {}
         }
     }

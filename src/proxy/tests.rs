@@ -186,6 +186,47 @@ fn a_dangling_proxy_stub_class_is_replaced_and_restored() {
     miri,
     ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
 )]
+fn values_rewritten_since_registration_stay() {
+    // Taken over from the Foundation's proxy/stub; then another product rewrites an interface's name
+    // and its method count while the proxy/stub is still ours.
+    let reg = MemoryRegistry::new();
+    install_foundation(&reg, &interfaces()[..1]);
+    assert_eq!(register(&reg, MODULE, true), Ok(true));
+    let key = interface_key(interfaces()[0].0);
+    reg.set_value(&key, "", &RegValue::Sz("IOPCShutdown (v2)".into()))
+        .unwrap();
+    reg.set_value(&format!("{key}\\NumMethods"), "", &RegValue::Sz("5".into()))
+        .unwrap();
+    let other = interface_key(interfaces()[1].0);
+    reg.set_value(&other, "", &RegValue::Sz("Their name".into())).unwrap();
+    unregister(&reg).unwrap();
+    // The taken-over interface gets the Foundation's proxy/stub back; what others rewrote stays.
+    assert_eq!(proxy_stub_of(&reg, interfaces()[0].0), Some(FOUNDATION));
+    assert_eq!(sz(&reg, &key, "").as_deref(), Some("IOPCShutdown (v2)"));
+    assert_eq!(sz(&reg, &format!("{key}\\NumMethods"), "").as_deref(), Some("5"));
+    assert_eq!(sz(&reg, &other, "").as_deref(), Some("Their name"));
+    assert_eq!(proxy_stub_of(&reg, interfaces()[1].0), None);
+    // A ProxyStubClsid32 written over ours since is not set back to what it was before us.
+    let reg = MemoryRegistry::new();
+    install_foundation(&reg, &interfaces()[..1]);
+    assert_eq!(register(&reg, MODULE, true), Ok(true));
+    let newer = GUID::from_u128(0x5EED);
+    reg.set_value(
+        &format!("{key}\\ProxyStubClsid32"),
+        "",
+        &RegValue::Sz(newer.to_string()),
+    )
+    .unwrap();
+    unregister(&reg).unwrap();
+    assert_eq!(proxy_stub_of(&reg, interfaces()[0].0), Some(newer));
+    assert!(!reg.key_exists(&class_key(&CLSID_OpcComnProxyStub)));
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn unregistration_without_a_ledger_removes_only_our_values() {
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces()[..1]);

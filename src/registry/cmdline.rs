@@ -19,6 +19,29 @@ pub enum OpcServerCommand {
     Embedding = 3,
 }
 
+/// The command line that starts the program at `path` (a `LocalServer32` value): the path in double
+/// quotes, so that a path with blanks cannot be read as a shorter program plus arguments
+/// (`C:\Program Files\OPC Tools\x.exe` unquoted runs `C:\Program.exe` or `C:\Program Files\OPC.exe`
+/// when such a file exists, CWE-428). A path that already holds a quote is a command line its caller
+/// wrote (a path cannot contain `"`) and is kept as given.
+pub(crate) fn command_line_of(path: &str) -> String {
+    if path.contains('"') {
+        path.to_string()
+    } else {
+        format!("\"{path}\"")
+    }
+}
+
+/// The program path of a command line as `LocalServer32` holds it: the text between the leading pair
+/// of quotes, or (unquoted, as older registrations wrote it) the whole text.
+pub(crate) fn program_path(command_line: &str) -> &str {
+    let line = command_line.trim_start();
+    match line.strip_prefix('"') {
+        Some(rest) => rest.split('"').next().unwrap_or(rest),
+        None => line.trim_end(),
+    }
+}
+
 /// Splits a command line into arguments the way Windows programs do for the cases that matter here:
 /// blanks separate arguments, double quotes group blanks into one.
 fn arguments(line: &str) -> Vec<String> {
@@ -133,5 +156,21 @@ mod tests {
         }
         assert_eq!(parse_command_line("/RegServer -UnregServer"), Err(E_INVALIDARG));
         assert_eq!(parse_command_line("-Embedding /RegServer"), Ok(Register));
+    }
+
+    #[test]
+    fn program_paths_are_quoted_and_read_back_either_way() {
+        let path = "C:\\Program Files\\OPC Tools\\x.exe";
+        let line = command_line_of(path);
+        assert_eq!(line, "\"C:\\Program Files\\OPC Tools\\x.exe\"");
+        assert_eq!(program_path(&line), path);
+        // Unquoted (as written before), with arguments, or given as a command line.
+        assert_eq!(program_path(path), path);
+        assert_eq!(program_path("\"C:\\a b\\x.exe\" -Embedding"), "C:\\a b\\x.exe");
+        assert_eq!(
+            command_line_of("\"C:\\a b\\x.exe\" -service"),
+            "\"C:\\a b\\x.exe\" -service"
+        );
+        assert_eq!(program_path("\"unterminated"), "unterminated");
     }
 }

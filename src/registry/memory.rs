@@ -2,10 +2,11 @@
 //! case-insensitive names that keep the case they were created with, a default value per key, and
 //! keys that can only be deleted once they have no subkeys.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::sync::{Mutex, MutexGuard};
 
-use super::{RegValue, Registry, MAX_NAME_UNITS};
+use super::{RegValue, Registry, MAX_KEY_DEPTH, MAX_NAME_UNITS};
 use crate::com::{E_INVALIDARG, HRESULT};
 
 #[derive(Default)]
@@ -22,12 +23,16 @@ pub struct MemoryRegistry {
     root: Mutex<Node>,
 }
 
-/// The key names of `path`; `None` when a name is empty or too long. The empty path is the root.
+/// The key names of `path`; `None` when a name is empty or too long, or the path deeper than the
+/// registry allows (MAX_KEY_DEPTH). The empty path is the root.
 fn split(path: &str) -> Option<Vec<&str>> {
     if path.is_empty() {
         return Some(Vec::new());
     }
     let parts: Vec<&str> = path.split('\\').collect();
+    if parts.len() > MAX_KEY_DEPTH {
+        return None;
+    }
     parts
         .iter()
         // (A name has at most as many UTF-16 units as UTF-8 bytes: most need no count.)
@@ -35,30 +40,51 @@ fn split(path: &str) -> Option<Vec<&str>> {
         .then_some(parts)
 }
 
-fn fold(name: &str) -> String {
-    super::path::folded(name)
+/// The map key of a name: its case-insensitive form, borrowed when the name is that already (lower
+/// case ASCII, the common case: a lookup then allocates nothing).
+fn fold(name: &str) -> Cow<'_, str> {
+    if name.bytes().all(|b| b.is_ascii() && !b.is_ascii_uppercase()) {
+        Cow::Borrowed(name)
+    } else {
+        Cow::Owned(super::path::folded(name))
+    }
+}
+
+impl Drop for Node {
+    /// Frees the subtree level by level, not by recursion: the depth of a tree costs no stack.
+    fn drop(&mut self) {
+        let mut pending: Vec<Node> = core::mem::take(&mut self.children)
+            .into_values()
+            .map(|(_, n)| n)
+            .collect();
+        while let Some(mut node) = pending.pop() {
+            pending.extend(core::mem::take(&mut node.children).into_values().map(|(_, n)| n));
+        }
+    }
 }
 
 impl Node {
     fn find(&self, parts: &[&str]) -> Option<&Node> {
-        parts
-            .iter()
-            .try_fold(self, |node, part| node.children.get(&fold(part)).map(|(_, n)| n))
+        parts.iter().try_fold(self, |node, part| {
+            node.children.get(fold(part).as_ref()).map(|(_, n)| n)
+        })
     }
 
     fn find_mut(&mut self, parts: &[&str]) -> Option<&mut Node> {
-        parts
-            .iter()
-            .try_fold(self, |node, part| node.children.get_mut(&fold(part)).map(|(_, n)| n))
+        parts.iter().try_fold(self, |node, part| {
+            node.children.get_mut(fold(part).as_ref()).map(|(_, n)| n)
+        })
     }
 
     fn create(&mut self, parts: &[&str]) -> &mut Node {
         parts.iter().fold(self, |node, part| {
-            &mut node
-                .children
-                .entry(fold(part))
-                .or_insert_with(|| (part.to_string(), Node::default()))
-                .1
+            let key = fold(part);
+            // (Looked up first, so that the keys on the way, which exist, cost no allocation.)
+            if !node.children.contains_key(key.as_ref()) {
+                node.children
+                    .insert(key.clone().into_owned(), (part.to_string(), Node::default()));
+            }
+            &mut node.children.get_mut(key.as_ref()).expect("present").1
         })
     }
 }
@@ -99,7 +125,10 @@ impl Registry for MemoryRegistry {
     fn value(&self, path: &str, name: &str) -> Option<RegValue> {
         let parts = split(path)?;
         let root = self.root();
-        root.find(&parts)?.values.get(&fold(name)).map(|(_, v)| v.clone())
+        root.find(&parts)?
+            .values
+            .get(fold(name).as_ref())
+            .map(|(_, v)| v.clone())
     }
 
     fn create_key(&self, path: &str) -> Result<(), HRESULT> {
@@ -115,14 +144,15 @@ impl Registry for MemoryRegistry {
         }
         let mut root = self.root();
         let node = root.create(&parts);
-        node.values.insert(fold(name), (name.to_string(), value.clone()));
+        node.values
+            .insert(fold(name).into_owned(), (name.to_string(), value.clone()));
         Ok(())
     }
 
     fn delete_value(&self, path: &str, name: &str) -> Result<(), HRESULT> {
         let parts = split(path).ok_or(E_INVALIDARG)?;
         if let Some(node) = self.root().find_mut(&parts) {
-            node.values.remove(&fold(name));
+            node.values.remove(fold(name).as_ref());
         }
         Ok(())
     }
@@ -134,12 +164,12 @@ impl Registry for MemoryRegistry {
         let Some(parent) = root.find_mut(parents) else {
             return Ok(());
         };
-        match parent.children.get(&fold(last)) {
+        match parent.children.get(fold(last).as_ref()) {
             None => Ok(()),
             // Windows refuses to delete a key with subkeys (ERROR_ACCESS_DENIED).
             Some((_, node)) if !node.children.is_empty() => Err(crate::com::hr(0x80070005)),
             Some(_) => {
-                parent.children.remove(&fold(last));
+                parent.children.remove(fold(last).as_ref());
                 Ok(())
             }
         }
@@ -195,5 +225,14 @@ mod tests {
         assert!(reg.subkeys("\\").is_empty());
         assert!(reg.subkeys("A\\").is_empty());
         assert_eq!(reg.subkeys("A"), vec!["B".to_string()]);
+        // As deep as the Windows registry goes (512 levels), and no deeper.
+        let deepest = vec!["k"; MAX_KEY_DEPTH].join("\\");
+        assert!(reg.create_key(&deepest).is_ok());
+        assert_eq!(reg.create_key(&format!("{deepest}\\k")), Err(E_INVALIDARG));
+        assert_eq!(
+            reg.set_value(&format!("{deepest}\\k"), "v", &RegValue::Dword(1)),
+            Err(E_INVALIDARG)
+        );
+        assert!(!reg.key_exists(&format!("{deepest}\\k")));
     }
 }

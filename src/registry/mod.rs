@@ -37,6 +37,11 @@ pub const REGDB_E_INVALIDVALUE: HRESULT = 0x80040153_u32 as HRESULT;
 /// The longest key or value name the Windows registry accepts, in UTF-16 units.
 pub(crate) const MAX_NAME_UNITS: usize = 255;
 
+/// The most levels of keys below `HKEY_CLASSES_ROOT` a path may have: the Windows registry's limit
+/// (512 levels). Deeper paths are refused with E_INVALIDARG by the in-memory registry and by
+/// `.reg` import before anything is written, so no walk meets a deeper tree.
+pub(crate) const MAX_KEY_DEPTH: usize = 512;
+
 /// One registry value. Registration writes strings only; the other kinds exist so an export of the
 /// real registry is faithful.
 #[derive(Clone, Debug, PartialEq, Eq)]

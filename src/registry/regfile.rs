@@ -15,7 +15,7 @@
 use core::fmt::Write as _;
 
 use super::path::RegPath;
-use super::{registries, OpcRegistry, RegValue, Registry, MAX_NAME_UNITS, REGDB_E_KEYMISSING};
+use super::{registries, OpcRegistry, RegValue, Registry, MAX_KEY_DEPTH, MAX_NAME_UNITS, REGDB_E_KEYMISSING};
 use crate::com::alloc::alloc_wstr_from_str;
 use crate::com::ffi::{self, Hr};
 use crate::com::{E_INVALIDARG, HRESULT, LPCWSTR, LPWSTR, S_OK};
@@ -86,13 +86,22 @@ fn export_key(reg: &dyn Registry, path: &str, out: &mut String) {
     if !path.is_empty() || !values.is_empty() {
         out.push_str("\r\n");
     }
-    for child in sorted(reg.subkeys(path)) {
-        let child_path = if path.is_empty() {
-            child
-        } else {
-            format!("{path}\\{child}")
-        };
-        export_key(reg, &child_path, out);
+}
+
+/// Writes the subtree at `path`, each key before its subkeys in sorted order. A walk with its own
+/// stack of pending keys, not recursion: the depth of the tree costs no call stack.
+fn export_tree(reg: &dyn Registry, path: &str, out: &mut String) {
+    let mut pending = vec![path.to_string()];
+    while let Some(key) = pending.pop() {
+        export_key(reg, &key, out);
+        // Reversed, so the first name is taken next.
+        for child in sorted(reg.subkeys(&key)).into_iter().rev() {
+            pending.push(if key.is_empty() {
+                child
+            } else {
+                format!("{key}\\{child}")
+            });
+        }
     }
 }
 
@@ -103,7 +112,7 @@ pub fn export(reg: &dyn Registry, path: &str) -> Result<String, HRESULT> {
         return Err(REGDB_E_KEYMISSING);
     }
     let mut out = format!("{HEADER}\r\n\r\n");
-    export_key(reg, path, &mut out);
+    export_tree(reg, path, &mut out);
     Ok(out)
 }
 
@@ -123,6 +132,10 @@ fn key_path(header: &str) -> Result<String, HRESULT> {
         return Err(E_INVALIDARG);
     }
     if rest.is_empty() || rest.split('\\').any(|name| !name_fits(name)) {
+        return Err(E_INVALIDARG);
+    }
+    // Deeper than the registry goes: refused while parsing, so the file changes nothing.
+    if rest.split('\\').count() > MAX_KEY_DEPTH {
         return Err(E_INVALIDARG);
     }
     Ok(rest.to_string())
@@ -270,11 +283,21 @@ fn parse(text: &str) -> Result<Vec<Change>, HRESULT> {
     Ok(changes)
 }
 
+/// Deletes the key at `path` with its subtree, every key after its subkeys. A walk with its own
+/// stack, not recursion: the depth of the tree costs no call stack.
 fn delete_tree(reg: &dyn Registry, path: &str) -> Result<(), HRESULT> {
-    for child in reg.subkeys(path) {
-        delete_tree(reg, &format!("{path}\\{child}"))?;
+    // (key, its subkeys are gone already)
+    let mut pending = vec![(path.to_string(), false)];
+    while let Some((key, emptied)) = pending.pop() {
+        if emptied {
+            reg.delete_key(&key)?;
+            continue;
+        }
+        let children = reg.subkeys(&key);
+        pending.push((key.clone(), true));
+        pending.extend(children.into_iter().map(|child| (format!("{key}\\{child}"), false)));
     }
-    reg.delete_key(path)
+    Ok(())
 }
 
 /// Applies a registry file to `reg`. Nothing is written when the text is malformed.
@@ -440,5 +463,46 @@ mod tests {
         let fits = format!("REGEDIT4\n[HKCR\\{longest}]\n\"{longest}\"=\"v\"");
         assert_eq!(apply(&reg, &fits), Ok(()));
         assert_eq!(reg.subkeys(""), vec![longest]);
+    }
+
+    #[test]
+    #[cfg_attr(miri, ignore = "safe code only (no unsafe on its path), long under Miri")]
+    fn keys_deeper_than_the_registry_are_refused_before_anything_changes() {
+        // (Such files overflowed the stack: the export of 5,000 levels, `[-key]` of 20,000.)
+        let reg = MemoryRegistry::new();
+        for depth in [MAX_KEY_DEPTH + 1, 20_000] {
+            let deep = vec!["k"; depth].join("\\");
+            for bad in [
+                format!("REGEDIT4\n[HKCR\\A]\n[HKCR\\{deep}]\n"),
+                format!("REGEDIT4\n[HKCR\\A]\n[-HKCR\\{deep}]\n"),
+            ] {
+                assert_eq!(apply(&reg, &bad), Err(E_INVALIDARG), "{depth} levels");
+            }
+        }
+        assert!(reg.subkeys("").is_empty());
+    }
+
+    #[test]
+    #[cfg_attr(miri, ignore = "safe code only (no unsafe on its path), long under Miri")]
+    fn the_deepest_keys_are_walked_without_recursion() {
+        // Export, import of the export, `[-key]` deletion and freeing of a tree as deep as the
+        // registry allows, in a thread with a small stack: a walk by recursion per level overflows it.
+        std::thread::Builder::new()
+            .stack_size(64 * 1024)
+            .spawn(|| {
+                let deepest = vec!["k"; MAX_KEY_DEPTH].join("\\");
+                let reg = MemoryRegistry::new();
+                apply(&reg, &format!("REGEDIT4\n[HKCR\\{deepest}]\n\"v\"=\"x\"\n")).unwrap();
+                let text = export(&reg, "").unwrap();
+                assert!(text.ends_with(&format!("[{ROOT}\\{deepest}]\r\n\"v\"=\"x\"\r\n\r\n")));
+                let copy = MemoryRegistry::new();
+                apply(&copy, &text).unwrap();
+                assert_eq!(export(&copy, "").unwrap(), text);
+                apply(&reg, "REGEDIT4\n[-HKCR\\k]\n").unwrap();
+                assert!(reg.subkeys("").is_empty());
+            })
+            .unwrap()
+            .join()
+            .unwrap();
     }
 }

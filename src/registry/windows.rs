@@ -10,21 +10,23 @@
 
 use core::ffi::c_void;
 use core::ptr;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use windows_sys::Win32::Foundation::{
     ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HMODULE, WIN32_ERROR,
 };
 use windows_sys::Win32::System::Com::{CoCreateInstance, CLSCTX_INPROC_SERVER};
 use windows_sys::Win32::System::LibraryLoader::{
-    GetModuleFileNameW, GetModuleHandleExW, GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS,
+    GetModuleFileNameW, GetModuleHandleExW, GetModuleHandleW, GetProcAddress, GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS,
     GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
 };
 use windows_sys::Win32::System::Registry::{
     RegCloseKey, RegCreateKeyExW, RegDeleteKeyExW, RegDeleteValueW, RegEnumKeyExW, RegEnumValueW, RegOpenKeyExW,
-    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, KEY_QUERY_VALUE, KEY_READ, KEY_SET_VALUE,
-    KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE, REG_SZ,
+    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, HKEY_LOCAL_MACHINE, KEY_QUERY_VALUE, KEY_READ,
+    KEY_SET_VALUE, KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE,
+    REG_SZ,
 };
+use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
 
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::unknown::{release, IUnknown};
@@ -45,6 +47,12 @@ fn wide(s: &str) -> Vec<u16> {
 
 /// An open registry key, closed when dropped.
 struct Key(HKEY);
+
+// SAFETY: a registry handle may be used and closed from any thread; `Key` only passes it to the
+// registry functions.
+unsafe impl Send for Key {}
+// SAFETY: as above: the registry functions may be called on one handle from several threads.
+unsafe impl Sync for Key {}
 
 impl Drop for Key {
     fn drop(&mut self) {
@@ -173,31 +181,86 @@ fn convert(kind: u32, bytes: Vec<u8>) -> RegValue {
     RegValue::Other { kind, bytes }
 }
 
+/// True when the library runs under Wine (its ntdll exports `wine_get_version`).
+fn under_wine() -> bool {
+    static WINE: OnceLock<bool> = OnceLock::new();
+    *WINE.get_or_init(|| {
+        let ntdll = wide("ntdll.dll");
+        // SAFETY: NUL-terminated names; ntdll is loaded in every process and stays loaded.
+        unsafe {
+            let module = GetModuleHandleW(ntdll.as_ptr());
+            !module.is_null() && GetProcAddress(module, c"wine_get_version".as_ptr().cast()).is_some()
+        }
+    })
+}
+
 /// `HKEY_CLASSES_ROOT` in one registry view.
 pub struct WindowsRegistry {
     /// `KEY_WOW64_64KEY`, `KEY_WOW64_32KEY`, or 0 for the view of the calling process.
     view: u32,
+    /// Under Wine, for a view flag other than 0: the classes root opened once in that view, the key
+    /// every path of the view is opened from. Wine gives every open from the predefined
+    /// `HKEY_CLASSES_ROOT` with `KEY_WOW64_32KEY` or `KEY_WOW64_64KEY` a handle it never closes (one
+    /// per read: a Wine-hosted browser grew by a handle per enumeration); opens relative to a key it
+    /// opened cost none. Its `HKEY_CLASSES_ROOT` is `HKEY_LOCAL_MACHINE\Software\Classes`, so that key
+    /// is opened. `None` inside (on Windows, or when the open failed): paths are opened from the
+    /// predefined key.
+    root: OnceLock<Option<Key>>,
 }
 
 impl WindowsRegistry {
     /// The registry view of the calling process (where registration writes).
     pub fn native() -> WindowsRegistry {
-        WindowsRegistry { view: 0 }
+        WindowsRegistry::view(0)
+    }
+
+    /// `HKEY_CLASSES_ROOT` in the view `view` (`KEY_WOW64_64KEY`, `KEY_WOW64_32KEY` or 0).
+    fn view(view: u32) -> WindowsRegistry {
+        WindowsRegistry {
+            view,
+            root: OnceLock::new(),
+        }
+    }
+
+    /// The key paths of this view are opened from (see `root`).
+    fn root(&self) -> HKEY {
+        if self.view == 0 {
+            return HKEY_CLASSES_ROOT;
+        }
+        let root = self.root.get_or_init(|| {
+            if !under_wine() {
+                return None;
+            }
+            let mut h: HKEY = ptr::null_mut();
+            let classes = wide("Software\\Classes");
+            // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
+            let e = unsafe {
+                RegOpenKeyExW(
+                    HKEY_LOCAL_MACHINE,
+                    classes.as_ptr(),
+                    0,
+                    MAXIMUM_ALLOWED | self.view,
+                    &mut h,
+                )
+            };
+            (e == ERROR_SUCCESS).then_some(Key(h))
+        });
+        root.as_ref().map_or(HKEY_CLASSES_ROOT, |k| k.0)
     }
 
     fn open(&self, path: &str, access: u32) -> Option<Key> {
         let mut h: HKEY = ptr::null_mut();
-        // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
-        let e = unsafe { RegOpenKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), 0, access | self.view, &mut h) };
+        // SAFETY: an open root, NUL-terminated path; `h` is written on success.
+        let e = unsafe { RegOpenKeyExW(self.root(), wide(path).as_ptr(), 0, access | self.view, &mut h) };
         (e == ERROR_SUCCESS).then_some(Key(h))
     }
 
     fn create(&self, path: &str) -> Result<Key, HRESULT> {
         let mut h: HKEY = ptr::null_mut();
-        // SAFETY: predefined root, NUL-terminated path, optional arguments NULL; `h` written on success.
+        // SAFETY: an open root, NUL-terminated path, optional arguments NULL; `h` written on success.
         let e = unsafe {
             RegCreateKeyExW(
-                HKEY_CLASSES_ROOT,
+                self.root(),
                 wide(path).as_ptr(),
                 0,
                 ptr::null(),
@@ -290,8 +353,8 @@ impl Registry for WindowsRegistry {
         if path.is_empty() {
             return Err(crate::com::E_INVALIDARG);
         }
-        // SAFETY: predefined root, NUL-terminated path. Fails with access denied when subkeys exist.
-        let e = unsafe { RegDeleteKeyExW(HKEY_CLASSES_ROOT, wide(path).as_ptr(), self.view, 0) };
+        // SAFETY: an open root, NUL-terminated path. Fails with access denied when subkeys exist.
+        let e = unsafe { RegDeleteKeyExW(self.root(), wide(path).as_ptr(), self.view, 0) };
         match e {
             ERROR_SUCCESS | ERROR_FILE_NOT_FOUND => Ok(()),
             e => Err(hr_from_win32(e)),
@@ -409,8 +472,8 @@ pub(crate) fn system_registries() -> Registries {
     Registries {
         write: native,
         views: vec![
-            Arc::new(WindowsRegistry { view: first }),
-            Arc::new(WindowsRegistry { view: second }),
+            Arc::new(WindowsRegistry::view(first)),
+            Arc::new(WindowsRegistry::view(second)),
         ],
     }
 }
@@ -556,7 +619,7 @@ mod tests {
         } else {
             (KEY_WOW64_64KEY, "64-bit only")
         };
-        let other = WindowsRegistry { view: other_view };
+        let other = WindowsRegistry::view(other_view);
         // What an earlier failed run may have left behind.
         let _ = native.delete_key(key);
         let _ = other.delete_key(key);
@@ -569,5 +632,40 @@ mod tests {
         assert_eq!(found.and_then(|s| s.user_type).as_deref(), Some(text));
         other.delete_key(key).unwrap();
         assert!(!other.key_exists(key));
+    }
+
+    #[test]
+    fn reading_the_other_view_costs_no_handle() {
+        use windows_sys::Win32::Foundation::{GetHandleInformation, HANDLE};
+        // The handles of this process, counted by asking each possible value (Wine's
+        // GetProcessHandleCount says 0).
+        let open_handles = || {
+            (1..16384usize)
+                .filter(|slot| {
+                    let mut flags = 0u32;
+                    // SAFETY: asks about a handle value; an invalid one fails without effect.
+                    unsafe { GetHandleInformation((slot * 4) as HANDLE, &mut flags) != 0 }
+                })
+                .count()
+        };
+        let regs = system_registries();
+        // The kinds of reads a server-list enumeration and GetClassDetails make, in both views.
+        let browse = || {
+            for view in &regs.views {
+                let _ = view.scan("Component Categories", &["Missing"]);
+                let _ = view.class_strings(&GUID::from_u128(1), true);
+                let _ = view.key_exists("CLSID");
+                let _ = view.value("CLSID", "");
+            }
+        };
+        browse();
+        let before = open_handles();
+        for _ in 0..300 {
+            browse();
+        }
+        let after = open_handles();
+        // (Other tests of this process open and close handles meanwhile: a margin, far below the
+        // 300 or more that a handle per read costs.)
+        assert!(after < before + 50, "{before} handles before, {after} after");
     }
 }

@@ -23,12 +23,13 @@ static CLSID fake(unsigned n) {
 static const WCHAR *const FAKE_PROGIDS[2 * FAKES] = {L"Oop.Browse0.1", L"Oop.Browse1.1", L"Oop.Browse2.1",
                                                      L"Oop.Browse3.1", L"Oop.Browse4.1", L"Oop.Browse5.1"};
 
-static DWORD run(const WCHAR *args) {
+/* Runs the browser installed in `where` with the arguments `args`; its exit code. */
+static DWORD run_from(const WCHAR *where, const WCHAR *args) {
     WCHAR cmd[1200];
     STARTUPINFOW si;
     PROCESS_INFORMATION pi;
     DWORD code = 999;
-    swprintf(cmd, 1200, L"\"%ls\\opccomn_browser.exe\" %ls", dir, args);
+    swprintf(cmd, 1200, L"\"%ls\\opccomn_browser.exe\" %ls", where, args);
     memset(&si, 0, sizeof si);
     si.cb = sizeof si;
     if (!CreateProcessW(NULL, cmd, NULL, NULL, FALSE, 0, NULL, NULL, &si, &pi)) return 998;
@@ -38,6 +39,8 @@ static DWORD run(const WCHAR *args) {
     CloseHandle(pi.hThread);
     return code;
 }
+
+static DWORD run(const WCHAR *args) { return run_from(dir, args); }
 
 static int browser_running(void) { return process_running(L"opccomn_browser.exe"); }
 
@@ -165,6 +168,96 @@ static const WCHAR OPCENUM_DELETE[] =
     L"[-HKEY_CLASSES_ROOT\\AppID\\{13486D44-4821-11D2-A494-3CB306C10000}]\r\n\r\n"
     L"[-HKEY_CLASSES_ROOT\\AppID\\OpcEnum.exe]\r\n\r\n"
     L"[-HKEY_CLASSES_ROOT\\OPC.ServerList.1]\r\n\r\n";
+
+/* The string value `name` (NULL: default) of `key` in the system registry, or "" (static buffer). */
+static const WCHAR *reg_string(OpcRegistry *sys, const WCHAR *key, const WCHAR *name) {
+    static WCHAR text[600];
+    LPWSTR v = NULL;
+    text[0] = 0;
+    if (SUCCEEDED(OpcRegistryGetString(sys, key, name, &v)) && v) {
+        swprintf(text, 600, L"%ls", v);
+        CoTaskMemFree(v);
+    }
+    return text;
+}
+
+#define BROWSER_KEY L"CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}"
+
+/* Installed under a path with blanks and the names of switches in it: the path is no argument (a
+ * browser under ...\Plant-Status\ registers, one under "OPC Tools -TakeOver" takes nothing over), and
+ * LocalServer32 holds the path quoted, through which COM starts it. */
+static void installed_under_an_awkward_path(OpcRegistry *sys) {
+    static const WCHAR *const files[2] = {L"opccomn_browser.exe", L"opccomn.dll"};
+    WCHAR top[MAX_PATH], odd[MAX_PATH], from[MAX_PATH], to[MAX_PATH], quoted[MAX_PATH + 4];
+    LPWSTR before, after;
+    unsigned k;
+    swprintf(top, MAX_PATH, L"%ls\\OPC Tools -TakeOver", dir);
+    swprintf(odd, MAX_PATH, L"%ls\\Plant-Status", top);
+    CreateDirectoryW(top, NULL);
+    CreateDirectoryW(odd, NULL);
+    for (k = 0; k < 2; k++) {
+        swprintf(from, MAX_PATH, L"%ls\\%ls", dir, files[k]);
+        swprintf(to, MAX_PATH, L"%ls\\%ls", odd, files[k]);
+        CHECK(CopyFileW(from, to, FALSE));
+    }
+    before = snapshot(sys);
+    CHECK(run_from(odd, L"/RegServer") == 0);
+    swprintf(quoted, MAX_PATH + 4, L"\"%ls\\opccomn_browser.exe\"", odd);
+    CHECK(wcscmp(reg_string(sys, BROWSER_KEY L"\\LocalServer32", NULL), quoted) == 0);
+    CHECK(run_from(odd, L"/status") == 0);
+    browse();
+    CHECK(run_from(odd, L"-UNREGSERVER") == 0);
+    after = snapshot(sys);
+    CHECK(wsame(before, after));
+    free(before);
+    free(after);
+    /* Next to OpcEnum, without /TakeOver on the command line: nothing changes. */
+    CHECK_HR(OpcRegistryApply(sys, OPCENUM_REG), S_OK);
+    before = snapshot(sys);
+    CHECK(run_from(odd, L"/RegServer") == 2);
+    after = snapshot(sys);
+    CHECK(wsame(before, after));
+    free(before);
+    free(after);
+    CHECK_HR(OpcRegistryApply(sys, OPCENUM_DELETE), S_OK);
+    for (k = 0; k < 2; k++) {
+        swprintf(to, MAX_PATH, L"%ls\\%ls", odd, files[k]);
+        CHECK(DeleteFileW(to));
+    }
+    CHECK(RemoveDirectoryW(odd));
+    CHECK(RemoveDirectoryW(top));
+}
+
+/* OpcEnum installed after the browser, or re-registered after /TakeOver: /UnregServer leaves its
+ * registration as OpcEnum wrote it last. */
+static void opcenum_installed_later_stays(OpcRegistry *sys) {
+    static const WCHAR NEWER[] =
+        L"Windows Registry Editor Version 5.00\r\n\r\n"
+        L"[HKEY_CLASSES_ROOT\\CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}\\LocalServer32]\r\n"
+        L"@=\"\\\"D:\\\\OPC Core\\\\OpcEnum.exe\\\"\"\r\n\r\n";
+    /* Browser first, OpcEnum installed over it. */
+    CHECK(run(L"/RegServer") == 0);
+    CHECK_HR(OpcRegistryApply(sys, OPCENUM_REG), S_OK);
+    CHECK(run(L"/UnregServer") == 0);
+    CHECK(wstr_is(reg_string(sys, BROWSER_KEY L"\\LocalServer32", NULL), "C:\\Windows\\System32\\OpcEnum.exe"));
+    CHECK(wstr_is(reg_string(sys, BROWSER_KEY, L"AppID"), "{13486D44-4821-11D2-A494-3CB306C10000}"));
+    CHECK(wstr_is(reg_string(sys, BROWSER_KEY, NULL), "OpcServerList Class"));
+    CHECK(wstr_is(reg_string(sys, L"OPC.ServerList.1\\CLSID", NULL), "{13486D51-4821-11D2-A494-3CB306C10000}"));
+    CHECK(wstr_is(reg_string(sys, L"OPC.ServerList.1", NULL), "OpcServerList Class"));
+    CHECK(reg_string(sys, L"AppID\\opccomn_browser.exe", L"AppID")[0] == 0);
+    CHECK(run(L"/Status") == 2);
+    /* OpcEnum active; the browser takes over; OpcEnum re-registers at a new path; the browser leaves. */
+    CHECK(run(L"/RegServer /TakeOver") == 0);
+    CHECK_HR(OpcRegistryApply(sys, NEWER), S_OK);
+    CHECK(run(L"/UnregServer") == 0);
+    CHECK(wstr_is(reg_string(sys, BROWSER_KEY L"\\LocalServer32", NULL), "\"D:\\OPC Core\\OpcEnum.exe\""));
+    CHECK(wstr_is(reg_string(sys, BROWSER_KEY, L"AppID"), "{13486D44-4821-11D2-A494-3CB306C10000}"));
+    CHECK(wstr_is(reg_string(sys, L"OPC.ServerList.1\\CLSID", NULL), "{13486D51-4821-11D2-A494-3CB306C10000}"));
+    CHECK_HR(OpcRegistryApply(sys, OPCENUM_DELETE), S_OK);
+    /* What the browser added next to OpcEnum's (the version-independent ProgID) stays with the class;
+     * it goes with the class. */
+    CHECK_HR(OpcRegistryApply(sys, L"Windows Registry Editor Version 5.00\r\n\r\n[-HKEY_CLASSES_ROOT\\OPC.ServerList]\r\n"), S_OK);
+}
 
 /* ---- The WOW64 run: a 32-bit client browsing through the 64-bit service ---- */
 
@@ -324,6 +417,9 @@ int main(int argc, char **argv) {
     free(before);
     free(after);
     CHECK_HR(OpcRegistryApply(sys, OPCENUM_DELETE), S_OK);
+
+    installed_under_an_awkward_path(sys);
+    opcenum_installed_later_stays(sys);
 
     for (k = 0; k < FAKES; k++) CHECK_HR(OpcUnregisterServer(&fakes[k], NULL), S_OK);
     CHECK_HR(OpcUnregisterProxyStub(NULL), S_OK);

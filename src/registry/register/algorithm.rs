@@ -38,7 +38,7 @@ pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), H
         if let (None, Some(text)) = (reg.value(&key, &name), description) {
             rec.note_missing_keys(&key);
             rec.values.insert((RegPath::new(&key), RegPath::new(&name)));
-            rec.ledger.push(Entry::Added(key, name));
+            rec.ledger.push(Entry::Added(key, name, Some(text.to_string())));
             reg.register_category(catid, LCID_ENGLISH, text)?;
         }
         rec.note_missing_keys(&format!("{}\\{catid}", class_categories_key(&d.clsid, false)));
@@ -83,6 +83,15 @@ fn class_category_of(path: &str, prefixes: &[(String, bool); 2]) -> Option<(GUID
 }
 
 /// Unregisters the server `d` from `regs`, undoing what [`register`] recorded.
+///
+/// Only what still holds what this registration wrote is taken back: a value someone else wrote or
+/// rewrote since is left as it is (and a value it replaced is not written back over a newer
+/// registration). When the class now serves another server (its program in the own module key, or
+/// its other module key added after this registration: OpcEnum installed or re-registered later), the
+/// keys and values this registration added where the class shares them with that server (the class
+/// key, ProgIDs, categories) stay too, as they may be the other server's as well; its own entries (its
+/// AppID keys, its module key while it still names this server) go, and values it replaced that still
+/// hold its data get their previous data back.
 pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(), HRESULT> {
     let reg = &*regs.write;
     let module_key = d.module_key();
@@ -90,15 +99,35 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         Some(ledger) => ledger,
         None => fallback_ledger(reg, d)?,
     };
-    // Another server registered the class after this one (OpcEnum installed later, say): the class
-    // key, ProgIDs and categories now serve it too. Take back only the own module key.
-    if !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key()) {
-        let own = RegPath::new(&module_key);
-        ledger.retain(|e| e.key().is_some_and(|k| RegPath::new(k) == own));
+    let written = Written::new(d)?;
+    let expected = |key: &str, name: &str| written.data(key, name);
+    let module_entry = ledger
+        .iter()
+        .find(|e| e.is_value(&module_key, ""))
+        .cloned()
+        .unwrap_or_else(|| Entry::Added(module_key.clone(), String::new(), None));
+    let module_still_ours = module_entry.still_written(reg, expected);
+    let other_came = !ledger.contains(&Entry::OtherServer) && reg.key_exists(&d.other_module_key());
+    if !module_still_ours || other_came {
+        // What it added where the class is shared may be the other server's too (the same data): it
+        // stays. A value it replaced that still holds this registration's data gets its previous data
+        // back.
+        let own_module = RegPath::new(&module_key);
+        let shared = |key: &str| {
+            let path = RegPath::new(key);
+            if path == own_module || path.strip_prefix(&format!("{module_key}\\")).is_some() {
+                return !module_still_ours;
+            }
+            shared_by_the_class(d, &path)
+        };
+        ledger.retain(|e| matches!(e, Entry::Replaced(..)) || e.key().is_some_and(|k| !shared(k)));
     }
     for entry in ledger.iter().rev() {
+        if !entry.still_written(reg, expected) {
+            continue;
+        }
         match entry {
-            Entry::Added(key, name) => {
+            Entry::Added(key, name, _) => {
                 let category = RegPath::new(key)
                     .strip_prefix("Component Categories\\")
                     .and_then(parse_guid);
@@ -107,11 +136,13 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
                 }
                 reg.delete_value(key, name)?
             }
-            Entry::Replaced(key, name, old) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
             Entry::Key(_) | Entry::OtherServer => {}
         }
     }
-    reg.delete_value(&module_key, LEDGER)?;
+    if reg.value(&module_key, LEDGER).is_some() {
+        reg.delete_value(&module_key, LEDGER)?;
+    }
     let mut keys: Vec<&String> = ledger
         .iter()
         .filter_map(|e| match e {
@@ -134,6 +165,47 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
     Ok(())
 }
 
+/// What registration writes to each value, for the entries of ledgers that did not record it.
+struct Written {
+    /// (key, value name, data)
+    values: Vec<(RegPath, RegPath, String)>,
+}
+
+impl Written {
+    fn new(d: &ServerDescription) -> Result<Written, HRESULT> {
+        let mut values: Vec<(RegPath, RegPath, String)> = d
+            .values()?
+            .into_iter()
+            .map(|(key, name, data, _)| (RegPath::new(key), RegPath::new(name), data))
+            .collect();
+        for (catid, given) in &d.implemented {
+            if let Some(text) = given.as_deref().or(standard_description(catid)) {
+                let name = format!("{LCID_ENGLISH:x}");
+                values.push((RegPath::new(category_key(catid)), RegPath::new(name), text.to_string()));
+            }
+        }
+        Ok(Written { values })
+    }
+
+    fn data(&self, key: &str, name: &str) -> Option<String> {
+        let (key, name) = (RegPath::new(key), RegPath::new(name));
+        self.values
+            .iter()
+            .find(|(k, n, _)| *k == key && *n == name)
+            .map(|(_, _, data)| data.clone())
+    }
+}
+
+/// True when `key` is one a class shares with every server registered for it: the class key and
+/// its subkeys, the ProgIDs, the category descriptions.
+fn shared_by_the_class(d: &ServerDescription, key: &RegPath) -> bool {
+    let under = |root: &str| *key == RegPath::new(root) || key.strip_prefix(&format!("{root}\\")).is_some();
+    under(&class_key(&d.clsid))
+        || key.strip_prefix("Component Categories\\").is_some()
+        || under(&d.prog_id)
+        || d.version_independent_prog_id.as_deref().is_some_and(under)
+}
+
 /// What to undo when no ledger exists: the values that hold what registration would write, and the
 /// server's own keys.
 fn fallback_ledger(reg: &dyn Registry, d: &ServerDescription) -> Result<Vec<Entry>, HRESULT> {
@@ -143,7 +215,7 @@ fn fallback_ledger(reg: &dyn Registry, d: &ServerDescription) -> Result<Vec<Entr
     let mut ledger: Vec<Entry> = d.own_keys().into_iter().map(Entry::Key).collect();
     for (key, name, data, _) in d.values()? {
         if reg.value(&key, &name).as_ref().and_then(RegValue::as_str) == Some(data.as_str()) {
-            ledger.push(Entry::Added(key, name));
+            ledger.push(Entry::Added(key, name, Some(data)));
         }
     }
     Ok(ledger)

@@ -43,7 +43,9 @@ pub struct OpcServerRegistration {
     pub version_independent_prog_id: LPCWSTR,
     /// The description users see (required), for example "My OPC Server".
     pub user_type: LPCWSTR,
-    /// Full path of the server's DLL or EXE. NULL means: for a local server the executable of the
+    /// Full path of the server's DLL or EXE, without quotes: `LocalServer32` gets it in quotes (a
+    /// path with blanks unquoted could start another program), `InprocServer32` as it is. A value
+    /// holding a quote is taken as a complete command line and written as given. NULL means: for a local server the executable of the
     /// calling process (what an EXE server handling `/RegServer` wants); for an in-process server the
     /// module that contains the opccomn code (the server DLL when it links opccomn statically; opccomn
     /// itself when it is loaded as opccomn.dll, so a server DLL using opccomn.dll must pass its path).

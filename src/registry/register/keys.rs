@@ -3,6 +3,7 @@
 
 use super::description::ServerDescription;
 use crate::com::HRESULT;
+use crate::registry::cmdline::{command_line_of, program_path};
 use crate::registry::{class_categories_key, class_key, MAX_NAME_UNITS};
 
 impl ServerDescription {
@@ -32,7 +33,15 @@ impl ServerDescription {
             ));
         }
         let module = self.module_key();
-        v.push((module.clone(), String::new(), self.module_path()?, true));
+        // An EXE server's module key holds a command line: the path quoted (CWE-428). An in-process
+        // server's holds a plain file path, which COM loads as it is.
+        let module_path = self.module_path()?;
+        let module_value = if self.local {
+            command_line_of(&module_path)
+        } else {
+            module_path
+        };
+        v.push((module.clone(), String::new(), module_value, true));
         if let (false, Some(tm)) = (self.local, &self.threading_model) {
             v.push((module, "ThreadingModel".into(), tm.clone(), true));
         }
@@ -65,8 +74,9 @@ impl ServerDescription {
                 }
             }
             if self.local {
-                let path = self.module_path()?;
-                let exe = path.rsplit(['\\', '/']).next().unwrap_or(&path).to_string();
+                let command = self.module_path()?;
+                let path = program_path(&command);
+                let exe = path.rsplit(['\\', '/']).next().unwrap_or(path).to_string();
                 if !exe.is_empty() && exe.encode_utf16().count() <= MAX_NAME_UNITS {
                     v.push((format!("AppID\\{exe}"), "AppID".into(), app_id.to_string(), false));
                 }

@@ -1,10 +1,13 @@
 //! The record of what a registration wrote (the ledger), kept in the value `OpcComnRegistration` of the
-//! server's module key: its entry format and the [`Recorder`] that writes keys and values while
-//! noting what it added.
+//! server's module key: its entry format, the [`Recorder`] that writes keys and values while noting
+//! what it added, and the rule every unregistration follows: a value is taken back (deleted, or its
+//! previous data restored) only while it still holds the data this registration wrote
+//! ([`Entry::still_written`]); a value someone else wrote or rewrote since is theirs.
 
 use std::collections::HashSet;
 
 use crate::com::HRESULT;
+use crate::registry::cmdline::program_path;
 use crate::registry::path::RegPath;
 use crate::registry::{RegValue, Registry};
 
@@ -16,10 +19,11 @@ pub(crate) const LEDGER: &str = "OpcComnRegistration";
 pub(crate) enum Entry {
     /// Created this key.
     Key(String),
-    /// Added this value (key, name).
-    Added(String, String),
-    /// Replaced this value (key, name, previous data).
-    Replaced(String, String, String),
+    /// Added this value (key, name, data written). The data is `None` in ledgers written before the
+    /// data was recorded.
+    Added(String, String, Option<String>),
+    /// Replaced this value (key, name, previous data, data written; `None` as for `Added`).
+    Replaced(String, String, String, Option<String>),
     /// At the first registration another server already registered the class in the other module key
     /// (`LocalServer32` for an in-process server, and the reverse).
     OtherServer,
@@ -38,8 +42,14 @@ impl Entry {
         match self {
             Entry::Key(k) => format!("K{}", escape(k)),
             Entry::OtherServer => "O".to_string(),
-            Entry::Added(k, n) => format!("V{}|{}", escape(k), escape(n)),
-            Entry::Replaced(k, n, old) => format!("R{}|{}|{}", escape(k), escape(n), escape(old)),
+            Entry::Added(k, n, data) => match data {
+                Some(data) => format!("V{}|{}|{}", escape(k), escape(n), escape(data)),
+                None => format!("V{}|{}", escape(k), escape(n)),
+            },
+            Entry::Replaced(k, n, old, data) => match data {
+                Some(data) => format!("R{}|{}|{}|{}", escape(k), escape(n), escape(old), escape(data)),
+                None => format!("R{}|{}|{}", escape(k), escape(n), escape(old)),
+            },
         }
     }
 
@@ -49,8 +59,10 @@ impl Entry {
         let fields: Vec<String> = chars.as_str().split('|').map(unescape).collect();
         match (tag, fields.as_slice()) {
             ('K', [k]) => Some(Entry::Key(k.clone())),
-            ('V', [k, n]) => Some(Entry::Added(k.clone(), n.clone())),
-            ('R', [k, n, old]) => Some(Entry::Replaced(k.clone(), n.clone(), old.clone())),
+            ('V', [k, n]) => Some(Entry::Added(k.clone(), n.clone(), None)),
+            ('V', [k, n, data]) => Some(Entry::Added(k.clone(), n.clone(), Some(data.clone()))),
+            ('R', [k, n, old]) => Some(Entry::Replaced(k.clone(), n.clone(), old.clone(), None)),
+            ('R', [k, n, old, data]) => Some(Entry::Replaced(k.clone(), n.clone(), old.clone(), Some(data.clone()))),
             ('O', [empty]) if empty.is_empty() => Some(Entry::OtherServer),
             _ => None,
         }
@@ -60,17 +72,56 @@ impl Entry {
     fn value(&self) -> Option<(RegPath, RegPath)> {
         match self {
             Entry::Key(_) | Entry::OtherServer => None,
-            Entry::Added(k, n) | Entry::Replaced(k, n, _) => Some((RegPath::new(k), RegPath::new(n))),
+            Entry::Added(k, n, _) | Entry::Replaced(k, n, _, _) => Some((RegPath::new(k), RegPath::new(n))),
         }
     }
 
+    /// True when the value this entry recorded still holds the data the registration wrote, so that
+    /// taking it back harms nobody. `expected` gives the data for entries of older ledgers, which did
+    /// not record it (`None` from it too: the value is taken as still written, the rule of those
+    /// ledgers). A missing value, or one of another type, no longer holds it. Always true for keys.
+    pub(crate) fn still_written(&self, reg: &dyn Registry, expected: impl Fn(&str, &str) -> Option<String>) -> bool {
+        let (key, name, written) = match self {
+            Entry::Key(_) | Entry::OtherServer => return true,
+            Entry::Added(k, n, w) | Entry::Replaced(k, n, _, w) => (k, n, w),
+        };
+        let Some(current) = reg.value(key, name) else {
+            return false;
+        };
+        let Some(current) = current.as_str() else { return false };
+        match written.clone().or_else(|| expected(key, name)) {
+            Some(written) => same_data(key, name, current, &written),
+            None => true,
+        }
+    }
+
+    /// True when this entry records the value `name` of `key`.
+    pub(crate) fn is_value(&self, key: &str, name: &str) -> bool {
+        self.value() == Some((RegPath::new(key), RegPath::new(name)))
+    }
+
     /// The key this entry is about (none for `OtherServer`).
-    pub(super) fn key(&self) -> Option<&str> {
+    pub(crate) fn key(&self) -> Option<&str> {
         match self {
-            Entry::Key(k) | Entry::Added(k, _) | Entry::Replaced(k, _, _) => Some(k),
+            Entry::Key(k) | Entry::Added(k, _, _) | Entry::Replaced(k, _, _, _) => Some(k),
             Entry::OtherServer => None,
         }
     }
+}
+
+/// True when `current`, the data of value `name` of `key`, is `written`. A `LocalServer32` command
+/// line compares by its program path as well, so a registration from before command lines were
+/// quoted (the same path unquoted) still counts as this registration's.
+fn same_data(key: &str, name: &str, current: &str, written: &str) -> bool {
+    if current == written {
+        return true;
+    }
+    let is_command_line = name.is_empty()
+        && key
+            .rsplit('\\')
+            .next()
+            .is_some_and(|k| k.eq_ignore_ascii_case("LocalServer32"));
+    is_command_line && program_path(current).eq_ignore_ascii_case(program_path(written))
 }
 
 pub(crate) fn read_ledger(reg: &dyn Registry, module_key: &str) -> Option<Vec<Entry>> {
@@ -136,22 +187,47 @@ impl<'a> Recorder<'a> {
     pub(crate) fn value(&mut self, path: &str, name: &str, data: &str, replace: bool) -> Result<(), HRESULT> {
         let id = (RegPath::new(path), RegPath::new(name));
         match self.reg.value(path, name) {
-            Some(RegValue::Sz(old)) if old == data => return Ok(()),
+            Some(RegValue::Sz(old)) if old == data => {
+                // Already so; if this registration wrote it, the record says so too.
+                self.note_written(&id, data);
+                return Ok(());
+            }
             Some(_) if !replace => return Ok(()),
             Some(old) => {
-                if let (Some(old), true) = (old.as_str(), !self.values.contains(&id)) {
-                    self.ledger
-                        .push(Entry::Replaced(path.to_string(), name.to_string(), old.to_string()));
+                if self.values.contains(&id) {
+                    // Ours already (registering again, say at a new path): the record follows.
+                    self.note_written(&id, data);
+                } else if let Some(old) = old.as_str() {
+                    self.ledger.push(Entry::Replaced(
+                        path.to_string(),
+                        name.to_string(),
+                        old.to_string(),
+                        Some(data.to_string()),
+                    ));
                     self.values.insert(id);
                 }
             }
             None => {
                 self.note_missing_keys(path);
-                if self.values.insert(id) {
-                    self.ledger.push(Entry::Added(path.to_string(), name.to_string()));
+                if self.values.insert(id.clone()) {
+                    self.ledger
+                        .push(Entry::Added(path.to_string(), name.to_string(), Some(data.to_string())));
+                } else {
+                    self.note_written(&id, data);
                 }
             }
         }
         self.reg.set_value(path, name, &RegValue::Sz(data.to_string()))
+    }
+
+    /// Records `data` as what this registration wrote to the value `id`, if the ledger has it.
+    fn note_written(&mut self, id: &(RegPath, RegPath), data: &str) {
+        for entry in &mut self.ledger {
+            if entry.value().as_ref() == Some(id) {
+                if let Entry::Added(_, _, written) | Entry::Replaced(_, _, _, written) = entry {
+                    *written = Some(data.to_string());
+                }
+            }
+        }
     }
 }

@@ -8,7 +8,7 @@
 //! CLSID\{clsid}\ProgID                   @ = ProgID
 //! CLSID\{clsid}\VersionIndependentProgID @ = version-independent ProgID
 //! CLSID\{clsid}\InprocServer32           @ = module path, ThreadingModel = ...   (in-process server)
-//! CLSID\{clsid}\LocalServer32            @ = module path                         (EXE server)
+//! CLSID\{clsid}\LocalServer32            @ = "module path" (quoted command line) (EXE server)
 //! CLSID\{clsid}\Implemented Categories\{catid}   (through the Component Categories Manager on Windows)
 //! CLSID\{clsid}\Required Categories\{catid}
 //! Component Categories\{catid}           409 = standard description (created when missing)
@@ -25,15 +25,21 @@
 //! Unregistration removes exactly what registration added, nothing that was there before and nothing
 //! another product wrote. To know what it added, registration keeps a ledger in the value
 //! `OpcComnRegistration` of the server's own module key (`InprocServer32` or `LocalServer32`): the keys
-//! it created, the values it added, and the previous data of values it changed. Unregistration deletes
-//! the added values, restores the changed ones, and deletes the created keys that are then empty. A
-//! category description is left in place while another class still implements the category.
-//! Registering twice is harmless: the ledger keeps what the first registration found. When another
-//! server registered the same class in the other module key *after* this registration (an OpcEnum
-//! installed later next to opccomn's in-process server list), the shared entries serve it too, so
-//! unregistration then takes back only its own module key. Without a
-//! ledger (a registration written by other means) unregistration removes the values whose data is what
-//! this registration would write, and the server's own keys once they are empty.
+//! it created, the values it added or changed with the data it wrote, and the previous data of values
+//! it changed. Unregistration deletes the added values and restores the changed ones *only while they
+//! still hold the data it wrote* (a value someone rewrote since is theirs: it is neither deleted nor
+//! set back to stale data), and deletes the created keys that are then empty. A category description
+//! is left in place while another class still implements the category. Registering twice is
+//! harmless: the ledger keeps what the first registration found and follows what the last one wrote.
+//! When the class serves another server since this registration (its program now in the own module
+//! key, or another server registered in the other module key *after* this registration: OpcEnum
+//! installed later next to opccomn's in-process server list or over the browser), the entries the
+//! class shares with it (class key, ProgIDs, categories) may be its too, so unregistration adds
+//! nothing back there and deletes only its own entries (its AppID keys; its module key while that
+//! still names this server). Without a ledger (a registration written by other means)
+//! unregistration treats the values whose data is what this registration would write as added by it,
+//! under the same rules. `LocalServer32` is written as a command line with the path in quotes
+//! (CWE-428), `InprocServer32` as the plain DLL path COM loads. See docs/registration-safety.md.
 //!
 //! Files, one concern each: `description` (the C struct and its validation), `keys` (the key list),
 //! `ledger` (the record format of what was written), `algorithm` (register and unregister); the
@@ -56,7 +62,7 @@ use crate::registry::{registries, OpcRegistry, Registries};
 
 /// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
 /// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
-/// (with `ThreadingModel`) or `LocalServer32`, the AppID, the categories (created with their standard
+/// (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the categories (created with their standard
 /// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
 /// on the calling thread, else by writing the same keys) and, for Data Access
 /// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
@@ -82,8 +88,11 @@ pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration,
 
 /// Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
 /// values and keys that registration added and restores values it replaced, leaving everything that
-/// was there before and everything other products wrote. A category's description stays while another
-/// class implements the category.
+/// was there before and everything other products wrote. Only what still holds the data registration
+/// wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
+/// re-registered after a take-over) is left as it is, never set back to older data, and while the
+/// class serves another server what it shares with it stays. A category's description stays while
+/// another class implements the category.
 ///
 /// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
 /// `OpcRegisterServer` for a bad description or a failing registry write.

@@ -1,4 +1,4 @@
-use super::ledger::{Entry, LEDGER};
+use super::ledger::{read_ledger, Entry, LEDGER};
 use super::*;
 use crate::com::ffi::Fail;
 use crate::com::{E_INVALIDARG, GUID};
@@ -244,16 +244,241 @@ fn unregistration_without_a_ledger_removes_only_matching_values() {
     assert_eq!(unregister(&memory(), &d), Err(REGDB_E_KEYMISSING));
 }
 
+/// The browser's registration (service/opccomn_browser.c): OpcEnum's class as an EXE server with its
+/// own AppID.
+fn browser() -> ServerDescription {
+    ServerDescription {
+        clsid: GUID::from_u128(0x13486D51_4821_11D2_A494_3CB306C10000),
+        local: true,
+        prog_id: "OPC.ServerList.1".into(),
+        version_independent_prog_id: Some("OPC.ServerList".into()),
+        user_type: "Opc ServerList Class".into(),
+        module_path: Some("C:\\Program Files\\OPC Tools\\opccomn_browser.exe".into()),
+        app_id: Some(GUID::from_u128(0xCCD63ADF_D02D_46DD_B170_FA6E0F086FE3)),
+        ..Default::default()
+    }
+}
+
+/// What the OPC Foundation's OpcEnum.exe registers for itself, with its program at `path`.
+fn opcenum(path: &str) -> String {
+    let path = path.replace('\\', "\\\\").replace('"', "\\\"");
+    format!(
+        "REGEDIT4\n\
+         [HKCR\\CLSID\\{{13486D51-4821-11D2-A494-3CB306C10000}}]\n@=\"OpcServerList Class\"\n\
+         \"AppID\"=\"{{13486D44-4821-11D2-A494-3CB306C10000}}\"\n\
+         [HKCR\\CLSID\\{{13486D51-4821-11D2-A494-3CB306C10000}}\\LocalServer32]\n@=\"{path}\"\n\
+         [HKCR\\CLSID\\{{13486D51-4821-11D2-A494-3CB306C10000}}\\ProgID]\n@=\"OPC.ServerList.1\"\n\
+         [HKCR\\AppID\\{{13486D44-4821-11D2-A494-3CB306C10000}}]\n@=\"OpcEnum\"\n\
+         [HKCR\\AppID\\OpcEnum.exe]\n\"AppID\"=\"{{13486D44-4821-11D2-A494-3CB306C10000}}\"\n\
+         [HKCR\\OPC.ServerList.1]\n@=\"OpcServerList Class\"\n\
+         [HKCR\\OPC.ServerList.1\\CLSID]\n@=\"{{13486D51-4821-11D2-A494-3CB306C10000}}\"\n\
+         [HKCR\\OPC.ServerList]\n@=\"OpcServerList Class\"\n\
+         [HKCR\\OPC.ServerList\\CLSID]\n@=\"{{13486D51-4821-11D2-A494-3CB306C10000}}\"\n\
+         [HKCR\\OPC.ServerList\\CurVer]\n@=\"OPC.ServerList.1\"\n"
+    )
+}
+
+/// Every value of `part` (keys and values as (key, name, value), case as written) is in `whole`.
+fn holds_all(whole: &Registries, part: &Registries) {
+    for (key, values) in dump(part) {
+        for (name, value) in values {
+            assert_eq!(whole.write.value(&key, &name), Some(value), "{key} {name:?}");
+        }
+    }
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn unregistration_leaves_a_server_installed_later_under_the_same_class() {
+    // Browser registered, then OpcEnum installed over it, then the browser unregistered.
+    let regs = memory();
+    let d = browser();
+    register(&regs, &d).unwrap();
+    regfile::apply(&*regs.write, &opcenum("C:\\Windows\\System32\\OpcEnum.exe")).unwrap();
+    unregister(&regs, &d).unwrap();
+    let only_opcenum = memory();
+    regfile::apply(&*only_opcenum.write, &opcenum("C:\\Windows\\System32\\OpcEnum.exe")).unwrap();
+    holds_all(&regs, &only_opcenum);
+    // This registration's own keys are gone, its record too.
+    assert!(!regs.write.key_exists("AppID\\{CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}"));
+    assert!(!regs.write.key_exists("AppID\\opccomn_browser.exe"));
+    assert_eq!(regs.write.value(&d.module_key(), LEDGER), None);
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn unregistration_never_writes_a_stale_value_over_a_newer_registration() {
+    // OpcEnum installed; the browser takes over (replacing its values); OpcEnum re-registers at a
+    // new path; the browser unregisters.
+    for rewrite_all in [true, false] {
+        let regs = memory();
+        regfile::apply(&*regs.write, &opcenum("C:\\Windows\\System32\\OpcEnum.exe")).unwrap();
+        let d = browser();
+        register(&regs, &d).unwrap();
+        let new_path = "\"D:\\OPC Core\\OpcEnum.exe\"";
+        if rewrite_all {
+            regfile::apply(&*regs.write, &opcenum(new_path)).unwrap();
+        } else {
+            regs.write
+                .set_value(&d.module_key(), "", &RegValue::Sz(new_path.into()))
+                .unwrap();
+        }
+        unregister(&regs, &d).unwrap();
+        let expected = memory();
+        regfile::apply(&*expected.write, &opcenum(new_path)).unwrap();
+        // Every value OpcEnum wrote holds what it wrote last (the values the browser replaced and that
+        // still held its data got OpcEnum's back).
+        holds_all(&regs, &expected);
+        assert!(!regs.write.key_exists("AppID\\{CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}"));
+    }
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn values_rewritten_since_registration_stay() {
+    let regs = memory();
+    let mut d = server(10);
+    d.local = true;
+    d.app_id = Some(GUID::from_u128(10));
+    d.run_as = Some("Interactive User".into());
+    register(&regs, &d).unwrap();
+    let app = format!("AppID\\{}", GUID::from_u128(10));
+    let category = format!("Component Categories\\{CATID_OPCDAServer20}");
+    // An administrator changes the account; another product rewrites the category's description and
+    // the version-independent ProgID's current version.
+    regs.write
+        .set_value(&app, "RunAs", &RegValue::Sz("OPC Account".into()))
+        .unwrap();
+    regs.write
+        .set_value(&category, "409", &RegValue::Sz("Data Access 2".into()))
+        .unwrap();
+    regs.write
+        .set_value("Vendor.Server10\\CurVer", "", &RegValue::Sz("Vendor.Server10.2".into()))
+        .unwrap();
+    unregister(&regs, &d).unwrap();
+    let s = |k: &str, n: &str| regs.write.value(k, n).and_then(|v| v.as_str().map(str::to_string));
+    assert_eq!(s(&app, "RunAs").as_deref(), Some("OPC Account"));
+    assert_eq!(s(&app, ""), None, "the description it wrote goes");
+    assert_eq!(s(&category, "409").as_deref(), Some("Data Access 2"));
+    assert_eq!(s("Vendor.Server10\\CurVer", "").as_deref(), Some("Vendor.Server10.2"));
+    assert!(!regs.write.key_exists(&class_key(&d.clsid)));
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn a_registration_moved_to_a_new_path_unregisters_completely() {
+    let regs = memory();
+    let empty = dump(&regs);
+    let mut d = browser();
+    register(&regs, &d).unwrap();
+    d.module_path = Some("D:\\Tools\\opccomn_browser.exe".into());
+    register(&regs, &d).unwrap();
+    assert_eq!(
+        regs.write.value(&d.module_key(), ""),
+        Some(RegValue::Sz("\"D:\\Tools\\opccomn_browser.exe\"".into()))
+    );
+    unregister(&regs, &d).unwrap();
+    assert_eq!(dump(&regs), empty);
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn registrations_of_earlier_versions_still_unregister() {
+    // Before, the ledger did not record the data written, and LocalServer32 was written unquoted.
+    let regs = memory();
+    let empty = dump(&regs);
+    let d = browser();
+    register(&regs, &d).unwrap();
+    let old: Vec<String> = read_ledger(&*regs.write, &d.module_key())
+        .unwrap()
+        .into_iter()
+        .map(|e| match e {
+            Entry::Added(k, n, _) => Entry::Added(k, n, None),
+            Entry::Replaced(k, n, o, _) => Entry::Replaced(k, n, o, None),
+            e => e,
+        })
+        .map(|e| e.encode())
+        .collect();
+    let module = d.module_key();
+    regs.write
+        .set_value(&module, LEDGER, &RegValue::Sz(old.join(";")))
+        .unwrap();
+    regs.write
+        .set_value(&module, "", &RegValue::Sz(d.module_path.clone().unwrap()))
+        .unwrap();
+    unregister(&regs, &d).unwrap();
+    assert_eq!(dump(&regs), empty);
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn command_lines_are_quoted_and_dll_paths_are_not() {
+    let regs = memory();
+    let mut exe = browser();
+    register(&regs, &exe).unwrap();
+    // (CWE-428: unquoted, `C:\Program Files\OPC Tools\opccomn_browser.exe` starts C:\Program.exe.)
+    assert_eq!(
+        regs.write.value(&exe.module_key(), ""),
+        Some(RegValue::Sz(
+            "\"C:\\Program Files\\OPC Tools\\opccomn_browser.exe\"".into()
+        ))
+    );
+    assert!(regs.write.key_exists("AppID\\opccomn_browser.exe"));
+    unregister(&regs, &exe).unwrap();
+    // A command line given already quoted (with arguments) is kept as given.
+    exe.module_path = Some("\"C:\\Program Files\\OPC Tools\\svc.exe\" -service".into());
+    register(&regs, &exe).unwrap();
+    assert_eq!(
+        regs.write.value(&exe.module_key(), ""),
+        Some(RegValue::Sz(exe.module_path.clone().unwrap()))
+    );
+    assert!(regs.write.key_exists("AppID\\svc.exe"));
+    unregister(&regs, &exe).unwrap();
+    // An in-process server's InprocServer32 is a file path that COM loads as it is.
+    let dll = server(11);
+    register(&regs, &dll).unwrap();
+    assert_eq!(
+        regs.write.value(&dll.module_key(), ""),
+        Some(RegValue::Sz("C:\\Program Files\\Vendor\\server.dll".into()))
+    );
+}
+
 #[test]
 fn ledger_entries_survive_awkward_names() {
     for e in [
         Entry::Key("A;B|C%3B".into()),
-        Entry::Added("K".into(), "".into()),
-        Entry::Replaced("K".into(), "n|;".into(), "old;data%".into()),
+        Entry::Added("K".into(), "".into(), None),
+        Entry::Added("K".into(), "".into(), Some("C:\\a|b;c%".into())),
+        Entry::Replaced("K".into(), "n|;".into(), "old;data%".into(), None),
+        Entry::Replaced("K".into(), "n".into(), "old".into(), Some("".into())),
         Entry::OtherServer,
     ] {
         assert_eq!(Entry::decode(&e.encode()), Some(e.clone()));
     }
+    // Ledgers written before the data was recorded read as such.
+    assert_eq!(Entry::decode("VK|n"), Some(Entry::Added("K".into(), "n".into(), None)));
+    assert_eq!(
+        Entry::decode("RK|n|old"),
+        Some(Entry::Replaced("K".into(), "n".into(), "old".into(), None))
+    );
 }
 
 #[test]
@@ -292,12 +517,17 @@ fn bad_descriptions_are_refused() {
     d.module_path = Some(String::new());
     assert_eq!(d.check(), Err(E_INVALIDARG));
     assert_eq!(register(&regs, &d), Err(E_INVALIDARG), "empty module path");
-    // SAFETY: NULL is allowed.
-    assert_eq!(unsafe { ServerDescription::read(ptr::null()) }.err(), Some(Fail::Null));
     // The refused registrations wrote nothing (the same registry takes a good one).
     assert_eq!(dump(&regs), empty);
     register(&regs, &server(8)).unwrap();
     assert_ne!(dump(&regs), empty);
+}
+
+/// A NULL description is refused before anything is read (unsafe code: runs under Miri).
+#[test]
+fn a_null_description_is_refused() {
+    // SAFETY: NULL is allowed.
+    assert_eq!(unsafe { ServerDescription::read(ptr::null()) }.err(), Some(Fail::Null));
 }
 
 /// Reads the whole registry behind a handle through `OpcRegistryExport`, as C callers do.
@@ -387,7 +617,7 @@ fn the_c_entry_points_read_the_structure_and_write_through_a_handle() {
         let class = format!("CLSID\\{clsid}");
         assert_eq!(
             value(&format!("{class}\\LocalServer32"), None).as_deref(),
-            Some("C:\\Vendor\\c.exe")
+            Some("\"C:\\Vendor\\c.exe\"")
         );
         assert_eq!(value(&format!("{class}\\InprocServer32"), None), None);
         assert_eq!(
