@@ -2,7 +2,7 @@
 //! `src/proxy/opccomn_ps.c` (with the NDR tables `tools/gen-proxy.py` generated from
 //! `idl/opccomn.idl` into `src/proxy/generated/`) with `<triple>-gcc` (or OPCCOMN_CC) into a static
 //! library (`<triple>-ar` or OPCCOMN_AR), links it and rpcrt4 (the NDR engine that interprets the
-//! tables), and sets `cfg(opccomn_proxy_stub)` for src/proxy. MSVC builds get no proxy/stub (a build
+//! tables) and uuid, and sets `cfg(opccomn_proxy_stub)` for src/proxy. MSVC builds get no proxy/stub (a build
 //! warning says so).
 
 use std::path::Path;
@@ -43,5 +43,7 @@ pub fn build(manifest_dir: &Path, out_dir: &Path) {
     println!("cargo:rustc-link-search=native={}", dir.display());
     println!("cargo:rustc-link-lib=static=opccomn_ps");
     println!("cargo:rustc-link-lib=dylib=rpcrt4");
+    // The IIDs of IUnknown, IPSFactoryBuffer, IRpcProxyBuffer and IRpcChannelBuffer (mingw's libuuid.a).
+    println!("cargo:rustc-link-lib=uuid");
     println!("cargo:rustc-cfg=opccomn_proxy_stub");
 }
