@@ -1,9 +1,9 @@
 //! For Windows targets, the proxy/stub of the OPC Common interfaces: compiles
 //! `src/proxy/opccomn_ps.c` (with the NDR tables `tools/gen-proxy.py` generated from
-//! `idl/opccomn.idl` into `src/proxy/generated/`) into a static library, links it and rpcrt4 (the NDR
-//! engine that interprets the tables), and sets `cfg(opccomn_proxy_stub)` for src/proxy. With mingw
-//! the tools are `<triple>-gcc` and `<triple>-ar` (or OPCCOMN_CC / OPCCOMN_AR), with MSVC `cl` and
-//! `lib` (or OPCCOMN_CL / OPCCOMN_LIB), see [`crate::toolchain`].
+//! `idl/opccomn.idl` into `src/proxy/generated/`) into a static library, links it, rpcrt4 (the NDR
+//! engine that interprets the tables) and uuid, and sets `cfg(opccomn_proxy_stub)` for src/proxy. With
+//! mingw the tools are `<triple>-gcc` and `<triple>-ar` (or OPCCOMN_CC / OPCCOMN_AR), with MSVC `cl`
+//! and `lib` (or OPCCOMN_CL / OPCCOMN_LIB), see [`crate::toolchain`].
 
 use std::fs;
 use std::path::Path;
@@ -57,5 +57,7 @@ pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
     println!("cargo:rustc-link-search=native={}", dir.display());
     println!("cargo:rustc-link-lib=static=opccomn_ps");
     println!("cargo:rustc-link-lib=dylib=rpcrt4");
+    // The IIDs of IUnknown, IPSFactoryBuffer, IRpcProxyBuffer and IRpcChannelBuffer (mingw's libuuid.a).
+    println!("cargo:rustc-link-lib=uuid");
     println!("cargo:rustc-cfg=opccomn_proxy_stub");
 }

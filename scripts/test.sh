@@ -166,10 +166,11 @@ skip_part() {
 # Runs the C tests of a 32-bit Windows build directory under 32-bit Wine and proves they ran: a 32-bit
 # program that did not start prints nothing, so every test must have printed its closing line.
 run_x86_c_tests() {
-    local dir=$1 tests t oop_tests lines
+    local dir=$1 tests t oop_tests ps_tests lines
     # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
     tests=$(ctest --test-dir "$dir" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
     oop_tests=$(ctest --test-dir "$dir" -N | grep -cE '^ *Test +#[0-9]+: oop\.') || true
+    ps_tests=$(ctest --test-dir "$dir" -N | grep -cE '^ *Test +#[0-9]+: ps\.test_[a-z_]+$') || true
     [ -n "$tests" ] || { echo "no C tests found in $dir" >&2; return 1; }
     ctest --test-dir "$dir" --output-on-failure --timeout 300
     for t in $tests; do
@@ -181,7 +182,12 @@ run_x86_c_tests() {
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
         { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }
-    echo "every x86 C test and cross-process test in $dir printed its result line"
+    # The proxy/stub robustness tests (ps.*; the runs against the unchecked stand-in must fail).
+    lines=$(grep -cE '^test_(stub_requests|proxy_replies): [0-9]+ passed, 0 failed' \
+        "$dir/Testing/Temporary/LastTest.log") || true
+    [ "$ps_tests" -gt 0 ] && [ "$ps_tests" = "$lines" ] ||
+        { echo "x86 proxy/stub tests in $dir: $ps_tests tests, $lines result lines" >&2; return 1; }
+    echo "every x86 C test, cross-process test and proxy/stub test in $dir printed its result line"
 }
 
 # The C++ example (examples/cpp-server) built as a user builds it: against a Windows build installed as

@@ -50,11 +50,119 @@ fn interfaces() -> [(&'static IID, &'static str, u32); 5] {
     ]
 }
 
+// Used by the proxy/stub (Windows, mingw); everywhere else only its tests run it.
+#[cfg_attr(not(opccomn_proxy_stub), allow(dead_code))]
+pub(crate) mod wire;
+
 #[cfg(opccomn_proxy_stub)]
 extern "C" {
-    // src/proxy/opccomn_ps.c: NdrDllGetClassObject / NdrDllCanUnloadNow over the generated tables.
-    fn OpcProxyStubGetClassObject(rclsid: *const GUID, riid: *const GUID, ppv: *mut *mut c_void) -> HRESULT;
+    // src/proxy/opccomn_ps.c: NdrDllGetClassObject / NdrDllCanUnloadNow over the generated tables, with
+    // the checks of `wire` in front of the runtime's NDR engine.
+    fn OpcProxyStubGetClassObject(
+        rclsid: *const GUID,
+        riid: *const GUID,
+        ppv: *mut *mut c_void,
+        checks: *const Checks,
+    ) -> HRESULT;
     fn OpcProxyStubCanUnloadNow() -> HRESULT;
+}
+
+/// The checks `src/proxy/opccomn_ps.c` calls (its `OpcProxyStubChecks`).
+#[cfg(opccomn_proxy_stub)]
+#[repr(C)]
+struct Checks {
+    request: unsafe extern "C" fn(u32, u32, *const u8, u32, u32) -> Hr,
+    reply_context: unsafe extern "C" fn(u32, u32, *const u8, u32) -> ffi::Crossed<u32>,
+    reply: unsafe extern "C" fn(u32, u32, u32, *const u8, u32, u32, u32) -> Hr,
+}
+
+#[cfg(opccomn_proxy_stub)]
+static CHECKS: Checks = Checks {
+    request: check_request,
+    reply_context,
+    reply: check_reply,
+};
+
+/// The bytes of a message: `len` bytes at `buf`; None for NULL with a length, and for a buffer that is
+/// not 4-byte aligned (the NDR engine aligns to the address, the checks to the message's start; a
+/// channel's buffers are always aligned).
+///
+/// # Safety
+/// `buf` NULL or readable for `len` bytes for `'a`.
+#[cfg(opccomn_proxy_stub)]
+unsafe fn message<'a>(buf: *const u8, len: u32) -> Option<&'a [u8]> {
+    if buf.is_null() {
+        return (len == 0).then_some(&[]);
+    }
+    if buf as usize % 4 != 0 {
+        return None;
+    }
+    // SAFETY: readable for `len` bytes, as the caller vouches.
+    Some(unsafe { core::slice::from_raw_parts(buf, len as usize) })
+}
+
+/// [`wire::check_request`] for the stubs' `Invoke`.
+///
+/// # Safety
+/// `buf` NULL or readable for `len` bytes.
+#[cfg(opccomn_proxy_stub)]
+unsafe extern "C" fn check_request(iface: u32, method: u32, buf: *const u8, len: u32, drep: u32) -> Hr {
+    ffi::guard!(wire::BAD_STUB_DATA, {
+        // SAFETY: forwarded from the caller.
+        match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {
+            (Some(iface), Some(bytes)) => match wire::check_request(iface, method, bytes, drep) {
+                Ok(()) => S_OK,
+                Err(hr) => hr,
+            },
+            _ => wire::BAD_STUB_DATA,
+        }
+    })
+}
+
+/// [`wire::reply_context`] for the checked channel, from the proxy's own request.
+///
+/// # Safety
+/// `buf` NULL or readable for `len` bytes.
+#[cfg(opccomn_proxy_stub)]
+unsafe extern "C" fn reply_context(iface: u32, method: u32, buf: *const u8, len: u32) -> ffi::Crossed<u32> {
+    ffi::guard!(0, {
+        // SAFETY: forwarded from the caller.
+        match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {
+            (Some(iface), Some(bytes)) => wire::reply_context(iface, method, bytes),
+            _ => 0,
+        }
+    })
+}
+
+/// [`wire::check_reply`] for the checked channel.
+///
+/// # Safety
+/// `buf` NULL or readable for `len` bytes.
+#[cfg(opccomn_proxy_stub)]
+unsafe extern "C" fn check_reply(
+    iface: u32,
+    method: u32,
+    context: u32,
+    buf: *const u8,
+    len: u32,
+    drep: u32,
+    wine: u32,
+) -> Hr {
+    ffi::guard!(wire::BAD_STUB_DATA, {
+        let layout = if wine != 0 {
+            wire::IpLayout::Wine
+        } else {
+            wire::IpLayout::Runtime
+        };
+        // SAFETY: forwarded from the caller.
+        match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {
+            (Some(iface), Some(bytes)) => match wire::check_reply(iface, method, context, bytes, drep, layout) {
+                Ok(()) => S_OK,
+                Err(hr) => hr,
+            },
+            _ => wire::BAD_STUB_DATA,
+        }
+    })
 }
 
 /// The PSFactoryBuffer for `rclsid` (CLSID_OpcComnProxyStub, or, as with MIDL's proxies, the IID of one
@@ -66,7 +174,7 @@ pub(crate) unsafe fn get_class_object(rclsid: &GUID, riid: &GUID, ppv: *mut *mut
     #[cfg(opccomn_proxy_stub)]
     {
         // SAFETY: valid pointers; the runtime checks `riid` and writes `*ppv` (NULL on failure).
-        let hr = unsafe { OpcProxyStubGetClassObject(rclsid, riid, ppv) };
+        let hr = unsafe { OpcProxyStubGetClassObject(rclsid, riid, ppv, &CHECKS) };
         if hr < 0 {
             // SAFETY: writable, as the caller vouches.
             unsafe { *ppv = ptr::null_mut() };

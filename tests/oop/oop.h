@@ -80,6 +80,8 @@ static unsigned long long process_cpu_time(void) {
 
 /* The locales the test server declares: the library's limit of 4096. */
 #define OOP_LOCALES 4096
+/* The most GUIDs IOPCEnumGUID::Next may ask for through opccomn's proxy/stub (src/proxy/wire.rs). */
+#define OOP_NEXT_BOUND 65536u
 static LCID oop_locale(unsigned i) {
     if (i == 0) return 0x0409;
     if (i == 1) return 0x0407;

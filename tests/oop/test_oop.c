@@ -392,13 +392,18 @@ static void check_server_list(void) {
         }
         CHECK_HR(e->lpVtbl->Reset(e), S_OK);
         /* A count far beyond what exists, with the room for it that the caller must provide (the
-         * proxy clears that much; 2^20 GUIDs are 16 MiB): the stub allocates it on the server side
-         * and only the elements that exist come back. */
+         * proxy clears that much): up to the bound of 65536 GUIDs (1 MiB) the stub allocates it on the
+         * server side and only the elements that exist come back; beyond it opccomn's proxy refuses to
+         * send the call and opccomn's stub refuses to run it (RPC_S_INVALID_BOUND), before anything is
+         * allocated (docs/proxy-stub-robustness.md). */
         {
-            GUID *big = (GUID *)malloc(((size_t)1 << 20) * sizeof(GUID));
+            GUID *big = (GUID *)malloc((OOP_NEXT_BOUND + 1) * sizeof(GUID));
             fetched = GARBAGE_U32;
-            CHECK_HR(e->lpVtbl->Next(e, 1u << 20, big, &fetched), S_FALSE);
+            CHECK_HR(e->lpVtbl->Next(e, OOP_NEXT_BOUND, big, &fetched), S_FALSE);
             CHECK(fetched == OOP_FAKE_SERVERS);
+            CHECK_HR(e->lpVtbl->Reset(e), S_OK);
+            fetched = GARBAGE_U32;
+            CHECK_HR(e->lpVtbl->Next(e, OOP_NEXT_BOUND + 1, big, &fetched), HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND));
             free(big);
         }
         e->lpVtbl->Release(e);

@@ -1,0 +1,309 @@
+//! The proxy/stub's own checks of the NDR bytes, made before the runtime's NDR engine reads them.
+//!
+//! The tables `widl` generates carry no correlation checks (no `/robust` correlation descriptors),
+//! and Wine's NDR engine would not enforce them if they did (`NdrCorrelationInitialize` and
+//! `NdrCorrelationPass` are stubs in Wine 8): a count on the wire that sizes an array was believed
+//! as sent. So opccomn checks every request before the stub unmarshals it and every reply before the
+//! proxy unmarshals it (`src/proxy/opccomn_ps.c` calls these functions from its `Invoke` and channel
+//! wrappers): each count that sizes an array agrees with the array's conformance and variance, the
+//! bytes are all there, strings end in NUL, the data representation is the local one (little-endian
+//! integers, ASCII characters, IEEE floating point; nothing is converted), and the counts a caller
+//! chooses are bounded by [`MAX_ELEMENTS`]. What is refused never reaches the NDR engine or the
+//! server: the call fails with `RPC_X_BAD_STUB_DATA`, `RPC_S_INVALID_BOUND` (a count beyond the bound,
+//! as MIDL's `[range]` reports it) or `RPC_S_PROCNUM_OUT_OF_RANGE` (no such method), as HRESULTs.
+//!
+//! The layouts are NDR 2.0 as MIDL and widl marshal the five interfaces of `idl/opccomn.idl`; a
+//! message may carry bytes after what is read (the runtime sizes buffers generously). Interface
+//! pointers (`EnumClassesOfCategories`, `Clone`) are laid out by the runtime: Wine writes a 32-bit
+//! size and the OBJREF ([`IpLayout::Wine`]), which is checked; elsewhere the runtime's own bounded
+//! reading of `MInterfacePointer` is relied on ([`IpLayout::Runtime`]), and only the HRESULT after
+//! it is required. No count sizes an interface pointer.
+
+use crate::com::HRESULT;
+
+/// The most elements any array of the five interfaces may carry: GUIDs asked of
+/// `IOPCEnumGUID::Next` (1 MiB of GUIDs), categories given to `EnumClassesOfCategories`, locales
+/// returned by `QueryAvailableLocaleIDs`. A request beyond it is refused before anything is allocated.
+pub const MAX_ELEMENTS: u32 = 65_536;
+
+/// `HRESULT_FROM_WIN32(RPC_X_BAD_STUB_DATA)`: the bytes do not match the method's layout.
+pub const BAD_STUB_DATA: HRESULT = 0x800706F7_u32 as HRESULT;
+/// `HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND)`: a count beyond [`MAX_ELEMENTS`].
+pub const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
+/// `HRESULT_FROM_WIN32(RPC_S_PROCNUM_OUT_OF_RANGE)`: the interface has no such method.
+pub const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
+
+/// `NDR_LOCAL_DATA_REPRESENTATION`: little-endian integers, ASCII, IEEE floating point.
+const LOCAL_DATA_REPRESENTATION: u32 = 0x10;
+
+/// The five interfaces, numbered as `src/proxy/opccomn_ps.c` numbers them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interface {
+    Shutdown,
+    Common,
+    ServerList,
+    EnumGuid,
+    ServerList2,
+}
+
+impl Interface {
+    /// The interface numbered `n` (0 IOPCShutdown, 1 IOPCCommon, 2 IOPCServerList, 3 IOPCEnumGUID,
+    /// 4 IOPCServerList2).
+    pub fn from_index(n: u32) -> Option<Interface> {
+        Some(match n {
+            0 => Interface::Shutdown,
+            1 => Interface::Common,
+            2 => Interface::ServerList,
+            3 => Interface::EnumGuid,
+            4 => Interface::ServerList2,
+            _ => return None,
+        })
+    }
+
+    /// Methods in the vtable, IUnknown's three included.
+    fn methods(self) -> u32 {
+        match self {
+            Interface::Shutdown => 4,
+            Interface::Common => 8,
+            Interface::ServerList | Interface::ServerList2 => 6,
+            Interface::EnumGuid => 7,
+        }
+    }
+}
+
+/// How the runtime lays out a marshalled interface pointer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IpLayout {
+    /// Wine's rpcrt4: a 32-bit byte count, then that many bytes of OBJREF (0: NULL).
+    Wine,
+    /// Another runtime (Windows): its own reading is bounded; not checked here.
+    Runtime,
+}
+
+/// Reads NDR 2.0 little-endian data, never past the end.
+struct Reader<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+type Check = Result<(), HRESULT>;
+
+impl<'a> Reader<'a> {
+    fn new(buf: &'a [u8]) -> Self {
+        Reader { buf, pos: 0 }
+    }
+
+    fn skip(&mut self, n: usize) -> Check {
+        let end = self.pos.checked_add(n).ok_or(BAD_STUB_DATA)?;
+        if end > self.buf.len() {
+            return Err(BAD_STUB_DATA);
+        }
+        self.pos = end;
+        Ok(())
+    }
+
+    fn align4(&mut self) -> Check {
+        let pad = (4 - self.pos % 4) % 4;
+        self.skip(pad)
+    }
+
+    fn u32(&mut self) -> Result<u32, HRESULT> {
+        self.align4()?;
+        let at = self.pos;
+        self.skip(4)?;
+        let b = &self.buf[at..at + 4];
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// `n` GUIDs (NDR aligns a GUID to 4).
+    fn guids(&mut self, n: u32) -> Check {
+        self.align4()?;
+        self.skip((n as usize).checked_mul(16).ok_or(BAD_STUB_DATA)?)
+    }
+
+    /// A count chosen by the caller: at most [`MAX_ELEMENTS`].
+    fn bounded(n: u32) -> Result<u32, HRESULT> {
+        if n > MAX_ELEMENTS {
+            Err(INVALID_BOUND)
+        } else {
+            Ok(n)
+        }
+    }
+
+    /// `[in, size_is(count)] GUID array[]`: its conformance, equal to `count`, and the GUIDs.
+    fn guid_array(&mut self, count: u32) -> Check {
+        let count = Self::bounded(count)?;
+        if self.u32()? != count {
+            return Err(BAD_STUB_DATA);
+        }
+        self.guids(count)
+    }
+
+    /// A `[string]` wide string (conformant and varying): maximum count = actual count >= 1, offset 0,
+    /// every unit present, the last one NUL. MIDL and widl marshal a string so; anything else would let
+    /// the maximum size an allocation the bytes do not back.
+    fn string(&mut self) -> Check {
+        let max = self.u32()?;
+        let offset = self.u32()?;
+        let actual = self.u32()?;
+        if max != actual || offset != 0 || actual == 0 {
+            return Err(BAD_STUB_DATA);
+        }
+        let bytes = (actual as usize).checked_mul(2).ok_or(BAD_STUB_DATA)?;
+        let at = self.pos;
+        self.skip(bytes)?;
+        if self.buf[at + bytes - 2..at + bytes] != [0, 0] {
+            return Err(BAD_STUB_DATA);
+        }
+        Ok(())
+    }
+
+    /// `[out, string] LPWSTR *`: a unique pointer, then the string when not NULL.
+    fn unique_string(&mut self) -> Check {
+        if self.u32()? != 0 {
+            self.string()?;
+        }
+        Ok(())
+    }
+
+    /// `[out] I **`: the marshalled interface pointer as the runtime lays it out.
+    fn interface_pointer(&mut self, layout: IpLayout) -> Check {
+        match layout {
+            IpLayout::Wine => {
+                let size = self.u32()?;
+                self.skip(size as usize)
+            }
+            // The runtime bounds its reading of MInterfacePointer; only the HRESULT after it is
+            // required, which `hresult_at_end` checks.
+            IpLayout::Runtime => {
+                self.pos = self.buf.len().saturating_sub(4) & !3;
+                Ok(())
+            }
+        }
+    }
+
+    /// The HRESULT every reply ends with.
+    fn hresult(&mut self) -> Check {
+        self.u32().map(|_| ())
+    }
+}
+
+fn local_data_representation(drep: u32) -> Check {
+    if drep & 0xFFFF == LOCAL_DATA_REPRESENTATION {
+        Ok(())
+    } else {
+        Err(BAD_STUB_DATA)
+    }
+}
+
+fn method_exists(interface: Interface, method: u32) -> Check {
+    if (3..interface.methods()).contains(&method) {
+        Ok(())
+    } else {
+        Err(PROCNUM_OUT_OF_RANGE)
+    }
+}
+
+/// Checks a request for `method` (its vtable index) of `interface` before the stub unmarshals it.
+pub fn check_request(interface: Interface, method: u32, buf: &[u8], drep: u32) -> Check {
+    method_exists(interface, method)?;
+    local_data_representation(drep)?;
+    let mut r = Reader::new(buf);
+    match (interface, method) {
+        // ShutdownRequest(szReason), SetClientName(szName)
+        (Interface::Shutdown, 3) | (Interface::Common, 7) => r.string(),
+        // SetLocaleID(dwLcid), GetErrorString(dwError, ...), Skip(celt)
+        (Interface::Common, 3 | 6) | (Interface::EnumGuid, 4) => r.u32().map(|_| ()),
+        // GetLocaleID, QueryAvailableLocaleIDs, Reset, Clone: nothing in.
+        (Interface::Common, 4 | 5) | (Interface::EnumGuid, 5 | 6) => Ok(()),
+        // EnumClassesOfCategories(cImplemented, rgcatidImpl, cRequired, rgcatidReq, ...)
+        (Interface::ServerList | Interface::ServerList2, 3) => {
+            let implemented = r.u32()?;
+            r.guid_array(implemented)?;
+            let required = r.u32()?;
+            r.guid_array(required)
+        }
+        // GetClassDetails(clsid, ...)
+        (Interface::ServerList | Interface::ServerList2, 4) => r.guids(1),
+        // CLSIDFromProgID(szProgId, ...)
+        (Interface::ServerList | Interface::ServerList2, 5) => r.string(),
+        // Next(celt, ...): the stub allocates celt GUIDs before the server runs.
+        (Interface::EnumGuid, 3) => Reader::bounded(r.u32()?).map(|_| ()),
+        _ => Err(PROCNUM_OUT_OF_RANGE),
+    }
+}
+
+/// What a reply check needs to know of the request the proxy sent: `IOPCEnumGUID::Next`'s `celt`
+/// (the size of the caller's buffer); 0 for every other method. `request` is the proxy's own request.
+pub fn reply_context(interface: Interface, method: u32, request: &[u8]) -> u32 {
+    match (interface, method) {
+        (Interface::EnumGuid, 3) => Reader::new(request).u32().unwrap_or(0),
+        _ => 0,
+    }
+}
+
+/// Checks a reply to `method` of `interface` before the proxy unmarshals it into the caller's memory.
+/// `context` is [`reply_context`] of the request.
+pub fn check_reply(interface: Interface, method: u32, context: u32, buf: &[u8], drep: u32, ip: IpLayout) -> Check {
+    method_exists(interface, method)?;
+    local_data_representation(drep)?;
+    let mut r = Reader::new(buf);
+    match (interface, method) {
+        // HRESULT only.
+        (Interface::Shutdown, 3) | (Interface::Common, 3 | 7) | (Interface::EnumGuid, 4 | 5) => {}
+        // GetLocaleID(*pdwLcid)
+        (Interface::Common, 4) => {
+            r.u32()?;
+        }
+        // QueryAvailableLocaleIDs(*pdwCount, *pdwLcid): the count sizes the array the caller walks.
+        (Interface::Common, 5) => {
+            let count = r.u32()?;
+            if r.u32()? != 0 {
+                let count = Reader::bounded(count)?;
+                if r.u32()? != count {
+                    return Err(BAD_STUB_DATA);
+                }
+                r.skip(count as usize * 4)?;
+            } else if count != 0 {
+                // A count with no array would have the caller walk NULL.
+                return Err(BAD_STUB_DATA);
+            }
+        }
+        // GetErrorString(*ppString)
+        (Interface::Common, 6) => r.unique_string()?,
+        // EnumClassesOfCategories(*ppenumClsid), Clone(*ppenum)
+        (Interface::ServerList | Interface::ServerList2, 3) | (Interface::EnumGuid, 6) => r.interface_pointer(ip)?,
+        // GetClassDetails: ProgID, user type (and, in IOPCServerList2, the version-independent ProgID).
+        (Interface::ServerList, 4) => {
+            r.unique_string()?;
+            r.unique_string()?;
+        }
+        (Interface::ServerList2, 4) => {
+            r.unique_string()?;
+            r.unique_string()?;
+            r.unique_string()?;
+        }
+        // CLSIDFromProgID(*clsid)
+        (Interface::ServerList | Interface::ServerList2, 5) => r.guids(1)?,
+        // Next(rgelt[celt], *pceltFetched): conformance = the caller's celt, offset 0, actual count =
+        // *pceltFetched <= celt, and the GUIDs all present. Nothing more may land in the caller's buffer.
+        (Interface::EnumGuid, 3) => {
+            let celt = context;
+            let max = r.u32()?;
+            let offset = r.u32()?;
+            let actual = r.u32()?;
+            if max != celt || offset != 0 || actual > max {
+                return Err(BAD_STUB_DATA);
+            }
+            r.guids(actual)?;
+            if r.u32()? != actual {
+                return Err(BAD_STUB_DATA);
+            }
+        }
+        _ => return Err(PROCNUM_OUT_OF_RANGE),
+    }
+    r.hresult()
+}
+
+#[cfg(test)]
+mod tests;
