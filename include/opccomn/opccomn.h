@@ -153,13 +153,6 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_PROXY_STUB_TAKE_OVER 1
 
 /**
- * The most elements any array of the five interfaces may carry: GUIDs asked of
- * `IOPCEnumGUID::Next` (1 MiB of GUIDs), categories given to `EnumClassesOfCategories`, locales
- * returned by `QueryAvailableLocaleIDs`. A request beyond it is refused before anything is allocated.
- */
-#define MAX_ELEMENTS 65536
-
-/**
  * `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing
  * them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
  * another product registers too (opccomn's own server list under the CLSID of OpcEnum).
@@ -926,21 +919,6 @@ typedef const WCHAR *LPCOLESTR;
  */
 #define LOCALE_INVARIANT 127
 #endif
-
-/**
- * `HRESULT_FROM_WIN32(RPC_X_BAD_STUB_DATA)`: the bytes do not match the method's layout.
- */
-#define BAD_STUB_DATA ((HRESULT)0x800706F7L)
-
-/**
- * `HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND)`: a count beyond [`MAX_ELEMENTS`].
- */
-#define INVALID_BOUND ((HRESULT)0x800706C6L)
-
-/**
- * `HRESULT_FROM_WIN32(RPC_S_PROCNUM_OUT_OF_RANGE)`: the interface has no such method.
- */
-#define PROCNUM_OUT_OF_RANGE ((HRESULT)0x800706D1L)
 
 #if !defined(_WIN32)
 /**
