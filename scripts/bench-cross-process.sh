@@ -23,8 +23,13 @@ if [ "${1:-}" = --record ]; then
 fi
 measure() {
     echo "machine: $(nproc) cores, $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
-    local rc=0
-    (cd "$build/bin" && wine cross_process_bench.exe "$@") | tr -d '\r' || rc=$?
+    # The output goes to a file, not a pipe: the test servers COM starts inherit the benchmark's
+    # standard output and live on after it, and a pipe's reader would wait for them.
+    local rc=0 out
+    out=$(mktemp)
+    (cd "$build/bin" && wine cross_process_bench.exe "$@") >"$out" 2>&1 </dev/null || rc=$?
+    tr -d '\r' <"$out"
+    rm -f "$out"
     echo "end: $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
     return "$rc"
 }
