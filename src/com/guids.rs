@@ -55,8 +55,6 @@ pub const CATID_OPCCMDServer10: GUID = GUID::from_u128(0x2D869D5C_3B05_41FB_851A
 pub const CLSID_OPCServerList: GUID = GUID::from_u128(0x13486D51_4821_11D2_A494_3CB306C10000);
 /// `CLSID_OpcComnProxyStub` {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class `PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces)`.
 pub const CLSID_OpcComnProxyStub: GUID = GUID::from_u128(0x3D738B71_0B9D_4337_A725_E8541A96D1C9);
-/// `IID_IClassFactory` {00000001-0000-0000-C000-000000000046}.
-pub const IID_IClassFactory: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
 
 /// The standard English descriptions of the OPC component categories.
 pub const CATEGORY_DESCRIPTIONS: &[(GUID, &str)] = &[
