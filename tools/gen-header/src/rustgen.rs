@@ -374,10 +374,10 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
     }
 
     // Filling the vtable.
-    let (generics, bounds) = if is_root {
-        ("<U>", format!("<U: {name}Impl>"))
+    let bounds = if is_root {
+        format!("<U: {name}Impl>")
     } else {
-        ("<U, T>", format!("<U: {}Impl, T: {name}Impl>", root.name))
+        format!("<U: {}Impl, T: {name}Impl>", root.name)
     };
     let _ = writeln!(s, "impl {name}Vtbl {{");
     if is_root {
@@ -389,14 +389,9 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
         );
     }
     let _ = writeln!(s, "    pub const fn new{bounds}() -> Self {{\n        {name}Vtbl {{");
-    let _ = generics;
     for (owner, m, _) in &sigs {
         let shim = if *owner == root.name {
-            if is_root {
-                format!("{owner}_{}::<U, {name}>", m.name)
-            } else {
-                format!("{owner}_{}::<U, {name}>", m.name)
-            }
+            format!("{owner}_{}::<U, {name}>", m.name)
         } else {
             format!("{owner}_{}::<T>", m.name)
         };
@@ -505,4 +500,114 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
         }
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::idl;
+
+    const BASE: &str = r#"
+        [local, object, uuid(00000000-0000-0000-C000-000000000046)]
+        interface IUnknown {
+            HRESULT QueryInterface([in] REFIID riid, [out, iid_is(riid)] void **ppvObject);
+            ULONG AddRef();
+            ULONG Release();
+        }
+        [object, uuid(0002E000-0000-0000-C000-000000000046)]
+        interface IEnumGUID : IUnknown {
+            HRESULT Next([in] ULONG celt, [out, size_is(celt), length_is(*pceltFetched)] GUID *rgelt, [out] ULONG *pceltFetched);
+            HRESULT Skip([in] ULONG celt);
+            HRESULT Reset();
+            HRESULT Clone([out] IEnumGUID **ppenum);
+        }
+    "#;
+
+    const OPC: &str = r#"
+        [object, uuid(F31DFDE2-07B6-11d2-B2D8-0060083BA1FB)]
+        interface IOPCCommon : IUnknown {
+            /// Sets the locale.
+            HRESULT SetLocaleID([in] LCID dwLcid);
+            HRESULT QueryAvailableLocaleIDs([out] DWORD *pdwCount, [out, size_is(,*pdwCount)] LCID **pdwLcid);
+        }
+    "#;
+
+    fn generate(opc: &str) -> Result<String, String> {
+        let base = idl::parse("idl/combase.idl", BASE).unwrap();
+        let opc = idl::parse("idl/opccomn.idl", opc).unwrap();
+        let catalog = Catalog::new(base.iter().chain(&opc));
+        module(
+            &catalog,
+            &[
+                File {
+                    path: "idl/combase.idl",
+                    interfaces: &base,
+                    rule: "Com",
+                },
+                File {
+                    path: "idl/opccomn.idl",
+                    interfaces: &opc,
+                    rule: "Opc",
+                },
+            ],
+        )
+    }
+
+    #[test]
+    fn each_method_gets_a_trait_method_a_guarded_shim_and_both_vtable_views() {
+        let m = generate(OPC).unwrap();
+        assert!(m.contains("pub trait IOPCCommonImpl: ComClass {"), "{m}");
+        assert!(m.contains(
+            "    /// Sets the locale.\n    fn SetLocaleID(this: &ComObject<Self>, dwLcid: LCID) -> FfiResult;"
+        ));
+        assert!(m.contains(
+            "unsafe fn QueryAvailableLocaleIDs(this: &ComObject<Self>, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> FfiResult;"
+        ));
+        // The OPC rule; the `[out]` parameters reset, the pointer to an array (`size_is(,...)`) included.
+        assert!(m.contains("ffi::boundary!(Opc, [pdwCount, pdwLcid], {"), "{m}");
+        assert!(m.contains("pub SetLocaleID: unsafe extern \"system\" fn(This: *mut IOPCCommon, dwLcid: LCID) -> Hr,"));
+        assert!(m.contains(
+            "pub SetLocaleID: unsafe extern \"system\" fn(This: *mut IOPCCommon, dwLcid: LCID) -> Foreign<HRESULT>,"
+        ));
+        assert!(m.contains("pub lpVtbl: *const IOPCCommonCalls,"));
+        assert!(m.contains("pub const METHODS: u32 = 5;"));
+        assert!(m.contains("pub const IID: GUID = GUID::from_u128(0xF31DFDE2_07B6_11D2_B2D8_0060083BA1FB);"));
+        assert!(m.contains("QueryInterface: IUnknown_QueryInterface::<U, IOPCCommon>,"));
+        assert!(m.contains("SetLocaleID: IOPCCommon_SetLocaleID::<T>,"));
+        assert!(m.contains("impl Vtable for IOPCCommonVtbl {}"));
+        assert!(m.contains("pub const OPC_COMMON_INTERFACES: [(GUID, &str, u32); 1] = [\n    (IOPCCommon::IID, \"IOPCCommon\", IOPCCommon::METHODS),"));
+        // AddRef and Release are guarded with 0, as COM's reference counts.
+        assert!(m.contains("unsafe extern \"system\" fn IUnknown_AddRef<U: IUnknownImpl, I>(This: *mut I) -> Crossed<ULONG> {\n    ffi::guard!(0, {"));
+    }
+
+    #[test]
+    fn enumerators_follow_com_and_arrays_are_never_reset() {
+        let m = generate(OPC).unwrap();
+        assert!(m.contains("fn IEnumGUID_Next<T: IEnumGUIDImpl>(This: *mut IEnumGUID, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> Hr {\n    ffi::boundary!(Com, [pceltFetched], {"), "{m}");
+        assert!(m.contains("ffi::boundary!(Com, [ppenum], {"));
+        assert!(m.contains("fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;"));
+    }
+
+    #[test]
+    fn a_method_added_to_the_idl_is_in_the_trait_every_object_must_implement() {
+        let added = OPC.replace(
+            "HRESULT SetLocaleID([in] LCID dwLcid);",
+            "HRESULT SetLocaleID([in] LCID dwLcid);\n HRESULT GetLocaleID([out] LCID *pdwLcid);",
+        );
+        let m = generate(&added).unwrap();
+        assert!(m.contains("unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult;"));
+        assert!(m.contains("GetLocaleID: IOPCCommon_GetLocaleID::<T>,"));
+        assert!(m.contains("pub const METHODS: u32 = 6;"));
+    }
+
+    #[test]
+    fn unknown_types_and_unsupported_shapes_are_errors() {
+        let bad = OPC.replace("[in] LCID dwLcid", "[in] VARIANT v");
+        let e = generate(&bad).unwrap_err();
+        assert!(e.contains("VARIANT"), "{e}");
+        let bad = OPC.replace("HRESULT SetLocaleID", "BOOL SetLocaleID");
+        assert!(generate(&bad).unwrap_err().contains("not HRESULT or ULONG"));
+        let bad = OPC.replace("interface IOPCCommon : IUnknown", "interface IOPCCommon : IEnumGUID");
+        assert!(generate(&bad).unwrap_err().contains("derives from IEnumGUID"));
+    }
 }
