@@ -24,6 +24,7 @@ pub mod locale;
 pub mod pattern;
 pub mod proxy;
 pub mod registry;
+pub mod server;
 pub mod serverlist;
 pub mod shutdown;
 

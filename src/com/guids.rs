@@ -21,6 +21,8 @@ pub const IID_IConnectionPoint: GUID = GUID::from_u128(0xB196B286_BAB4_101A_B69C
 pub const IID_IEnumConnectionPoints: GUID = GUID::from_u128(0xB196B285_BAB4_101A_B69C_00AA00341D07);
 /// IID of `IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07}.
 pub const IID_IConnectionPointContainer: GUID = GUID::from_u128(0xB196B284_BAB4_101A_B69C_00AA00341D07);
+/// IID of `IClassFactory` {00000001-0000-0000-C000-000000000046}.
+pub const IID_IClassFactory: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
 /// IID of `IOPCShutdown` {F31DFDE1-07B6-11d2-B2D8-0060083BA1FB}.
 pub const IID_IOPCShutdown: GUID = GUID::from_u128(0xF31DFDE1_07B6_11D2_B2D8_0060083BA1FB);
 /// IID of `IOPCCommon` {F31DFDE2-07B6-11d2-B2D8-0060083BA1FB}.
@@ -176,4 +178,9 @@ pub mod exported {
     #[cfg(not(windows))]
     #[export_name = "IID_IConnectionPointContainer"]
     pub static EXPORTED_IID_IConnectionPointContainer: GUID = IID_IConnectionPointContainer;
+
+    /// IID of `IClassFactory` {00000001-0000-0000-C000-000000000046} (exported on systems without uuid.lib).
+    #[cfg(not(windows))]
+    #[export_name = "IID_IClassFactory"]
+    pub static EXPORTED_IID_IClassFactory: GUID = IID_IClassFactory;
 }

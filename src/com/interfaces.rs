@@ -1249,6 +1249,176 @@ unsafe extern "system" fn IConnectionPointContainer_FindConnectionPoint<T: IConn
     })
 }
 
+// ---- IClassFactory (idl/combase.idl) ----
+
+/// COM's class object interface: what DllGetClassObject returns and CoRegisterClassObject registers
+/// (opccomn: OpcClassFactoryCreate(), OpcModuleGetClassObject()).
+#[repr(C)]
+pub struct IClassFactory {
+    /// The methods, as the library calls them.
+    pub lpVtbl: *const IClassFactoryCalls,
+}
+
+impl IClassFactory {
+    /// `IID_IClassFactory` {00000001-0000-0000-C000-000000000046}.
+    pub const IID: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
+    /// The number of methods, IUnknown's three included.
+    pub const METHODS: u32 = 5;
+
+    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    ///
+    /// # Safety
+    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
+    pub unsafe fn QueryInterface(this: *mut Self, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT {
+        // SAFETY: the caller's contract; every interface pointer points at its vtable.
+        unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
+    }
+
+    /// Adds a reference; returns the new count (for diagnostics only).
+    ///
+    /// # Safety
+    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
+    pub unsafe fn AddRef(this: *mut Self) -> ULONG {
+        // SAFETY: the caller's contract; every interface pointer points at its vtable.
+        unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
+    }
+
+    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    ///
+    /// # Safety
+    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
+    pub unsafe fn Release(this: *mut Self) -> ULONG {
+        // SAFETY: the caller's contract; every interface pointer points at its vtable.
+        unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
+    }
+
+    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+    ///
+    /// # Safety
+    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
+    pub unsafe fn CreateInstance(
+        this: *mut Self,
+        pUnkOuter: *mut IUnknown,
+        riid: REFIID,
+        ppvObject: *mut *mut c_void,
+    ) -> HRESULT {
+        // SAFETY: the caller's contract; every interface pointer points at its vtable.
+        unsafe { ((*(*this).lpVtbl).CreateInstance)(this, pUnkOuter, riid, ppvObject) }.get()
+    }
+
+    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
+    ///
+    /// # Safety
+    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
+    pub unsafe fn LockServer(this: *mut Self, fLock: BOOL) -> HRESULT {
+        // SAFETY: the caller's contract; every interface pointer points at its vtable.
+        unsafe { ((*(*this).lpVtbl).LockServer)(this, fLock) }.get()
+    }
+}
+
+/// IClassFactory's methods as the library calls them on any object: each returns a `Foreign<T>`.
+#[repr(C)]
+pub struct IClassFactoryCalls {
+    /// QueryInterface.
+    pub QueryInterface: unsafe extern "system" fn(
+        This: *mut IClassFactory,
+        riid: REFIID,
+        ppvObject: *mut *mut c_void,
+    ) -> Foreign<HRESULT>,
+    /// AddRef.
+    pub AddRef: unsafe extern "system" fn(This: *mut IClassFactory) -> Foreign<ULONG>,
+    /// Release.
+    pub Release: unsafe extern "system" fn(This: *mut IClassFactory) -> Foreign<ULONG>,
+    /// CreateInstance.
+    pub CreateInstance: unsafe extern "system" fn(
+        This: *mut IClassFactory,
+        pUnkOuter: *mut IUnknown,
+        riid: REFIID,
+        ppvObject: *mut *mut c_void,
+    ) -> Foreign<HRESULT>,
+    /// LockServer.
+    pub LockServer: unsafe extern "system" fn(This: *mut IClassFactory, fLock: BOOL) -> Foreign<HRESULT>,
+}
+
+/// IClassFactory's vtable as the library fills it for its own objects: each entry returns a
+/// `Crossed<T>`, which only `ffi::boundary!` and `ffi::guard!` make. See [`IClassFactoryVtbl::new`].
+#[repr(C)]
+pub struct IClassFactoryVtbl {
+    /// QueryInterface.
+    pub QueryInterface:
+        unsafe extern "system" fn(This: *mut IClassFactory, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
+    /// AddRef.
+    pub AddRef: unsafe extern "system" fn(This: *mut IClassFactory) -> Crossed<ULONG>,
+    /// Release.
+    pub Release: unsafe extern "system" fn(This: *mut IClassFactory) -> Crossed<ULONG>,
+    /// CreateInstance.
+    pub CreateInstance: unsafe extern "system" fn(
+        This: *mut IClassFactory,
+        pUnkOuter: *mut IUnknown,
+        riid: REFIID,
+        ppvObject: *mut *mut c_void,
+    ) -> Hr,
+    /// LockServer.
+    pub LockServer: unsafe extern "system" fn(This: *mut IClassFactory, fLock: BOOL) -> Hr,
+}
+
+impl IClassFactoryVtbl {
+    /// The vtable of the IClassFactory slots of `T`'s objects, with the IUnknown methods of `U`
+    /// ([`Delegating`](super::object::Delegating) for the controlling unknown, as COM requires).
+    pub const fn new<U: IUnknownImpl, T: IClassFactoryImpl>() -> Self {
+        IClassFactoryVtbl {
+            QueryInterface: IUnknown_QueryInterface::<U, IClassFactory>,
+            AddRef: IUnknown_AddRef::<U, IClassFactory>,
+            Release: IUnknown_Release::<U, IClassFactory>,
+            CreateInstance: IClassFactory_CreateInstance::<T>,
+            LockServer: IClassFactory_LockServer::<T>,
+        }
+    }
+}
+
+impl Vtable for IClassFactoryVtbl {}
+
+/// What an object implements to present IClassFactory: one method per IDL method (after
+/// IUnknown's), called by the generated shim with the object and the caller's arguments.
+pub trait IClassFactoryImpl: ComClass {
+    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+    ///
+    /// # Safety
+    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
+    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
+    unsafe fn CreateInstance(
+        this: &ComObject<Self>,
+        pUnkOuter: *mut IUnknown,
+        riid: REFIID,
+        ppvObject: *mut *mut c_void,
+    ) -> FfiResult;
+    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
+    fn LockServer(this: &ComObject<Self>, fLock: BOOL) -> FfiResult;
+}
+
+unsafe extern "system" fn IClassFactory_CreateInstance<T: IClassFactoryImpl>(
+    This: *mut IClassFactory,
+    pUnkOuter: *mut IUnknown,
+    riid: REFIID,
+    ppvObject: *mut *mut c_void,
+) -> Hr {
+    ffi::boundary!(Com, [ppvObject], {
+        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
+        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
+        unsafe {
+            <T as IClassFactoryImpl>::CreateInstance(ComObject::<T>::from_interface(This), pUnkOuter, riid, ppvObject)
+        }
+    })
+}
+
+unsafe extern "system" fn IClassFactory_LockServer<T: IClassFactoryImpl>(This: *mut IClassFactory, fLock: BOOL) -> Hr {
+    ffi::boundary!(Com, [], {
+        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
+        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
+        unsafe { <T as IClassFactoryImpl>::LockServer(ComObject::<T>::from_interface(This), fLock) }
+    })
+}
+
 // ---- IOPCShutdown (idl/opccomn.idl) ----
 
 /// The client's shutdown sink (specification 4.2): a client advises an object with this interface on the
@@ -2397,175 +2567,6 @@ unsafe extern "system" fn IOPCServerList2_CLSIDFromProgID<T: IOPCServerList2Impl
         // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
         // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
         unsafe { <T as IOPCServerList2Impl>::CLSIDFromProgID(ComObject::<T>::from_interface(This), szProgId, clsid) }
-    })
-}
-
-// ---- IClassFactory (idl/internal.idl) ----
-
-/// COM's class object interface: what DllGetClassObject hands out for OPCServerList.
-#[repr(C)]
-pub struct IClassFactory {
-    /// The methods, as the library calls them.
-    pub lpVtbl: *const IClassFactoryCalls,
-}
-
-impl IClassFactory {
-    /// `IID_IClassFactory` {00000001-0000-0000-C000-000000000046}.
-    pub const IID: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
-    /// The number of methods, IUnknown's three included.
-    pub const METHODS: u32 = 5;
-
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
-    ///
-    /// # Safety
-    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
-    pub unsafe fn QueryInterface(this: *mut Self, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT {
-        // SAFETY: the caller's contract; every interface pointer points at its vtable.
-        unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
-    }
-
-    /// Adds a reference; returns the new count (for diagnostics only).
-    ///
-    /// # Safety
-    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
-    pub unsafe fn AddRef(this: *mut Self) -> ULONG {
-        // SAFETY: the caller's contract; every interface pointer points at its vtable.
-        unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
-    }
-
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
-    ///
-    /// # Safety
-    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
-    pub unsafe fn Release(this: *mut Self) -> ULONG {
-        // SAFETY: the caller's contract; every interface pointer points at its vtable.
-        unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
-    }
-
-    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
-    ///
-    /// # Safety
-    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
-    pub unsafe fn CreateInstance(
-        this: *mut Self,
-        pUnkOuter: *mut IUnknown,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
-    ) -> HRESULT {
-        // SAFETY: the caller's contract; every interface pointer points at its vtable.
-        unsafe { ((*(*this).lpVtbl).CreateInstance)(this, pUnkOuter, riid, ppvObject) }.get()
-    }
-
-    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
-    ///
-    /// # Safety
-    /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
-    pub unsafe fn LockServer(this: *mut Self, fLock: BOOL) -> HRESULT {
-        // SAFETY: the caller's contract; every interface pointer points at its vtable.
-        unsafe { ((*(*this).lpVtbl).LockServer)(this, fLock) }.get()
-    }
-}
-
-/// IClassFactory's methods as the library calls them on any object: each returns a `Foreign<T>`.
-#[repr(C)]
-pub struct IClassFactoryCalls {
-    /// QueryInterface.
-    pub QueryInterface: unsafe extern "system" fn(
-        This: *mut IClassFactory,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
-    ) -> Foreign<HRESULT>,
-    /// AddRef.
-    pub AddRef: unsafe extern "system" fn(This: *mut IClassFactory) -> Foreign<ULONG>,
-    /// Release.
-    pub Release: unsafe extern "system" fn(This: *mut IClassFactory) -> Foreign<ULONG>,
-    /// CreateInstance.
-    pub CreateInstance: unsafe extern "system" fn(
-        This: *mut IClassFactory,
-        pUnkOuter: *mut IUnknown,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
-    ) -> Foreign<HRESULT>,
-    /// LockServer.
-    pub LockServer: unsafe extern "system" fn(This: *mut IClassFactory, fLock: BOOL) -> Foreign<HRESULT>,
-}
-
-/// IClassFactory's vtable as the library fills it for its own objects: each entry returns a
-/// `Crossed<T>`, which only `ffi::boundary!` and `ffi::guard!` make. See [`IClassFactoryVtbl::new`].
-#[repr(C)]
-pub struct IClassFactoryVtbl {
-    /// QueryInterface.
-    pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IClassFactory, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
-    /// AddRef.
-    pub AddRef: unsafe extern "system" fn(This: *mut IClassFactory) -> Crossed<ULONG>,
-    /// Release.
-    pub Release: unsafe extern "system" fn(This: *mut IClassFactory) -> Crossed<ULONG>,
-    /// CreateInstance.
-    pub CreateInstance: unsafe extern "system" fn(
-        This: *mut IClassFactory,
-        pUnkOuter: *mut IUnknown,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
-    ) -> Hr,
-    /// LockServer.
-    pub LockServer: unsafe extern "system" fn(This: *mut IClassFactory, fLock: BOOL) -> Hr,
-}
-
-impl IClassFactoryVtbl {
-    /// The vtable of the IClassFactory slots of `T`'s objects, with the IUnknown methods of `U`
-    /// ([`Delegating`](super::object::Delegating) for the controlling unknown, as COM requires).
-    pub const fn new<U: IUnknownImpl, T: IClassFactoryImpl>() -> Self {
-        IClassFactoryVtbl {
-            QueryInterface: IUnknown_QueryInterface::<U, IClassFactory>,
-            AddRef: IUnknown_AddRef::<U, IClassFactory>,
-            Release: IUnknown_Release::<U, IClassFactory>,
-            CreateInstance: IClassFactory_CreateInstance::<T>,
-            LockServer: IClassFactory_LockServer::<T>,
-        }
-    }
-}
-
-impl Vtable for IClassFactoryVtbl {}
-
-/// What an object implements to present IClassFactory: one method per IDL method (after
-/// IUnknown's), called by the generated shim with the object and the caller's arguments.
-pub trait IClassFactoryImpl: ComClass {
-    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CreateInstance(
-        this: &ComObject<Self>,
-        pUnkOuter: *mut IUnknown,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
-    ) -> FfiResult;
-    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
-    fn LockServer(this: &ComObject<Self>, fLock: BOOL) -> FfiResult;
-}
-
-unsafe extern "system" fn IClassFactory_CreateInstance<T: IClassFactoryImpl>(
-    This: *mut IClassFactory,
-    pUnkOuter: *mut IUnknown,
-    riid: REFIID,
-    ppvObject: *mut *mut c_void,
-) -> Hr {
-    ffi::boundary!(Com, [ppvObject], {
-        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IClassFactoryImpl>::CreateInstance(ComObject::<T>::from_interface(This), pUnkOuter, riid, ppvObject)
-        }
-    })
-}
-
-unsafe extern "system" fn IClassFactory_LockServer<T: IClassFactoryImpl>(This: *mut IClassFactory, fLock: BOOL) -> Hr {
-    ffi::boundary!(Com, [], {
-        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IClassFactoryImpl>::LockServer(ComObject::<T>::from_interface(This), fLock) }
     })
 }
 

@@ -273,6 +273,16 @@ impl<T: ComClass> ComObject<T> {
 
     /// As [`ComObject::new`], for construction that can fail; nothing is allocated on failure.
     pub fn try_new<E>(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> Result<T, E>) -> Result<ComRef<T>, E> {
+        Self::make(outer, true, build)
+    }
+
+    /// As [`ComObject::try_new`]; `counted`: whether the object counts on an EXE server's module lock
+    /// (every object does but class objects, which COM holds while they are registered).
+    fn make<E>(
+        outer: *mut IUnknown,
+        counted: bool,
+        build: impl FnOnce(&Binder) -> Result<T, E>,
+    ) -> Result<ComRef<T>, E> {
         // The raw pointer of the allocation, taken first: every slot keeps a copy of it, and nothing
         // reborrows the block through a Box or a reference later (that would invalidate the copies).
         let raw: NonNull<MaybeUninit<ComObject<T>>> = NonNull::from(Box::leak(Box::new_uninit()));
@@ -291,7 +301,7 @@ impl<T: ComClass> ComObject<T> {
                     outer,
                     query: query_thunk::<T>,
                     destroy: destroy_thunk::<T>,
-                    module_lock: ModuleLock::lock(),
+                    module_lock: if counted { ModuleLock::lock() } else { None },
                 },
                 state: value,
             })
@@ -332,6 +342,32 @@ impl<T: ComClass> ComObject<T> {
         // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
         unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
         // `obj` drops here, releasing the construction reference.
+    }
+
+    /// The creation protocol of a class object (IClassFactory): as [`ComObject::create`] without an
+    /// outer object, and the object does not count on an EXE server's module lock.
+    ///
+    /// # Safety
+    /// `riid` NULL or readable; `ppv` NULL or writable.
+    pub unsafe fn create_class_object(
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+        build: impl FnOnce(&Binder) -> Result<T, HRESULT>,
+    ) -> HRESULT {
+        if ppv.is_null() {
+            return E_POINTER;
+        }
+        // SAFETY: checked non-NULL; the caller vouches it is writable.
+        unsafe { *ppv = ptr::null_mut() };
+        if riid.is_null() {
+            return E_POINTER;
+        }
+        let obj = match guard(Err(E_UNEXPECTED), || Self::make(ptr::null_mut(), false, build)) {
+            Ok(obj) => obj,
+            Err(hr) => return hr,
+        };
+        // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
+        unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
     }
 
     /// The object behind one of its interface pointers.
