@@ -94,6 +94,9 @@ OPCCOMN_CONVENTION(&OpcVersionToFileVersion, HRESULT (__attribute__((cdecl)) *)(
 OPCCOMN_CONVENTION(&OpcVersionFromFileVersion, HRESULT (__attribute__((cdecl)) *)(DWORD ms, DWORD ls, struct OpcVersion *version), "OpcVersionFromFileVersion must be cdecl");
 OPCCOMN_CONVENTION(&OpcVersionCompare, int32_t (__attribute__((cdecl)) *)(const struct OpcVersion *a, const struct OpcVersion *b), "OpcVersionCompare must be cdecl");
 OPCCOMN_CONVENTION(&OpcVersionIsNewer, BOOL (__attribute__((cdecl)) *)(const struct OpcVersion *candidate, const struct OpcVersion *installed), "OpcVersionIsNewer must be cdecl");
+OPCCOMN_CONVENTION(&OpcInitializeServerSecurity, HRESULT (__attribute__((cdecl)) *)(const struct OpcSecurityOptions *options), "OpcInitializeServerSecurity must be cdecl");
+OPCCOMN_CONVENTION(&OpcInitializeClientSecurity, HRESULT (__attribute__((cdecl)) *)(const struct OpcSecurityOptions *options), "OpcInitializeClientSecurity must be cdecl");
+OPCCOMN_CONVENTION(&OpcSetProxyBlanket, HRESULT (__attribute__((cdecl)) *)(IUnknown *proxy, const struct OpcSecurityOptions *options), "OpcSetProxyBlanket must be cdecl");
 OPCCOMN_CONVENTION(&OpcServerListCreate, HRESULT (__attribute__((cdecl)) *)(IUnknown *outer, REFIID riid, void **ppv), "OpcServerListCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcServerListCreateOver, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg, IUnknown *outer, REFIID riid, void **ppv), "OpcServerListCreateOver must be cdecl");
 OPCCOMN_CONVENTION(&OpcDllGetClassObject, HRESULT (__attribute__((cdecl)) *)(REFCLSID rclsid, REFIID riid, void **ppv), "OpcDllGetClassObject must be cdecl");

@@ -1146,6 +1146,13 @@ static void case_OpcVersionIsNewer__installed(void) {
     cases++;
 }
 
+static void case_OpcSetProxyBlanket__proxy(void) {
+    nr_setup();
+    CHECK_HR(OpcSetProxyBlanket(NULL, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
 static void case_OpcServerListCreate__riid(void) {
     nr_setup();
     void * out_ppv;
@@ -1475,6 +1482,7 @@ int main(void) {
     case_OpcVersionCompare__b();
     case_OpcVersionIsNewer__candidate();
     case_OpcVersionIsNewer__installed();
+    case_OpcSetProxyBlanket__proxy();
     case_OpcServerListCreate__riid();
     case_OpcServerListCreate__ppv();
     case_OpcServerListCreateOver__riid();
