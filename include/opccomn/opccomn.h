@@ -708,9 +708,10 @@ typedef struct OpcSecurityOptions {
    * The process's AppID, or NULL. When set, CoInitializeSecurity gets EOAC_APPID and COM takes the
    * process's security from the AppID's registry key (AuthenticationLevel, AccessPermission), so
    * an administrator's dcomcnfg settings apply; COM then ignores the levels passed. Not with
-   * `access_sddl`; NULL for `OpcSetProxyBlanket`.
+   * `access_sddl`; NULL for `OpcSetProxyBlanket`. (Typed CLSID, the header's name for a GUID that
+   * works with and without <windows.h>; an AppID is often the server's CLSID.)
    */
-  const struct GUID *appid;
+  const CLSID *appid;
   /**
    * Who may call into the process, as SDDL (Windows' security descriptor string), or NULL. It
    * must name an owner (`O:`) and a group (`G:`) and have no SACL (`S:`), as CoInitializeSecurity

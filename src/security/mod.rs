@@ -20,7 +20,7 @@ use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::IID_IUNKNOWN;
 use crate::com::options::read_sized;
 use crate::com::unknown::query;
-use crate::com::{IUnknown, E_INVALIDARG, GUID, HRESULT, LPCWSTR, S_OK};
+use crate::com::{IUnknown, CLSID, E_INVALIDARG, GUID, HRESULT, LPCWSTR, S_OK};
 
 #[cfg(windows)]
 mod windows;
@@ -50,8 +50,9 @@ pub struct OpcSecurityOptions {
     /// The process's AppID, or NULL. When set, CoInitializeSecurity gets EOAC_APPID and COM takes the
     /// process's security from the AppID's registry key (AuthenticationLevel, AccessPermission), so
     /// an administrator's dcomcnfg settings apply; COM then ignores the levels passed. Not with
-    /// `access_sddl`; NULL for `OpcSetProxyBlanket`.
-    pub appid: *const GUID,
+    /// `access_sddl`; NULL for `OpcSetProxyBlanket`. (Typed CLSID, the header's name for a GUID that
+    /// works with and without <windows.h>; an AppID is often the server's CLSID.)
+    pub appid: *const CLSID,
     /// Who may call into the process, as SDDL (Windows' security descriptor string), or NULL. It
     /// must name an owner (`O:`) and a group (`G:`) and have no SACL (`S:`), as CoInitializeSecurity
     /// requires, e.g. `O:BAG:BAD:(A;;0x3;;;AU)(A;;0x3;;;SY)` (authenticated users and SYSTEM;
