@@ -708,8 +708,8 @@ typedef struct OpcSecurityOptions {
    * The process's AppID, or NULL. When set, CoInitializeSecurity gets EOAC_APPID and COM takes the
    * process's security from the AppID's registry key (AuthenticationLevel, AccessPermission), so
    * an administrator's dcomcnfg settings apply; COM then ignores the levels passed. Not with
-   * `access_sddl`; NULL for `OpcSetProxyBlanket`. (Typed CLSID, the header's name for a GUID that
-   * works with and without <windows.h>; an AppID is often the server's CLSID.)
+   * `access_sddl`; NULL for `OpcSetProxyBlanket`. (Declared as a CLSID pointer: the GUID type of this
+   * header with and without the Windows headers; an AppID is often the server's CLSID.)
    */
   const CLSID *appid;
   /**
