@@ -339,7 +339,8 @@ pub(crate) unsafe fn set_blanket(
 /// `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
 /// Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
 /// CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
-/// Off Windows the options are checked as above, then the result is E_NOTIMPL.
+/// Off Windows the options are checked as above (the access list's text excepted: only Windows can
+/// read SDDL), then the result is E_NOTIMPL.
 ///
 /// # Safety
 /// `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or
