@@ -94,6 +94,9 @@ OPCCOMN_CONVENTION(&OpcVersionToFileVersion, HRESULT (__attribute__((cdecl)) *)(
 OPCCOMN_CONVENTION(&OpcVersionFromFileVersion, HRESULT (__attribute__((cdecl)) *)(DWORD ms, DWORD ls, struct OpcVersion *version), "OpcVersionFromFileVersion must be cdecl");
 OPCCOMN_CONVENTION(&OpcVersionCompare, int32_t (__attribute__((cdecl)) *)(const struct OpcVersion *a, const struct OpcVersion *b), "OpcVersionCompare must be cdecl");
 OPCCOMN_CONVENTION(&OpcVersionIsNewer, BOOL (__attribute__((cdecl)) *)(const struct OpcVersion *candidate, const struct OpcVersion *installed), "OpcVersionIsNewer must be cdecl");
+OPCCOMN_CONVENTION(&OpcInitializeServerSecurity, HRESULT (__attribute__((cdecl)) *)(const struct OpcSecurityOptions *options), "OpcInitializeServerSecurity must be cdecl");
+OPCCOMN_CONVENTION(&OpcInitializeClientSecurity, HRESULT (__attribute__((cdecl)) *)(const struct OpcSecurityOptions *options), "OpcInitializeClientSecurity must be cdecl");
+OPCCOMN_CONVENTION(&OpcSetProxyBlanket, HRESULT (__attribute__((cdecl)) *)(IUnknown *proxy, const struct OpcSecurityOptions *options), "OpcSetProxyBlanket must be cdecl");
 OPCCOMN_CONVENTION(&OpcClassFactoryCreate, HRESULT (__attribute__((cdecl)) *)(const struct OpcServerClass *cls, REFIID riid, void **ppv), "OpcClassFactoryCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcServerLock, void (__attribute__((cdecl)) *)(void), "OpcServerLock must be cdecl");
 OPCCOMN_CONVENTION(&OpcServerUnlock, void (__attribute__((cdecl)) *)(void), "OpcServerUnlock must be cdecl");

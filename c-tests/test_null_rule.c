@@ -1186,6 +1186,13 @@ static void case_OpcVersionIsNewer__installed(void) {
     cases++;
 }
 
+static void case_OpcSetProxyBlanket__proxy(void) {
+    nr_setup();
+    CHECK_HR(OpcSetProxyBlanket(NULL, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
 static void case_OpcClassFactoryCreate__cls(void) {
     nr_setup();
     void * out_ppv;
@@ -1602,6 +1609,7 @@ int main(void) {
     case_OpcVersionCompare__b();
     case_OpcVersionIsNewer__candidate();
     case_OpcVersionIsNewer__installed();
+    case_OpcSetProxyBlanket__proxy();
     case_OpcClassFactoryCreate__cls();
     case_OpcClassFactoryCreate__riid();
     case_OpcClassFactoryCreate__ppv();

@@ -165,6 +165,14 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_REGISTRATION_KEEP_EXISTING 1
 
 /**
+ * `OpcSecurityOptions::flags`: accept an authentication level below RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
+ * Warning: Windows hardened DCOM against it (KB5004442, CVE-2021-26414; enforced since March
+ * 2023): servers refuse activation requests below PKT_INTEGRITY, so a process using a weaker level
+ * stops talking to other machines. Only for tests or for peers on systems without the hardening.
+ */
+#define OPC_SECURITY_ALLOW_WEAKER_AUTHN 1
+
+/**
  * `OpcServerClass::flags`: instances may be aggregated (CreateInstance with an outer object).
  */
 #define OPC_CLASS_AGGREGATABLE 1
@@ -678,6 +686,52 @@ typedef struct OpcVersion {
    */
   uint16_t build;
 } OpcVersion;
+
+/**
+ * What `OpcInitializeServerSecurity`, `OpcInitializeClientSecurity` and `OpcSetProxyBlanket` ask COM
+ * for. Zero-initialise it, set `struct_size` to `sizeof(OpcSecurityOptions)`, then set what you
+ * need; every zero field means the hardened default. NULL options are all defaults.
+ */
+typedef struct OpcSecurityOptions {
+  /**
+   * `sizeof(OpcSecurityOptions)` as the caller's header declares it.
+   */
+  uint32_t struct_size;
+  /**
+   * An RPC_C_AUTHN_LEVEL_* value: 0 means RPC_C_AUTHN_LEVEL_PKT_INTEGRITY (5), not COM's
+   * RPC_C_AUTHN_LEVEL_DEFAULT; PKT_PRIVACY (6) is accepted. A level below PKT_INTEGRITY (NONE 1,
+   * CONNECT 2, CALL 3, PKT 4) is refused with E_INVALIDARG unless `flags` has
+   * `OPC_SECURITY_ALLOW_WEAKER_AUTHN`.
+   */
+  uint32_t authn_level;
+  /**
+   * An RPC_C_IMP_LEVEL_* value (1 to 4): 0 means RPC_C_IMP_LEVEL_IDENTIFY (2) for
+   * `OpcInitializeServerSecurity` (a server that never acts as its caller needs no more) and
+   * RPC_C_IMP_LEVEL_IMPERSONATE (3) for `OpcInitializeClientSecurity` and `OpcSetProxyBlanket`.
+   */
+  uint32_t imp_level;
+  /**
+   * `OPC_SECURITY_*` flags; 0 for none. Unknown bits are refused with E_INVALIDARG.
+   */
+  uint32_t flags;
+  /**
+   * The process's AppID, or NULL. When set, CoInitializeSecurity gets EOAC_APPID and COM takes the
+   * process's security from the AppID's registry key (AuthenticationLevel, AccessPermission), so
+   * an administrator's dcomcnfg settings apply; COM then ignores the levels passed. Not with
+   * `access_sddl`; NULL for `OpcSetProxyBlanket`. (Declared as a CLSID pointer: the GUID type of this
+   * header with and without the Windows headers; an AppID is often the server's CLSID.)
+   */
+  const CLSID *appid;
+  /**
+   * Who may call into the process, as SDDL (Windows' security descriptor string), or NULL. It
+   * must name an owner (`O:`) and a group (`G:`) and have no SACL (`S:`), as CoInitializeSecurity
+   * requires, e.g. `O:BAG:BAD:(A;;0x3;;;AU)(A;;0x3;;;SY)` (authenticated users and SYSTEM;
+   * 0x3 = COM_RIGHTS_EXECUTE | COM_RIGHTS_EXECUTE_LOCAL, add 0x4 COM_RIGHTS_EXECUTE_REMOTE for
+   * remote callers). NULL with a NULL `appid`: COM checks no access list, so everyone who
+   * authenticates at the level may call. Not with `appid`; NULL for `OpcSetProxyBlanket`.
+   */
+  LPCWSTR access_sddl;
+} OpcSecurityOptions;
 
 /**
  * Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
@@ -3549,6 +3603,74 @@ int32_t OPCCOMN_CDECL OpcVersionCompare(const struct OpcVersion *a, const struct
 BOOL OPCCOMN_CDECL OpcVersionIsNewer(const struct OpcVersion *candidate, const struct OpcVersion *installed);
 
 /**
+ * Sets the process security of an OPC server (CoInitializeSecurity), hardened: authentication at
+ * RPC_C_AUTHN_LEVEL_PKT_INTEGRITY (or what `options->authn_level` asks, never below PKT_INTEGRITY
+ * without `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IDENTIFY (the server
+ * learns who calls but cannot act as the caller), and for access: EOAC_APPID with
+ * `options->appid` (COM then takes the settings from the AppID's registry key), else the access list
+ * `options->access_sddl`, else none (everyone who authenticates at the level may call). The other
+ * arguments: COM chooses the authentication services (-1), no authentication list.
+ *
+ * Call it once, early: after CoInitializeEx and before the process marshals anything (registering
+ * class objects, creating or receiving proxies), because COM sets process security once, implicitly
+ * at the first marshalling if nobody called CoInitializeSecurity.
+ *
+ * Returns S_OK; E_INVALIDARG for a `struct_size` other than `sizeof(OpcSecurityOptions)`, an
+ * unknown flag, a level out of range or below PKT_INTEGRITY without the flag, both `appid` and
+ * `access_sddl`, or an access list that is empty, is no valid SDDL, names no owner or group, or has
+ * a SACL (Windows' conversion error, as an HRESULT, where it gives one); RPC_E_TOO_LATE when process
+ * security is already set: by an earlier successful call of this function or
+ * `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
+ * Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
+ * CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
+ * Off Windows the options are checked as above (the access list's text excepted: only Windows can
+ * read SDDL), then the result is E_NOTIMPL.
+ *
+ * @par Safety
+ * `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or
+ * readable, its `access_sddl` NULL or a NUL-terminated UTF-16 string.
+ */
+HRESULT OPCCOMN_CDECL OpcInitializeServerSecurity(const struct OpcSecurityOptions *options);
+
+/**
+ * Sets the process security of an OPC client (CoInitializeSecurity), hardened: as
+ * `OpcInitializeServerSecurity`, with impersonation RPC_C_IMP_LEVEL_IMPERSONATE by default (the
+ * level servers expect of clients). A client is a DCOM server for the callbacks it receives
+ * (IOPCShutdown::ShutdownRequest, data callbacks): a client that receives them from another machine
+ * needs PKT_INTEGRITY here too, and `access_sddl` (or `appid`) decides who may call it back.
+ *
+ * Returns what `OpcInitializeServerSecurity` returns; off Windows E_NOTIMPL after checking the
+ * options.
+ *
+ * @par Safety
+ * As for `OpcInitializeServerSecurity`.
+ */
+HRESULT OPCCOMN_CDECL OpcInitializeClientSecurity(const struct OpcSecurityOptions *options);
+
+/**
+ * Sets the authentication of one proxy (CoSetProxyBlanket), for clients that cannot set their
+ * process security: on `proxy` and on its IUnknown (queried, set, released), because QueryInterface,
+ * AddRef and Release travel through the IUnknown's own blanket. Authentication at
+ * RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or `options->authn_level` (never below PKT_INTEGRITY without
+ * `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IMPERSONATE or
+ * `options->imp_level`; the authentication and authorization services, the server principal name,
+ * the identity and the capabilities stay the proxy's (RPC_C_AUTHN_DEFAULT, RPC_C_AUTHZ_DEFAULT,
+ * COLE_DEFAULT_PRINCIPAL, COLE_DEFAULT_AUTHINFO, EOAC_DEFAULT). Each further interface the client
+ * queries from the object gets a new proxy with the process's blanket: set it on each.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `proxy`, bad options (as `OpcInitializeServerSecurity`), or
+ * an `appid` or `access_sddl`; E_NOINTERFACE when `proxy` is not a proxy (an in-process object has no
+ * IClientSecurity; nothing to secure, and nothing is changed); otherwise CoSetProxyBlanket's result
+ * for the interface or, when that succeeded, for its IUnknown (the interface's blanket then stays
+ * set), or QueryInterface's failure. Off Windows E_NOTIMPL after checking the arguments.
+ *
+ * @par Safety
+ * `proxy` must be NULL or a valid COM interface pointer; `options` as for
+ * `OpcInitializeServerSecurity`.
+ */
+HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecurityOptions *options);
+
+/**
  * Creates the class object (IClassFactory) of one of the server's classes: CreateInstance calls
  * `class->create` (checking the arguments first, refusing an outer object with CLASS_E_NOAGGREGATION
  * unless the class is OPC_CLASS_AGGREGATABLE and `riid` is IID_IUnknown, and making sure `*ppv` is
@@ -3865,6 +3987,11 @@ HRESULT OPCCOMN_CDECL OpcShutdownSinkCreate(OpcShutdownCallback callback, void *
  * IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
  * gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
  * E_INVALIDARG for a NULL argument.
+ *
+ * Across machines the sink receives ShutdownRequest as a DCOM call from the server's machine: the
+ * client is then a DCOM server, and since Windows' DCOM hardening (KB5004442) the call arrives only
+ * when the client's process security is at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or above. Call
+ * `OpcInitializeClientSecurity` after CoInitializeEx and before creating the server.
  *
  * @par Safety
  * `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.

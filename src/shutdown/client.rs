@@ -143,6 +143,11 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint,
 /// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
 /// E_INVALIDARG for a NULL argument.
 ///
+/// Across machines the sink receives ShutdownRequest as a DCOM call from the server's machine: the
+/// client is then a DCOM server, and since Windows' DCOM hardening (KB5004442) the call arrives only
+/// when the client's process security is at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or above. Call
+/// `OpcInitializeClientSecurity` after CoInitializeEx and before creating the server.
+///
 /// # Safety
 /// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
 #[no_mangle]
