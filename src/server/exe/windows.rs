@@ -21,6 +21,7 @@ use crate::com::{IUnknown, E_UNEXPECTED, HRESULT, LPCWSTR, S_FALSE, S_OK};
 use crate::registry::cmdline::OpcServerCommand;
 use crate::registry::register::ServerDescription;
 use crate::registry::registries;
+use crate::security::{OpcInitializeServerSecurity, OpcSecurityOptions, RPC_E_TOO_LATE};
 use crate::server::{
     class_object, register_all, server_lock, server_unlock, set_process_count, unregister_all, ProcessCount,
     ServerClass,
@@ -183,6 +184,23 @@ pub(super) fn run(
         OpcServerCommand::Register => return Ok(register_all(&regs, descriptions).map(|()| S_OK)?),
         OpcServerCommand::Unregister => return Ok(unregister_all(&regs, descriptions).map(|()| S_OK)?),
         OpcServerCommand::None | OpcServerCommand::Embedding => {}
+    }
+    // Process security from the server's AppID (EOAC_APPID: its AuthenticationLevel and permissions,
+    // which registration writes at PKT_INTEGRITY), unless the server set its own before.
+    if let Some(app_id) = descriptions.iter().find_map(|d| d.app_id) {
+        let security = OpcSecurityOptions {
+            struct_size: core::mem::size_of::<OpcSecurityOptions>() as u32,
+            authn_level: 0,
+            imp_level: 0,
+            flags: 0,
+            appid: &app_id,
+            access_sddl: ptr::null(),
+        };
+        // SAFETY: valid options with a readable AppID.
+        let hr = unsafe { OpcInitializeServerSecurity(&security) }.get();
+        if hr < 0 && hr != RPC_E_TOO_LATE {
+            return Err(hr.into());
+        }
     }
     let result = serve(o, table, command == OpcServerCommand::Embedding);
     drop(running);
