@@ -17,6 +17,7 @@ pub mod memory;
 pub mod path;
 pub mod regfile;
 pub mod register;
+pub mod sddl;
 pub mod version;
 #[cfg(windows)]
 pub mod windows;
