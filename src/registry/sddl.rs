@@ -32,9 +32,9 @@
 use crate::com::{E_INVALIDARG, HRESULT};
 
 /// The longest SDDL text accepted, in characters.
-pub const MAX_SDDL_CHARS: usize = 8192;
+pub(crate) const MAX_SDDL_CHARS: usize = 8192;
 /// The most ACEs a DACL may have.
-pub const MAX_ACES: usize = 256;
+pub(crate) const MAX_ACES: usize = 256;
 /// The most sub-authorities of a SID (Windows' SID_MAX_SUB_AUTHORITIES).
 const MAX_SUB_AUTHORITIES: usize = 15;
 
@@ -105,7 +105,7 @@ const BIT_NAMES: [(&str, u32); 17] = [
 
 /// The well-known SIDs with an SDDL alias that do not depend on a domain: (alias, authority,
 /// sub-authorities).
-pub const ALIASES: [(&str, u64, &[u32]); 32] = [
+pub(crate) const ALIASES: [(&str, u64, &[u32]); 32] = [
     ("WD", 1, &[0]),
     ("CO", 3, &[0]),
     ("CG", 3, &[1]),
