@@ -255,6 +255,9 @@ fn browser() -> ServerDescription {
         user_type: "Opc ServerList Class".into(),
         module_path: Some("C:\\Program Files\\OPC Tools\\opccomn_browser.exe".into()),
         app_id: Some(GUID::from_u128(0xCCD63ADF_D02D_46DD_B170_FA6E0F086FE3)),
+        access_permission: Some("O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)".into()),
+        launch_permission: Some("O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)".into()),
+        authentication_level: Some(5),
         ..Default::default()
     }
 }
