@@ -467,7 +467,7 @@ impl SecurityDescriptor {
     }
 
     /// Reads a binary self-relative descriptor of the subset (any layout of its parts; no SACL, no
-    /// NULL DACL, only access-allowed and access-denied ACEs).
+    /// NULL DACL, only access-allowed and access-denied ACEs; not empty).
     pub fn from_bytes(bytes: &[u8]) -> Res<SecurityDescriptor> {
         let header = bytes.get(..HEADER).ok_or(E_INVALIDARG)?;
         let word = |i: usize| u32::from_le_bytes([header[i], header[i + 1], header[i + 2], header[i + 3]]) as usize;
@@ -494,7 +494,10 @@ impl SecurityDescriptor {
         };
         let dacl = word(16);
         if control & SE_DACL_PRESENT == 0 {
-            return if dacl == 0 && control & dacl_flags == 0 {
+            // An empty descriptor (no owner, group or DACL) has no SDDL of the subset: refused, as
+            // empty text is.
+            let empty = sd.owner.is_none() && sd.group.is_none();
+            return if dacl == 0 && control & dacl_flags == 0 && !empty {
                 Ok(sd)
             } else {
                 Err(E_INVALIDARG)

@@ -181,6 +181,13 @@ fn malformed_binary_is_refused() {
     let mut short_ace = good.clone();
     short_ace[dacl + 10] = 12; // an ACE smaller than its SID
     assert_eq!(bytes_to_sddl(&short_ace), Err(E_INVALIDARG));
+    // Found by the fuzz target: a descriptor with nothing in it has no SDDL of the subset.
+    let mut empty = vec![0u8; 20];
+    empty[0] = 1;
+    empty[3] = 0x80;
+    assert_eq!(bytes_to_sddl(&empty), Err(E_INVALIDARG));
+    empty.extend_from_slice(&[0; 30]);
+    assert_eq!(bytes_to_sddl(&empty), Err(E_INVALIDARG));
     let mut more_aces = good.clone();
     more_aces[dacl + 4] = 2; // counts an ACE that is not there
     assert_eq!(bytes_to_sddl(&more_aces), Err(E_INVALIDARG));
