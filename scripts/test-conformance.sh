@@ -65,6 +65,7 @@ while read -r number name want flags; do
     for flag in $flags; do
         case "$flag" in
             hostile) args+=(--hostile) ;;
+            dcom) args+=(--dcom) ;;
             warn=*) warn=${flag#warn=} ;;
             inproc-only) oop=0 ;;
             *) echo "defects.txt: unknown flag $flag" >&2; exit 1 ;;
