@@ -103,7 +103,7 @@ pub struct OpcServerRegistration {
     /// `OPC_AUTHN_LEVEL_PKT_INTEGRITY` (5), the level every AppID gets unless told otherwise (also when
     /// an older, shorter structure is passed); 1 to 6 is written as given. Below 5 (NONE 1, CONNECT 2,
     /// CALL 3, PKT 4), clients on other machines cannot activate the server since Windows' DCOM
-    /// hardening (KB5004442, CVE-2021-26414) and `opccomn-check --dcom` fails 1 and 2: set a lower
+    /// hardening (KB5004442, CVE-2021-26414), and `opccomn-check --dcom` fails the AppID: set a lower
     /// level only for a reason. A value above 6, or a level without `app_id`, is E_INVALIDARG.
     /// (Version 2 of the structure.)
     pub app_id_authentication_level: u32,
