@@ -94,6 +94,18 @@ OPCCOMN_CONVENTION(&OpcVersionToFileVersion, HRESULT (__attribute__((cdecl)) *)(
 OPCCOMN_CONVENTION(&OpcVersionFromFileVersion, HRESULT (__attribute__((cdecl)) *)(DWORD ms, DWORD ls, struct OpcVersion *version), "OpcVersionFromFileVersion must be cdecl");
 OPCCOMN_CONVENTION(&OpcVersionCompare, int32_t (__attribute__((cdecl)) *)(const struct OpcVersion *a, const struct OpcVersion *b), "OpcVersionCompare must be cdecl");
 OPCCOMN_CONVENTION(&OpcVersionIsNewer, BOOL (__attribute__((cdecl)) *)(const struct OpcVersion *candidate, const struct OpcVersion *installed), "OpcVersionIsNewer must be cdecl");
+OPCCOMN_CONVENTION(&OpcInitializeServerSecurity, HRESULT (__attribute__((cdecl)) *)(const struct OpcSecurityOptions *options), "OpcInitializeServerSecurity must be cdecl");
+OPCCOMN_CONVENTION(&OpcInitializeClientSecurity, HRESULT (__attribute__((cdecl)) *)(const struct OpcSecurityOptions *options), "OpcInitializeClientSecurity must be cdecl");
+OPCCOMN_CONVENTION(&OpcSetProxyBlanket, HRESULT (__attribute__((cdecl)) *)(IUnknown *proxy, const struct OpcSecurityOptions *options), "OpcSetProxyBlanket must be cdecl");
+OPCCOMN_CONVENTION(&OpcClassFactoryCreate, HRESULT (__attribute__((cdecl)) *)(const struct OpcServerClass *cls, REFIID riid, void **ppv), "OpcClassFactoryCreate must be cdecl");
+OPCCOMN_CONVENTION(&OpcServerLock, void (__attribute__((cdecl)) *)(void), "OpcServerLock must be cdecl");
+OPCCOMN_CONVENTION(&OpcServerUnlock, void (__attribute__((cdecl)) *)(void), "OpcServerUnlock must be cdecl");
+OPCCOMN_CONVENTION(&OpcModuleGetClassObject, HRESULT (__attribute__((cdecl)) *)(const struct OpcServerClass *classes, uint32_t count, REFCLSID rclsid, REFIID riid, void **ppv), "OpcModuleGetClassObject must be cdecl");
+OPCCOMN_CONVENTION(&OpcModuleCanUnloadNow, HRESULT (__attribute__((cdecl)) *)(void), "OpcModuleCanUnloadNow must be cdecl");
+OPCCOMN_CONVENTION(&OpcModuleRegister, HRESULT (__attribute__((cdecl)) *)(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg), "OpcModuleRegister must be cdecl");
+OPCCOMN_CONVENTION(&OpcModuleUnregister, HRESULT (__attribute__((cdecl)) *)(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg), "OpcModuleUnregister must be cdecl");
+OPCCOMN_CONVENTION(&OpcExeServerRun, HRESULT (__attribute__((cdecl)) *)(const struct OpcExeServerOptions *options, LPCWSTR command_line), "OpcExeServerRun must be cdecl");
+OPCCOMN_CONVENTION(&OpcExeServerStop, HRESULT (__attribute__((cdecl)) *)(void), "OpcExeServerStop must be cdecl");
 OPCCOMN_CONVENTION(&OpcServerListCreate, HRESULT (__attribute__((cdecl)) *)(IUnknown *outer, REFIID riid, void **ppv), "OpcServerListCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcServerListCreateOver, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg, IUnknown *outer, REFIID riid, void **ppv), "OpcServerListCreateOver must be cdecl");
 OPCCOMN_CONVENTION(&OpcDllGetClassObject, HRESULT (__attribute__((cdecl)) *)(REFCLSID rclsid, REFIID riid, void **ppv), "OpcDllGetClassObject must be cdecl");
@@ -116,6 +128,8 @@ OPCCOMN_CONVENTION((OpcClientNameFn)0, void (__attribute__((cdecl)) *)(void *con
 OPCCOMN_CONVENTION((OpcAcceptLocaleFn)0, int32_t (__attribute__((cdecl)) *)(void *context, LCID locale, int32_t listed), "OpcAcceptLocaleFn must be cdecl");
 OPCCOMN_CONVENTION((OpcLocaleChangedFn)0, void (__attribute__((cdecl)) *)(void *context, LCID locale), "OpcLocaleChangedFn must be cdecl");
 OPCCOMN_CONVENTION((OpcVendorErrorTextFn)0, HRESULT (__attribute__((cdecl)) *)(void *context, HRESULT code, LCID locale, LPWSTR *text), "OpcVendorErrorTextFn must be cdecl");
+OPCCOMN_CONVENTION((OpcCreateInstanceFn)0, HRESULT (__attribute__((cdecl)) *)(void *context, IUnknown *outer, REFIID riid, void **ppv), "OpcCreateInstanceFn must be cdecl");
+OPCCOMN_CONVENTION((OpcExeServerStopFn)0, void (__attribute__((cdecl)) *)(void *context), "OpcExeServerStopFn must be cdecl");
 OPCCOMN_CONVENTION((OpcShutdownCallback)0, void (__attribute__((cdecl)) *)(void *context, LPCWSTR reason), "OpcShutdownCallback must be cdecl");
 
 /* The check can fail: a vtable entry is not __cdecl. */

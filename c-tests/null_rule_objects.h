@@ -118,6 +118,29 @@ static IOPCEnumGUID *nr_enum_opc_guid(void) {
     return (IOPCEnumGUID *)nr_hold(e);
 }
 
+static IClassFactory *nr_factory(void) {
+    void *p = NULL;
+    OpcDllGetClassObject(&CLSID_OPCServerList, &IID_IClassFactory, &p);
+    return (IClassFactory *)nr_hold(p);
+}
+
+/* A server class whose instances are IOPCCommon sessions, for the class-object and module functions. */
+static const GUID nr_class_id = {0x5ec00001, 0x1111, 0x2222, {0x33, 0x33, 0x44, 0x44, 0x55, 0x55, 0x66, 0x66}};
+
+static HRESULT OPCCOMN_CDECL nr_create_instance(void *context, IUnknown *outer, REFIID riid, void **ppv) {
+    (void)context;
+    return OpcCommonCreate(NULL, outer, riid, ppv);
+}
+
+static const OpcServerClass *nr_server_class(void) {
+    static OpcServerClass c;
+    memset(&c, 0, sizeof c);
+    c.struct_size = sizeof c;
+    c.clsid = &nr_class_id;
+    c.create = nr_create_instance;
+    return &c;
+}
+
 /* Interface pointers, each of its own object, for arguments of type IUnknown *. */
 static IUnknown *nr_common_unknown(void) { return (IUnknown *)nr_common(); }
 static IUnknown *nr_container_unknown(void) { return (IUnknown *)nr_container(); }

@@ -287,6 +287,46 @@ static void case_IConnectionPointContainer__FindConnectionPoint__ppCP(void) {
     cases++;
 }
 
+static void case_IClassFactory__QueryInterface__riid(void) {
+    nr_setup();
+    IClassFactory *self = nr_factory();
+    void * out_ppvObject;
+    memset(&out_ppvObject, 0xA5, sizeof out_ppvObject);
+    CHECK_HR(self->lpVtbl->QueryInterface(self, NULL, &out_ppvObject), E_POINTER);
+    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IClassFactory::QueryInterface(riid = NULL): `ppvObject` not reset\n");
+    CHECK(nr_is_zero(&out_ppvObject, sizeof out_ppvObject));
+    nr_teardown();
+    cases++;
+}
+
+static void case_IClassFactory__QueryInterface__ppvObject(void) {
+    nr_setup();
+    IClassFactory *self = nr_factory();
+    CHECK_HR(self->lpVtbl->QueryInterface(self, &IID_Unknown_, NULL), E_POINTER);
+    nr_teardown();
+    cases++;
+}
+
+static void case_IClassFactory__CreateInstance__riid(void) {
+    nr_setup();
+    IClassFactory *self = nr_factory();
+    void * out_ppvObject;
+    memset(&out_ppvObject, 0xA5, sizeof out_ppvObject);
+    CHECK_HR(self->lpVtbl->CreateInstance(self, NULL, NULL, &out_ppvObject), E_POINTER);
+    if (!nr_is_zero(&out_ppvObject, sizeof out_ppvObject)) fprintf(stderr, "IClassFactory::CreateInstance(riid = NULL): `ppvObject` not reset\n");
+    CHECK(nr_is_zero(&out_ppvObject, sizeof out_ppvObject));
+    nr_teardown();
+    cases++;
+}
+
+static void case_IClassFactory__CreateInstance__ppvObject(void) {
+    nr_setup();
+    IClassFactory *self = nr_factory();
+    CHECK_HR(self->lpVtbl->CreateInstance(self, NULL, &IID_Unknown_, NULL), E_POINTER);
+    nr_teardown();
+    cases++;
+}
+
 static void case_IOPCShutdown__QueryInterface__riid(void) {
     nr_setup();
     IOPCShutdown *self = nr_sink();
@@ -1146,6 +1186,96 @@ static void case_OpcVersionIsNewer__installed(void) {
     cases++;
 }
 
+static void case_OpcSetProxyBlanket__proxy(void) {
+    nr_setup();
+    CHECK_HR(OpcSetProxyBlanket(NULL, NULL), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcClassFactoryCreate__cls(void) {
+    nr_setup();
+    void * out_ppv;
+    memset(&out_ppv, 0xA5, sizeof out_ppv);
+    CHECK_HR(OpcClassFactoryCreate(NULL, &IID_IClassFactory, &out_ppv), E_POINTER);
+    if (!nr_is_zero(&out_ppv, sizeof out_ppv)) fprintf(stderr, "OpcClassFactoryCreate(cls = NULL): `ppv` not reset\n");
+    CHECK(nr_is_zero(&out_ppv, sizeof out_ppv));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcClassFactoryCreate__riid(void) {
+    nr_setup();
+    void * out_ppv;
+    memset(&out_ppv, 0xA5, sizeof out_ppv);
+    CHECK_HR(OpcClassFactoryCreate(nr_server_class(), NULL, &out_ppv), E_POINTER);
+    if (!nr_is_zero(&out_ppv, sizeof out_ppv)) fprintf(stderr, "OpcClassFactoryCreate(riid = NULL): `ppv` not reset\n");
+    CHECK(nr_is_zero(&out_ppv, sizeof out_ppv));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcClassFactoryCreate__ppv(void) {
+    nr_setup();
+    CHECK_HR(OpcClassFactoryCreate(nr_server_class(), &IID_IClassFactory, NULL), E_POINTER);
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcModuleGetClassObject__classes(void) {
+    nr_setup();
+    void * out_ppv;
+    memset(&out_ppv, 0xA5, sizeof out_ppv);
+    CHECK_HR(OpcModuleGetClassObject(NULL, 1, &nr_class_id, &IID_IClassFactory, &out_ppv), E_POINTER);
+    if (!nr_is_zero(&out_ppv, sizeof out_ppv)) fprintf(stderr, "OpcModuleGetClassObject(classes = NULL): `ppv` not reset\n");
+    CHECK(nr_is_zero(&out_ppv, sizeof out_ppv));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcModuleGetClassObject__rclsid(void) {
+    nr_setup();
+    void * out_ppv;
+    memset(&out_ppv, 0xA5, sizeof out_ppv);
+    CHECK_HR(OpcModuleGetClassObject(nr_server_class(), 1, NULL, &IID_IClassFactory, &out_ppv), E_POINTER);
+    if (!nr_is_zero(&out_ppv, sizeof out_ppv)) fprintf(stderr, "OpcModuleGetClassObject(rclsid = NULL): `ppv` not reset\n");
+    CHECK(nr_is_zero(&out_ppv, sizeof out_ppv));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcModuleGetClassObject__riid(void) {
+    nr_setup();
+    void * out_ppv;
+    memset(&out_ppv, 0xA5, sizeof out_ppv);
+    CHECK_HR(OpcModuleGetClassObject(nr_server_class(), 1, &nr_class_id, NULL, &out_ppv), E_POINTER);
+    if (!nr_is_zero(&out_ppv, sizeof out_ppv)) fprintf(stderr, "OpcModuleGetClassObject(riid = NULL): `ppv` not reset\n");
+    CHECK(nr_is_zero(&out_ppv, sizeof out_ppv));
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcModuleGetClassObject__ppv(void) {
+    nr_setup();
+    CHECK_HR(OpcModuleGetClassObject(nr_server_class(), 1, &nr_class_id, &IID_IClassFactory, NULL), E_POINTER);
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcModuleRegister__classes(void) {
+    nr_setup();
+    CHECK_HR(OpcModuleRegister(NULL, 1, nr_reg), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
+static void case_OpcModuleUnregister__classes(void) {
+    nr_setup();
+    CHECK_HR(OpcModuleUnregister(NULL, 1, nr_reg), E_INVALIDARG);
+    nr_teardown();
+    cases++;
+}
+
 static void case_OpcServerListCreate__riid(void) {
     nr_setup();
     void * out_ppv;
@@ -1383,6 +1513,10 @@ int main(void) {
     case_IConnectionPointContainer__EnumConnectionPoints__ppEnum();
     case_IConnectionPointContainer__FindConnectionPoint__riid();
     case_IConnectionPointContainer__FindConnectionPoint__ppCP();
+    case_IClassFactory__QueryInterface__riid();
+    case_IClassFactory__QueryInterface__ppvObject();
+    case_IClassFactory__CreateInstance__riid();
+    case_IClassFactory__CreateInstance__ppvObject();
     case_IOPCShutdown__QueryInterface__riid();
     case_IOPCShutdown__QueryInterface__ppvObject();
     case_IOPCCommon__QueryInterface__riid();
@@ -1475,6 +1609,16 @@ int main(void) {
     case_OpcVersionCompare__b();
     case_OpcVersionIsNewer__candidate();
     case_OpcVersionIsNewer__installed();
+    case_OpcSetProxyBlanket__proxy();
+    case_OpcClassFactoryCreate__cls();
+    case_OpcClassFactoryCreate__riid();
+    case_OpcClassFactoryCreate__ppv();
+    case_OpcModuleGetClassObject__classes();
+    case_OpcModuleGetClassObject__rclsid();
+    case_OpcModuleGetClassObject__riid();
+    case_OpcModuleGetClassObject__ppv();
+    case_OpcModuleRegister__classes();
+    case_OpcModuleUnregister__classes();
     case_OpcServerListCreate__riid();
     case_OpcServerListCreate__ppv();
     case_OpcServerListCreateOver__riid();

@@ -181,7 +181,7 @@ PY
 # warning. Then the same AppID at AuthenticationLevel 1 and 2, as installers of old wrote it:
 # dcom.authentication-level fails, naming KB5004442, and nothing else; without a level it is a
 # warning naming the machine default. Wine enforces none of this: what is checked is the registry
-# the checker reads and its verdicts (docs/dcom-security.md).
+# the checker reads and its verdicts (docs/guide/dcom-appid.md).
 (cd "$bin" && wine opccomn_browser.exe /RegServer >/dev/null)
 app_key='HKCR\AppID\{C906C0A4-7001-4E1E-8827-B369541ED7F7}'
 for format in json junit text; do

@@ -218,7 +218,8 @@ stage_lint() {
     cargo run -q -p gen-header -- --check
     scripts/check-generated.sh
     python3 tools/gen-null-rule-test.py --check
-    # The generator's own checks (IDL reader, the Rust-vtable comparison catching each kind of mismatch).
+    # The generator's own checks (IDL reader, the Rust interfaces it generates, the boundary rules it
+    # checks catching each kind of breach).
     cargo clippy -q -p gen-header --all-targets -- -D warnings
     cargo test -q -p gen-header
     # The proxy/stub's NDR tables are generated from idl/opccomn.idl (widl and the system IDLs come

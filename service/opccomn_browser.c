@@ -21,19 +21,21 @@
  * what still holds what this program wrote (the registration helpers keep a ledger in the
  * LocalServer32 key): an OpcEnum installed or re-registered since keeps its registration as it is.
  *
- * DCOM security: CoInitializeSecurity with EOAC_APPID, so the settings of the AppID
- * {CCD63ADF-D02D-46DD-B170-FA6E0F086FE3} decide (editable with dcomcnfg). Registration writes them
- * hardened (Windows' DCOM hardening, KB5004442): AuthenticationLevel 5 (PKT_INTEGRITY), and
- * authenticated users may browse, locally and remotely, while anonymous and unauthenticated callers
- * may not (BROWSER_ACCESS, BROWSER_LAUNCH). See docs/dcom-security.md and
- * docs/guide/out-of-process.md. */
+ * DCOM security: OpcInitializeServerSecurity with the AppID {CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}
+ * (EOAC_APPID), so its AuthenticationLevel and access and launch permissions decide (editable with
+ * dcomcnfg). Registration writes them hardened (Windows' DCOM hardening, KB5004442):
+ * AuthenticationLevel 5 (PKT_INTEGRITY), and authenticated users may browse, locally and remotely,
+ * while anonymous and unauthenticated callers may not (BROWSER_ACCESS, BROWSER_LAUNCH). See
+ * docs/guide/dcom-appid.md and docs/guide/out-of-process.md.
+ *
+ * Lifetime: the library's EXE host (OpcExeServerRun) keeps the process while a client holds any
+ * object it handed out, the server list's enumerators included. */
 #include <stdio.h>
 #include <string.h>
 #include <wchar.h>
 
 #include <opccomn/opccomn.h>
 
-#include "exe_host.h"
 
 static const CLSID APPID_OpcComnBrowser = {0xCCD63ADF, 0xD02D, 0x46DD, {0xB1, 0x70, 0xFA, 0x6E, 0x0F, 0x08, 0x6F, 0xE3}};
 /* AccessPermission: authenticated users (AU) and SYSTEM may call, locally and remotely
@@ -48,18 +50,37 @@ static const CLSID APPID_OpcComnBrowser = {0xCCD63ADF, 0xD02D, 0x46DD, {0xB1, 0x
 /* A browser nobody connects to gives up after this long (COM starts it for a client, so one comes). */
 #define IDLE_MS 60000
 
-static HRESULT create_server_list(REFIID riid, void **ppv) { return exe_host_create_server_list(NULL, riid, ppv); }
+static HRESULT OPCCOMN_CDECL create_server_list(void *context, IUnknown *outer, REFIID riid, void **ppv) {
+    (void)context;
+    (void)outer; /* not aggregatable: the library refuses an outer object */
+    return OpcServerListCreate(NULL, riid, ppv);
+}
 
+/* On the library's EXE host: the server list over the system registry, until the last object a
+ * client holds is released (its enumerators included), or nobody came within IDLE_MS. */
 static int serve(void) {
-    static const CLSID *const clsids[1] = {&CLSID_OPCServerList};
-    static ExeHostClass classes[1] = {EXE_HOST_CLASS(create_server_list)};
-    HRESULT hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
-    /* The AppID's AccessPermission decides who may call (machine defaults when it has none). */
-    if (SUCCEEDED(hr))
-        hr = CoInitializeSecurity((PSECURITY_DESCRIPTOR)&APPID_OpcComnBrowser, -1, NULL, NULL,
-                                  RPC_C_AUTHN_LEVEL_DEFAULT, RPC_C_IMP_LEVEL_IDENTIFY, NULL, EOAC_APPID, NULL);
-    /* Until the last object goes (or nobody came), however long clients keep it. */
-    if (SUCCEEDED(hr) && exe_host_serve(clsids, classes, 1, IDLE_MS, INFINITE, INFINITE, &hr) == 0) return 0;
+    OpcServerClass cls;
+    OpcExeServerOptions options;
+    OpcSecurityOptions security;
+    HRESULT hr;
+    memset(&cls, 0, sizeof cls);
+    cls.struct_size = sizeof cls;
+    cls.clsid = &CLSID_OPCServerList;
+    cls.create = create_server_list;
+    memset(&options, 0, sizeof options);
+    options.struct_size = sizeof options;
+    options.classes = &cls;
+    options.class_count = 1;
+    options.first_client_timeout_ms = IDLE_MS;
+    hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
+    /* The process's security is the AppID's (EOAC_APPID): its AuthenticationLevel and AccessPermission
+     * decide who may call (machine defaults where it has none). */
+    memset(&security, 0, sizeof security);
+    security.struct_size = sizeof security;
+    security.appid = &APPID_OpcComnBrowser;
+    if (SUCCEEDED(hr)) hr = OpcInitializeServerSecurity(&security);
+    if (SUCCEEDED(hr)) hr = OpcExeServerRun(&options, L"-Embedding");
+    if (SUCCEEDED(hr)) return 0; /* without CoUninitialize (OpcExeServerRun) */
     fprintf(stderr, "opccomn_browser: cannot serve CLSID_OPCServerList: 0x%08lX\n", (unsigned long)hr);
     return 1;
 }

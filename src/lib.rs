@@ -11,6 +11,7 @@
 //! - `shutdown`: the IOPCShutdown connection point for servers and a shutdown sink for clients (chapter 4)
 //! - `registry`: the registry abstraction and the registration helpers (chapter 6)
 //! - `serverlist`: the server browser OPCServerList and the COM server entry points (chapter 7)
+//! - `security`: DCOM process security and proxy blankets, hardened for KB5004442
 //! - `proxy`: opccomn.dll as the proxy/stub of the five OPC Common interfaces, and its registration
 //!
 //! The C API is declared in `include/opccomn/opccomn.h`, generated from these sources (cbindgen) and the IDL in `idl/` by tools/gen-header.
@@ -24,6 +25,8 @@ pub mod locale;
 pub mod pattern;
 pub mod proxy;
 pub mod registry;
+pub mod security;
+pub mod server;
 pub mod serverlist;
 pub mod shutdown;
 

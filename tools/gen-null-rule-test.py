@@ -30,12 +30,13 @@ OPC_INTERFACES = {"IOPCCommon", "IOPCShutdown", "IOPCServerList", "IOPCServerLis
 
 # (function or Interface::Method, argument) pairs, or "*" for every function, that may be NULL.
 OPTIONAL = {
-    ("*", "outer"), ("*", "options"), ("*", "context"), ("*", "reg"),
+    ("*", "outer"), ("*", "pUnkOuter"), ("*", "options"), ("*", "context"), ("*", "reg"),
     ("OpcShutdownNotify", "reason"), ("OpcShutdownNotifyEx", "reason"),
     ("OpcShutdownNotifyEx", "pNotified"), ("OpcShutdownNotifyEx", "pFailed"),
     ("OpcShutdownNotifyBounded", "reason"), ("OpcShutdownNotifyBounded", "pNotified"),
     ("OpcShutdownNotifyBounded", "pFailed"), ("OpcShutdownNotifyBounded", "pTimedOut"),
     ("OpcSetModuleLock", "lock"),
+    ("OpcExeServerRun", "options"), ("OpcExeServerRun", "command_line"),
     ("IOPCShutdown::ShutdownRequest", "szReason"),
     ("OpcRegistryGetString", "name"), ("OpcRegistryExport", "key"),
     ("OpcCreateComponentCategory", "description"),
@@ -53,7 +54,7 @@ THIS = {
     "IConnectionPointContainer": "nr_container()", "IConnectionPoint": "nr_point()",
     "IEnumConnectionPoints": "nr_enum_points()", "IEnumConnections": "nr_enum_connections()",
     "IOPCServerList": "nr_list()", "IOPCServerList2": "nr_list2()", "IEnumGUID": "nr_enum_guid()",
-    "IOPCEnumGUID": "nr_enum_opc_guid()",
+    "IOPCEnumGUID": "nr_enum_opc_guid()", "IClassFactory": "nr_factory()",
 }
 
 # Valid values of in-arguments: by (function, argument), then by argument, then by type.
@@ -65,6 +66,8 @@ VALID_BY_FUNCTION = {
     ("OpcShutdownUnadvise", "server"): "nr_container_unknown()",
     ("IOPCServerList::CLSIDFromProgID", "szProgId"): 'W("OPC.ServerList.1")',
     ("IOPCServerList2::CLSIDFromProgID", "szProgId"): 'W("OPC.ServerList.1")',
+    ("OpcModuleGetClassObject", "rclsid"): "&nr_class_id",
+    ("OpcModuleGetClassObject", "riid"): "&IID_IClassFactory", ("OpcClassFactoryCreate", "riid"): "&IID_IClassFactory",
 }
 VALID_BY_NAME = {
     "riid": "&IID_Unknown_", "rclsid": "&CLSID_OPCServerList", "clsid": "&CLSID_OPCServerList",
@@ -72,7 +75,7 @@ VALID_BY_NAME = {
     "sink": "nr_sink_unknown()", "pUnkSink": "nr_sink_unknown()", "callback": "nr_on_shutdown",
     "rgcatidImpl": "nr_categories()", "rgcatidReq": "nr_categories()", "server": "nr_registration()",
     "command_line": 'W("/RegServer")', "key": 'W("CLSID")', "pattern": None, "string": None,
-    "celt": None, "cConnections": None, "cImplemented": "1", "cRequired": "1", "dwLcid": "0x409",
+    "celt": None, "cConnections": None, "count": "1", "cImplemented": "1", "cRequired": "1", "dwLcid": "0x409",
     "locale": "0x409", "dwError": "(HRESULT)0x80004005L", "code": "(HRESULT)0x80004005L", "kind": "0",
     "bCaseSensitive": "TRUE", "caseSensitive": "TRUE", "dwCookie": "1", "cookie": "1",
     "ms": "0x00010002", "ls": "3", "size": "8", "szName": 'W("client")', "text": 'W("x")',
@@ -82,6 +85,7 @@ VALID_BY_NAME = {
 VALID_BY_TYPE = {
     "LPCWSTR": 'W("abc")', "LPCOLESTR": 'W("abc")', "LPCSTR": '"abc"',
     "const OpcPattern *": "nr_pattern()", "const OpcRegistry *": "nr_reg",
+    "const struct OpcServerClass *": "nr_server_class()", "const OpcServerClass *": "nr_server_class()",
     "OpcRegistry *": "nr_reg", "const OpcVersion *": "&nr_version",
 }
 # Pointer types that are inputs (everything else that is a pointer is an out-parameter).

@@ -1,4 +1,5 @@
-// The example as a DLL server (InprocServer32): the four standard exports. `regsvr32` registers it.
+// The example as a DLL server (InprocServer32): the four standard exports, each a call of the
+// library's DLL plumbing over the example's class. `regsvr32` registers it.
 #include "example_server.h"
 
 // The four exports under their undecorated names, also on 32-bit Windows where STDAPI is __stdcall
@@ -12,11 +13,7 @@
 
 namespace {
 HMODULE g_module;
-volatile LONG g_locks;  // live server objects and LockServer(TRUE) calls
 }  // namespace
-
-void ExampleModuleLock() { InterlockedIncrement(&g_locks); }
-void ExampleModuleUnlock() { InterlockedDecrement(&g_locks); }
 
 extern "C" BOOL WINAPI DllMain(HINSTANCE instance, DWORD reason, LPVOID) {
     if (reason == DLL_PROCESS_ATTACH) {
@@ -27,13 +24,12 @@ extern "C" BOOL WINAPI DllMain(HINSTANCE instance, DWORD reason, LPVOID) {
 }
 
 EXAMPLE_EXPORT(HRESULT) DllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = nullptr;
-    if (!IsEqualCLSID(rclsid, CLSID_ExampleServerInProc)) return CLASS_E_CLASSNOTAVAILABLE;
-    return ExampleClassFactory()->QueryInterface(riid, ppv);
+    static const OpcServerClass cls = ExampleClass(true, nullptr);
+    return OpcModuleGetClassObject(&cls, 1, rclsid, riid, ppv);
 }
 
-EXAMPLE_EXPORT(HRESULT) DllCanUnloadNow() { return g_locks == 0 && ExampleClassFactoryReferences() == 0 ? S_OK : S_FALSE; }
+// Unloadable when no server object, no LockServer and no object of the library is left.
+EXAMPLE_EXPORT(HRESULT) DllCanUnloadNow() { return OpcModuleCanUnloadNow(); }
 
 namespace {
 // This DLL uses opccomn.dll, so it names its own path (NULL would be opccomn.dll's).
@@ -42,7 +38,8 @@ HRESULT Register(bool add) {
     DWORD length = GetModuleFileNameW(g_module, path, MAX_PATH);
     if (length == 0 || length >= MAX_PATH) return E_FAIL;
     OpcServerRegistration registration = ExampleRegistration(true, path);
-    return add ? OpcRegisterServer(&registration, nullptr) : OpcUnregisterServer(&registration, nullptr);
+    OpcServerClass cls = ExampleClass(true, &registration);
+    return add ? OpcModuleRegister(&cls, 1, nullptr) : OpcModuleUnregister(&cls, 1, nullptr);
 }
 }  // namespace
 

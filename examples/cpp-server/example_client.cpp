@@ -576,6 +576,10 @@ int main() {
 
     HRESULT hr = CoInitializeEx(nullptr, COINIT_APARTMENTTHREADED);
     if (FAILED(hr)) return 2;
+    // Process security before anything is marshalled: packet integrity (what Windows' DCOM hardening,
+    // KB5004442, requires), impersonation. This client receives IOPCShutdown callbacks, for which it
+    // is the DCOM server: from another machine they arrive only at PKT_INTEGRITY or above.
+    CHECK_HR(OpcInitializeClientSecurity(nullptr), S_OK);
     TestInProc();
     TestLocalServer();
     CoUninitialize();

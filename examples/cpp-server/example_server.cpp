@@ -60,7 +60,7 @@ public:
     static HRESULT NotifyAll(LPCWSTR reason, ULONG *servers, const OpcShutdownNotifyOptions *bounded);
 
 private:
-    ExampleServer() { ExampleModuleLock(); }
+    ExampleServer() { OpcServerLock(); }  // counts on the DLL or EXE (OpcModuleCanUnloadNow, the EXE host)
     ~ExampleServer();
     HRESULT Init();
     bool TryAddRef();
@@ -113,7 +113,7 @@ ExampleServer::~ExampleServer() {
     // The outer object owns the inner objects: one Release each.
     if (m_shutdown) m_shutdown->Release();
     if (m_common) m_common->Release();
-    ExampleModuleUnlock();
+    OpcServerUnlock();
 }
 
 HRESULT ExampleServer::QueryInterface(REFIID riid, void **ppv) {
@@ -238,37 +238,10 @@ HRESULT ExampleServer::NotifyAll(LPCWSTR reason, ULONG *servers, const OpcShutdo
     return result;
 }
 
-// ---- The class factory: one static object ----
-class ExampleFactory final : public IClassFactory {
-public:
-    HRESULT STDMETHODCALLTYPE QueryInterface(REFIID riid, void **ppv) override {
-        if (!ppv) return E_POINTER;
-        *ppv = nullptr;
-        if (!IsEqualIID(riid, IID_IUnknown) && !IsEqualIID(riid, IID_IClassFactory)) return E_NOINTERFACE;
-        *ppv = static_cast<IClassFactory *>(this);
-        AddRef();
-        return S_OK;
-    }
-    // A client holding the factory keeps a DLL loaded (DllCanUnloadNow); an EXE's own
-    // registration (CoRegisterClassObject) holds one reference all the time, so there only
-    // LockServer counts.
-    ULONG STDMETHODCALLTYPE AddRef() override { return static_cast<ULONG>(InterlockedIncrement(&m_refs)); }
-    ULONG STDMETHODCALLTYPE Release() override { return static_cast<ULONG>(InterlockedDecrement(&m_refs)); }
-    HRESULT STDMETHODCALLTYPE CreateInstance(IUnknown *outer, REFIID riid, void **ppv) override {
-        return ExampleServerCreate(outer, riid, ppv);
-    }
-    HRESULT STDMETHODCALLTYPE LockServer(BOOL lock) override {
-        if (lock) ExampleModuleLock();
-        else ExampleModuleUnlock();
-        return S_OK;
-    }
-    LONG References() const { return m_refs; }
-
-private:
-    volatile LONG m_refs = 0;
-};
-
-ExampleFactory g_factory;
+// ---- The class, for the library's class object (IClassFactory) ----
+HRESULT OPCCOMN_CDECL CreateExampleServer(void *, IUnknown *outer, REFIID riid, void **ppv) {
+    return ExampleServerCreate(outer, riid, ppv);
+}
 
 }  // namespace
 
@@ -279,9 +252,14 @@ HRESULT ExampleServerCreate(IUnknown *outer, REFIID riid, void **ppv) {
     return ExampleServer::Create(riid, ppv);
 }
 
-IClassFactory *ExampleClassFactory() { return &g_factory; }
-
-LONG ExampleClassFactoryReferences() { return g_factory.References(); }
+OpcServerClass ExampleClass(bool inproc, const OpcServerRegistration *registration) {
+    OpcServerClass c = {};
+    c.struct_size = sizeof c;
+    c.clsid = inproc ? &CLSID_ExampleServerInProc : &CLSID_ExampleServer;
+    c.create = CreateExampleServer;  // no aggregation (flags 0): the library refuses an outer object
+    c.registration = registration;
+    return c;
+}
 
 HRESULT ExampleNotifyAllServers(LPCWSTR reason, ULONG *servers, const OpcShutdownNotifyOptions *bounded) {
     return ExampleServer::NotifyAll(reason, servers, bounded);
@@ -308,7 +286,7 @@ OpcServerRegistration ExampleRegistration(bool inproc, LPCWSTR module_path) {
         // (COM_RIGHTS_EXECUTE | EXECUTE_LOCAL | EXECUTE_REMOTE = 0x7) and start it (and
         // ACTIVATE_LOCAL | ACTIVATE_REMOTE: 0x1F), locally and remotely; anonymous callers may not.
         // The server does not call CoInitializeSecurity, so COM takes these from the AppID.
-        // docs/dcom-security.md explains each part.
+        // docs/guide/dcom-appid.md explains each part.
         r.app_id = &APPID_ExampleServer;
         r.app_id_access_permission = L"O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)";
         r.app_id_launch_permission = L"O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)";

@@ -76,14 +76,10 @@ OpcServerRegistration ExampleRegistration(bool inproc, LPCWSTR module_path);
 // interface `riid` of it. CLASS_E_NOAGGREGATION when `outer` is not NULL.
 HRESULT ExampleServerCreate(IUnknown *outer, REFIID riid, void **ppv);
 
-// The class factory for ExampleServerCreate (a static object) and the references clients hold on it.
-IClassFactory *ExampleClassFactory();
-LONG ExampleClassFactoryReferences();
-
-// Provided by the EXE and the DLL: the module stays loaded (DLL) or running (EXE) while a server
-// object lives or a client holds a lock on the factory.
-void ExampleModuleLock();
-void ExampleModuleUnlock();
+// The server's class, for the library's class object and its DLL and EXE plumbing
+// (OpcModuleGetClassObject, OpcExeServerRun), with what /RegServer and DllRegisterServer write for it
+// (`registration`, may be NULL). Each server object counts on the module (OpcServerLock) while it lives.
+OpcServerClass ExampleClass(bool inproc, const OpcServerRegistration *registration);
 
 // Asks the clients of every live server object of this module to disconnect (RequestShutdown, and
 // the EXE when its operator stops it). `*servers` (optional) receives the number of server objects.

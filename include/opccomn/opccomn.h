@@ -117,6 +117,11 @@ typedef struct IEnumConnectionPoints IEnumConnectionPoints;
 typedef struct IConnectionPointContainer IConnectionPointContainer;
 #endif
 
+#ifndef __IClassFactory_FWD_DEFINED__
+#define __IClassFactory_FWD_DEFINED__
+typedef struct IClassFactory IClassFactory;
+#endif
+
 #endif
 
 #ifndef __IOPCShutdown_FWD_DEFINED__
@@ -165,6 +170,19 @@ typedef struct IOPCServerList2 IOPCServerList2;
  * (KB5004442, enforced since March 2023).
  */
 #define OPC_AUTHN_LEVEL_PKT_INTEGRITY 5
+
+/**
+ * `OpcSecurityOptions::flags`: accept an authentication level below RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
+ * Warning: Windows hardened DCOM against it (KB5004442, CVE-2021-26414; enforced since March
+ * 2023): servers refuse activation requests below PKT_INTEGRITY, so a process using a weaker level
+ * stops talking to other machines. Only for tests or for peers on systems without the hardening.
+ */
+#define OPC_SECURITY_ALLOW_WEAKER_AUTHN 1
+
+/**
+ * `OpcServerClass::flags`: instances may be aggregated (CreateInstance with an outer object).
+ */
+#define OPC_CLASS_AGGREGATABLE 1
 
 /**
  * A timeout that never ends: the notification waits for the answer however long it takes.
@@ -661,8 +679,8 @@ typedef struct OpcServerRegistration {
    * `AccessPermission` of the AppID, as SDDL text (who may call the server; for example
    * `O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)`), written as the binary self-relative security
    * descriptor dcomcnfg writes; NULL writes none (the machine's default access permission then
-   * applies). Owner, group and a DACL of allow and deny ACEs: docs/dcom-security.md says which SDDL
-   * is accepted. Needs `app_id`. (Version 2 of the structure.)
+   * applies). Owner, group and a DACL of allow and deny ACEs: docs/guide/dcom-appid.md says which
+   * SDDL is accepted. Needs `app_id`. (Version 2 of the structure.)
    */
   LPCWSTR app_id_access_permission;
   /**
@@ -701,6 +719,146 @@ typedef struct OpcVersion {
    */
   uint16_t build;
 } OpcVersion;
+
+/**
+ * What `OpcInitializeServerSecurity`, `OpcInitializeClientSecurity` and `OpcSetProxyBlanket` ask COM
+ * for. Zero-initialise it, set `struct_size` to `sizeof(OpcSecurityOptions)`, then set what you
+ * need; every zero field means the hardened default. NULL options are all defaults.
+ */
+typedef struct OpcSecurityOptions {
+  /**
+   * `sizeof(OpcSecurityOptions)` as the caller's header declares it.
+   */
+  uint32_t struct_size;
+  /**
+   * An RPC_C_AUTHN_LEVEL_* value: 0 means RPC_C_AUTHN_LEVEL_PKT_INTEGRITY (5), not COM's
+   * RPC_C_AUTHN_LEVEL_DEFAULT; PKT_PRIVACY (6) is accepted. A level below PKT_INTEGRITY (NONE 1,
+   * CONNECT 2, CALL 3, PKT 4) is refused with E_INVALIDARG unless `flags` has
+   * `OPC_SECURITY_ALLOW_WEAKER_AUTHN`.
+   */
+  uint32_t authn_level;
+  /**
+   * An RPC_C_IMP_LEVEL_* value (1 to 4): 0 means RPC_C_IMP_LEVEL_IDENTIFY (2) for
+   * `OpcInitializeServerSecurity` (a server that never acts as its caller needs no more) and
+   * RPC_C_IMP_LEVEL_IMPERSONATE (3) for `OpcInitializeClientSecurity` and `OpcSetProxyBlanket`.
+   */
+  uint32_t imp_level;
+  /**
+   * `OPC_SECURITY_*` flags; 0 for none. Unknown bits are refused with E_INVALIDARG.
+   */
+  uint32_t flags;
+  /**
+   * The process's AppID, or NULL. When set, CoInitializeSecurity gets EOAC_APPID and COM takes the
+   * process's security from the AppID's registry key (AuthenticationLevel, AccessPermission), so
+   * an administrator's dcomcnfg settings apply; COM then ignores the levels passed. Not with
+   * `access_sddl`; NULL for `OpcSetProxyBlanket`. (Declared as a CLSID pointer: the GUID type of this
+   * header with and without the Windows headers; an AppID is often the server's CLSID.)
+   */
+  const CLSID *appid;
+  /**
+   * Who may call into the process, as SDDL (Windows' security descriptor string), or NULL. It
+   * must name an owner (`O:`) and a group (`G:`) and have no SACL (`S:`), as CoInitializeSecurity
+   * requires, e.g. `O:BAG:BAD:(A;;0x3;;;AU)(A;;0x3;;;SY)` (authenticated users and SYSTEM;
+   * 0x3 = COM_RIGHTS_EXECUTE | COM_RIGHTS_EXECUTE_LOCAL, add 0x4 COM_RIGHTS_EXECUTE_REMOTE for
+   * remote callers). NULL with a NULL `appid`: COM checks no access list, so everyone who
+   * authenticates at the level may call. Not with `appid`; NULL for `OpcSetProxyBlanket`.
+   */
+  LPCWSTR access_sddl;
+} OpcSecurityOptions;
+
+/**
+ * Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
+ * into `outer` when `outer` is not NULL (only for a class with OPC_CLASS_AGGREGATABLE; `riid` is then
+ * IID_IUnknown and the result the inner, non-delegating IUnknown), its interface `riid` in `*ppv`.
+ * Return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...). The library has
+ * already checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+ */
+typedef HRESULT (OPCCOMN_CDECL *OpcCreateInstanceFn)(void *context, IUnknown *outer, REFIID riid, void **ppv);
+
+/**
+ * One class of a server: what its class object makes, and what registration writes for it.
+ * Zero-initialise it, set `struct_size` to `sizeof(OpcServerClass)`, then set what you need; the
+ * library reads only the first `struct_size` bytes. Keep it (and everything it points at) alive
+ * while the class objects made from it may be used: a static table is usual.
+ */
+typedef struct OpcServerClass {
+  /**
+   * `sizeof(OpcServerClass)` as the caller's header declares it.
+   */
+  uint32_t struct_size;
+  /**
+   * The class identifier (required).
+   */
+  const CLSID *clsid;
+  /**
+   * Makes an instance (required).
+   */
+  OpcCreateInstanceFn create;
+  /**
+   * Passed to `create`.
+   */
+  void *context;
+  /**
+   * OPC_CLASS_AGGREGATABLE or 0.
+   */
+  uint32_t flags;
+  /**
+   * What `/RegServer` (OpcExeServerMain) and OpcModuleRegister write for the class, NULL for a
+   * class that is not registered by them. Its `clsid` must be this class's.
+   */
+  const struct OpcServerRegistration *registration;
+} OpcServerClass;
+
+/**
+ * Called when an EXE server is stopped by its operator, on the host's thread (COM initialised, in the
+ * multithreaded apartment) while clients may still be connected: ask them to disconnect here
+ * (IOPCShutdown, `OpcShutdownNotifyBounded` with a timeout, so that a hung client cannot hold the
+ * stop). Not called when the server ends because its last client left.
+ */
+typedef void (OPCCOMN_CDECL *OpcExeServerStopFn)(void *context);
+
+/**
+ * How `OpcExeServerRun` runs an EXE server. Zero-initialise it, set `struct_size` to
+ * `sizeof(OpcExeServerOptions)`, then set what you need.
+ */
+typedef struct OpcExeServerOptions {
+  /**
+   * `sizeof(OpcExeServerOptions)` as the caller's header declares it.
+   */
+  uint32_t struct_size;
+  /**
+   * The server's classes (at least one, at most 256): their class objects are registered while it
+   * serves, their `registration`s written by `/RegServer` (NULL `module_path`: this EXE).
+   */
+  const struct OpcServerClass *classes;
+  /**
+   * Number of entries in `classes`.
+   */
+  uint32_t class_count;
+  /**
+   * The name of an event the operator's tools set to stop the server (for example
+   * `L"Local\\VendorServerStop"`), NULL for none.
+   */
+  LPCWSTR stop_event_name;
+  /**
+   * Called when the server is stopped (see OpcExeServerStopFn); NULL for nothing.
+   */
+  OpcExeServerStopFn on_stop;
+  /**
+   * Passed to `on_stop`.
+   */
+  void *context;
+  /**
+   * How long a server started by COM (`-Embedding`) waits for its first client, in milliseconds;
+   * 0 means 60000.
+   */
+  uint32_t first_client_timeout_ms;
+  /**
+   * After a stop, how long the host waits for clients to release what they hold, in milliseconds;
+   * 0 means 10000.
+   */
+  uint32_t release_timeout_ms;
+} OpcExeServerOptions;
 
 /**
  * How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
@@ -1770,6 +1928,121 @@ struct IConnectionPointContainer
 /* IConnectionPointContainer was declared by another header (MIDL's output declares no __uuidof) */
 __CRT_UUID_DECL(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
 #endif /* __IConnectionPointContainer_INTERFACE_DEFINED__ */
+
+/* IClassFactory (the standard COM interface; <windows.h> declares it on Windows) */
+#ifndef __IClassFactory_INTERFACE_DEFINED__
+#define __IClassFactory_INTERFACE_DEFINED__
+
+/** The interface identifier of IClassFactory, {00000001-0000-0000-C000-000000000046}. */
+EXTERN_C const IID IID_IClassFactory;
+
+#if defined(__cplusplus) && !defined(CINTERFACE)
+
+/**
+ * COM's class object interface: what DllGetClassObject returns and CoRegisterClassObject registers
+ * (opccomn: OpcClassFactoryCreate(), OpcModuleGetClassObject()).
+ */
+MIDL_INTERFACE("00000001-0000-0000-c000-000000000046")
+IClassFactory : public IUnknown
+{
+public:
+    /**
+     * Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+     */
+    virtual HRESULT STDMETHODCALLTYPE CreateInstance(
+        /* [in, unique] */ IUnknown *pUnkOuter,
+        /* [in] */ REFIID riid,
+        /* [out, iid_is(riid)] */ void **ppvObject) = 0;
+
+    /**
+     * Locks the server in memory (TRUE) or releases such a lock (FALSE).
+     */
+    virtual HRESULT STDMETHODCALLTYPE LockServer(
+        /* [in] */ BOOL fLock) = 0;
+
+};
+
+#ifdef __CRT_UUID_DECL
+__CRT_UUID_DECL(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#endif
+
+#else /* C style interface */
+
+/** The methods of IClassFactory in vtable order, IUnknown first (the C form of the interface). */
+typedef struct IClassFactoryVtbl
+{
+    BEGIN_INTERFACE
+
+    /* IUnknown methods */
+    /**
+     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(
+        IClassFactory *This,
+        /* [in] */ REFIID riid,
+        /* [out, iid_is(riid)] */ void **ppvObject);
+
+    /**
+     * Adds a reference; returns the new count (for diagnostics only).
+     */
+    ULONG (STDMETHODCALLTYPE *AddRef)(
+        IClassFactory *This);
+
+    /**
+     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     */
+    ULONG (STDMETHODCALLTYPE *Release)(
+        IClassFactory *This);
+
+    /* IClassFactory methods */
+    /**
+     * Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+     */
+    HRESULT (STDMETHODCALLTYPE *CreateInstance)(
+        IClassFactory *This,
+        /* [in, unique] */ IUnknown *pUnkOuter,
+        /* [in] */ REFIID riid,
+        /* [out, iid_is(riid)] */ void **ppvObject);
+
+    /**
+     * Locks the server in memory (TRUE) or releases such a lock (FALSE).
+     */
+    HRESULT (STDMETHODCALLTYPE *LockServer)(
+        IClassFactory *This,
+        /* [in] */ BOOL fLock);
+
+    END_INTERFACE
+} IClassFactoryVtbl;
+
+/**
+ * COM's class object interface: what DllGetClassObject returns and CoRegisterClassObject registers
+ * (opccomn: OpcClassFactoryCreate(), OpcModuleGetClassObject()).
+ */
+struct IClassFactory
+{
+    /** The interface's methods (IClassFactoryVtbl). */
+    CONST_VTBL struct IClassFactoryVtbl *lpVtbl;
+};
+
+#ifdef COBJMACROS
+#define IClassFactory_QueryInterface(This,riid,ppvObject) \
+    ( (This)->lpVtbl->QueryInterface(This,riid,ppvObject) )
+#define IClassFactory_AddRef(This) \
+    ( (This)->lpVtbl->AddRef(This) )
+#define IClassFactory_Release(This) \
+    ( (This)->lpVtbl->Release(This) )
+#define IClassFactory_CreateInstance(This,pUnkOuter,riid,ppvObject) \
+    ( (This)->lpVtbl->CreateInstance(This,pUnkOuter,riid,ppvObject) )
+#define IClassFactory_LockServer(This,fLock) \
+    ( (This)->lpVtbl->LockServer(This,fLock) )
+#endif /* COBJMACROS */
+
+#endif /* C style interface */
+
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IClassFactory)
+/* IClassFactory was declared by another header (MIDL's output declares no __uuidof) */
+__CRT_UUID_DECL(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#endif /* __IClassFactory_INTERFACE_DEFINED__ */
 
 #endif /* !defined(_WIN32) */
 
@@ -3363,6 +3636,202 @@ int32_t OPCCOMN_CDECL OpcVersionCompare(const struct OpcVersion *a, const struct
 BOOL OPCCOMN_CDECL OpcVersionIsNewer(const struct OpcVersion *candidate, const struct OpcVersion *installed);
 
 /**
+ * Sets the process security of an OPC server (CoInitializeSecurity), hardened: authentication at
+ * RPC_C_AUTHN_LEVEL_PKT_INTEGRITY (or what `options->authn_level` asks, never below PKT_INTEGRITY
+ * without `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IDENTIFY (the server
+ * learns who calls but cannot act as the caller), and for access: EOAC_APPID with
+ * `options->appid` (COM then takes the settings from the AppID's registry key), else the access list
+ * `options->access_sddl`, else none (everyone who authenticates at the level may call). The other
+ * arguments: COM chooses the authentication services (-1), no authentication list.
+ *
+ * Call it once, early: after CoInitializeEx and before the process marshals anything (registering
+ * class objects, creating or receiving proxies), because COM sets process security once, implicitly
+ * at the first marshalling if nobody called CoInitializeSecurity.
+ *
+ * Returns S_OK; E_INVALIDARG for a `struct_size` other than `sizeof(OpcSecurityOptions)`, an
+ * unknown flag, a level out of range or below PKT_INTEGRITY without the flag, both `appid` and
+ * `access_sddl`, or an access list that is empty, is no valid SDDL, names no owner or group, or has
+ * a SACL (Windows' conversion error, as an HRESULT, where it gives one); RPC_E_TOO_LATE when process
+ * security is already set: by an earlier successful call of this function or
+ * `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
+ * Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
+ * CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
+ * Off Windows the options are checked as above (the access list's text excepted: only Windows can
+ * read SDDL), then the result is E_NOTIMPL.
+ *
+ * @par Safety
+ * `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or
+ * readable, its `access_sddl` NULL or a NUL-terminated UTF-16 string.
+ */
+HRESULT OPCCOMN_CDECL OpcInitializeServerSecurity(const struct OpcSecurityOptions *options);
+
+/**
+ * Sets the process security of an OPC client (CoInitializeSecurity), hardened: as
+ * `OpcInitializeServerSecurity`, with impersonation RPC_C_IMP_LEVEL_IMPERSONATE by default (the
+ * level servers expect of clients). A client is a DCOM server for the callbacks it receives
+ * (IOPCShutdown::ShutdownRequest, data callbacks): a client that receives them from another machine
+ * needs PKT_INTEGRITY here too, and `access_sddl` (or `appid`) decides who may call it back.
+ *
+ * Returns what `OpcInitializeServerSecurity` returns; off Windows E_NOTIMPL after checking the
+ * options.
+ *
+ * @par Safety
+ * As for `OpcInitializeServerSecurity`.
+ */
+HRESULT OPCCOMN_CDECL OpcInitializeClientSecurity(const struct OpcSecurityOptions *options);
+
+/**
+ * Sets the authentication of one proxy (CoSetProxyBlanket), for clients that cannot set their
+ * process security: on `proxy` and on its IUnknown (queried, set, released), because QueryInterface,
+ * AddRef and Release travel through the IUnknown's own blanket. Authentication at
+ * RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or `options->authn_level` (never below PKT_INTEGRITY without
+ * `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IMPERSONATE or
+ * `options->imp_level`; the authentication and authorization services, the server principal name,
+ * the identity and the capabilities stay the proxy's (RPC_C_AUTHN_DEFAULT, RPC_C_AUTHZ_DEFAULT,
+ * COLE_DEFAULT_PRINCIPAL, COLE_DEFAULT_AUTHINFO, EOAC_DEFAULT). Each further interface the client
+ * queries from the object gets a new proxy with the process's blanket: set it on each.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `proxy`, bad options (as `OpcInitializeServerSecurity`), or
+ * an `appid` or `access_sddl`; E_NOINTERFACE when `proxy` is not a proxy (an in-process object has no
+ * IClientSecurity; nothing to secure, and nothing is changed); otherwise CoSetProxyBlanket's result
+ * for the interface or, when that succeeded, for its IUnknown (the interface's blanket then stays
+ * set), or QueryInterface's failure. Off Windows E_NOTIMPL after checking the arguments.
+ *
+ * @par Safety
+ * `proxy` must be NULL or a valid COM interface pointer; `options` as for
+ * `OpcInitializeServerSecurity`.
+ */
+HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecurityOptions *options);
+
+/**
+ * Creates the class object (IClassFactory) of one of the server's classes: CreateInstance calls
+ * `class->create` (checking the arguments first, refusing an outer object with CLASS_E_NOAGGREGATION
+ * unless the class is OPC_CLASS_AGGREGATABLE and `riid` is IID_IUnknown, and making sure `*ppv` is
+ * NULL on every failure: a function that reports success without an object gets E_UNEXPECTED);
+ * LockServer(TRUE/FALSE) is OpcServerLock/OpcServerUnlock. The class object itself does not count
+ * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerMain, or a
+ * DllGetClassObject of its own.
+ *
+ * Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
+ * a NULL `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is
+ * IID_IClassFactory or IID_IUnknown. `*ppv` is NULL on failure.
+ *
+ * @par Safety
+ * `cls` NULL or valid as documented on OpcServerClass (and kept so while the class object lives);
+ * `riid` NULL or readable; `ppv` NULL or writable.
+ */
+HRESULT OPCCOMN_CDECL OpcClassFactoryCreate(const struct OpcServerClass *cls, REFIID riid, void **ppv);
+
+/**
+ * Counts one more reference to the server: call it when an object of the server's own is made (and
+ * OpcServerUnlock when it is freed), so that a DLL server is not unloaded and an EXE server does not
+ * exit while a client holds it. LockServer and the library's objects are counted without it, and so
+ * is an object that aggregates one of the library's objects (IOPCCommon, the shutdown connection
+ * point) for as long as it holds it. Under OpcExeServerMain this is COM's server process count
+ * (CoAddRefServerProcess); elsewhere a count OpcModuleCanUnloadNow reads. Any thread.
+ */
+void OPCCOMN_CDECL OpcServerLock(void);
+
+/**
+ * Takes back one OpcServerLock. Under OpcExeServerMain the last one ends the server once it has had
+ * a client (COM stops handing out its class objects at once). An unlock without a lock is ignored.
+ * Any thread.
+ */
+void OPCCOMN_CDECL OpcServerUnlock(void);
+
+/**
+ * DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)
+ * whose CLSID is `rclsid`, as OpcClassFactoryCreate makes it.
+ *
+ * Returns S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count
+ * of 0 or over 256, or a class OpcClassFactoryCreate refuses; CLASS_E_CLASSNOTAVAILABLE for a
+ * CLSID not in the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown. `*ppv` is
+ * NULL on failure.
+ *
+ * @par Safety
+ * `classes` NULL or `count` classes valid as documented on OpcServerClass (kept so while the DLL is
+ * loaded); `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+ */
+HRESULT OPCCOMN_CDECL OpcModuleGetClassObject(const struct OpcServerClass *classes, uint32_t count, REFCLSID rclsid, REFIID riid, void **ppv);
+
+/**
+ * DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock or
+ * LockServer lock is held) and no object of the library is alive (the server's sessions, connection
+ * points and enumerators among them; with opccomn.dll shared between modules, every module's), else
+ * S_FALSE.
+ */
+HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
+
+/**
+ * Registers every class of the table that has a `registration` (OpcRegisterServer for each, in
+ * order), in `reg` (NULL: the system registry): for DllRegisterServer, or `/RegServer`. A DLL that
+ * uses opccomn.dll must set `module_path` in its registrations (NULL would be opccomn.dll's path).
+ * When one fails, the classes registered before it are unregistered again.
+ *
+ * Returns S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a
+ * registration whose CLSID is not its class's; the errors of OpcRegisterServer.
+ *
+ * @par Safety
+ * `classes` NULL or `count` classes valid as documented on OpcServerClass; `reg` NULL or a live handle.
+ */
+HRESULT OPCCOMN_CDECL OpcModuleRegister(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg);
+
+/**
+ * Unregisters every class of the table that has a `registration` (OpcUnregisterServer for each, in
+ * reverse order), from `reg` (NULL: the system registry): for DllUnregisterServer, or `/UnregServer`.
+ * Goes on after a class that fails and returns the first failure; a class that is not registered
+ * (REGDB_E_KEYMISSING) is no failure.
+ *
+ * Returns S_OK; the errors of OpcModuleRegister for a bad table; the errors of OpcUnregisterServer.
+ *
+ * @par Safety
+ * As for OpcModuleRegister.
+ */
+HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg);
+
+/**
+ * Runs an EXE server (LocalServer32) as its `main`: everything but the server's own objects.
+ *
+ * - `/RegServer` (or `-RegServer`): registers every class with a `registration` (NULL `module_path`:
+ *   this EXE), unregistering again what it wrote when one fails; returns.
+ * - `/UnregServer`: unregisters them, in reverse order (a class not registered is no failure); returns.
+ * - Otherwise it serves: initialises COM (multithreaded apartment), registers the class objects
+ *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
+ *   library makes (through the module lock, which the host sets), LockServer, and the server's own
+ *   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
+ *   last goes it returns (COM stops handing out the class objects at that moment). Started by COM
+ *   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
+ *   serves until stopped. A stop (console control, the named event `stop_event_name`,
+ *   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
+ *   go.
+ *
+ * `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
+ * CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
+ * CoUninitialize would wait for it (under Wine possibly for ever); return from `main` (or call
+ * ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time.
+ *
+ * Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
+ * after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
+ * a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
+ * command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process; the errors
+ * of CoInitializeEx, CoRegisterClassObject and of registration.
+ *
+ * @par Safety
+ * `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
+ * call returns); `command_line` NULL or a NUL-terminated string.
+ */
+HRESULT OPCCOMN_CDECL OpcExeServerRun(const struct OpcExeServerOptions *options, LPCWSTR command_line);
+
+/**
+ * Stops the EXE server that OpcExeServerRun runs in this process, as its operator would: the host
+ * calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
+ * for example a service's control handler or the server's own user interface.
+ *
+ * Returns S_OK; S_FALSE when no host runs.
+ */
+HRESULT OPCCOMN_CDECL OpcExeServerStop(void);
+
+/**
  * Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
  * (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
  * IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
@@ -3551,6 +4020,11 @@ HRESULT OPCCOMN_CDECL OpcShutdownSinkCreate(OpcShutdownCallback callback, void *
  * IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
  * gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
  * E_INVALIDARG for a NULL argument.
+ *
+ * Across machines the sink receives ShutdownRequest as a DCOM call from the server's machine: the
+ * client is then a DCOM server, and since Windows' DCOM hardening (KB5004442) the call arrives only
+ * when the client's process security is at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or above. Call
+ * `OpcInitializeClientSecurity` after CoInitializeEx and before creating the server.
  *
  * @par Safety
  * `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.

@@ -10,7 +10,7 @@ _WIN32") are left out on Windows, where programs get them from uuid.lib.
 
 Self-contained (no system header), so any C compiler for the target builds it, MSVC's included;
 the type has the layout of GUID. */
-#define OPCCOMN_GUID_COUNT 24
+#define OPCCOMN_GUID_COUNT 25
 
 typedef struct opccomn_guid {
     unsigned int Data1;
@@ -144,6 +144,11 @@ const opccomn_guid IID_IEnumConnectionPoints = {0xB196B285, 0xBAB4, 0x101A, {0xB
 /* IID of `IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07} (exported on systems without uuid.lib). */
 #if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 24) && !defined(_WIN32) /* not _WIN32 */
 const opccomn_guid IID_IConnectionPointContainer = {0xB196B284, 0xBAB4, 0x101A, {0xB6, 0x9C, 0x00, 0xAA, 0x00, 0x34, 0x1D, 0x07}};
+#endif
+
+/* IID of `IClassFactory` {00000001-0000-0000-C000-000000000046} (exported on systems without uuid.lib). */
+#if (OPCCOMN_GUID_ALL || OPCCOMN_GUID_ONLY == 25) && !defined(_WIN32) /* not _WIN32 */
+const opccomn_guid IID_IClassFactory = {0x00000001, 0x0000, 0x0000, {0xC0, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x46}};
 #endif
 
 /* ISO C forbids an empty translation unit. */

@@ -17,15 +17,16 @@
 //! Counts are taken as given up to `ULONG::MAX`: only the elements that exist are ever written or
 //! skipped, so a huge `celt` is safe (the caller's array needs room for the elements returned).
 //!
-//! A user of this module names the interface ([`EnumInterface`]) and builds its static vtable with
-//! [`enum_vtbl!`](crate::enum_vtbl); elements implement [`Element`].
+//! A user of this module names the interface ([`EnumInterface`]), implements the interface's generated
+//! trait for its enumerator with [`enum_impl!`](crate::enum_impl) and builds its static vtable with the
+//! generated `IEnumXXXVtbl::new`; elements implement [`Element`].
 
 use core::ptr::{self, NonNull};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::ffi::{self, Fail, Hr};
+use super::ffi::{self, Fail, FfiResult};
 use super::hresult::{S_FALSE, S_OK};
-use super::object::{ComClass, ComObject, Slot};
+use super::object::{ComClass, ComObject, Slot, Vtable};
 use super::types::{GUID, HRESULT, ULONG};
 use super::unknown::{add_ref, release, IUnknown};
 
@@ -91,32 +92,44 @@ pub(crate) trait EnumInterface: Send + Sync + Sized + 'static {
     type Item: Element;
     /// The interface (`IEnumXXX`).
     type Iface;
-    /// Its vtable type.
-    type Vtbl: 'static;
+    /// Its vtable type (generated).
+    type Vtbl: Vtable;
     /// The interfaces the enumerator answers QueryInterface for (with the one vtable: they share a
     /// layout, as IOPCEnumGUID and IEnumGUID do).
     const IIDS: &'static [GUID];
-    /// The vtable, built with [`enum_vtbl!`](crate::enum_vtbl).
+    /// The vtable: `IEnumXXXVtbl::new::<Delegating, Enumerator<Self>>()`.
     fn vtbl() -> &'static Self::Vtbl;
 }
 
-/// The static vtable of enumerator interface `$kind` (an [`EnumInterface`]) of vtable type `$vtbl`.
+/// Implements the generated trait `$trait` of an IEnumXXX interface for `Enumerator<$kind>` (an
+/// [`EnumInterface`]) with this module's methods.
 #[macro_export]
 #[doc(hidden)]
-macro_rules! enum_vtbl {
-    ($vtbl:ident, $kind:ty) => {
-        $vtbl {
-            QueryInterface: $crate::com::object::delegating_query_interface::<
-                <$kind as $crate::com::enumerator::EnumInterface>::Iface,
-            >,
-            AddRef: $crate::com::object::delegating_add_ref::<<$kind as $crate::com::enumerator::EnumInterface>::Iface>,
-            Release: $crate::com::object::delegating_release::<
-                <$kind as $crate::com::enumerator::EnumInterface>::Iface,
-            >,
-            Next: $crate::com::enumerator::next::<$kind>,
-            Skip: $crate::com::enumerator::skip::<$kind>,
-            Reset: $crate::com::enumerator::reset::<$kind>,
-            Clone: $crate::com::enumerator::clone::<$kind>,
+macro_rules! enum_impl {
+    ($trait:path, $kind:ty) => {
+        impl $trait for $crate::com::enumerator::Enumerator<$kind> {
+            unsafe fn Next(
+                this: &$crate::com::object::ComObject<Self>,
+                celt: $crate::com::ULONG,
+                rgelt: *mut <<$kind as $crate::com::enumerator::EnumInterface>::Item as $crate::com::enumerator::Element>::Out,
+                pceltFetched: *mut $crate::com::ULONG,
+            ) -> $crate::com::ffi::FfiResult {
+                // SAFETY: forwarded from the generated shim's caller.
+                unsafe { $crate::com::enumerator::next(this, celt, rgelt, pceltFetched) }
+            }
+            fn Skip(this: &$crate::com::object::ComObject<Self>, celt: $crate::com::ULONG) -> $crate::com::ffi::FfiResult {
+                $crate::com::enumerator::skip(this, celt)
+            }
+            fn Reset(this: &$crate::com::object::ComObject<Self>) -> $crate::com::ffi::FfiResult {
+                $crate::com::enumerator::reset(this)
+            }
+            unsafe fn Clone(
+                this: &$crate::com::object::ComObject<Self>,
+                ppenum: *mut *mut <$kind as $crate::com::enumerator::EnumInterface>::Iface,
+            ) -> $crate::com::ffi::FfiResult {
+                // SAFETY: forwarded from the generated shim's caller.
+                unsafe { $crate::com::enumerator::clone(this, ppenum) }
+            }
         }
     };
 }
@@ -163,13 +176,6 @@ impl<K: EnumInterface> Enumerator<K> {
     }
 }
 
-/// # Safety
-/// `this` is an interface pointer of a live `Enumerator<K>`.
-unsafe fn object<'a, K: EnumInterface>(this: *mut K::Iface) -> &'a Enumerator<K> {
-    // SAFETY: only `Enumerator<K>` slots present K's vtable.
-    unsafe { ComObject::<Enumerator<K>>::from_interface(this) }
-}
-
 fn all_or_false(count: usize, celt: ULONG) -> HRESULT {
     if count == celt as usize {
         S_OK
@@ -178,134 +184,104 @@ fn all_or_false(count: usize, celt: ULONG) -> HRESULT {
     }
 }
 
-/// IEnumXXX::Next.
+/// IEnumXXX::Next (the generated shim has reset `pceltFetched`).
 ///
 /// # Safety
-/// Called through an enumerator's vtable with COM arguments: `rgelt` has room for `celt` elements (or
-/// for as many as are left), `pceltFetched` is NULL or writable.
-pub(crate) unsafe extern "system" fn next<K: EnumInterface>(
-    this: *mut K::Iface,
+/// COM's arguments: `rgelt` has room for `celt` elements (or for as many as are left), `pceltFetched`
+/// is NULL or writable.
+pub(crate) unsafe fn next<K: EnumInterface>(
+    e: &ComObject<Enumerator<K>>,
     celt: ULONG,
     rgelt: *mut <K::Item as Element>::Out,
     pceltFetched: *mut ULONG,
-) -> Hr {
-    ffi::boundary!(Com, [pceltFetched], {
-        // SAFETY: the caller vouches a non-NULL `pceltFetched` is writable.
-        let fetched = unsafe { ffi::out_opt(pceltFetched) };
-        if celt == 0 {
-            return Ok(S_OK);
-        }
-        // COM: the count may be omitted only when asking for one element.
-        if fetched.is_none() && celt > 1 {
-            return Err(Fail::Null);
-        }
-        let rgelt = ffi::in_ptr(rgelt)?.as_ptr();
-        // SAFETY: COM calls this only through our vtable.
-        let e = unsafe { object::<K>(this) };
-        let (start, count) = e.advance(celt);
-        for (i, item) in e.items[start..start + count].iter().enumerate() {
-            // SAFETY: `i < count <= celt`; the caller provides room for the elements returned.
-            unsafe { rgelt.add(i).write(item.hand_out()) };
-        }
-        if let Some(fetched) = fetched {
-            // `count <= celt` fits a ULONG.
-            fetched.write(count as ULONG);
-        }
-        Ok(all_or_false(count, celt))
-    })
+) -> FfiResult {
+    // SAFETY: the caller vouches a non-NULL `pceltFetched` is writable.
+    let fetched = unsafe { ffi::out_opt(pceltFetched) };
+    if celt == 0 {
+        return Ok(S_OK);
+    }
+    // COM: the count may be omitted only when asking for one element.
+    if fetched.is_none() && celt > 1 {
+        return Err(Fail::Null);
+    }
+    let rgelt = ffi::in_ptr(rgelt)?.as_ptr();
+    let (start, count) = e.advance(celt);
+    for (i, item) in e.items[start..start + count].iter().enumerate() {
+        // SAFETY: `i < count <= celt`; the caller provides room for the elements returned.
+        unsafe { rgelt.add(i).write(item.hand_out()) };
+    }
+    if let Some(fetched) = fetched {
+        // `count <= celt` fits a ULONG.
+        fetched.write(count as ULONG);
+    }
+    Ok(all_or_false(count, celt))
 }
 
 /// IEnumXXX::Skip.
-///
-/// # Safety
-/// Called through an enumerator's vtable.
-pub(crate) unsafe extern "system" fn skip<K: EnumInterface>(this: *mut K::Iface, celt: ULONG) -> Hr {
-    ffi::boundary!(Com, [], {
-        // SAFETY: COM calls this only through our vtable.
-        let (_, count) = unsafe { object::<K>(this) }.advance(celt);
-        Ok(all_or_false(count, celt))
-    })
+pub(crate) fn skip<K: EnumInterface>(e: &ComObject<Enumerator<K>>, celt: ULONG) -> FfiResult {
+    let (_, count) = e.advance(celt);
+    Ok(all_or_false(count, celt))
 }
 
 /// IEnumXXX::Reset.
-///
-/// # Safety
-/// Called through an enumerator's vtable.
-pub(crate) unsafe extern "system" fn reset<K: EnumInterface>(this: *mut K::Iface) -> Hr {
-    ffi::boundary!(Com, [], {
-        // SAFETY: COM calls this only through our vtable.
-        *unsafe { object::<K>(this) }.position() = 0;
-        Ok(S_OK)
-    })
+pub(crate) fn reset<K: EnumInterface>(e: &ComObject<Enumerator<K>>) -> FfiResult {
+    *e.position() = 0;
+    Ok(S_OK)
 }
 
 /// IEnumXXX::Clone: a new enumerator over the same snapshot, at the same position.
 ///
 /// # Safety
-/// Called through an enumerator's vtable; `ppenum` NULL or writable.
-pub(crate) unsafe extern "system" fn clone<K: EnumInterface>(this: *mut K::Iface, ppenum: *mut *mut K::Iface) -> Hr {
-    ffi::boundary!(Com, [ppenum], {
-        // SAFETY: the caller vouches a non-NULL `ppenum` is writable.
-        let out = unsafe { ffi::out(ppenum) }?;
-        // SAFETY: COM calls this only through our vtable.
-        let e = unsafe { object::<K>(this) };
-        let position = *e.position();
-        out.write(Enumerator::<K>::create(e.items.clone(), position));
-        Ok(S_OK)
-    })
+/// `ppenum` NULL or writable.
+pub(crate) unsafe fn clone<K: EnumInterface>(e: &ComObject<Enumerator<K>>, ppenum: *mut *mut K::Iface) -> FfiResult {
+    // SAFETY: the caller vouches a non-NULL `ppenum` is writable.
+    let out = unsafe { ffi::out(ppenum) }?;
+    let position = *e.position();
+    out.write(Enumerator::<K>::create(e.items.clone(), position));
+    Ok(S_OK)
 }
 
 #[cfg(test)]
 mod tests {
-    use core::ffi::c_void;
-
     use super::*;
-    use crate::com::ffi::Crossed;
     use crate::com::hresult::E_POINTER;
     use crate::com::iids::IID_IUNKNOWN;
-    use crate::com::types::REFIID;
+    use crate::com::interfaces::{
+        IConnectionPoint, IEnumConnectionPoints, IEnumConnectionPointsImpl, IEnumConnectionPointsVtbl, IEnumGUID,
+        IEnumGUIDImpl, IEnumGUIDVtbl,
+    };
+    use crate::com::object::Delegating;
     use crate::com::unknown::query_interface;
-
-    /// A test enumerator interface: the layout every IEnumXXX has.
-    #[repr(C)]
-    #[allow(non_snake_case)]
-    struct TestEnumVtbl<E: 'static> {
-        QueryInterface: unsafe extern "system" fn(*mut TestEnum<E>, REFIID, *mut *mut c_void) -> Hr,
-        AddRef: unsafe extern "system" fn(*mut TestEnum<E>) -> Crossed<ULONG>,
-        Release: unsafe extern "system" fn(*mut TestEnum<E>) -> Crossed<ULONG>,
-        Next: unsafe extern "system" fn(*mut TestEnum<E>, ULONG, *mut E, *mut ULONG) -> Hr,
-        Skip: unsafe extern "system" fn(*mut TestEnum<E>, ULONG) -> Hr,
-        Reset: unsafe extern "system" fn(*mut TestEnum<E>) -> Hr,
-        Clone: unsafe extern "system" fn(*mut TestEnum<E>, *mut *mut TestEnum<E>) -> Hr,
-    }
-    #[repr(C)]
-    struct TestEnum<E: 'static> {
-        lpVtbl: *const TestEnumVtbl<E>,
-    }
 
     const IID_TEST: GUID = GUID::from_u128(0x1234);
     const IID_TEST_ALIAS: GUID = GUID::from_u128(0x5678);
 
+    /// GUIDs, presented as IEnumGUID under two test IIDs.
     struct Guids;
-    static GUIDS_VTBL: TestEnumVtbl<GUID> = crate::enum_vtbl!(TestEnumVtbl, Guids);
+    static GUIDS_VTBL: IEnumGUIDVtbl = IEnumGUIDVtbl::new::<Delegating, Enumerator<Guids>>();
+    crate::enum_impl!(IEnumGUIDImpl, Guids);
     impl EnumInterface for Guids {
         type Item = GUID;
-        type Iface = TestEnum<GUID>;
-        type Vtbl = TestEnumVtbl<GUID>;
+        type Iface = IEnumGUID;
+        type Vtbl = IEnumGUIDVtbl;
         const IIDS: &'static [GUID] = &[IID_TEST, IID_TEST_ALIAS];
-        fn vtbl() -> &'static TestEnumVtbl<GUID> {
+        fn vtbl() -> &'static IEnumGUIDVtbl {
             &GUIDS_VTBL
         }
     }
 
+    /// Counted pointers (plain library objects, presented as connection points: only their
+    /// reference counts are used).
     struct Pointers;
-    static POINTERS_VTBL: TestEnumVtbl<*mut IUnknown> = crate::enum_vtbl!(TestEnumVtbl, Pointers);
+    static POINTERS_VTBL: IEnumConnectionPointsVtbl =
+        IEnumConnectionPointsVtbl::new::<Delegating, Enumerator<Pointers>>();
+    crate::enum_impl!(IEnumConnectionPointsImpl, Pointers);
     impl EnumInterface for Pointers {
-        type Item = Counted<IUnknown>;
-        type Iface = TestEnum<*mut IUnknown>;
-        type Vtbl = TestEnumVtbl<*mut IUnknown>;
+        type Item = Counted<IConnectionPoint>;
+        type Iface = IEnumConnectionPoints;
+        type Vtbl = IEnumConnectionPointsVtbl;
         const IIDS: &'static [GUID] = &[IID_TEST];
-        fn vtbl() -> &'static TestEnumVtbl<*mut IUnknown> {
+        fn vtbl() -> &'static IEnumConnectionPointsVtbl {
             &POINTERS_VTBL
         }
     }
@@ -420,10 +396,10 @@ mod tests {
     fn counted_elements_are_handed_out_addrefd_and_released_with_the_last_enumerator() {
         let (a, b) = (thing(), thing());
         // SAFETY: the snapshot takes over one reference to each (AddRef'd for it here).
-        let items: Arc<[Counted<IUnknown>]> = unsafe {
+        let items: Arc<[Counted<IConnectionPoint>]> = unsafe {
             add_ref(a);
             add_ref(b);
-            vec![Counted::adopt(a).unwrap(), Counted::adopt(b).unwrap()].into()
+            vec![Counted::adopt(a.cast()).unwrap(), Counted::adopt(b.cast()).unwrap()].into()
         };
         assert_eq!((refs(a), refs(b)), (2, 2));
         let p = Enumerator::<Pointers>::create(items, 0);
@@ -436,14 +412,14 @@ mod tests {
             let mut out = [ptr::null_mut(); 3];
             let mut n = 0;
             assert_eq!((v.Next)(p, 3, out.as_mut_ptr(), &mut n), S_FALSE);
-            assert_eq!((n, out[0], out[1]), (2, a, b));
+            assert_eq!((n, out[0].cast(), out[1].cast()), (2, a, b));
             assert!(out[2].is_null());
             assert_eq!((refs(a), refs(b)), (3, 3), "every pointer handed out is AddRef'd");
-            release(out[0]);
-            release(out[1]);
+            release(out[0].cast());
+            release(out[1].cast());
             assert_eq!((v.Next)(copy, 1, out.as_mut_ptr(), ptr::null_mut()), S_OK);
-            assert_eq!(out[0], a);
-            release(out[0]);
+            assert_eq!(out[0].cast(), a);
+            release(out[0].cast());
             assert_eq!(release(p.cast()), 0);
             assert_eq!((refs(a), refs(b)), (2, 2), "the clone still holds the snapshot");
             assert_eq!(release(copy.cast()), 0);

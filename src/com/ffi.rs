@@ -15,13 +15,20 @@
 //! code, so the rule is written once per function and cannot drift between functions of one kind.
 //!
 //! Both macros return a [`Crossed<T>`] ([`Hr`] for an HRESULT), which code outside this module cannot
-//! make from a value of its own. Every vtable's methods (AddRef and Release included) and every export
-//! that returns something are typed to return it, so a method or an export whose body returns a value
-//! it made itself does not compile; C sees the plain `T` (`#[repr(transparent)]`). The compiler does
-//! not catch a body that only forwards a call through another object's vtable (the vtable structs
-//! are used to call as well, so that call returns a `Crossed<T>` too): a test in this module reads the
-//! crate's sources and fails when a function is not written with one of the two macros, or when an
-//! export does not declare that type.
+//! make from a value of its own, and every entry of a vtable the library fills returns one (the
+//! vtables, their shims and the trait an object implements per interface are generated from the IDL:
+//! `src/com/interfaces.rs`). A call into an object (any object, through the `...Calls` view of its
+//! vtable that an interface pointer has) returns a [`Foreign<T>`] instead, which no Rust function of the
+//! library can make either, so a method that only forwards another object's result cannot fill a
+//! vtable, and a vtable whose entries skipped the boundary cannot be built: the compiler proves both
+//! (see the `compile_fail` examples on [`Crossed`]). C sees the plain `T` (`#[repr(transparent)]`).
+//!
+//! What the compiler cannot see is checked by `tools/gen-header` (`rustcheck.rs`, with syn), which
+//! fails the build's drift check: that every export and every callback handed to C (a named
+//! `extern "C"` / `extern "system"` function outside the generated module) has one `boundary!` or
+//! `guard!` as its whole body and declares `Hr` / `Crossed<T>` (or nothing), so no code of it runs
+//! outside the panic guard; and that nothing but the generated module implements
+//! [`Vtable`](super::object::Vtable) or casts a pointer to a `...Vtbl` type.
 //!
 //! The rule (docs/api-conventions.md): COM plumbing (IUnknown, IClassFactory, the enumerators,
 //! connection points, and the creation functions that follow CoCreateInstance's `riid, ppv`
@@ -140,10 +147,8 @@ out_tuple!(A, B, C, D);
 /// does not type-check. `#[repr(transparent)]`: the ABI is exactly `T`'s under every calling
 /// convention (an HRESULT is returned as the `int32_t` it is); `cbindgen.toml` has the header say `T`.
 ///
-/// A result read from C (a method of an object the library was given) arrives as a `Crossed<T>` too;
-/// [`Crossed::get`] gives the plain value.
-///
-/// Methods written with the macros fill a vtable:
+/// A vtable is filled by the generated `IFooVtbl::new` from an object's implementation of `IFooImpl`;
+/// a vtable written out by hand needs functions that return this type, which only the two macros make:
 ///
 /// ```
 /// use core::ffi::c_void;
@@ -174,6 +179,29 @@ out_tuple!(A, B, C, D);
 /// }
 /// static VTBL: IUnknownVtbl = IUnknownVtbl { QueryInterface: qi, AddRef: count, Release: count };
 /// ```
+///
+/// nor does one that only forwards a call into another object (its result is a [`Foreign<T>`]):
+///
+/// ```compile_fail,E0308
+/// use opccomn::com::ffi::Crossed;
+/// use opccomn::com::{IUnknown, ULONG};
+///
+/// unsafe extern "system" fn f(this: *mut IUnknown) -> Crossed<ULONG> {
+///     let o = this;
+///     ((*(*o).lpVtbl).AddRef)(o)
+/// }
+/// ```
+///
+/// and a view of a foreign vtable cannot be filled, since nothing makes a [`Foreign<T>`]:
+///
+/// ```compile_fail,E0423
+/// use opccomn::com::ffi::Foreign;
+/// use opccomn::com::{IUnknown, ULONG};
+///
+/// unsafe extern "system" fn f(_: *mut IUnknown) -> Foreign<ULONG> {
+///     Foreign(1)
+/// }
+/// ```
 #[repr(transparent)]
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub struct Crossed<T>(T);
@@ -185,6 +213,34 @@ impl<T> Crossed<T> {
     /// The plain value.
     pub fn get(self) -> T {
         self.0
+    }
+}
+
+/// What a call into an object returns: read through the `...Calls` view of its vtable, which every
+/// interface pointer has (`src/com/interfaces.rs`). The object may be anybody's (the library's own, a
+/// caller's, the system's), so its result proves nothing about the library's boundary: no Rust
+/// function of the library can make one, and a vtable entry, which must return a [`Crossed<T>`],
+/// cannot return one. [`Foreign::get`] gives the plain value. `#[repr(transparent)]`, as `Crossed`.
+#[repr(transparent)]
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Foreign<T>(T);
+
+impl<T> Foreign<T> {
+    /// The plain value.
+    pub fn get(self) -> T {
+        self.0
+    }
+}
+
+impl<T: core::fmt::Debug> core::fmt::Debug for Foreign<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<T: PartialEq> PartialEq<T> for Foreign<T> {
+    fn eq(&self, other: &T) -> bool {
+        self.0 == *other
     }
 }
 
@@ -262,7 +318,8 @@ macro_rules! ffi_boundary {
 /// The body of an export or vtable method that returns no HRESULT: `guard!(fallback, { ... })`.
 #[macro_export]
 macro_rules! ffi_guard {
-    // A function returning nothing has no result to carry the proof; the scanning test below checks it.
+    // A function returning nothing has no result to carry the proof; tools/gen-header checks that such
+    // an export's whole body is this macro.
     ((), $body:block) => {
         $crate::com::ffi::guard((), move || $body)
     };
@@ -471,194 +528,5 @@ mod tests {
             assert_eq!(in_ref::<u32>(ptr::null()).err(), Some(Fail::Null));
             assert_eq!(*in_ref(&items[1]).unwrap(), 2);
         }
-    }
-
-    /// Every `#[no_mangle]` export and every vtable method (a named `extern "C"` / `extern "system"`
-    /// function outside tests) must have `boundary!` or `guard!` as its whole body, so none can skip
-    /// the panic guard, the NULL rule or the out-parameter reset.
-    #[test]
-    #[cfg_attr(miri, ignore)] // reads the crate's sources from the file system
-    fn every_export_and_vtable_method_crosses_the_boundary() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-        let mut files = Vec::new();
-        let mut dirs = vec![root];
-        while let Some(dir) = dirs.pop() {
-            for entry in std::fs::read_dir(dir).unwrap() {
-                let path = entry.unwrap().path();
-                if path.is_dir() {
-                    dirs.push(path);
-                } else if path.extension().is_some_and(|e| e == "rs")
-                    && !path.file_name().unwrap().to_string_lossy().ends_with("tests.rs")
-                {
-                    files.push(path);
-                }
-            }
-        }
-        let mut checked = 0;
-        let mut offenders = Vec::new();
-        for path in files {
-            let text = std::fs::read_to_string(&path).unwrap();
-            // Test modules build foreign objects and callbacks; they are not the library's boundary.
-            let text = without_test_modules(&text);
-            // Comments (the doc examples of this module among them) are not code.
-            let text: String = text
-                .lines()
-                .filter(|l| !l.trim_start().starts_with("//"))
-                .flat_map(|l| [l, "\n"])
-                .collect();
-            let text = text.as_str();
-            for (name, ret, body) in extern_functions(text) {
-                checked += 1;
-                let body = strip_comments(body);
-                let body = body.trim();
-                let head = body.split('(').next().unwrap_or("");
-                let ok = (head.ends_with("ffi::boundary!") || head.ends_with("ffi::guard!")) && ends_with_macro(body);
-                if !ok {
-                    offenders.push(format!("{}: {name}", path.display()));
-                }
-                // What the compiler cannot see: that an export declares the proof type. (A vtable
-                // method that does not cannot be put in its vtable.)
-                let ret = ret.trim();
-                let proof = ret.is_empty() || ret == "Hr" || ret.ends_with("::Hr") || ret.contains("Crossed<");
-                if !proof {
-                    offenders.push(format!(
-                        "{}: {name} returns {ret}, not ffi::Hr or ffi::Crossed",
-                        path.display()
-                    ));
-                }
-            }
-            for (i, _) in text.match_indices("\n#[no_mangle]") {
-                // The item after the attribute (and any further attributes): an extern function or a
-                // static (the IIDs).
-                let item = text[i..]
-                    .lines()
-                    .skip(1)
-                    .map(str::trim)
-                    .find(|l| !l.starts_with("#[") && !l.starts_with("//"))
-                    .unwrap_or("");
-                if !item.contains("extern \"") && !item.contains("static ") {
-                    offenders.push(format!(
-                        "{}: a #[no_mangle] item that is not an extern function",
-                        path.display()
-                    ));
-                }
-            }
-        }
-        assert!(
-            checked > 70,
-            "the scan found only {checked} functions; is it still reading the sources?"
-        );
-        assert!(
-            offenders.is_empty(),
-            "not written with ffi::boundary!/ffi::guard!, or not declared to return ffi::Hr/ffi::Crossed: {offenders:#?}"
-        );
-    }
-
-    /// Named `extern "C"` / `extern "system"` function definitions in `text`: name, return type (empty
-    /// for none) and body (the text inside the outermost braces). Function pointer types
-    /// (`extern "system" fn(`) are skipped.
-    fn extern_functions(text: &str) -> Vec<(String, &str, &str)> {
-        let mut found = Vec::new();
-        for abi in ["extern \"C\" fn ", "extern \"system\" fn "] {
-            for (i, _) in text.match_indices(abi) {
-                let rest = &text[i + abi.len()..];
-                let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
-                if name.is_empty() {
-                    continue;
-                }
-                // The signature ends at the first `{` after the parameter list; a `;` first means a
-                // declaration without body (an import).
-                let open_params = rest.find('(').unwrap();
-                let mut depth = 0;
-                let mut close = open_params;
-                for (j, c) in rest[open_params..].char_indices() {
-                    match c {
-                        '(' => depth += 1,
-                        ')' => {
-                            depth -= 1;
-                            if depth == 0 {
-                                close = open_params + j;
-                                break;
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-                let after = &rest[close..];
-                let (Some(brace), semi) = (after.find('{'), after.find(';')) else {
-                    continue;
-                };
-                if semi.is_some_and(|s| s < brace) {
-                    continue;
-                }
-                let body_start = close + brace + 1;
-                let mut depth = 1;
-                let mut end = body_start;
-                for (j, c) in rest[body_start..].char_indices() {
-                    match c {
-                        '{' => depth += 1,
-                        '}' => {
-                            depth -= 1;
-                            if depth == 0 {
-                                end = body_start + j;
-                                break;
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-                let ret = after[1..brace].trim().strip_prefix("->").unwrap_or("");
-                found.push((name, ret, &rest[body_start..end]));
-            }
-        }
-        found
-    }
-
-    /// `text` without its `#[cfg(test)]` modules (each up to its closing brace).
-    fn without_test_modules(text: &str) -> String {
-        let mut out = String::new();
-        let mut rest = text;
-        while let Some(i) = rest.find("#[cfg(test)]\n") {
-            let after = &rest[i..];
-            let line_end = after[13..].find('\n').map_or(after.len(), |j| 13 + j);
-            let next_line = &after[13..line_end];
-            if !next_line.contains("mod ") || !next_line.trim_end().ends_with('{') {
-                out.push_str(&rest[..i + 13]);
-                rest = &rest[i + 13..];
-                continue;
-            }
-            out.push_str(&rest[..i]);
-            let mut depth = 0;
-            let mut end = after.len();
-            for (j, c) in after.char_indices() {
-                match c {
-                    '{' => depth += 1,
-                    '}' => {
-                        depth -= 1;
-                        if depth == 0 {
-                            end = j + 1;
-                            break;
-                        }
-                    }
-                    _ => {}
-                }
-            }
-            rest = &after[end..];
-        }
-        out.push_str(rest);
-        out
-    }
-
-    fn strip_comments(body: &str) -> String {
-        body.lines()
-            .map(str::trim)
-            .filter(|l| !l.starts_with("//"))
-            .collect::<Vec<_>>()
-            .join("\n")
-    }
-
-    /// The macro call is the whole body: nothing runs after it either.
-    fn ends_with_macro(body: &str) -> bool {
-        body.trim_end().ends_with(')')
     }
 }

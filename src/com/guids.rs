@@ -21,6 +21,8 @@ pub const IID_IConnectionPoint: GUID = GUID::from_u128(0xB196B286_BAB4_101A_B69C
 pub const IID_IEnumConnectionPoints: GUID = GUID::from_u128(0xB196B285_BAB4_101A_B69C_00AA00341D07);
 /// IID of `IConnectionPointContainer` {B196B284-BAB4-101A-B69C-00AA00341D07}.
 pub const IID_IConnectionPointContainer: GUID = GUID::from_u128(0xB196B284_BAB4_101A_B69C_00AA00341D07);
+/// IID of `IClassFactory` {00000001-0000-0000-C000-000000000046}.
+pub const IID_IClassFactory: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
 /// IID of `IOPCShutdown` {F31DFDE1-07B6-11d2-B2D8-0060083BA1FB}.
 pub const IID_IOPCShutdown: GUID = GUID::from_u128(0xF31DFDE1_07B6_11D2_B2D8_0060083BA1FB);
 /// IID of `IOPCCommon` {F31DFDE2-07B6-11d2-B2D8-0060083BA1FB}.
@@ -55,8 +57,6 @@ pub const CATID_OPCCMDServer10: GUID = GUID::from_u128(0x2D869D5C_3B05_41FB_851A
 pub const CLSID_OPCServerList: GUID = GUID::from_u128(0x13486D51_4821_11D2_A494_3CB306C10000);
 /// `CLSID_OpcComnProxyStub` {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class `PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces)`.
 pub const CLSID_OpcComnProxyStub: GUID = GUID::from_u128(0x3D738B71_0B9D_4337_A725_E8541A96D1C9);
-/// `IID_IClassFactory` {00000001-0000-0000-C000-000000000046}.
-pub const IID_IClassFactory: GUID = GUID::from_u128(0x00000001_0000_0000_C000_000000000046);
 
 /// The standard English descriptions of the OPC component categories.
 pub const CATEGORY_DESCRIPTIONS: &[(GUID, &str)] = &[
@@ -178,4 +178,9 @@ pub mod exported {
     #[cfg(not(windows))]
     #[export_name = "IID_IConnectionPointContainer"]
     pub static EXPORTED_IID_IConnectionPointContainer: GUID = IID_IConnectionPointContainer;
+
+    /// IID of `IClassFactory` {00000001-0000-0000-C000-000000000046} (exported on systems without uuid.lib).
+    #[cfg(not(windows))]
+    #[export_name = "IID_IClassFactory"]
+    pub static EXPORTED_IID_IClassFactory: GUID = IID_IClassFactory;
 }

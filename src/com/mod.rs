@@ -7,6 +7,7 @@ pub mod ffi;
 pub mod guids;
 pub mod hresult;
 pub mod iids;
+pub mod interfaces;
 pub mod module_lock;
 pub mod object;
 #[cfg(windows)]
@@ -17,5 +18,5 @@ pub mod unknown;
 pub mod wstr;
 
 pub use hresult::*;
+pub use interfaces::{IUnknown, IUnknownVtbl};
 pub use types::*;
-pub use unknown::{IUnknown, IUnknownVtbl};

@@ -60,11 +60,26 @@ impl ModuleLock {
         current
     }
 
+    /// A module lock of the library's own (the EXE host's).
+    #[cfg_attr(not(windows), allow(dead_code))]
+    pub(crate) fn new(
+        lock: unsafe extern "C" fn(*mut c_void),
+        unlock: unsafe extern "C" fn(*mut c_void),
+        context: *mut c_void,
+    ) -> ModuleLock {
+        ModuleLock { lock, unlock, context }
+    }
+
     /// Calls `unlock` (of the module lock that counted the object, even if another was set since).
     pub(crate) fn unlock(self) {
         // SAFETY: `OpcSetModuleLock`'s contract.
         unsafe { (self.unlock)(self.context) };
     }
+}
+
+/// Sets (or, with `None`, clears) the module lock in force.
+pub(crate) fn set_module_lock(next: Option<ModuleLock>) {
+    *CURRENT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = next;
 }
 
 /// Sets the module lock of an EXE server (see `OpcModuleLock`): from now on, every object the library
@@ -107,7 +122,7 @@ pub unsafe extern "C" fn OpcSetModuleLock(lock: *const OpcModuleLock) -> Hr {
                 _ => return Err(super::E_INVALIDARG.into()),
             }
         };
-        *CURRENT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = next;
+        set_module_lock(next);
         Ok(S_OK)
     })
 }

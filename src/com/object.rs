@@ -34,12 +34,13 @@ use core::ptr::{self, NonNull};
 use core::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::mem::MaybeUninit;
 
-use super::ffi::{guard, Crossed, Hr};
+use super::ffi::{self, guard, FfiResult};
 use super::hresult::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, E_UNEXPECTED, S_OK};
 use super::iids::IID_IUNKNOWN;
+use super::interfaces::{IUnknownImpl, IUnknownVtbl};
 use super::module_lock::ModuleLock;
 use super::types::{GUID, HRESULT, REFIID, ULONG};
-use super::unknown::{add_ref, IUnknown, IUnknownVtbl};
+use super::unknown::{add_ref, IUnknown};
 
 /// Number of library objects alive, for `DllCanUnloadNow` and leak checks.
 static LIVE_OBJECTS: AtomicUsize = AtomicUsize::new(0);
@@ -87,6 +88,11 @@ impl Slot {
     }
 }
 
+/// A vtable generated from the IDL (`src/com/interfaces.rs`), whose entries all return
+/// [`Crossed<T>`](super::ffi::Crossed): the only kind of vtable a slot presents. Only the generated
+/// module implements it (`tools/gen-header` checks).
+pub trait Vtable: 'static {}
+
 /// Hands out slots bound to an object under construction.
 pub struct Binder {
     header: NonNull<ComHeader>,
@@ -94,7 +100,7 @@ pub struct Binder {
 
 impl Binder {
     /// A slot presenting `vtbl` for the object being built.
-    pub fn slot<V: 'static>(&self, vtbl: &'static V) -> Slot {
+    pub fn slot<V: Vtable>(&self, vtbl: &'static V) -> Slot {
         Slot {
             vtbl: vtbl as *const V as *const c_void,
             header: self.header,
@@ -267,6 +273,16 @@ impl<T: ComClass> ComObject<T> {
 
     /// As [`ComObject::new`], for construction that can fail; nothing is allocated on failure.
     pub fn try_new<E>(outer: *mut IUnknown, build: impl FnOnce(&Binder) -> Result<T, E>) -> Result<ComRef<T>, E> {
+        Self::make(outer, true, build)
+    }
+
+    /// As [`ComObject::try_new`]; `counted`: whether the object counts on an EXE server's module lock
+    /// (every object does but class objects, which COM holds while they are registered).
+    fn make<E>(
+        outer: *mut IUnknown,
+        counted: bool,
+        build: impl FnOnce(&Binder) -> Result<T, E>,
+    ) -> Result<ComRef<T>, E> {
         // The raw pointer of the allocation, taken first: every slot keeps a copy of it, and nothing
         // reborrows the block through a Box or a reference later (that would invalidate the copies).
         let raw: NonNull<MaybeUninit<ComObject<T>>> = NonNull::from(Box::leak(Box::new_uninit()));
@@ -285,7 +301,7 @@ impl<T: ComClass> ComObject<T> {
                     outer,
                     query: query_thunk::<T>,
                     destroy: destroy_thunk::<T>,
-                    module_lock: ModuleLock::lock(),
+                    module_lock: if counted { ModuleLock::lock() } else { None },
                 },
                 state: value,
             })
@@ -326,6 +342,32 @@ impl<T: ComClass> ComObject<T> {
         // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
         unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
         // `obj` drops here, releasing the construction reference.
+    }
+
+    /// The creation protocol of a class object (IClassFactory): as [`ComObject::create`] without an
+    /// outer object, and the object does not count on an EXE server's module lock.
+    ///
+    /// # Safety
+    /// `riid` NULL or readable; `ppv` NULL or writable.
+    pub unsafe fn create_class_object(
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+        build: impl FnOnce(&Binder) -> Result<T, HRESULT>,
+    ) -> HRESULT {
+        if ppv.is_null() {
+            return E_POINTER;
+        }
+        // SAFETY: checked non-NULL; the caller vouches it is writable.
+        unsafe { *ppv = ptr::null_mut() };
+        if riid.is_null() {
+            return E_POINTER;
+        }
+        let obj = match guard(Err(E_UNEXPECTED), || Self::make(ptr::null_mut(), false, build)) {
+            Ok(obj) => obj,
+            Err(hr) => return hr,
+        };
+        // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
+        unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
     }
 
     /// The object behind one of its interface pointers.
@@ -446,61 +488,52 @@ unsafe fn header_of<I>(this: *mut I) -> NonNull<ComHeader> {
     unsafe { (*(this as *const Slot)).header }
 }
 
-static INNER_VTBL: IUnknownVtbl = IUnknownVtbl {
-    QueryInterface: inner_query_interface,
-    AddRef: inner_add_ref,
-    Release: inner_release,
-};
+static INNER_VTBL: IUnknownVtbl = IUnknownVtbl::new::<Inner>();
 
-unsafe extern "system" fn inner_query_interface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
-    super::ffi::boundary!(Com, [ppv], {
-        // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here).
-        Ok(unsafe { ComHeader::query_interface(header_of(this), riid, ppv) })
-    })
-}
+/// The IUnknown of an object itself (`header.inner`): its identity when it stands alone, and what an
+/// aggregating outer object holds. It counts this object's own references.
+pub struct Inner;
 
-unsafe extern "system" fn inner_add_ref(this: *mut IUnknown) -> Crossed<ULONG> {
-    super::ffi::guard!(0, {
+impl IUnknownImpl for Inner {
+    unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult {
+        // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here); the
+        // non-delegating QueryInterface checks the caller's pointers.
+        Ok(unsafe { ComHeader::query_interface(header_of(this), riid, ppvObject) })
+    }
+
+    unsafe fn AddRef(this: *mut IUnknown) -> ULONG {
         // SAFETY: as above.
         unsafe { header_of(this).as_ref().add_ref() }
-    })
-}
+    }
 
-unsafe extern "system" fn inner_release(this: *mut IUnknown) -> Crossed<ULONG> {
-    super::ffi::guard!(0, {
+    unsafe fn Release(this: *mut IUnknown) -> ULONG {
         // SAFETY: as above; the caller gives up its reference.
         unsafe { ComHeader::release(header_of(this)) }
-    })
+    }
 }
 
-/// `QueryInterface` for the vtable of any interface slot: delegates to the controlling unknown.
-///
-/// # Safety
-/// Only for vtables installed in library object slots; COM callers pass such slots as `this`.
-pub unsafe extern "system" fn delegating_query_interface<I>(this: *mut I, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
-    super::ffi::boundary!(Com, [ppv], {
+/// The IUnknown methods of every other slot of an object: they delegate to the controlling unknown
+/// (the outer object when aggregated, else the object's own inner IUnknown), as COM requires.
+pub struct Delegating;
+
+impl IUnknownImpl for Delegating {
+    unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult {
         // SAFETY: `this` is a slot of a live object; the controlling unknown is valid while it lives.
         let header = unsafe { header_of(this) };
         // SAFETY: the header of a live object.
         let outer = unsafe { header.as_ref() }.outer;
         if outer.is_null() {
             // SAFETY: the caller's pointers go to the non-delegating QueryInterface, which checks them.
-            return Ok(unsafe { ComHeader::query_interface(header, riid, ppv) });
+            return Ok(unsafe { ComHeader::query_interface(header, riid, ppvObject) });
         }
-        // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
-        let (out, riid) = unsafe { (super::ffi::out(ppv)?, super::ffi::in_ref(riid)?) };
+        // SAFETY: the caller's contract: `ppvObject` NULL or writable, `riid` NULL or readable.
+        let (out, riid) = unsafe { (ffi::out(ppvObject)?, ffi::in_ref(riid)?) };
         // SAFETY: the outer unknown is valid while this object lives.
         Ok(unsafe { super::unknown::query_interface(outer, riid, out.as_ptr()) })
-    })
-}
+    }
 
-/// `AddRef` for the vtable of any interface slot: delegates to the controlling unknown.
-///
-/// # Safety
-/// As for [`delegating_query_interface`].
-pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> Crossed<ULONG> {
-    super::ffi::guard!(0, {
-        // SAFETY: as for delegating_query_interface.
+    unsafe fn AddRef(this: *mut IUnknown) -> ULONG {
+        // SAFETY: as for QueryInterface.
         unsafe {
             let header = header_of(this).as_ref();
             if header.outer.is_null() {
@@ -509,16 +542,10 @@ pub unsafe extern "system" fn delegating_add_ref<I>(this: *mut I) -> Crossed<ULO
                 add_ref(header.outer)
             }
         }
-    })
-}
+    }
 
-/// `Release` for the vtable of any interface slot: delegates to the controlling unknown.
-///
-/// # Safety
-/// As for [`delegating_query_interface`]; the caller gives up a reference.
-pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> Crossed<ULONG> {
-    super::ffi::guard!(0, {
-        // SAFETY: as for delegating_query_interface.
+    unsafe fn Release(this: *mut IUnknown) -> ULONG {
+        // SAFETY: as for QueryInterface; the caller gives up a reference.
         unsafe {
             let header = header_of(this);
             let outer = header.as_ref().outer;
@@ -528,31 +555,22 @@ pub unsafe extern "system" fn delegating_release<I>(this: *mut I) -> Crossed<ULO
                 super::unknown::release(outer)
             }
         }
-    })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::com::hresult::E_INVALIDARG;
+    use crate::com::hresult::{E_INVALIDARG, E_NOTIMPL};
+    use crate::com::interfaces::{IOPCCommon, IOPCCommonImpl, IOPCCommonVtbl};
     use crate::com::unknown::release;
     use std::sync::atomic::AtomicBool;
     use std::sync::Arc;
 
-    /// A test interface: IUnknown plus one method that returns a value and one that panics.
-    #[repr(C)]
-    struct ITestVtbl {
-        QueryInterface: unsafe extern "system" fn(*mut ITest, REFIID, *mut *mut c_void) -> Hr,
-        AddRef: unsafe extern "system" fn(*mut ITest) -> Crossed<ULONG>,
-        Release: unsafe extern "system" fn(*mut ITest) -> Crossed<ULONG>,
-        Value: unsafe extern "system" fn(*mut ITest, *mut u32) -> Hr,
-        Explode: unsafe extern "system" fn(*mut ITest) -> Hr,
-    }
-    #[repr(C)]
-    struct ITest {
-        lpVtbl: *const ITestVtbl,
-    }
-    const IID_ITEST: GUID = GUID::from_u128(0x11111111_2222_3333_4444_555555555555);
+    /// The test interface: IOPCCommon, whose GetLocaleID returns the object's value and whose
+    /// SetLocaleID panics (the other methods are not used).
+    type ITest = IOPCCommon;
+    const IID_ITEST: GUID = IOPCCommon::IID;
 
     struct TestObject {
         test: Slot,
@@ -570,25 +588,27 @@ mod tests {
         }
     }
 
-    unsafe extern "system" fn value(this: *mut ITest, out: *mut u32) -> Hr {
-        crate::com::ffi::boundary!(Opc, [out], {
+    impl IOPCCommonImpl for TestObject {
+        fn SetLocaleID(_: &ComObject<Self>, _: u32) -> FfiResult {
+            panic!("a bug inside a method")
+        }
+        unsafe fn GetLocaleID(this: &ComObject<Self>, out: *mut u32) -> FfiResult {
             // SAFETY: the caller passes NULL or a writable `out`.
-            let out = unsafe { crate::com::ffi::out(out) }?;
-            // SAFETY: called through TEST_VTBL only, on a live TestObject.
-            out.write(unsafe { ComObject::<TestObject>::from_interface(this) }.value);
+            let out = unsafe { ffi::out(out) }?;
+            out.write(this.value);
             Ok(S_OK)
-        })
+        }
+        unsafe fn QueryAvailableLocaleIDs(_: &ComObject<Self>, _: *mut u32, _: *mut *mut u32) -> FfiResult {
+            Err(E_NOTIMPL.into())
+        }
+        unsafe fn GetErrorString(_: &ComObject<Self>, _: HRESULT, _: *mut *mut u16) -> FfiResult {
+            Err(E_NOTIMPL.into())
+        }
+        unsafe fn SetClientName(_: &ComObject<Self>, _: *const u16) -> FfiResult {
+            Err(E_NOTIMPL.into())
+        }
     }
-    unsafe extern "system" fn explode(_this: *mut ITest) -> Hr {
-        crate::com::ffi::guard!(E_UNEXPECTED, { panic!("a bug inside a method") })
-    }
-    static TEST_VTBL: ITestVtbl = ITestVtbl {
-        QueryInterface: delegating_query_interface::<ITest>,
-        AddRef: delegating_add_ref::<ITest>,
-        Release: delegating_release::<ITest>,
-        Value: value,
-        Explode: explode,
-    };
+    static TEST_VTBL: IOPCCommonVtbl = IOPCCommonVtbl::new::<Delegating, TestObject>();
 
     fn create(died: &Arc<AtomicBool>) -> *mut ITest {
         let mut p: *mut c_void = ptr::null_mut();
@@ -668,9 +688,9 @@ mod tests {
         // SAFETY: `t` is live until the final Release.
         unsafe {
             let vt = &*(*t).lpVtbl;
-            assert_eq!((vt.Explode)(t), E_UNEXPECTED);
+            assert_eq!((vt.SetLocaleID)(t, 0), E_UNEXPECTED);
             let mut v = 0;
-            assert_eq!((vt.Value)(t, &mut v), S_OK);
+            assert_eq!((vt.GetLocaleID)(t, &mut v), S_OK);
             assert_eq!(v, 42);
             assert_eq!((vt.Release)(t), 0);
         }
@@ -747,7 +767,7 @@ mod tests {
             drop(obj.to_ref());
             assert_eq!((vt.Release)(t), REFS_SATURATED);
             let mut v = 0;
-            assert_eq!((vt.Value)(t, &mut v), S_OK);
+            assert_eq!((vt.GetLocaleID)(t, &mut v), S_OK);
             assert_eq!(v, 42);
             assert!(!died.load(Ordering::SeqCst));
             obj.header().set_refs_for_test(1);

@@ -74,6 +74,32 @@ pub type REFCLSID = *const CLSID;
 #[cfg(not(system_com_headers))]
 pub type LPCLSID = *mut CLSID;
 
+/// One connection of a connection point: the sink and the cookie Advise returned for it.
+#[cfg(not(system_com_headers))]
+#[repr(C)]
+#[allow(non_snake_case)]
+#[derive(Clone, Copy)]
+pub struct CONNECTDATA {
+    /// The connected sink (AddRef'ed for whoever received it from IEnumConnections::Next).
+    pub pUnk: *mut super::interfaces::IUnknown,
+    /// The cookie IConnectionPoint::Advise returned for the sink.
+    pub dwCookie: DWORD,
+}
+
+/// `CATEGORYINFO` of comcat.h: a component category and its description in one locale (what
+/// ICatRegister::RegisterCategories takes; the library's header does not use it).
+#[repr(C)]
+#[allow(non_snake_case)]
+#[derive(Clone, Copy)]
+pub struct CATEGORYINFO {
+    /// The category.
+    pub catid: CATID,
+    /// The locale of the description.
+    pub lcid: LCID,
+    /// The description, NUL-terminated.
+    pub szDescription: [WCHAR; 128],
+}
+
 impl GUID {
     /// Builds a GUID from its canonical 128-bit big-endian value,
     /// `0x01234567_89ab_cdef_0123_456789abcdef` for `{01234567-89AB-CDEF-0123-456789ABCDEF}`.

@@ -1,29 +1,12 @@
 //! `IUnknown`, the root of every COM interface, in the exact COM layout.
 
-use super::ffi::{Crossed, Hr};
 use core::ffi::c_void;
 use core::ptr::NonNull;
 
 use super::hresult::E_POINTER;
-use super::types::{GUID, HRESULT, REFIID, ULONG};
+use super::types::{GUID, HRESULT, ULONG};
 
-/// The three methods every COM interface starts with.
-#[cfg(not(system_com_headers))]
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IUnknownVtbl {
-    pub QueryInterface: unsafe extern "system" fn(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
-    pub AddRef: unsafe extern "system" fn(This: *mut IUnknown) -> Crossed<ULONG>,
-    pub Release: unsafe extern "system" fn(This: *mut IUnknown) -> Crossed<ULONG>,
-}
-
-/// A COM object seen through its `IUnknown` interface.
-#[cfg(not(system_com_headers))]
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IUnknown {
-    pub lpVtbl: *const IUnknownVtbl,
-}
+pub use super::interfaces::{IUnknown, IUnknownVtbl};
 
 /// Calls `QueryInterface` on any COM interface pointer.
 ///
@@ -31,7 +14,7 @@ pub struct IUnknown {
 /// `unknown` must be a valid COM interface pointer and `ppv` writable.
 pub unsafe fn query_interface(unknown: *mut IUnknown, iid: &GUID, ppv: *mut *mut c_void) -> HRESULT {
     // SAFETY: every COM interface starts with the IUnknown methods; the caller vouches for the pointer.
-    unsafe { ((*(*unknown).lpVtbl).QueryInterface)(unknown, iid, ppv) }.get()
+    unsafe { IUnknown::QueryInterface(unknown, iid, ppv) }
 }
 
 /// Calls `AddRef` on any COM interface pointer.
@@ -40,7 +23,7 @@ pub unsafe fn query_interface(unknown: *mut IUnknown, iid: &GUID, ppv: *mut *mut
 /// `unknown` must be a valid COM interface pointer.
 pub unsafe fn add_ref(unknown: *mut IUnknown) -> ULONG {
     // SAFETY: as for `query_interface`.
-    unsafe { ((*(*unknown).lpVtbl).AddRef)(unknown) }.get()
+    unsafe { IUnknown::AddRef(unknown) }
 }
 
 /// Calls `Release` on any COM interface pointer.
@@ -49,7 +32,7 @@ pub unsafe fn add_ref(unknown: *mut IUnknown) -> ULONG {
 /// `unknown` must be a valid COM interface pointer that the caller owns a reference to.
 pub unsafe fn release(unknown: *mut IUnknown) -> ULONG {
     // SAFETY: as for `query_interface`.
-    unsafe { ((*(*unknown).lpVtbl).Release)(unknown) }.get()
+    unsafe { IUnknown::Release(unknown) }
 }
 
 /// One counted reference to an interface of an object; released when dropped.

@@ -10,41 +10,19 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::com::alloc::{alloc_array, alloc_wstr};
-use crate::com::ffi::{self, Crossed, Hr};
+use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::IID_IOPCCommon;
-use crate::com::object::{
-    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
-};
+use crate::com::interfaces::IOPCCommonImpl;
+use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::options::read_sized;
-use crate::com::{IUnknown, DWORD, E_INVALIDARG, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, ULONG, WCHAR};
+use crate::com::{IUnknown, DWORD, E_INVALIDARG, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, WCHAR};
 use crate::errors::{
     error_string, OpcServerKind, OpcVendorErrorStringFn, OpcVendorErrorTextFn, VendorCallback, VendorTexts,
     CATALOG_LOCALES,
 };
 use crate::locale::{LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
 
-/// The methods of IOPCCommon, in the order of the specification's IDL.
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IOPCCommonVtbl {
-    pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCCommon, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCCommon) -> Crossed<ULONG>,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCCommon) -> Crossed<ULONG>,
-    pub SetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, dwLcid: LCID) -> Hr,
-    pub GetLocaleID: unsafe extern "system" fn(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> Hr,
-    pub QueryAvailableLocaleIDs:
-        unsafe extern "system" fn(This: *mut IOPCCommon, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> Hr,
-    pub GetErrorString: unsafe extern "system" fn(This: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> Hr,
-    pub SetClientName: unsafe extern "system" fn(This: *mut IOPCCommon, szName: LPCWSTR) -> Hr,
-}
-
-/// The IOPCCommon interface: per-client locale, client name and error texts.
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IOPCCommon {
-    pub lpVtbl: *const IOPCCommonVtbl,
-}
+pub use crate::com::interfaces::{IOPCCommon, IOPCCommonVtbl};
 
 /// Called after a client set its name; `name` is valid only during the call. May be called from any
 /// thread; never called while the library holds a lock.
@@ -311,75 +289,46 @@ impl OpcCommon {
     }
 }
 
-static IOPCCOMMON_VTBL: IOPCCommonVtbl = IOPCCommonVtbl {
-    QueryInterface: delegating_query_interface::<IOPCCommon>,
-    AddRef: delegating_add_ref::<IOPCCommon>,
-    Release: delegating_release::<IOPCCommon>,
-    SetLocaleID: set_locale_id,
-    GetLocaleID: get_locale_id,
-    QueryAvailableLocaleIDs: query_available_locale_ids,
-    GetErrorString: get_error_string,
-    SetClientName: set_client_name,
-};
+static IOPCCOMMON_VTBL: IOPCCommonVtbl = IOPCCommonVtbl::new::<Delegating, OpcCommon>();
 
-/// # Safety
-/// `this` is an IOPCCommon pointer of a live OpcCommon object (COM calls only reach us that way).
-unsafe fn object<'a>(this: *mut IOPCCommon) -> &'a OpcCommon {
-    // SAFETY: IOPCCOMMON_VTBL is only installed in OpcCommon objects.
-    unsafe { ComObject::<OpcCommon>::from_interface(this) }
-}
+impl IOPCCommonImpl for OpcCommon {
+    fn SetLocaleID(this: &ComObject<Self>, lcid: LCID) -> FfiResult {
+        Ok(this.set_locale(lcid)?)
+    }
 
-unsafe extern "system" fn set_locale_id(this: *mut IOPCCommon, lcid: LCID) -> Hr {
-    ffi::boundary!(Opc, [], {
-        // SAFETY: COM calls this only through our vtable.
-        Ok(unsafe { object(this) }.set_locale(lcid)?)
-    })
-}
-
-unsafe extern "system" fn get_locale_id(this: *mut IOPCCommon, pdwLcid: *mut LCID) -> Hr {
-    ffi::boundary!(Opc, [pdwLcid], {
+    unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
         let out = unsafe { ffi::out(pdwLcid) }?;
-        // SAFETY: COM calls this only through our vtable.
-        out.write(unsafe { object(this) }.locale.load(Ordering::Relaxed));
+        out.write(this.locale.load(Ordering::Relaxed));
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn query_available_locale_ids(
-    this: *mut IOPCCommon,
-    pdwCount: *mut DWORD,
-    pdwLcid: *mut *mut LCID,
-) -> Hr {
-    ffi::boundary!(Opc, [pdwCount, pdwLcid], {
+    unsafe fn QueryAvailableLocaleIDs(
+        this: &ComObject<Self>,
+        pdwCount: *mut DWORD,
+        pdwLcid: *mut *mut LCID,
+    ) -> FfiResult {
         // SAFETY: the caller vouches non-NULL out-parameters are writable.
         let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(pdwLcid)?) };
-        // SAFETY: COM calls this only through our vtable.
-        let available = &unsafe { object(this) }.settings.available;
+        let available = &this.settings.available;
         array.write(alloc_array(available)?);
         count.write(available.len() as DWORD);
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn get_error_string(this: *mut IOPCCommon, dwError: HRESULT, ppString: *mut LPWSTR) -> Hr {
-    ffi::boundary!(Opc, [ppString], {
+    unsafe fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: *mut LPWSTR) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
         let out = unsafe { ffi::out(ppString) }?;
-        // SAFETY: COM calls this only through our vtable.
-        out.write(unsafe { object(this) }.error_string(dwError)?);
+        out.write(this.error_string(dwError)?);
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn set_client_name(this: *mut IOPCCommon, szName: LPCWSTR) -> Hr {
-    ffi::boundary!(Opc, [], {
+    unsafe fn SetClientName(this: &ComObject<Self>, szName: LPCWSTR) -> FfiResult {
         // SAFETY: the caller passes NULL or a NUL-terminated string.
         let name = unsafe { ffi::in_units(szName) }?;
-        // SAFETY: COM calls this only through our vtable.
-        unsafe { object(this) }.set_client_name(name);
+        this.set_client_name(name);
         Ok(S_OK)
-    })
+    }
 }
 
 /// Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at

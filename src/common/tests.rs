@@ -6,11 +6,12 @@ use core::ptr;
 
 use super::*;
 use crate::com::alloc::task_free;
+use crate::com::ffi::Crossed;
 use crate::com::iids::IID_IUNKNOWN;
 use crate::com::unknown::hostile;
 use crate::com::unknown::{add_ref, query_interface, release};
 use crate::com::wstr::{wstr_units, MAX_STRING_UNITS};
-use crate::com::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, S_FALSE};
+use crate::com::{CLASS_E_NOAGGREGATION, E_NOINTERFACE, E_POINTER, S_FALSE, ULONG};
 
 const OPC_E_INVALIDHANDLE: HRESULT = 0xC0040001_u32 as HRESULT;
 
@@ -55,7 +56,7 @@ fn create(options: *const OpcCommonOptions) -> *mut IOPCCommon {
     p.cast()
 }
 
-fn vt(c: *mut IOPCCommon) -> &'static IOPCCommonVtbl {
+fn vt(c: *mut IOPCCommon) -> &'static crate::com::interfaces::IOPCCommonCalls {
     // SAFETY: a live IOPCCommon pointer.
     unsafe { &*(*c).lpVtbl }
 }

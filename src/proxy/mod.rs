@@ -29,7 +29,6 @@ use core::ptr;
 
 use crate::com::ffi::{self, Hr};
 pub use crate::com::guids::CLSID_OpcComnProxyStub;
-use crate::com::iids::{IID_IOPCCommon, IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IOPCShutdown};
 use crate::com::{BOOL, E_INVALIDARG, GUID, HRESULT, IID, LPCWSTR, S_FALSE, S_OK};
 use crate::registry::path::RegPath;
 use crate::registry::register::{read_ledger, this_module_path, Entry, Recorder, LEDGER};
@@ -39,15 +38,12 @@ use crate::registry::{class_key, parse_guid, registries, OpcRegistry, RegValue, 
 /// previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
 pub const OPC_PROXY_STUB_TAKE_OVER: u32 = 1;
 
+/// The interfaces of idl/opccomn.idl, generated from it with their method counts.
+static INTERFACES: [(IID, &str, u32); 5] = crate::com::interfaces::OPC_COMMON_INTERFACES;
+
 /// The interfaces the proxy/stub serves: IID, name, `NumMethods` (IUnknown's three included).
 fn interfaces() -> [(&'static IID, &'static str, u32); 5] {
-    [
-        (&IID_IOPCShutdown, "IOPCShutdown", 4),
-        (&IID_IOPCCommon, "IOPCCommon", 8),
-        (&IID_IOPCServerList, "IOPCServerList", 6),
-        (&IID_IOPCEnumGUID, "IOPCEnumGUID", 7),
-        (&IID_IOPCServerList2, "IOPCServerList2", 6),
-    ]
+    INTERFACES.each_ref().map(|(iid, name, methods)| (iid, *name, *methods))
 }
 
 // Used by the proxy/stub (Windows, mingw); everywhere else only its tests run it.

@@ -29,8 +29,9 @@ use windows_sys::Win32::System::Registry::{
 use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
 
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
+use crate::com::interfaces::ICatRegister;
 use crate::com::unknown::{release, IUnknown};
-use crate::com::{E_FAIL, GUID, HRESULT, LCID, ULONG};
+use crate::com::{CATEGORYINFO, E_FAIL, GUID, HRESULT};
 
 /// `HRESULT_FROM_WIN32`.
 fn hr_from_win32(e: WIN32_ERROR) -> HRESULT {
@@ -290,7 +291,7 @@ impl WindowsRegistry {
                 (&CLSID_STD_COMPONENT_CATEGORIES_MGR as *const GUID).cast(),
                 ptr::null_mut(),
                 CLSCTX_INPROC_SERVER,
-                (&IID_ICAT_REGISTER as *const GUID).cast(),
+                (&ICatRegister::IID as *const GUID).cast(),
                 &mut p,
             )
         };
@@ -404,16 +405,16 @@ impl Registry for WindowsRegistry {
         let Some(cats) = self.cat_register() else {
             return write_category(self, catid, lcid, description);
         };
-        let mut info = CategoryInfo {
+        let mut info = CATEGORYINFO {
             catid: *catid,
             lcid,
-            description: [0; 128],
+            szDescription: [0; 128],
         };
-        for (slot, unit) in info.description.iter_mut().zip(description.encode_utf16().take(127)) {
+        for (slot, unit) in info.szDescription.iter_mut().zip(description.encode_utf16().take(127)) {
             *slot = unit;
         }
         // SAFETY: live ICatRegister; one CATEGORYINFO.
-        let hr = unsafe { ((*(*cats.0).vtbl).RegisterCategories)(cats.0, 1, &mut info) };
+        let hr = unsafe { ICatRegister::RegisterCategories(cats.0, 1, &mut info) };
         ok(hr)
     }
 
@@ -424,11 +425,10 @@ impl Registry for WindowsRegistry {
         let mut id = *catid;
         // SAFETY: live ICatRegister; one CATID.
         let hr = unsafe {
-            let v = &*(*cats.0).vtbl;
             if required {
-                (v.RegisterClassReqCategories)(cats.0, clsid, 1, &mut id)
+                ICatRegister::RegisterClassReqCategories(cats.0, clsid, 1, &mut id)
             } else {
-                (v.RegisterClassImplCategories)(cats.0, clsid, 1, &mut id)
+                ICatRegister::RegisterClassImplCategories(cats.0, clsid, 1, &mut id)
             }
         };
         ok(hr)
@@ -441,11 +441,10 @@ impl Registry for WindowsRegistry {
         let mut id = *catid;
         // SAFETY: live ICatRegister; one CATID.
         let hr = unsafe {
-            let v = &*(*cats.0).vtbl;
             if required {
-                (v.UnRegisterClassReqCategories)(cats.0, clsid, 1, &mut id)
+                ICatRegister::UnRegisterClassReqCategories(cats.0, clsid, 1, &mut id)
             } else {
-                (v.UnRegisterClassImplCategories)(cats.0, clsid, 1, &mut id)
+                ICatRegister::UnRegisterClassImplCategories(cats.0, clsid, 1, &mut id)
             }
         };
         ok(hr)
@@ -519,38 +518,6 @@ pub(crate) fn module_file_name(module: HMODULE) -> Result<String, HRESULT> {
 
 /// `CLSID_StdComponentCategoriesMgr` {0002E005-0000-0000-C000-000000000046}.
 const CLSID_STD_COMPONENT_CATEGORIES_MGR: GUID = GUID::from_u128(0x0002E005_0000_0000_C000_000000000046);
-/// `IID_ICatRegister` {0002E012-0000-0000-C000-000000000046}.
-const IID_ICAT_REGISTER: GUID = GUID::from_u128(0x0002E012_0000_0000_C000_000000000046);
-
-/// `CATEGORYINFO` of comcat.h.
-#[repr(C)]
-struct CategoryInfo {
-    catid: GUID,
-    lcid: LCID,
-    description: [u16; 128],
-}
-
-/// The methods of `ICatRegister` (comcat.h), in order.
-#[repr(C)]
-#[allow(non_snake_case)]
-struct ICatRegisterVtbl {
-    QueryInterface: unsafe extern "system" fn(*mut ICatRegister, *const GUID, *mut *mut c_void) -> HRESULT,
-    AddRef: unsafe extern "system" fn(*mut ICatRegister) -> ULONG,
-    Release: unsafe extern "system" fn(*mut ICatRegister) -> ULONG,
-    RegisterCategories: unsafe extern "system" fn(*mut ICatRegister, ULONG, *mut CategoryInfo) -> HRESULT,
-    UnRegisterCategories: unsafe extern "system" fn(*mut ICatRegister, ULONG, *mut GUID) -> HRESULT,
-    RegisterClassImplCategories: unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
-    UnRegisterClassImplCategories:
-        unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
-    RegisterClassReqCategories: unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
-    UnRegisterClassReqCategories:
-        unsafe extern "system" fn(*mut ICatRegister, *const GUID, ULONG, *mut GUID) -> HRESULT,
-}
-
-#[repr(C)]
-struct ICatRegister {
-    vtbl: *const ICatRegisterVtbl,
-}
 
 /// An owned ICatRegister reference.
 struct CatRegister(*mut ICatRegister);

@@ -43,11 +43,10 @@ use std::sync::Arc;
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
 use crate::com::enumerator::{EnumInterface, Enumerator};
-use crate::com::ffi::{self, Crossed, Fail, FfiResult, Hr};
+use crate::com::ffi::{self, Fail, FfiResult, Hr};
 use crate::com::iids::{IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IENUMGUID};
-use crate::com::object::{
-    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
-};
+use crate::com::interfaces::{IOPCEnumGUIDImpl, IOPCServerList2Impl, IOPCServerListImpl};
+use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::{
     IUnknown, CATID, CLSID, CO_E_CLASSSTRING, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR, REFCLSID, REFIID,
     REGDB_E_CLASSNOTREG, S_OK, ULONG,
@@ -57,11 +56,12 @@ use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries
 use interfaces::{IEnumGUID, IOPCEnumGUID, IOPCEnumGUIDVtbl};
 
 /// The enumerator of EnumClassesOfCategories: the core's snapshot enumerator over class identifiers,
-/// presented as IOPCEnumGUID and IEnumGUID (one layout). A NULL fetched-count for more than one element
-/// is E_INVALIDARG, as for every OPC method.
+/// presented as IOPCEnumGUID and IEnumGUID (one layout). It follows COM's enumerator contract: a NULL
+/// fetched-count for more than one element is E_POINTER.
 struct ClassEnum;
 
-static CLASS_ENUM_VTBL: IOPCEnumGUIDVtbl = crate::enum_vtbl!(IOPCEnumGUIDVtbl, ClassEnum);
+static CLASS_ENUM_VTBL: IOPCEnumGUIDVtbl = IOPCEnumGUIDVtbl::new::<Delegating, Enumerator<ClassEnum>>();
+crate::enum_impl!(IOPCEnumGUIDImpl, ClassEnum);
 
 impl EnumInterface for ClassEnum {
     type Item = GUID;
@@ -78,73 +78,7 @@ const MAX_CATEGORIES: ULONG = 4096;
 /// The count ICatInformation uses for "any category"; accepted as a synonym of 0.
 const ANY_CATEGORY: ULONG = ULONG::MAX;
 
-/// The methods of IOPCServerList, in the order of the specification's IDL.
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IOPCServerListVtbl {
-    pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCServerList, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList) -> Crossed<ULONG>,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList) -> Crossed<ULONG>,
-    pub EnumClassesOfCategories: unsafe extern "system" fn(
-        This: *mut IOPCServerList,
-        cImplemented: ULONG,
-        rgcatidImpl: *mut CATID,
-        cRequired: ULONG,
-        rgcatidReq: *mut CATID,
-        ppenumClsid: *mut *mut IEnumGUID,
-    ) -> Hr,
-    pub GetClassDetails: unsafe extern "system" fn(
-        This: *mut IOPCServerList,
-        clsid: REFCLSID,
-        ppszProgID: *mut LPOLESTR,
-        ppszUserType: *mut LPOLESTR,
-    ) -> Hr,
-    pub CLSIDFromProgID:
-        unsafe extern "system" fn(This: *mut IOPCServerList, szProgId: LPCOLESTR, clsid: LPCLSID) -> Hr,
-}
-
-/// IOPCServerList: the list of OPC servers registered on a machine, by category.
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IOPCServerList {
-    pub lpVtbl: *const IOPCServerListVtbl,
-}
-
-/// The methods of IOPCServerList2 (OPC Common 1.10).
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IOPCServerList2Vtbl {
-    pub QueryInterface:
-        unsafe extern "system" fn(This: *mut IOPCServerList2, riid: REFIID, ppvObject: *mut *mut c_void) -> Hr,
-    pub AddRef: unsafe extern "system" fn(This: *mut IOPCServerList2) -> Crossed<ULONG>,
-    pub Release: unsafe extern "system" fn(This: *mut IOPCServerList2) -> Crossed<ULONG>,
-    pub EnumClassesOfCategories: unsafe extern "system" fn(
-        This: *mut IOPCServerList2,
-        cImplemented: ULONG,
-        rgcatidImpl: *mut CATID,
-        cRequired: ULONG,
-        rgcatidReq: *mut CATID,
-        ppenumClsid: *mut *mut IOPCEnumGUID,
-    ) -> Hr,
-    pub GetClassDetails: unsafe extern "system" fn(
-        This: *mut IOPCServerList2,
-        clsid: REFCLSID,
-        ppszProgID: *mut LPOLESTR,
-        ppszUserType: *mut LPOLESTR,
-        ppszVerIndProgID: *mut LPOLESTR,
-    ) -> Hr,
-    pub CLSIDFromProgID:
-        unsafe extern "system" fn(This: *mut IOPCServerList2, szProgId: LPCOLESTR, clsid: LPCLSID) -> Hr,
-}
-
-/// IOPCServerList2 (OPC Common 1.10): IOPCServerList with the version-independent ProgID and an
-/// IOPCEnumGUID enumerator.
-#[repr(C)]
-#[allow(non_snake_case)]
-pub struct IOPCServerList2 {
-    pub lpVtbl: *const IOPCServerList2Vtbl,
-}
+pub use crate::com::interfaces::{IOPCServerList, IOPCServerList2, IOPCServerList2Vtbl, IOPCServerListVtbl};
 
 /// The OPCServerList object.
 pub(crate) struct ServerList {
@@ -318,19 +252,12 @@ unsafe fn category_list<'a>(count: ULONG, p: *const CATID) -> FfiResult<Option<&
     unsafe { ffi::in_array(p, count, MAX_CATEGORIES as usize) }.map(Some)
 }
 
-/// # Safety
-/// `this` is a slot of a live ServerList (COM calls only reach us that way).
-unsafe fn object<'a, I>(this: *mut I) -> &'a ServerList {
-    // SAFETY: the server-list vtables are only installed in ServerList objects.
-    unsafe { ComObject::<ServerList>::from_interface(this) }
-}
-
 /// EnumClassesOfCategories of both interfaces.
 ///
 /// # Safety
 /// As the method: COM arguments, `this` one of our slots.
-unsafe fn enum_classes<I>(
-    this: *mut I,
+unsafe fn enum_classes(
+    list: &ServerList,
     c_impl: ULONG,
     rg_impl: *const CATID,
     c_req: ULONG,
@@ -345,8 +272,6 @@ unsafe fn enum_classes<I>(
             category_list(c_req, rg_req)?,
         )
     };
-    // SAFETY: COM calls this only through our vtables.
-    let list = unsafe { object(this) };
     let classes = classes_of_categories(&list.regs, implemented, required);
     out.write(Enumerator::<ClassEnum>::create(classes.into(), 0));
     Ok(S_OK)
@@ -380,8 +305,8 @@ impl Drop for Allocated {
 ///
 /// # Safety
 /// As the method: COM arguments, `this` one of our slots.
-unsafe fn get_class_details<I>(
-    this: *mut I,
+unsafe fn get_class_details(
+    list: &ServerList,
     clsid: REFCLSID,
     prog_id: *mut LPOLESTR,
     user_type: *mut LPOLESTR,
@@ -396,8 +321,6 @@ unsafe fn get_class_details<I>(
             ffi::in_ref(clsid)?,
         )
     };
-    // SAFETY: COM calls this only through our vtables.
-    let list = unsafe { object(this) };
     let details = class_details(&list.regs, clsid, vi.is_some())?;
     let mut strings = Allocated(Vec::new());
     let p = strings.string(&details.prog_id)?;
@@ -419,7 +342,7 @@ unsafe fn get_class_details<I>(
 ///
 /// # Safety
 /// As the method: COM arguments, `this` one of our slots.
-unsafe fn clsid_from_prog_id_method<I>(this: *mut I, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
+unsafe fn clsid_from_prog_id_method(list: &ServerList, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
     // SAFETY: forwarded from the caller: `clsid` NULL or writable, `sz_prog_id` NULL or
     // NUL-terminated.
     let (out, units) = unsafe { (ffi::out(clsid)?, ffi::in_units(sz_prog_id)) };
@@ -432,95 +355,71 @@ unsafe fn clsid_from_prog_id_method<I>(this: *mut I, sz_prog_id: LPCOLESTR, clsi
         }
     })?;
     let prog_id = String::from_utf16(units).map_err(|_| CO_E_CLASSSTRING)?;
-    // SAFETY: COM calls this only through our vtables.
-    out.write(clsid_from_prog_id(&unsafe { object(this) }.regs, &prog_id)?);
+    out.write(clsid_from_prog_id(&list.regs, &prog_id)?);
     Ok(S_OK)
 }
 
-unsafe extern "system" fn list_enum(
-    this: *mut IOPCServerList,
-    c_impl: ULONG,
-    rg_impl: *mut CATID,
-    c_req: ULONG,
-    rg_req: *mut CATID,
-    ppenum: *mut *mut IEnumGUID,
-) -> Hr {
-    ffi::boundary!(Opc, [ppenum], {
+impl IOPCServerListImpl for ServerList {
+    unsafe fn EnumClassesOfCategories(
+        this: &ComObject<Self>,
+        c_impl: ULONG,
+        rg_impl: *mut CATID,
+        c_req: ULONG,
+        rg_req: *mut CATID,
+        ppenum: *mut *mut IEnumGUID,
+    ) -> FfiResult {
         // SAFETY: forwarded; the enumerator answers for IEnumGUID with the same layout.
         unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum.cast()) }
-    })
-}
+    }
 
-unsafe extern "system" fn list_details(
-    this: *mut IOPCServerList,
-    clsid: REFCLSID,
-    prog_id: *mut LPOLESTR,
-    user_type: *mut LPOLESTR,
-) -> Hr {
-    ffi::boundary!(Opc, [prog_id, user_type], {
+    unsafe fn GetClassDetails(
+        this: &ComObject<Self>,
+        clsid: REFCLSID,
+        prog_id: *mut LPOLESTR,
+        user_type: *mut LPOLESTR,
+    ) -> FfiResult {
         // SAFETY: forwarded.
         unsafe { get_class_details(this, clsid, prog_id, user_type, None) }
-    })
-}
+    }
 
-unsafe extern "system" fn list_clsid(this: *mut IOPCServerList, prog_id: LPCOLESTR, clsid: LPCLSID) -> Hr {
-    ffi::boundary!(Opc, [clsid], {
+    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
         // SAFETY: forwarded.
         unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
-    })
+    }
 }
 
-unsafe extern "system" fn list2_enum(
-    this: *mut IOPCServerList2,
-    c_impl: ULONG,
-    rg_impl: *mut CATID,
-    c_req: ULONG,
-    rg_req: *mut CATID,
-    ppenum: *mut *mut IOPCEnumGUID,
-) -> Hr {
-    ffi::boundary!(Opc, [ppenum], {
+impl IOPCServerList2Impl for ServerList {
+    unsafe fn EnumClassesOfCategories(
+        this: &ComObject<Self>,
+        c_impl: ULONG,
+        rg_impl: *mut CATID,
+        c_req: ULONG,
+        rg_req: *mut CATID,
+        ppenum: *mut *mut IOPCEnumGUID,
+    ) -> FfiResult {
         // SAFETY: forwarded.
         unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum) }
-    })
-}
+    }
 
-unsafe extern "system" fn list2_details(
-    this: *mut IOPCServerList2,
-    clsid: REFCLSID,
-    prog_id: *mut LPOLESTR,
-    user_type: *mut LPOLESTR,
-    vi: *mut LPOLESTR,
-) -> Hr {
-    ffi::boundary!(Opc, [prog_id, user_type, vi], {
+    unsafe fn GetClassDetails(
+        this: &ComObject<Self>,
+        clsid: REFCLSID,
+        prog_id: *mut LPOLESTR,
+        user_type: *mut LPOLESTR,
+        vi: *mut LPOLESTR,
+    ) -> FfiResult {
         // SAFETY: forwarded.
         unsafe { get_class_details(this, clsid, prog_id, user_type, Some(vi)) }
-    })
-}
+    }
 
-unsafe extern "system" fn list2_clsid(this: *mut IOPCServerList2, prog_id: LPCOLESTR, clsid: LPCLSID) -> Hr {
-    ffi::boundary!(Opc, [clsid], {
+    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
         // SAFETY: forwarded.
         unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
-    })
+    }
 }
 
-static LIST_VTBL: IOPCServerListVtbl = IOPCServerListVtbl {
-    QueryInterface: delegating_query_interface::<IOPCServerList>,
-    AddRef: delegating_add_ref::<IOPCServerList>,
-    Release: delegating_release::<IOPCServerList>,
-    EnumClassesOfCategories: list_enum,
-    GetClassDetails: list_details,
-    CLSIDFromProgID: list_clsid,
-};
-
-static LIST2_VTBL: IOPCServerList2Vtbl = IOPCServerList2Vtbl {
-    QueryInterface: delegating_query_interface::<IOPCServerList2>,
-    AddRef: delegating_add_ref::<IOPCServerList2>,
-    Release: delegating_release::<IOPCServerList2>,
-    EnumClassesOfCategories: list2_enum,
-    GetClassDetails: list2_details,
-    CLSIDFromProgID: list2_clsid,
-};
+static LIST_VTBL: IOPCServerListVtbl = IOPCServerListVtbl::new::<Delegating, ServerList>();
+static LIST2_VTBL: IOPCServerList2Vtbl = IOPCServerList2Vtbl::new::<Delegating, ServerList>();
 
 /// Creates a server list over `regs` with the standard creation protocol.
 ///

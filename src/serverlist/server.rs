@@ -17,12 +17,11 @@ use core::ffi::c_void;
 use core::ptr;
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use crate::com::ffi::{self, Crossed, Hr};
+use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::{CLSID_OPCServerList, IID_ICLASSFACTORY};
-use crate::com::object::{
-    delegating_add_ref, delegating_query_interface, delegating_release, live_objects, ComClass, ComObject, Slot,
-};
-use crate::com::{IUnknown, BOOL, GUID, HRESULT, REFCLSID, REFIID, S_FALSE, S_OK, ULONG};
+use crate::com::interfaces::{IClassFactoryImpl, IClassFactoryVtbl};
+use crate::com::object::{live_objects, ComClass, ComObject, Delegating, Slot};
+use crate::com::{IUnknown, BOOL, GUID, HRESULT, REFCLSID, REFIID, S_FALSE, S_OK};
 use crate::registry::register::{register, unregister, ServerDescription};
 use crate::registry::{registries, REGDB_E_KEYMISSING};
 
@@ -32,22 +31,6 @@ pub const SELFREG_E_CLASS: HRESULT = 0x80040201_u32 as HRESULT;
 
 /// Server locks taken with IClassFactory::LockServer(TRUE) and not yet released.
 static LOCKS: AtomicU32 = AtomicU32::new(0);
-
-/// The methods of IClassFactory.
-#[repr(C)]
-#[allow(non_snake_case)]
-pub(crate) struct IClassFactoryVtbl {
-    QueryInterface: unsafe extern "system" fn(*mut IClassFactory, REFIID, *mut *mut c_void) -> Hr,
-    AddRef: unsafe extern "system" fn(*mut IClassFactory) -> Crossed<ULONG>,
-    Release: unsafe extern "system" fn(*mut IClassFactory) -> Crossed<ULONG>,
-    CreateInstance: unsafe extern "system" fn(*mut IClassFactory, *mut IUnknown, REFIID, *mut *mut c_void) -> Hr,
-    LockServer: unsafe extern "system" fn(*mut IClassFactory, BOOL) -> Hr,
-}
-
-#[repr(C)]
-pub(crate) struct IClassFactory {
-    vtbl: *const IClassFactoryVtbl,
-}
 
 /// The class factory of OPCServerList.
 struct Factory {
@@ -60,28 +43,20 @@ impl ComClass for Factory {
     }
 }
 
-static FACTORY_VTBL: IClassFactoryVtbl = IClassFactoryVtbl {
-    QueryInterface: delegating_query_interface::<IClassFactory>,
-    AddRef: delegating_add_ref::<IClassFactory>,
-    Release: delegating_release::<IClassFactory>,
-    CreateInstance: create_instance,
-    LockServer: lock_server,
-};
+static FACTORY_VTBL: IClassFactoryVtbl = IClassFactoryVtbl::new::<Delegating, Factory>();
 
-unsafe extern "system" fn create_instance(
-    _this: *mut IClassFactory,
-    outer: *mut IUnknown,
-    riid: REFIID,
-    ppv: *mut *mut c_void,
-) -> Hr {
-    ffi::boundary!(Com, [ppv], {
+impl IClassFactoryImpl for Factory {
+    unsafe fn CreateInstance(
+        _this: &ComObject<Self>,
+        outer: *mut IUnknown,
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+    ) -> FfiResult {
         // SAFETY: forwarded: the standard creation protocol checks every argument.
         Ok(unsafe { super::create(registries(ptr::null()), outer, riid, ppv) })
-    })
-}
+    }
 
-unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> Hr {
-    ffi::boundary!(Com, [], {
+    fn LockServer(_this: &ComObject<Self>, lock: BOOL) -> FfiResult {
         if lock != 0 {
             LOCKS.fetch_add(1, Ordering::AcqRel);
         } else {
@@ -89,7 +64,7 @@ unsafe extern "system" fn lock_server(_this: *mut IClassFactory, lock: BOOL) -> 
             let _ = LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
         }
         Ok(S_OK)
-    })
+    }
 }
 
 /// The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
@@ -258,8 +233,8 @@ mod tests {
                 OpcDllGetClassObject(&CLSID_OPCServerList, &IID_ICLASSFACTORY, &mut p),
                 S_OK
             );
-            let f = p as *mut IClassFactory;
-            let v = &*(*f).vtbl;
+            let f = p as *mut crate::com::interfaces::IClassFactory;
+            let v = &*(*f).lpVtbl;
             let mut list = ptr::null_mut();
             assert_eq!(
                 (v.CreateInstance)(f, ptr::null_mut(), &IID_IOPCServerList, &mut list),

@@ -15,37 +15,17 @@ use core::ffi::c_void;
 use core::ptr::{self, NonNull};
 use std::sync::OnceLock;
 
-use crate::com::ffi::{self, Crossed, Hr};
-use crate::com::object::{delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject};
+use crate::com::ffi::FfiResult;
+use crate::com::interfaces::IMarshalImpl;
+use crate::com::object::{ComClass, ComObject};
 use crate::com::ole32::CoCreateFreeThreadedMarshaler;
 use crate::com::unknown::{query, release};
-use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, REFIID, S_OK, ULONG};
+use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, REFIID, S_OK};
 
-/// `IID_IMarshal` {00000003-0000-0000-C000-000000000046}.
-pub(crate) const IID_IMARSHAL: GUID = GUID::from_u128(0x00000003_0000_0000_C000_000000000046);
+pub(crate) use crate::com::interfaces::IMarshal;
 
-/// IMarshal in its COM layout (streams are passed through untouched, so they stay `c_void`).
-#[repr(C)]
-#[allow(non_snake_case)]
-pub(crate) struct IMarshalVtbl {
-    QueryInterface: unsafe extern "system" fn(*mut IMarshal, REFIID, *mut *mut c_void) -> Hr,
-    AddRef: unsafe extern "system" fn(*mut IMarshal) -> Crossed<ULONG>,
-    Release: unsafe extern "system" fn(*mut IMarshal) -> Crossed<ULONG>,
-    GetUnmarshalClass:
-        unsafe extern "system" fn(*mut IMarshal, REFIID, *mut c_void, DWORD, *mut c_void, DWORD, *mut GUID) -> Hr,
-    GetMarshalSizeMax:
-        unsafe extern "system" fn(*mut IMarshal, REFIID, *mut c_void, DWORD, *mut c_void, DWORD, *mut DWORD) -> Hr,
-    MarshalInterface:
-        unsafe extern "system" fn(*mut IMarshal, *mut c_void, REFIID, *mut c_void, DWORD, *mut c_void, DWORD) -> Hr,
-    UnmarshalInterface: unsafe extern "system" fn(*mut IMarshal, *mut c_void, REFIID, *mut *mut c_void) -> Hr,
-    ReleaseMarshalData: unsafe extern "system" fn(*mut IMarshal, *mut c_void) -> Hr,
-    DisconnectObject: unsafe extern "system" fn(*mut IMarshal, DWORD) -> Hr,
-}
-
-#[repr(C)]
-pub(crate) struct IMarshal {
-    vtbl: *const IMarshalVtbl,
-}
+/// `IID_IMarshal`.
+pub(crate) const IID_IMARSHAL: GUID = IMarshal::IID;
 
 /// The aggregated FTM of one object: its non-delegating IUnknown, created on first use.
 #[derive(Default)]
@@ -70,31 +50,10 @@ pub(crate) trait HasFtm: ComClass {
     fn ftm(&self) -> &Ftm;
 }
 
-/// The IMarshal vtable for objects of type `T`.
-pub(crate) struct MarshalVtbl<T>(core::marker::PhantomData<T>);
-
-impl<T: HasFtm> MarshalVtbl<T> {
-    pub(crate) const VTBL: IMarshalVtbl = IMarshalVtbl {
-        QueryInterface: delegating_query_interface::<IMarshal>,
-        AddRef: delegating_add_ref::<IMarshal>,
-        Release: delegating_release::<IMarshal>,
-        GetUnmarshalClass: get_unmarshal_class::<T>,
-        GetMarshalSizeMax: get_marshal_size_max::<T>,
-        MarshalInterface: marshal_interface::<T>,
-        UnmarshalInterface: unmarshal_interface::<T>,
-        ReleaseMarshalData: release_marshal_data::<T>,
-        DisconnectObject: disconnect_object::<T>,
-    };
-}
-
 /// Runs `f` with the FTM's IMarshal for the object behind `this`.
 ///
-/// # Safety
-/// `this` must be the IMarshal slot of a live `ComObject<T>`.
-unsafe fn with_ftm<T: HasFtm>(this: *mut IMarshal, f: impl FnOnce(*mut IMarshal) -> HRESULT) -> HRESULT {
+fn with_ftm<T: HasFtm>(obj: &ComObject<T>, f: impl FnOnce(*mut IMarshal) -> HRESULT) -> HRESULT {
     {
-        // SAFETY: per the caller.
-        let obj = unsafe { ComObject::<T>::from_interface(this) };
         let inner = obj.ftm().0.get_or_init(|| {
             let mut unk: *mut c_void = ptr::null_mut();
             // The object is its own controlling unknown (the sink is never aggregated).
@@ -121,91 +80,72 @@ unsafe fn with_ftm<T: HasFtm>(this: *mut IMarshal, f: impl FnOnce(*mut IMarshal)
     }
 }
 
-unsafe extern "system" fn get_unmarshal_class<T: HasFtm>(
-    this: *mut IMarshal,
-    riid: REFIID,
-    pv: *mut c_void,
-    ctx: DWORD,
-    pvctx: *mut c_void,
-    flags: DWORD,
-    clsid: *mut GUID,
-) -> Hr {
-    // The free-threaded marshaler checks and writes the arguments itself.
-    ffi::boundary!(Com, [], {
-        // SAFETY: COM calls this only through our vtable; the arguments go to the FTM unchanged.
-        Ok(unsafe {
-            with_ftm::<T>(this, |m| {
-                ((*(*m).vtbl).GetUnmarshalClass)(m, riid, pv, ctx, pvctx, flags, clsid).get()
-            })
-        })
-    })
-}
+// The free-threaded marshaler checks and writes the arguments itself; they go to it unchanged.
+impl<T: HasFtm> IMarshalImpl for T {
+    unsafe fn GetUnmarshalClass(
+        this: &ComObject<Self>,
+        riid: REFIID,
+        pv: *mut c_void,
+        ctx: DWORD,
+        pvctx: *mut c_void,
+        flags: DWORD,
+        clsid: *mut GUID,
+    ) -> FfiResult {
+        // SAFETY: `m` is the FTM's IMarshal; the arguments are the caller's.
+        Ok(with_ftm(this, |m| unsafe {
+            IMarshal::GetUnmarshalClass(m, riid, pv, ctx, pvctx, flags, clsid)
+        }))
+    }
 
-unsafe extern "system" fn get_marshal_size_max<T: HasFtm>(
-    this: *mut IMarshal,
-    riid: REFIID,
-    pv: *mut c_void,
-    ctx: DWORD,
-    pvctx: *mut c_void,
-    flags: DWORD,
-    size: *mut DWORD,
-) -> Hr {
-    // The free-threaded marshaler checks and writes the arguments itself.
-    ffi::boundary!(Com, [], {
+    unsafe fn GetMarshalSizeMax(
+        this: &ComObject<Self>,
+        riid: REFIID,
+        pv: *mut c_void,
+        ctx: DWORD,
+        pvctx: *mut c_void,
+        flags: DWORD,
+        size: *mut DWORD,
+    ) -> FfiResult {
         // SAFETY: as above.
-        Ok(unsafe {
-            with_ftm::<T>(this, |m| {
-                ((*(*m).vtbl).GetMarshalSizeMax)(m, riid, pv, ctx, pvctx, flags, size).get()
-            })
-        })
-    })
-}
+        Ok(with_ftm(this, |m| unsafe {
+            IMarshal::GetMarshalSizeMax(m, riid, pv, ctx, pvctx, flags, size)
+        }))
+    }
 
-unsafe extern "system" fn marshal_interface<T: HasFtm>(
-    this: *mut IMarshal,
-    stream: *mut c_void,
-    riid: REFIID,
-    pv: *mut c_void,
-    ctx: DWORD,
-    pvctx: *mut c_void,
-    flags: DWORD,
-) -> Hr {
-    // The free-threaded marshaler checks and writes the arguments itself.
-    ffi::boundary!(Com, [], {
+    unsafe fn MarshalInterface(
+        this: &ComObject<Self>,
+        stream: *mut c_void,
+        riid: REFIID,
+        pv: *mut c_void,
+        ctx: DWORD,
+        pvctx: *mut c_void,
+        flags: DWORD,
+    ) -> FfiResult {
         // SAFETY: as above.
-        Ok(unsafe {
-            with_ftm::<T>(this, |m| {
-                ((*(*m).vtbl).MarshalInterface)(m, stream, riid, pv, ctx, pvctx, flags).get()
-            })
-        })
-    })
-}
+        Ok(with_ftm(this, |m| unsafe {
+            IMarshal::MarshalInterface(m, stream, riid, pv, ctx, pvctx, flags)
+        }))
+    }
 
-unsafe extern "system" fn unmarshal_interface<T: HasFtm>(
-    this: *mut IMarshal,
-    stream: *mut c_void,
-    riid: REFIID,
-    ppv: *mut *mut c_void,
-) -> Hr {
-    // The free-threaded marshaler checks and writes the arguments itself.
-    ffi::boundary!(Com, [], {
+    unsafe fn UnmarshalInterface(
+        this: &ComObject<Self>,
+        stream: *mut c_void,
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+    ) -> FfiResult {
         // SAFETY: as above.
-        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).UnmarshalInterface)(m, stream, riid, ppv).get()) })
-    })
-}
+        Ok(with_ftm(this, |m| unsafe {
+            IMarshal::UnmarshalInterface(m, stream, riid, ppv)
+        }))
+    }
 
-unsafe extern "system" fn release_marshal_data<T: HasFtm>(this: *mut IMarshal, stream: *mut c_void) -> Hr {
-    // The free-threaded marshaler checks and writes the arguments itself.
-    ffi::boundary!(Com, [], {
+    unsafe fn ReleaseMarshalData(this: &ComObject<Self>, stream: *mut c_void) -> FfiResult {
         // SAFETY: as above.
-        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).ReleaseMarshalData)(m, stream).get()) })
-    })
-}
+        Ok(with_ftm(this, |m| unsafe { IMarshal::ReleaseMarshalData(m, stream) }))
+    }
 
-unsafe extern "system" fn disconnect_object<T: HasFtm>(this: *mut IMarshal, reserved: DWORD) -> Hr {
-    // The free-threaded marshaler checks and writes the arguments itself.
-    ffi::boundary!(Com, [], {
+    fn DisconnectObject(this: &ComObject<Self>, reserved: DWORD) -> FfiResult {
         // SAFETY: as above.
-        Ok(unsafe { with_ftm::<T>(this, |m| ((*(*m).vtbl).DisconnectObject)(m, reserved).get()) })
-    })
+        Ok(with_ftm(this, |m| unsafe { IMarshal::DisconnectObject(m, reserved) }))
+    }
 }

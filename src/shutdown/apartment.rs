@@ -177,29 +177,12 @@ mod git {
 
     use super::IOPCShutdown;
     use crate::com::iids::IID_IOPCShutdown;
+    use crate::com::interfaces::IGlobalInterfaceTable as Git;
     use crate::com::unknown::release;
-    use crate::com::{IUnknown, DWORD, GUID, HRESULT, REFIID, S_OK, ULONG};
+    use crate::com::{DWORD, GUID, HRESULT, S_OK};
 
     /// `CLSID_StdGlobalInterfaceTable` {00000323-0000-0000-C000-000000000046}.
     const CLSID_STD_GLOBAL_INTERFACE_TABLE: GUID = GUID::from_u128(0x00000323_0000_0000_C000_000000000046);
-    /// `IID_IGlobalInterfaceTable` {00000146-0000-0000-C000-000000000046}.
-    const IID_IGLOBAL_INTERFACE_TABLE: GUID = GUID::from_u128(0x00000146_0000_0000_C000_000000000046);
-
-    #[repr(C)]
-    #[allow(non_snake_case)]
-    struct IGlobalInterfaceTableVtbl {
-        QueryInterface: unsafe extern "system" fn(*mut Git, REFIID, *mut *mut c_void) -> HRESULT,
-        AddRef: unsafe extern "system" fn(*mut Git) -> ULONG,
-        Release: unsafe extern "system" fn(*mut Git) -> ULONG,
-        RegisterInterfaceInGlobal: unsafe extern "system" fn(*mut Git, *mut IUnknown, REFIID, *mut DWORD) -> HRESULT,
-        RevokeInterfaceFromGlobal: unsafe extern "system" fn(*mut Git, DWORD) -> HRESULT,
-        GetInterfaceFromGlobal: unsafe extern "system" fn(*mut Git, DWORD, REFIID, *mut *mut c_void) -> HRESULT,
-    }
-
-    #[repr(C)]
-    struct Git {
-        vtbl: *const IGlobalInterfaceTableVtbl,
-    }
 
     /// Runs `f` with the process's GIT (a singleton; asking for it is cheap).
     fn with_git<R>(f: impl FnOnce(*mut Git) -> Result<R, HRESULT>) -> Result<R, HRESULT> {
@@ -210,7 +193,7 @@ mod git {
                 (&CLSID_STD_GLOBAL_INTERFACE_TABLE as *const GUID).cast(),
                 ptr::null_mut(),
                 CLSCTX_INPROC_SERVER,
-                (&IID_IGLOBAL_INTERFACE_TABLE as *const GUID).cast(),
+                (&Git::IID as *const GUID).cast(),
                 &mut git,
             )
         };
@@ -232,8 +215,7 @@ mod git {
         with_git(|git| {
             let mut cookie: DWORD = 0;
             // SAFETY: `git` is a live GIT; `sink` is valid per the caller.
-            let hr =
-                unsafe { ((*(*git).vtbl).RegisterInterfaceInGlobal)(git, sink.cast(), &IID_IOPCShutdown, &mut cookie) };
+            let hr = unsafe { Git::RegisterInterfaceInGlobal(git, sink.cast(), &IID_IOPCShutdown, &mut cookie) };
             if hr == S_OK {
                 Ok(cookie)
             } else {
@@ -248,7 +230,7 @@ mod git {
         with_git(|git| {
             let mut p: *mut c_void = ptr::null_mut();
             // SAFETY: `git` is a live GIT; the out-pointer is valid.
-            let hr = unsafe { ((*(*git).vtbl).GetInterfaceFromGlobal)(git, cookie, &IID_IOPCShutdown, &mut p) };
+            let hr = unsafe { Git::GetInterfaceFromGlobal(git, cookie, &IID_IOPCShutdown, &mut p) };
             match NonNull::new(p.cast::<IOPCShutdown>()) {
                 Some(p) if hr == S_OK => Ok(p),
                 _ => Err(if hr == S_OK { crate::com::E_POINTER } else { hr }),
@@ -261,7 +243,7 @@ mod git {
     pub(super) fn revoke(cookie: u32) {
         let _ = with_git(|git| {
             // SAFETY: `git` is a live GIT.
-            Ok(unsafe { ((*(*git).vtbl).RevokeInterfaceFromGlobal)(git, cookie) })
+            Ok(unsafe { Git::RevokeInterfaceFromGlobal(git, cookie) })
         });
     }
 }

@@ -4,12 +4,11 @@
 use core::ffi::c_void;
 use core::ptr;
 
-use super::interfaces::{IConnectionPoint, IConnectionPointContainer, IOPCShutdown, IOPCShutdownVtbl};
-use crate::com::ffi::{self, Fail, Hr};
+use super::interfaces::{IConnectionPoint, IConnectionPointContainer, IOPCShutdownVtbl};
+use crate::com::ffi::{self, Fail, FfiResult, Hr};
 use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINTCONTAINER};
-use crate::com::object::{
-    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
-};
+use crate::com::interfaces::IOPCShutdownImpl;
+use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::unknown::{query, release};
 use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
 
@@ -57,29 +56,21 @@ impl super::agile::HasFtm for ShutdownSink {
 }
 
 #[cfg(windows)]
-static SINK_MARSHAL_VTBL: super::agile::IMarshalVtbl = super::agile::MarshalVtbl::<ShutdownSink>::VTBL;
+static SINK_MARSHAL_VTBL: crate::com::interfaces::IMarshalVtbl =
+    crate::com::interfaces::IMarshalVtbl::new::<Delegating, ShutdownSink>();
 
-static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl {
-    QueryInterface: delegating_query_interface::<IOPCShutdown>,
-    AddRef: delegating_add_ref::<IOPCShutdown>,
-    Release: delegating_release::<IOPCShutdown>,
-    ShutdownRequest: shutdown_request,
-};
+static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl::new::<Delegating, ShutdownSink>();
 
-unsafe extern "system" fn shutdown_request(this: *mut IOPCShutdown, szReason: LPCWSTR) -> Hr {
-    // The specification requires S_OK whatever happens, a panic included.
-    ffi::guard!(S_OK, {
-        // SAFETY: COM calls this only through our vtable.
-        let sink = unsafe { ComObject::<ShutdownSink>::from_interface(this) };
-        let reason = if szReason.is_null() {
-            NUL_STRING.as_ptr()
-        } else {
-            szReason
-        };
-        // SAFETY: the client registered the callback for this; `reason` is a valid string.
-        unsafe { (sink.callback)(sink.context, reason) };
-        S_OK
-    })
+impl IOPCShutdownImpl for ShutdownSink {
+    unsafe fn ShutdownRequest(this: &ComObject<Self>, reason: LPCWSTR) -> FfiResult {
+        // The specification requires S_OK whatever happens, a panic included.
+        Ok(ffi::guard(S_OK, || {
+            let reason = if reason.is_null() { NUL_STRING.as_ptr() } else { reason };
+            // SAFETY: the client registered the callback for this; `reason` is a valid string.
+            unsafe { (this.callback)(this.context, reason) };
+            S_OK
+        }))
+    }
 }
 
 /// Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
@@ -151,6 +142,11 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint,
 /// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
 /// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
 /// E_INVALIDARG for a NULL argument.
+///
+/// Across machines the sink receives ShutdownRequest as a DCOM call from the server's machine: the
+/// client is then a DCOM server, and since Windows' DCOM hardening (KB5004442) the call arrives only
+/// when the client's process security is at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or above. Call
+/// `OpcInitializeClientSecurity` after CoInitializeEx and before creating the server.
 ///
 /// # Safety
 /// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.

@@ -19,14 +19,15 @@ use super::interfaces::{
     CONNECTDATA,
 };
 use crate::com::enumerator::{Counted, Element, EnumInterface, Enumerator};
-use crate::com::ffi::{self, Hr};
+use crate::com::ffi::{self, FfiResult};
 use crate::com::iids::{
     IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
     IID_IENUMCONNECTIONS, IID_IUNKNOWN,
 };
-use crate::com::object::{
-    delegating_add_ref, delegating_query_interface, delegating_release, ComClass, ComObject, Slot,
+use crate::com::interfaces::{
+    IConnectionPointContainerImpl, IConnectionPointImpl, IEnumConnectionPointsImpl, IEnumConnectionsImpl, IUnknownImpl,
 };
+use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::options::read_sized;
 use crate::com::unknown::{add_ref, query};
 use crate::com::{
@@ -252,7 +253,9 @@ impl Element for EnumeratedConnection {
 /// IEnumConnections over the connections of the point, as the core's snapshot enumerator.
 struct ConnectionsEnum;
 
-static ENUM_CONNECTIONS_VTBL: IEnumConnectionsVtbl = crate::enum_vtbl!(IEnumConnectionsVtbl, ConnectionsEnum);
+static ENUM_CONNECTIONS_VTBL: IEnumConnectionsVtbl =
+    IEnumConnectionsVtbl::new::<Delegating, Enumerator<ConnectionsEnum>>();
+crate::enum_impl!(IEnumConnectionsImpl, ConnectionsEnum);
 
 impl EnumInterface for ConnectionsEnum {
     type Item = EnumeratedConnection;
@@ -267,7 +270,9 @@ impl EnumInterface for ConnectionsEnum {
 /// IEnumConnectionPoints over the container's one connection point (counted: it keeps the server alive).
 struct ConnectionPointsEnum;
 
-static ENUM_POINTS_VTBL: IEnumConnectionPointsVtbl = crate::enum_vtbl!(IEnumConnectionPointsVtbl, ConnectionPointsEnum);
+static ENUM_POINTS_VTBL: IEnumConnectionPointsVtbl =
+    IEnumConnectionPointsVtbl::new::<Delegating, Enumerator<ConnectionPointsEnum>>();
+crate::enum_impl!(IEnumConnectionPointsImpl, ConnectionPointsEnum);
 
 impl EnumInterface for ConnectionPointsEnum {
     type Item = Counted<IConnectionPoint>;
@@ -279,24 +284,9 @@ impl EnumInterface for ConnectionPointsEnum {
     }
 }
 
-static CONTAINER_VTBL: IConnectionPointContainerVtbl = IConnectionPointContainerVtbl {
-    QueryInterface: delegating_query_interface::<IConnectionPointContainer>,
-    AddRef: delegating_add_ref::<IConnectionPointContainer>,
-    Release: delegating_release::<IConnectionPointContainer>,
-    EnumConnectionPoints: enum_connection_points,
-    FindConnectionPoint: find_connection_point,
-};
+static CONTAINER_VTBL: IConnectionPointContainerVtbl = IConnectionPointContainerVtbl::new::<Delegating, OpcShutdown>();
 
-static POINT_VTBL: IConnectionPointVtbl = IConnectionPointVtbl {
-    QueryInterface: point_query_interface,
-    AddRef: delegating_add_ref::<IConnectionPoint>,
-    Release: delegating_release::<IConnectionPoint>,
-    GetConnectionInterface: get_connection_interface,
-    GetConnectionPointContainer: get_connection_point_container,
-    Advise: advise,
-    Unadvise: unadvise,
-    EnumConnections: enum_connections,
-};
+static POINT_VTBL: IConnectionPointVtbl = IConnectionPointVtbl::new::<PointUnknown, OpcShutdown>();
 
 /// The object behind any of its interfaces, if it is one of ours.
 ///
@@ -307,22 +297,11 @@ pub(crate) unsafe fn from_container<'a>(this: *mut IConnectionPointContainer) ->
     unsafe { ComObject::<OpcShutdown>::from_foreign(this, &CONTAINER_VTBL) }
 }
 
-/// # Safety
-/// `this` is a slot of a live OpcShutdown (COM calls only reach us through its vtables).
-unsafe fn object<'a, I>(this: *mut I) -> &'a ComObject<OpcShutdown> {
-    // SAFETY: CONTAINER_VTBL and POINT_VTBL are only installed in OpcShutdown objects.
-    unsafe { ComObject::<OpcShutdown>::from_interface(this) }
-}
-
-unsafe extern "system" fn enum_connection_points(
-    this: *mut IConnectionPointContainer,
-    ppEnum: *mut *mut IEnumConnectionPoints,
-) -> Hr {
-    ffi::boundary!(Com, [ppEnum], {
+impl IConnectionPointContainerImpl for OpcShutdown {
+    unsafe fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
         let out = unsafe { ffi::out(ppEnum) }?;
-        // SAFETY: COM calls this only through our vtable.
-        let point = unsafe { object(this) }.point_ptr();
+        let point = this.point_ptr();
         // The snapshot's reference to the point counts on the server, which it keeps alive.
         // SAFETY: `point` is a slot of the live object; the element takes over the reference added.
         let item = unsafe {
@@ -332,67 +311,65 @@ unsafe extern "system" fn enum_connection_points(
         .expect("slot pointers are never NULL");
         out.write(Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0));
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn find_connection_point(
-    this: *mut IConnectionPointContainer,
-    riid: REFIID,
-    ppCP: *mut *mut IConnectionPoint,
-) -> Hr {
-    ffi::boundary!(Com, [ppCP], {
+    unsafe fn FindConnectionPoint(this: &ComObject<Self>, riid: REFIID, ppCP: *mut *mut IConnectionPoint) -> FfiResult {
         // SAFETY: the caller's contract: `ppCP` NULL or writable, `riid` NULL or readable.
         let (out, riid) = unsafe { (ffi::out(ppCP)?, ffi::in_ref(riid)?) };
         if *riid != IID_IOPCShutdown {
             return Err(CONNECT_E_NOCONNECTION.into());
         }
-        // SAFETY: COM calls this only through our vtable.
-        let point = unsafe { object(this) }.point_ptr();
+        let point = this.point_ptr();
         // SAFETY: a slot of the live object; the AddRef counts on the controlling unknown.
         unsafe { add_ref(point.cast()) };
         out.write(point);
         Ok(S_OK)
-    })
+    }
 }
 
-/// QueryInterface of the connection point: its own identity, answering IUnknown and
-/// IConnectionPoint only (a connection point is not its container).
-unsafe extern "system" fn point_query_interface(
-    this: *mut IConnectionPoint,
-    riid: REFIID,
-    ppv: *mut *mut c_void,
-) -> Hr {
-    ffi::boundary!(Com, [ppv], {
+/// The IUnknown of the connection point: its own identity, answering IUnknown and IConnectionPoint
+/// only (a connection point is not its container); AddRef and Release count on the controlling
+/// unknown, as for every other slot.
+struct PointUnknown;
+
+impl IUnknownImpl for PointUnknown {
+    unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> FfiResult {
         // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
         let (out, iid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?) };
         if *iid != IID_IUNKNOWN && *iid != IID_ICONNECTIONPOINT {
             return Err(E_NOINTERFACE.into());
         }
         // SAFETY: `this` is the point slot of a live object.
-        unsafe { add_ref(this.cast()) };
+        unsafe { add_ref(this) };
         out.write(this.cast());
         Ok(S_OK)
-    })
+    }
+
+    unsafe fn AddRef(this: *mut IUnknown) -> u32 {
+        // SAFETY: forwarded: `this` is a slot of a live object.
+        unsafe { Delegating::AddRef(this) }
+    }
+
+    unsafe fn Release(this: *mut IUnknown) -> u32 {
+        // SAFETY: forwarded; the caller gives up its reference.
+        unsafe { Delegating::Release(this) }
+    }
 }
 
-unsafe extern "system" fn get_connection_interface(_this: *mut IConnectionPoint, pIID: *mut IID) -> Hr {
-    ffi::boundary!(Com, [pIID], {
+impl IConnectionPointImpl for OpcShutdown {
+    unsafe fn GetConnectionInterface(_this: &ComObject<Self>, pIID: *mut IID) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL `pIID` is writable.
         unsafe { ffi::out(pIID) }?.write(IID_IOPCShutdown);
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn get_connection_point_container(
-    this: *mut IConnectionPoint,
-    ppCPC: *mut *mut IConnectionPointContainer,
-) -> Hr {
-    ffi::boundary!(Com, [ppCPC], {
+    unsafe fn GetConnectionPointContainer(
+        this: &ComObject<Self>,
+        ppCPC: *mut *mut IConnectionPointContainer,
+    ) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL `ppCPC` is writable.
         let out = unsafe { ffi::out(ppCPC) }?;
-        // SAFETY: COM calls this only through our vtable.
-        let obj = unsafe { object(this) };
-        let header = obj.header();
+        let header = this.header();
         if header.is_aggregated() {
             // The container is whatever the server object (the controlling unknown) answers for
             // IConnectionPointContainer: usually this object's container slot, forwarded.
@@ -407,39 +384,31 @@ unsafe extern "system" fn get_connection_point_container(
             }
         }
         // Our own container slot; its AddRef counts on the controlling unknown.
-        let container = obj.container_ptr();
+        let container = this.container_ptr();
         // SAFETY: a slot of the live object.
         unsafe { add_ref(container.cast()) };
         out.write(container);
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn advise(this: *mut IConnectionPoint, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> Hr {
-    ffi::boundary!(Com, [pdwCookie], {
+    unsafe fn Advise(this: &ComObject<Self>, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
         let (out, sink) = (unsafe { ffi::out(pdwCookie) }?, ffi::in_ptr(pUnkSink)?);
-        // SAFETY: COM calls this only through our vtable; the sink is a valid COM pointer.
-        out.write(unsafe { object(this).advise(sink.as_ptr()) }?);
+        // SAFETY: the sink is a valid COM pointer.
+        out.write(unsafe { this.advise(sink.as_ptr()) }?);
         Ok(S_OK)
-    })
-}
+    }
 
-unsafe extern "system" fn unadvise(this: *mut IConnectionPoint, dwCookie: DWORD) -> Hr {
-    ffi::boundary!(Com, [], {
-        // SAFETY: COM calls this only through our vtable.
-        Ok(unsafe { object(this) }.unadvise(dwCookie))
-    })
-}
+    fn Unadvise(this: &ComObject<Self>, dwCookie: DWORD) -> FfiResult {
+        Ok(this.unadvise(dwCookie))
+    }
 
-unsafe extern "system" fn enum_connections(this: *mut IConnectionPoint, ppEnum: *mut *mut IEnumConnections) -> Hr {
-    ffi::boundary!(Com, [ppEnum], {
+    unsafe fn EnumConnections(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnections) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
         let out = unsafe { ffi::out(ppEnum) }?;
-        // SAFETY: COM calls this only through our vtable.
-        out.write(unsafe { object(this) }.enum_connections()?);
+        out.write(this.enum_connections()?);
         Ok(S_OK)
-    })
+    }
 }
 
 /// Reads the caller's options, honouring `struct_size`; returns the advise limit.

@@ -60,7 +60,6 @@ const int kDefect = OPCCOMN_DEFECT;
 namespace {
 
 HMODULE g_module;
-volatile LONG g_locks;
 
 const CLSID kClsid = {0x7E57DEF0, 0xC0DE, 0x4C0D, {0x90, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, static_cast<unsigned char>(OPCCOMN_DEFECT)}};
 
@@ -236,12 +235,12 @@ public:
     PointWrap m_point;
 
 private:
-    Server() { InterlockedIncrement(&g_locks); }
+    Server() { OpcServerLock(); }
     ~Server() {
         if (m_point.inner) m_point.inner->Release();
         if (m_container.inner) m_container.inner->Release();
         if (m_common.inner) m_common.inner->Release();
-        InterlockedDecrement(&g_locks);
+        OpcServerUnlock();
     }
     HRESULT Init() {
         m_common.outer = m_container.outer = m_point.outer = this;
@@ -284,30 +283,10 @@ HRESULT ContainerWrap::FindConnectionPoint(REFIID riid, IConnectionPoint **ppCP)
     return inner->FindConnectionPoint(riid, ppCP);
 }
 
-class Factory final : public IClassFactory {
-public:
-    HRESULT STDMETHODCALLTYPE QueryInterface(REFIID riid, void **ppv) override {
-        if (!ppv) return E_POINTER;
-        *ppv = nullptr;
-        if (!IsEqualIID(riid, IID_IUnknown) && !IsEqualIID(riid, IID_IClassFactory)) return E_NOINTERFACE;
-        *ppv = static_cast<IClassFactory *>(this);
-        AddRef();
-        return S_OK;
-    }
-    ULONG STDMETHODCALLTYPE AddRef() override { return static_cast<ULONG>(InterlockedIncrement(&g_locks)); }
-    ULONG STDMETHODCALLTYPE Release() override { return static_cast<ULONG>(InterlockedDecrement(&g_locks)); }
-    HRESULT STDMETHODCALLTYPE CreateInstance(IUnknown *outer, REFIID riid, void **ppv) override {
-        if (!ppv) return E_POINTER;
-        *ppv = nullptr;
-        if (outer) return CLASS_E_NOAGGREGATION;
-        return Server::Create(riid, ppv);
-    }
-    HRESULT STDMETHODCALLTYPE LockServer(BOOL lock) override {
-        if (lock) InterlockedIncrement(&g_locks);
-        else InterlockedDecrement(&g_locks);
-        return S_OK;
-    }
-} g_factory;
+HRESULT OPCCOMN_CDECL CreateServer(void *, IUnknown *, REFIID riid, void **ppv) { return Server::Create(riid, ppv); }
+
+// The class for the library's class object (no aggregation: the library refuses an outer object).
+const OpcServerClass kClass = {sizeof(OpcServerClass), &kClsid, CreateServer, nullptr, 0, nullptr};
 
 // DX 1.0 with a description of its own making (the standard one is "OPC Data Exchange Servers Version 1.0").
 const CATID kDx10 = {0xA0C85BB8, 0x4161, 0x4fd6, {0x86, 0x55, 0xBB, 0x58, 0x46, 0x01, 0xC9, 0xE0}};
@@ -382,12 +361,9 @@ extern "C" BOOL WINAPI DllMain(HINSTANCE instance, DWORD reason, LPVOID) {
 }
 
 DEFECT_EXPORT(HRESULT) DllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = nullptr;
-    if (!IsEqualCLSID(rclsid, kClsid)) return CLASS_E_CLASSNOTAVAILABLE;
-    return g_factory.QueryInterface(riid, ppv);
+    return OpcModuleGetClassObject(&kClass, 1, rclsid, riid, ppv);
 }
 
-DEFECT_EXPORT(HRESULT) DllCanUnloadNow() { return g_locks == 0 ? S_OK : S_FALSE; }
+DEFECT_EXPORT(HRESULT) DllCanUnloadNow() { return OpcModuleCanUnloadNow(); }
 DEFECT_EXPORT(HRESULT) DllRegisterServer() { return Register(true); }
 DEFECT_EXPORT(HRESULT) DllUnregisterServer() { return Register(false); }

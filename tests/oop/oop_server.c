@@ -14,8 +14,6 @@
  * server saw: the client name, the result of a shutdown notification, the proxy/stub in use. */
 #include "oop.h"
 
-#include "exe_host.h"
-
 static int widl_mode;
 static OpcRegistry *fake_registry; /* the server list's registry */
 
@@ -57,7 +55,7 @@ static ULONG STDMETHODCALLTYPE server_release(IUnknown *This) {
         DeleteCriticalSection(&s->lock);
         free(s->client_name);
         free(s);
-        exe_host_object_destroyed();
+        OpcServerUnlock();
     }
     return (ULONG)n;
 }
@@ -131,18 +129,20 @@ static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *te
     return S_FALSE;
 }
 
-static HRESULT create_server(REFIID riid, void **ppv) {
+static HRESULT OPCCOMN_CDECL create_server(void *context, IUnknown *outer, REFIID riid, void **ppv) {
     OpcCommonOptions options;
     OpcShutdownOptions shutdown_options;
     static LCID locales[OOP_LOCALES];
     unsigned i;
     HRESULT hr;
     Server *s = (Server *)calloc(1, sizeof *s);
+    (void)context;
+    (void)outer; /* the class is not aggregatable: the library refuses an outer object */
     if (!s) return E_OUTOFMEMORY;
     s->unk.lpVtbl = &server_vtbl;
     s->refs = 1;
     InitializeCriticalSection(&s->lock);
-    exe_host_object_created();
+    OpcServerLock(); /* the server object counts on the process while it lives */
     for (i = 0; i < OOP_LOCALES; i++) locales[i] = oop_locale(i);
     memset(&options, 0, sizeof options);
     options.struct_size = sizeof options;
@@ -162,8 +162,23 @@ static HRESULT create_server(REFIID riid, void **ppv) {
     return hr;
 }
 
-/* The server list is the library's object over the fake registry, counted by exe_host.h. */
-static HRESULT create_list(REFIID riid, void **ppv) { return exe_host_create_server_list(fake_registry, riid, ppv); }
+/* The server list is the library's object over the fake registry (counted through the module lock). */
+static HRESULT OPCCOMN_CDECL create_list(void *context, IUnknown *outer, REFIID riid, void **ppv) {
+    (void)context;
+    (void)outer;
+    return OpcServerListCreateOver(fake_registry, NULL, riid, ppv);
+}
+
+/* A client that died leaves its references (Wine runs no rundown of a dead client's references):
+ * 20 minutes after the start, however long a client's calls take (a benchmark runs for minutes on a
+ * loaded machine), the server stops as its operator would, so it cannot keep this process, and the
+ * test runner's output pipe it inherited, alive for ever. */
+static DWORD WINAPI watchdog(void *unused) {
+    (void)unused;
+    Sleep(1200000);
+    OpcExeServerStop();
+    return 0;
+}
 
 /* The fake servers: OOP_FAKE_SERVERS Data Access 2.0 servers with ProgIDs Oop.Fake<N>.1. */
 static HRESULT fill_fake_registry(void) {
@@ -198,31 +213,41 @@ static HRESULT fill_fake_registry(void) {
 
 int main(void) {
     HRESULT hr;
-    LONG left;
     const WCHAR *set_flag = wcsstr(GetCommandLineW(), L" -set:");
     unsigned set = set_flag ? (unsigned)(set_flag[6] - L'0') % 10 : 0;
     CLSID server_clsid = oop_class(set, 0), list_clsid = oop_class(set, 1);
-    const CLSID *clsids[2] = {&server_clsid, &list_clsid};
-    static ExeHostClass classes[2] = {EXE_HOST_CLASS(create_server), EXE_HOST_CLASS(create_list)};
+    OpcServerClass classes[2];
+    OpcExeServerOptions options;
+    HANDLE timer;
+    memset(classes, 0, sizeof classes);
+    classes[0].struct_size = classes[1].struct_size = sizeof classes[0];
+    classes[0].clsid = &server_clsid;
+    classes[0].create = create_server;
+    classes[1].clsid = &list_clsid;
+    classes[1].create = create_list;
+    memset(&options, 0, sizeof options);
+    options.struct_size = sizeof options;
+    options.classes = classes;
+    options.class_count = 2;
+    options.first_client_timeout_ms = 120000; /* a server nobody connects to gives up after two minutes */
+    options.release_timeout_ms = 30000;       /* after the watchdog's stop: 30 s for what is left */
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
     if (SUCCEEDED(hr) && widl_mode) hr = use_widl_proxy_stub();
     if (SUCCEEDED(hr) && wcsstr(GetCommandLineW(), L"-ps:opccomn-direct")) hr = use_opccomn_proxy_stub_directly();
     if (SUCCEEDED(hr)) hr = fill_fake_registry();
-    /* Until the last object goes. A server nobody connects to gives up after two minutes; one in use,
-     * however long its client's calls take (a benchmark runs for minutes on a loaded machine), after
-     * 20 minutes; then objects a vanished client never released (Wine runs no rundown of a dead
-     * client's references) get 30 s, so they cannot keep this process, and the test runner's output
-     * pipe it inherited, alive for ever. */
-    left = SUCCEEDED(hr) ? exe_host_serve(clsids, classes, 2, 120000, 1200000, 30000, &hr) : -1;
-    if (left < 0) {
+    timer = CreateThread(NULL, 0, watchdog, NULL, 0, NULL);
+    if (timer) CloseHandle(timer);
+    /* Until the last object goes (the host: -Embedding is on the command line COM started it with). */
+    if (SUCCEEDED(hr)) hr = OpcExeServerRun(&options, NULL);
+    if (FAILED(hr)) {
         fprintf(stderr, "oop_server: start failed: 0x%08lX\n", (unsigned long)hr);
         return 1;
     }
-    if (left > 0) {
-        fprintf(stderr, "oop_server: exiting with %ld objects a client never released\n", left);
+    if (hr == S_FALSE) {
+        fprintf(stderr, "oop_server: exiting with objects a client never released\n");
         return 3;
     }
     OpcRegistryRelease(fake_registry);
-    return 0; /* without CoUninitialize (exe_host.h) */
+    return 0; /* without CoUninitialize (OpcExeServerRun) */
 }

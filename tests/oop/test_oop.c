@@ -14,7 +14,8 @@
  * inside the callback; OpcShutdownNotifyBounded with a client hung in ShutdownRequest, one that answers
  * and one that was killed after advising (a child process of this program); IOPCServerList2 / IOPCServerList over 100 fake servers with IOPCEnumGUID and
  * IEnumGUID Next of several elements, Skip, Reset, Clone, GetClassDetails, CLSIDFromProgID, category
- * arrays up to the library's 4096 and beyond. Registration is undone at the end and checked. */
+ * arrays up to the library's 4096 and beyond; OpcSetProxyBlanket on the IOPCCommon proxy. Registration is
+ * undone at the end and checked. */
 #include "oop.h"
 
 #include <comcat.h>
@@ -135,6 +136,50 @@ static void check_common(IOPCCommon *c) {
     free(seen);
     CHECK(FAILED(c->lpVtbl->SetClientName(c, NULL)));
     CHECK_HR(c->lpVtbl->GetLocaleID(c, &lcid), S_OK);
+}
+
+/* Wine's proxies implement IClientSecurity with SetBlanket and QueryBlanket as stubs answering
+ * E_NOTIMPL (Wine 8); Windows' set and report the blanket. */
+static int under_wine(void) {
+    HMODULE ntdll = GetModuleHandleW(L"ntdll.dll");
+    return ntdll && GetProcAddress(ntdll, "wine_get_version") != NULL;
+}
+
+/* OpcSetProxyBlanket on a real proxy. On Windows it succeeds and the levels reach the proxy
+ * (CoQueryProxyBlanket reads them back). Under Wine it reaches the proxy's IClientSecurity (an
+ * in-process object has none: E_NOINTERFACE, c-tests/test_security.c) and passes on its E_NOTIMPL.
+ * Either way the proxy and its IUnknown keep working, and a weak level is refused before COM. */
+static void check_blanket(IOPCCommon *c) {
+    OpcSecurityOptions o;
+    DWORD authn = 0, imp = 0;
+    LCID lcid = 0;
+    IUnknown *container = NULL;
+    int wine = under_wine();
+    HRESULT expected = wine ? E_NOTIMPL : S_OK;
+    memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
+    CHECK_HR(OpcSetProxyBlanket((IUnknown *)c, NULL), expected);
+    if (!wine) {
+        CHECK_HR(CoQueryProxyBlanket((IUnknown *)c, NULL, NULL, NULL, &authn, &imp, NULL, NULL), S_OK);
+        CHECK(authn == RPC_C_AUTHN_LEVEL_PKT_INTEGRITY && imp == RPC_C_IMP_LEVEL_IMPERSONATE);
+    }
+    o.authn_level = RPC_C_AUTHN_LEVEL_PKT_PRIVACY;
+    o.imp_level = RPC_C_IMP_LEVEL_IDENTIFY;
+    CHECK_HR(OpcSetProxyBlanket((IUnknown *)c, &o), expected);
+    if (!wine) {
+        CHECK_HR(CoQueryProxyBlanket((IUnknown *)c, NULL, NULL, NULL, &authn, &imp, NULL, NULL), S_OK);
+        CHECK(authn == RPC_C_AUTHN_LEVEL_PKT_PRIVACY && imp == RPC_C_IMP_LEVEL_IDENTIFY);
+    }
+    /* A weak level is refused before COM is asked. */
+    o.authn_level = RPC_C_AUTHN_LEVEL_CONNECT;
+    CHECK_HR(OpcSetProxyBlanket((IUnknown *)c, &o), E_INVALIDARG);
+    /* The proxy still calls, and QueryInterface still goes through the IUnknown. */
+    CHECK_HR(c->lpVtbl->GetLocaleID(c, &lcid), S_OK);
+    CHECK_HR(c->lpVtbl->QueryInterface(c, &IID_IConnectionPointContainer, (void **)&container), S_OK);
+    if (container) {
+        CHECK_HR(OpcSetProxyBlanket(container, NULL), expected);
+        container->lpVtbl->Release(container);
+    }
 }
 
 typedef struct SinkState {
@@ -526,6 +571,7 @@ int main(int argc, char **argv) {
         free(which);
 
         check_common(c);
+        check_blanket(c);
         check_shutdown(c);
         check_bounded_shutdown(c);
         c->lpVtbl->Release(c);

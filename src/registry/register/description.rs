@@ -91,8 +91,8 @@ pub struct OpcServerRegistration {
     /// `AccessPermission` of the AppID, as SDDL text (who may call the server; for example
     /// `O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)`), written as the binary self-relative security
     /// descriptor dcomcnfg writes; NULL writes none (the machine's default access permission then
-    /// applies). Owner, group and a DACL of allow and deny ACEs: docs/dcom-security.md says which SDDL
-    /// is accepted. Needs `app_id`. (Version 2 of the structure.)
+    /// applies). Owner, group and a DACL of allow and deny ACEs: docs/guide/dcom-appid.md says which
+    /// SDDL is accepted. Needs `app_id`. (Version 2 of the structure.)
     pub app_id_access_permission: LPCWSTR,
     /// `LaunchPermission` of the AppID, as SDDL text (who may start and activate the server, for
     /// example `O:BAG:BAD:(A;;0x1F;;;BA)(A;;0x1F;;;SY)(A;;0xB;;;IU)`), as for

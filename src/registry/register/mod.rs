@@ -46,7 +46,7 @@
 //! (CWE-428), `InprocServer32` as the plain DLL path COM loads. The ledger records the AppID's DWORD
 //! and binary values with their type, and they follow the same rule: a level or permission another
 //! installer or an administrator changed since stays. See docs/registration-safety.md and
-//! docs/dcom-security.md.
+//! docs/guide/dcom-appid.md.
 //!
 //! Files, one concern each: `description` (the C struct and its validation), `keys` (the key list),
 //! `ledger` (the record format of what was written), `algorithm` (register and unregister); the

@@ -40,6 +40,11 @@ impl<'a> Catalog<'a> {
         }
     }
 
+    /// Whether an interface of this name is declared.
+    pub fn contains(&self, name: &str) -> bool {
+        self.by_name.contains_key(name)
+    }
+
     /// The methods of `i` with those of its bases first, each with the interface that declares it.
     pub fn vtable(&self, i: &'a Interface) -> Vec<(&'a str, &'a Method)> {
         let mut chain = vec![i];

@@ -4,21 +4,23 @@
 //!   sources through cbindgen (`cbindgen.toml`).
 //! - The interfaces come from `idl/opccomn.idl` (the five OPC Common interfaces) and `idl/combase.idl`
 //!   (the standard COM interfaces, declared only off Windows), written in MIDL's shape (see `emit`).
+//! - `src/com/interfaces.rs`: the Rust side of the same interfaces and of `idl/internal.idl` (vtables,
+//!   shims, the trait per interface, the proxy/stub's table; see `rustgen`), formatted by rustfmt.
 //! - The identifiers: `src/com/guids.rs` (Rust constants and the DLL's data exports) and
 //!   `src/c/opccomn_guids.c` (the same data for per-symbol objects) from the IDL and idl/opcguids.txt.
 //! - `c-tests/abi_i686.c`: compile-time checks (for i686-w64-mingw32-gcc) that every vtable entry is
 //!   `__stdcall` and every exported function and callback has the convention of its Rust definition.
 //!
-//! Before writing anything it checks that every Rust vtable struct has its IDL interface's methods in
-//! the IDL's order, with the IDL's parameters and `extern "system"`.
+//! It also checks the rules of the FFI boundary that the compiler cannot (see `rustcheck`).
 //!
 //! `gen-header` writes the files; `gen-header --check` exits 1 when a committed file differs from what
-//! the sources generate now (CI runs this), or when the Rust vtables disagree with the IDL.
+//! the sources generate now (CI runs this). Both exit 1 when the sources break the boundary's rules.
 
 mod emit;
 mod guids;
 mod idl;
 mod rustcheck;
+mod rustgen;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -33,23 +35,34 @@ fn main() -> ExitCode {
     let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
     let opc = idl::parse("idl/opccomn.idl", &read("idl/opccomn.idl")).unwrap_or_else(|e| panic!("{e}"));
     let base = idl::parse("idl/combase.idl", &read("idl/combase.idl")).unwrap_or_else(|e| panic!("{e}"));
+    let internal = idl::parse("idl/internal.idl", &read("idl/internal.idl")).unwrap_or_else(|e| panic!("{e}"));
     let table = guids::parse_table(&read("idl/opcguids.txt")).unwrap_or_else(|e| panic!("{e}"));
-    let catalog = emit::Catalog::new(opc.iter().chain(&base));
+    let catalog = emit::Catalog::new(opc.iter().chain(&base).chain(&internal));
 
-    // The Rust vtables must be the IDL's.
+    // The Rust side of the interfaces.
+    let interfaces = rustgen::module(
+        &catalog,
+        &[
+            rustgen::File {
+                path: "idl/combase.idl",
+                interfaces: &base,
+                rule: "Com",
+            },
+            rustgen::File {
+                path: "idl/opccomn.idl",
+                interfaces: &opc,
+                rule: "Opc",
+            },
+            rustgen::File {
+                path: "idl/internal.idl",
+                interfaces: &internal,
+                rule: "Com",
+            },
+        ],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+
     let sources = rustcheck::read(&root);
-    let all: Vec<&idl::Interface> = base.iter().chain(&opc).collect();
-    let problems = rustcheck::check_vtables(&catalog, &all, &sources);
-    if !problems.is_empty() {
-        for p in &problems {
-            eprintln!("vtable mismatch: {p}");
-        }
-        eprintln!(
-            "the Rust vtable structs disagree with idl/*.idl: {} problem(s)",
-            problems.len()
-        );
-        return ExitCode::FAILURE;
-    }
 
     let header = match generate_header(&root, &opc, &base, &table, &catalog, &sources) {
         Ok(h) => h,
@@ -62,6 +75,7 @@ fn main() -> ExitCode {
     let outputs = [
         (HEADER, header),
         ("src/com/guids.rs", guids::rust_module(&opc, &base, &table)),
+        ("src/com/interfaces.rs", rustfmt(&root, &interfaces)),
         ("src/c/opccomn_guids.c", guids::c_data(&opc, &base, &table)),
         ("c-tests/abi_i686.c", abi_check),
     ];
@@ -80,6 +94,17 @@ fn main() -> ExitCode {
             std::fs::write(&full, text).unwrap_or_else(|e| panic!("write {path}: {e}"));
             println!("wrote {path}");
         }
+    }
+    // What the compiler cannot check about the boundary.
+    for p in &sources.problems {
+        eprintln!("boundary: {p}");
+    }
+    if !sources.problems.is_empty() {
+        eprintln!(
+            "{} breach(es) of the boundary's rules (tools/gen-header/src/rustcheck.rs)",
+            sources.problems.len()
+        );
+        return ExitCode::FAILURE;
     }
     if stale > 0 {
         ExitCode::FAILURE
@@ -120,6 +145,7 @@ fn generate_header(
     for i in opc.iter().chain(base) {
         config.export.exclude.push(i.name.clone());
         config.export.exclude.push(format!("{}Vtbl", i.name));
+        config.export.exclude.push(format!("{}Calls", i.name));
     }
     let bindings = cbindgen::Builder::new()
         .with_crate(root)
@@ -348,4 +374,26 @@ fn package_version(root: &Path) -> String {
         }
     }
     panic!("no [package] version in Cargo.toml");
+}
+
+/// `text` as `cargo fmt` formats it (the repository's rustfmt.toml), so the generated module passes
+/// `cargo fmt --check` as it is written.
+fn rustfmt(root: &Path, text: &str) -> String {
+    use std::io::Write as _;
+    let mut child = std::process::Command::new("rustfmt")
+        .args(["--edition", "2021", "--emit", "stdout", "--config-path"])
+        .arg(root.join("rustfmt.toml"))
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("run rustfmt (rustup component add rustfmt)");
+    child
+        .stdin
+        .take()
+        .expect("rustfmt's input")
+        .write_all(text.as_bytes())
+        .expect("write to rustfmt");
+    let output = child.wait_with_output().expect("rustfmt");
+    assert!(output.status.success(), "rustfmt could not format the generated module");
+    String::from_utf8(output.stdout).expect("UTF-8 from rustfmt")
 }

@@ -1,28 +1,33 @@
-//! Reads the library's Rust sources (with syn) for what the header must agree with: the `#[repr(C)]`
-//! vtable structs, which must have the IDL's methods in the IDL's order with the IDL's parameters, and
-//! the exported functions with their calling conventions.
+//! Reads the library's Rust sources (with syn) for what the header must agree with (the exported
+//! functions and callback types with their calling conventions) and for the rules of the FFI boundary
+//! that the compiler cannot check by itself.
+//!
+//! The compiler checks the rest: every vtable entry returns `ffi::Crossed<T>`, which only
+//! `ffi::boundary!` and `ffi::guard!` make, and the vtables and their shims are generated
+//! (`src/com/interfaces.rs`). What is left, outside `#[cfg(test)]` modules and the generated module:
+//! - every named `extern "C"` / `extern "system"` function with a body (the exports and the callbacks
+//!   handed to C) has one `ffi::boundary!(...)` or `ffi::guard!(...)` as its whole body, and returns
+//!   `ffi::Hr` / `ffi::Crossed<T>` or nothing, so no code of it runs outside the panic guard;
+//! - nothing implements `Vtable` (what `Binder::slot` accepts) or casts a pointer to a `...Vtbl`
+//!   type, either of which could put a function that skipped the boundary into a vtable.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use crate::emit::Catalog;
-use crate::idl::Interface;
+use syn::visit::Visit;
 
-/// One `fn` pointer field of a vtable struct.
-pub struct Field {
-    pub name: String,
-    pub abi: Option<String>,
-    /// (parameter name, normalised base type, pointer depth)
-    pub params: Vec<(String, String, usize)>,
-}
+/// The generated module: it is where the vtables are made.
+const GENERATED: &str = "src/com/interfaces.rs";
 
 pub struct Sources {
-    /// Vtable structs by name (a name may occur more than once, e.g. in tests).
-    pub vtables: BTreeMap<String, Vec<(String, Vec<Field>)>>,
     /// `#[no_mangle]` / `#[export_name]` functions: symbol → ABI ("C" or "system").
     pub functions: BTreeMap<String, String>,
     /// Function pointer types (`pub type F = Option<unsafe extern "C" fn(...)>`): name → ABI.
     pub callbacks: BTreeMap<String, String>,
+    /// Breaches of the boundary's rules, one line each (`file: what`).
+    pub problems: Vec<String>,
+    /// How many extern functions were checked.
+    pub checked: usize,
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
@@ -41,86 +46,134 @@ fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
     }
 }
 
-/// `GUID`, `CLSID`, `IID` and `CATID` are one type; so are the string aliases.
-fn normalise(name: &str) -> String {
-    match name {
-        "CLSID" | "IID" | "CATID" => "GUID",
-        "LPOLESTR" => "LPWSTR",
-        "LPCOLESTR" => "LPCWSTR",
-        "c_void" => "void",
-        other => other,
-    }
-    .to_string()
+fn is_cfg_test(attrs: &[syn::Attribute]) -> bool {
+    attrs.iter().any(|a| {
+        a.path().is_ident("cfg")
+            && a.parse_args::<syn::Meta>()
+                .is_ok_and(|m| m.path().is_ident("test") || m.path().is_ident("miri"))
+    })
 }
 
-fn rust_type(ty: &syn::Type) -> (String, usize) {
-    match ty {
-        syn::Type::Ptr(p) => {
-            let (base, depth) = rust_type(&p.elem);
-            (base, depth + 1)
+fn is_exported(attrs: &[syn::Attribute]) -> bool {
+    attrs.iter().any(|a| {
+        let p = a.path();
+        p.is_ident("no_mangle")
+            || p.is_ident("export_name")
+            || (p.is_ident("unsafe")
+                && a.parse_args::<syn::Path>()
+                    .is_ok_and(|inner| inner.is_ident("no_mangle") || inner.is_ident("export_name")))
+    })
+}
+
+/// `ffi::boundary!` / `ffi::guard!` (also through `crate::com::ffi::` or `super::ffi::`).
+fn is_boundary_macro(path: &syn::Path) -> bool {
+    let segments: Vec<String> = path.segments.iter().map(|s| s.ident.to_string()).collect();
+    let n = segments.len();
+    n >= 2 && segments[n - 2] == "ffi" && matches!(segments[n - 1].as_str(), "boundary" | "guard")
+}
+
+/// The body is one boundary macro and nothing else.
+fn body_is_boundary(block: &syn::Block) -> bool {
+    match block.stmts.as_slice() {
+        [syn::Stmt::Macro(m)] => m.semi_token.is_none() && is_boundary_macro(&m.mac.path),
+        [syn::Stmt::Expr(syn::Expr::Macro(m), None)] => is_boundary_macro(&m.mac.path),
+        _ => false,
+    }
+}
+
+/// `Hr`, `Crossed<T>` (any path ending so), or no return type.
+fn returns_proof(output: &syn::ReturnType) -> bool {
+    match output {
+        syn::ReturnType::Default => true,
+        syn::ReturnType::Type(_, ty) => match &**ty {
+            syn::Type::Path(p) => p
+                .path
+                .segments
+                .last()
+                .is_some_and(|s| s.ident == "Hr" || s.ident == "Crossed"),
+            _ => false,
+        },
+    }
+}
+
+fn extern_abi(abi: &Option<syn::Abi>) -> Option<String> {
+    abi.as_ref()
+        .map(|a| a.name.as_ref().map_or("C".into(), |n| n.value()))
+        .filter(|abi| abi == "C" || abi == "system")
+}
+
+/// Looks inside function bodies for casts to a `...Vtbl` pointer.
+struct Casts<'a> {
+    file: &'a str,
+    problems: &'a mut Vec<String>,
+}
+
+impl<'ast> Visit<'ast> for Casts<'_> {
+    fn visit_expr_cast(&mut self, cast: &'ast syn::ExprCast) {
+        if let syn::Type::Ptr(p) = &*cast.ty {
+            if let syn::Type::Path(target) = &*p.elem {
+                if let Some(last) = target.path.segments.last() {
+                    if last.ident.to_string().ends_with("Vtbl") {
+                        self.problems.push(format!(
+                            "{}: a cast to a pointer to {}: call an object through its interface (its `...Calls` view)",
+                            self.file, last.ident
+                        ));
+                    }
+                }
+            }
         }
-        syn::Type::Path(p) => (
-            normalise(&p.path.segments.last().map(|s| s.ident.to_string()).unwrap_or_default()),
-            0,
-        ),
-        _ => ("?".into(), 0),
+        syn::visit::visit_expr_cast(self, cast);
     }
-}
 
-/// The base type and pointer depth of an IDL parameter type (`const GUID *` → ("GUID", 1)).
-pub fn idl_type(ty: &str, array: bool) -> (String, usize) {
-    let base = ty
-        .split_whitespace()
-        .rfind(|w| *w != "const" && !w.chars().all(|c| c == '*'))
-        .unwrap_or("");
-    (normalise(base), ty.matches('*').count() + usize::from(array))
+    fn visit_item_mod(&mut self, m: &'ast syn::ItemMod) {
+        if !is_cfg_test(&m.attrs) {
+            syn::visit::visit_item_mod(self, m);
+        }
+    }
 }
 
 fn visit_items(items: &[syn::Item], file: &str, out: &mut Sources) {
+    let generated = file == GENERATED;
     for item in items {
         match item {
-            syn::Item::Struct(s) if s.ident.to_string().ends_with("Vtbl") => {
-                let mut fields = Vec::new();
-                if let syn::Fields::Named(named) = &s.fields {
-                    for f in &named.named {
-                        let syn::Type::BareFn(fun) = &f.ty else { continue };
-                        let abi = fun
-                            .abi
-                            .as_ref()
-                            .map(|a| a.name.as_ref().map_or("C".into(), |n| n.value()));
-                        let params = fun
-                            .inputs
-                            .iter()
-                            .map(|a| {
-                                let name = a.name.as_ref().map(|(n, _)| n.to_string()).unwrap_or_default();
-                                let (base, depth) = rust_type(&a.ty);
-                                (name, base, depth)
-                            })
-                            .collect();
-                        fields.push(Field {
-                            name: f.ident.as_ref().map(|i| i.to_string()).unwrap_or_default(),
-                            abi,
-                            params,
-                        });
+            syn::Item::Fn(f) => {
+                let exported = is_exported(&f.attrs);
+                let abi = extern_abi(&f.sig.abi);
+                if let (true, Some(abi)) = (exported, &abi) {
+                    out.functions.insert(f.sig.ident.to_string(), abi.clone());
+                }
+                if exported && abi.is_none() {
+                    out.problems.push(format!(
+                        "{file}: {} is exported but not extern \"C\" or \"system\"",
+                        f.sig.ident
+                    ));
+                }
+                if abi.is_some() && !generated {
+                    out.checked += 1;
+                    if !body_is_boundary(&f.block) {
+                        out.problems.push(format!(
+                            "{file}: {}: the whole body must be one ffi::boundary!(...) or ffi::guard!(...)",
+                            f.sig.ident
+                        ));
+                    }
+                    if !returns_proof(&f.sig.output) {
+                        out.problems.push(format!(
+                            "{file}: {} must return ffi::Hr or ffi::Crossed<T> (or nothing)",
+                            f.sig.ident
+                        ));
                     }
                 }
-                out.vtables
-                    .entry(s.ident.to_string())
-                    .or_default()
-                    .push((file.to_string(), fields));
             }
-            syn::Item::Fn(f) => {
-                let exported = f.attrs.iter().any(|a| {
-                    let p = a.path();
-                    p.is_ident("no_mangle")
-                        || p.is_ident("export_name")
-                        || (p.is_ident("unsafe")
-                            && a.parse_args::<syn::Path>()
-                                .is_ok_and(|inner| inner.is_ident("no_mangle")))
-                });
-                if let (true, Some(abi)) = (exported, &f.sig.abi) {
-                    let abi = abi.name.as_ref().map_or("C".into(), |n| n.value());
-                    out.functions.insert(f.sig.ident.to_string(), abi);
+            syn::Item::Impl(i) if !generated => {
+                let names_vtable = i
+                    .trait_
+                    .as_ref()
+                    .and_then(|(_, path, _)| path.segments.last())
+                    .is_some_and(|s| s.ident == "Vtable");
+                if names_vtable {
+                    out.problems.push(format!(
+                        "{file}: implements Vtable; only the generated vtables of src/com/interfaces.rs may"
+                    ));
                 }
             }
             syn::Item::Type(t) => {
@@ -143,148 +196,147 @@ fn visit_items(items: &[syn::Item], file: &str, out: &mut Sources) {
                     out.callbacks.insert(t.ident.to_string(), abi);
                 }
             }
-            syn::Item::Mod(m) => {
+            syn::Item::Mod(m) if !is_cfg_test(&m.attrs) => {
                 if let Some((_, items)) = &m.content {
                     visit_items(items, file, out);
                 }
             }
             _ => {}
         }
+        if !generated {
+            let mut casts = Casts {
+                file,
+                problems: &mut out.problems,
+            };
+            match item {
+                syn::Item::Mod(_) => {}
+                other => casts.visit_item(other),
+            }
+        }
     }
 }
 
+/// Reads every Rust source of the library.
 pub fn read(root: &Path) -> Sources {
     let mut files = Vec::new();
     rust_files(&root.join("src"), &mut files);
     let mut out = Sources {
-        vtables: BTreeMap::new(),
         functions: BTreeMap::new(),
         callbacks: BTreeMap::new(),
+        problems: Vec::new(),
+        checked: 0,
     };
     for path in files {
+        let rel = path.strip_prefix(root).unwrap_or(&path).display().to_string();
+        // Files of tests only (`tests.rs`, `stress_tests.rs`) are not the library's boundary.
+        if rel.ends_with("tests.rs") {
+            continue;
+        }
         let text = std::fs::read_to_string(&path).expect("read a Rust source");
         let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let rel = path.strip_prefix(root).unwrap_or(&path).display().to_string();
         visit_items(&file.items, &rel, &mut out);
     }
-    out
-}
-
-/// Compares every IDL interface with the Rust vtable struct of the same name; returns the differences.
-pub fn check_vtables(catalog: &Catalog, interfaces: &[&Interface], sources: &Sources) -> Vec<String> {
-    let mut problems = Vec::new();
-    for i in interfaces {
-        let vname = format!("{}Vtbl", i.name);
-        let Some(found) = sources.vtables.get(&vname) else {
-            problems.push(format!("no Rust struct {vname} for the IDL interface {}", i.name));
-            continue;
-        };
-        let expected = catalog.vtable(i);
-        for (file, fields) in found {
-            let names: Vec<&str> = fields.iter().map(|f| f.name.as_str()).collect();
-            let idl_names: Vec<&str> = expected.iter().map(|(_, m)| m.name.as_str()).collect();
-            if names != idl_names {
-                problems.push(format!(
-                    "{file}: {vname} has the methods {names:?}, the IDL has {idl_names:?} (names and order must match)"
-                ));
-                continue;
-            }
-            for (field, (_, m)) in fields.iter().zip(&expected) {
-                let at = format!("{file}: {vname}::{}", field.name);
-                if field.abi.as_deref() != Some("system") {
-                    problems.push(format!("{at} is not `extern \"system\"` (STDMETHODCALLTYPE)"));
-                }
-                let mut want: Vec<(String, String, usize)> = vec![("This".into(), i.name.clone(), 1)];
-                for p in &m.params {
-                    let (base, depth) = idl_type(&p.ty, p.array);
-                    want.push((p.name.clone(), base, depth));
-                }
-                if field.params != want {
-                    problems.push(format!("{at}: parameters {:?}, the IDL says {:?}", field.params, want));
-                }
-            }
-        }
+    if out.checked < 40 {
+        out.problems.push(format!(
+            "only {} extern functions found in src/: is the check still reading the sources?",
+            out.checked
+        ));
     }
-    problems
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::idl;
-
-    const IDL: &str = r#"
-        [object, uuid(00000000-0000-0000-C000-000000000046)]
-        interface IUnknown {
-            HRESULT QueryInterface([in] REFIID riid, [out] void **ppvObject);
-            ULONG AddRef();
-            ULONG Release();
-        }
-        [object, uuid(F31DFDE1-07B6-11d2-B2D8-0060083BA1FB)]
-        interface IOPCShutdown : IUnknown { HRESULT ShutdownRequest([in, string] LPCWSTR szReason); }
-    "#;
 
     fn problems(rust: &str) -> Vec<String> {
-        let ifs = idl::parse("t.idl", IDL).unwrap();
-        let catalog = Catalog::new(ifs.iter());
         let mut sources = Sources {
-            vtables: BTreeMap::new(),
             functions: BTreeMap::new(),
             callbacks: BTreeMap::new(),
+            problems: Vec::new(),
+            checked: 0,
         };
-        visit_items(&syn::parse_file(rust).unwrap().items, "t.rs", &mut sources);
-        let all: Vec<&Interface> = ifs.iter().collect();
-        check_vtables(&catalog, &all, &sources)
-    }
-
-    const GOOD: &str = r#"
-        pub struct IUnknownVtbl {
-            pub QueryInterface: unsafe extern "system" fn(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-            pub AddRef: unsafe extern "system" fn(This: *mut IUnknown) -> ULONG,
-            pub Release: unsafe extern "system" fn(This: *mut IUnknown) -> ULONG,
-        }
-        pub struct IOPCShutdownVtbl {
-            pub QueryInterface: unsafe extern "system" fn(This: *mut IOPCShutdown, riid: REFIID, ppvObject: *mut *mut c_void) -> HRESULT,
-            pub AddRef: unsafe extern "system" fn(This: *mut IOPCShutdown) -> ULONG,
-            pub Release: unsafe extern "system" fn(This: *mut IOPCShutdown) -> ULONG,
-            pub ShutdownRequest: unsafe extern "system" fn(This: *mut IOPCShutdown, szReason: LPCWSTR) -> HRESULT,
-        }
-    "#;
-
-    #[test]
-    fn matching_vtables_pass() {
-        assert_eq!(problems(GOOD), Vec::<String>::new());
+        visit_items(&syn::parse_file(rust).unwrap().items, "src/t.rs", &mut sources);
+        sources.problems
     }
 
     #[test]
-    fn order_abi_parameters_and_missing_structs_are_reported() {
-        let swapped = GOOD.replace(
-            "pub AddRef: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,\n            pub Release: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,",
-            "pub Release: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,\n            pub AddRef: unsafe extern \"system\" fn(This: *mut IOPCShutdown) -> ULONG,",
+    fn exports_written_with_the_boundary_pass() {
+        let good = r#"
+            #[no_mangle]
+            pub unsafe extern "C" fn OpcA(p: *mut u32) -> Hr {
+                ffi::boundary!(Opc, [p], { Ok(S_OK) })
+            }
+            #[no_mangle]
+            pub extern "system" fn OpcB() -> ffi::Crossed<BOOL> {
+                crate::com::ffi::guard!(0, { 1 })
+            }
+            #[no_mangle]
+            pub extern "C" fn OpcC() {
+                ffi::guard!((), { work() })
+            }
+            fn plain() -> u32 { let x = 1; x }
+            #[cfg(test)]
+            mod tests {
+                extern "system" fn stand_in() -> HRESULT { 0 }
+                fn f() { let _ = p as *const IFooVtbl; }
+                impl Vtable for TestVtbl {}
+            }
+        "#;
+        assert_eq!(problems(good), Vec::<String>::new());
+    }
+
+    #[test]
+    fn code_outside_the_boundary_is_reported() {
+        let p = problems(
+            r#"#[no_mangle] pub extern "C" fn OpcA() -> Hr { let x = risky(); ffi::boundary!(Opc, [], { Ok(x) }) }"#,
         );
-        assert_ne!(swapped, GOOD);
-        let p = problems(&swapped);
-        assert!(p.len() == 1 && p[0].contains("order must match"), "{p:?}");
+        assert!(p.len() == 1 && p[0].contains("whole body"), "{p:?}");
 
-        let cdecl = GOOD.replace(
-            "ShutdownRequest: unsafe extern \"system\"",
-            "ShutdownRequest: unsafe extern \"C\"",
+        let p = problems(r#"#[no_mangle] pub extern "C" fn OpcA() -> HRESULT { ffi::guard!(0, { 0 }) }"#);
+        assert!(p.len() == 1 && p[0].contains("must return"), "{p:?}");
+
+        let p = problems(r#"unsafe extern "system" fn shim(this: *mut IFoo) -> Hr { other(this) }"#);
+        assert!(p.len() == 1 && p[0].contains("whole body"), "{p:?}");
+
+        let p = problems(r#"#[no_mangle] pub extern "C" fn OpcA() { ffi::guard!((), { 1 }); log() }"#);
+        assert!(p.len() == 1 && p[0].contains("whole body"), "{p:?}");
+
+        let p = problems(r#"#[no_mangle] pub fn OpcA() -> Hr { ffi::guard!(0, { 0 }) }"#);
+        assert!(p.len() == 1 && p[0].contains("not extern"), "{p:?}");
+    }
+
+    #[test]
+    fn vtables_made_by_hand_are_reported() {
+        let p = problems("struct MyVtbl; impl Vtable for MyVtbl {}");
+        assert!(p.len() == 1 && p[0].contains("implements Vtable"), "{p:?}");
+
+        let p = problems(
+            "fn f(o: *mut IUnknown) -> u32 { unsafe { ((*((*o).lpVtbl as *const IUnknownVtbl)).AddRef)(o) }.get() }",
         );
-        let p = problems(&cdecl);
-        assert!(p.len() == 1 && p[0].contains("not `extern \"system\"`"), "{p:?}");
+        assert!(p.len() == 1 && p[0].contains("IUnknownVtbl"), "{p:?}");
 
-        let wrong_type = GOOD.replace("szReason: LPCWSTR", "szReason: *mut LPCWSTR");
-        let p = problems(&wrong_type);
-        assert!(p.len() == 1 && p[0].contains("the IDL says"), "{p:?}");
+        let p = problems("mod inner { fn f(v: *const u8) { let _ = v as *mut crate::x::IFooVtbl; } }");
+        assert!(p.len() == 1 && p[0].contains("IFooVtbl"), "{p:?}");
+    }
 
-        let renamed = GOOD.replace("szReason: LPCWSTR", "reason: LPCWSTR");
-        assert_eq!(problems(&renamed).len(), 1);
-
-        let missing = GOOD.replace("IOPCShutdownVtbl", "SomethingElseVtbl");
-        let p = problems(&missing);
-        assert!(
-            p.len() == 1 && p[0].contains("no Rust struct IOPCShutdownVtbl"),
-            "{p:?}"
-        );
+    #[test]
+    fn exports_and_callbacks_are_listed_with_their_conventions() {
+        let mut sources = Sources {
+            functions: BTreeMap::new(),
+            callbacks: BTreeMap::new(),
+            problems: Vec::new(),
+            checked: 0,
+        };
+        let text = r#"
+            #[no_mangle] pub extern "system" fn DllCanUnloadNow() -> Hr { ffi::guard!(0, { 0 }) }
+            #[unsafe(no_mangle)] pub unsafe extern "C" fn OpcX() -> Hr { ffi::guard!(0, { 0 }) }
+            pub type Cb = Option<unsafe extern "C" fn(context: *mut c_void)>;
+        "#;
+        visit_items(&syn::parse_file(text).unwrap().items, "src/t.rs", &mut sources);
+        assert_eq!(sources.functions["DllCanUnloadNow"], "system");
+        assert_eq!(sources.functions["OpcX"], "C");
+        assert_eq!(sources.callbacks["Cb"], "C");
+        assert_eq!(sources.checked, 2);
     }
 }

@@ -1,0 +1,172 @@
+//! The host of an EXE server (LocalServer32), [`OpcExeServerRun`]: the command line,
+//! registration, the class objects, the process's lifetime and the operator's stop.
+//!
+//! **Lifetime.** While it serves, the server count ([`super::OpcServerLock`], LockServer, and through
+//! the module lock every object of the library) is COM's server process count: CoAddRefServerProcess
+//! and CoReleaseServerProcess. When it falls to zero COM suspends the class objects at once (a client
+//! activating now gets a new process, never this exiting one) and the host returns: COM's rule for
+//! local servers, kept while **any** object handed out is referenced. Started by COM (`-Embedding`),
+//! a server no client comes to gives up after `first_client_timeout_ms`. Started by hand, it holds one
+//! count of its own until it is stopped.
+//!
+//! **Stop.** Console control (Ctrl+C, the console closing, log-off, shutdown), the named event
+//! `stop_event_name`, or [`OpcExeServerStop`] from any thread: the host calls `on_stop` (where the
+//! server notifies its clients, within a bound: `OpcShutdownNotifyBounded`), lets go of its own count,
+//! waits `release_timeout_ms` at most for the clients to release what they hold, revokes the class
+//! objects and returns.
+//!
+//! Off Windows the functions exist (a server's `main` builds everywhere) and OpcExeServerRun returns
+//! E_NOTIMPL after checking its arguments.
+
+use core::ffi::c_void;
+use core::ptr;
+
+use super::{registrations, OpcServerClass, ServerClass, MAX_CLASSES};
+use crate::com::ffi::{self, Fail, Hr};
+use crate::com::options::read_sized;
+#[cfg(not(windows))]
+use crate::com::E_NOTIMPL;
+#[cfg(not(windows))]
+use crate::com::S_FALSE;
+use crate::com::{E_INVALIDARG, E_UNEXPECTED, LPCWSTR};
+use crate::registry::cmdline::parse_command_line;
+
+#[cfg(windows)]
+mod windows;
+
+/// Called when an EXE server is stopped by its operator, on the host's thread (COM initialised, in the
+/// multithreaded apartment) while clients may still be connected: ask them to disconnect here
+/// (IOPCShutdown, `OpcShutdownNotifyBounded` with a timeout, so that a hung client cannot hold the
+/// stop). Not called when the server ends because its last client left.
+pub type OpcExeServerStopFn = Option<unsafe extern "C" fn(context: *mut c_void)>;
+
+/// How `OpcExeServerRun` runs an EXE server. Zero-initialise it, set `struct_size` to
+/// `sizeof(OpcExeServerOptions)`, then set what you need.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct OpcExeServerOptions {
+    /// `sizeof(OpcExeServerOptions)` as the caller's header declares it.
+    pub struct_size: u32,
+    /// The server's classes (at least one, at most 256): their class objects are registered while it
+    /// serves, their `registration`s written by `/RegServer` (NULL `module_path`: this EXE).
+    pub classes: *const OpcServerClass,
+    /// Number of entries in `classes`.
+    pub class_count: u32,
+    /// The name of an event the operator's tools set to stop the server (for example
+    /// `L"Local\\VendorServerStop"`), NULL for none.
+    pub stop_event_name: LPCWSTR,
+    /// Called when the server is stopped (see OpcExeServerStopFn); NULL for nothing.
+    pub on_stop: OpcExeServerStopFn,
+    /// Passed to `on_stop`.
+    pub context: *mut c_void,
+    /// How long a server started by COM (`-Embedding`) waits for its first client, in milliseconds;
+    /// 0 means 60000.
+    pub first_client_timeout_ms: u32,
+    /// After a stop, how long the host waits for clients to release what they hold, in milliseconds;
+    /// 0 means 10000.
+    pub release_timeout_ms: u32,
+}
+
+/// Runs an EXE server (LocalServer32) as its `main`: everything but the server's own objects.
+///
+/// - `/RegServer` (or `-RegServer`): registers every class with a `registration` (NULL `module_path`:
+///   this EXE), unregistering again what it wrote when one fails; returns.
+/// - `/UnregServer`: unregisters them, in reverse order (a class not registered is no failure); returns.
+/// - Otherwise it serves: initialises COM (multithreaded apartment), registers the class objects
+///   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
+///   library makes (through the module lock, which the host sets), LockServer, and the server's own
+///   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
+///   last goes it returns (COM stops handing out the class objects at that moment). Started by COM
+///   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
+///   serves until stopped. A stop (console control, the named event `stop_event_name`,
+///   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
+///   go.
+///
+/// `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
+/// CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
+/// CoUninitialize would wait for it (under Wine possibly for ever); return from `main` (or call
+/// ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time.
+///
+/// Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
+/// after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
+/// a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
+/// command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process; the errors
+/// of CoInitializeEx, CoRegisterClassObject and of registration.
+///
+/// # Safety
+/// `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
+/// call returns); `command_line` NULL or a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn OpcExeServerRun(options: *const OpcExeServerOptions, command_line: LPCWSTR) -> Hr {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller's contract.
+        let o = unsafe { read_options(options) }?;
+        // SAFETY: as above: `classes` holds `class_count` valid classes.
+        let table = unsafe { ServerClass::read_table(o.classes, o.class_count) }?;
+        // SAFETY: as above; the registrations are checked before anything is written.
+        let descriptions = unsafe { registrations(o.classes, o.class_count) }?;
+        let line = match command_line.is_null() {
+            #[cfg(windows)]
+            // SAFETY: no arguments; the process's command line lives as long as the process.
+            true => unsafe { ffi::in_string(windows_sys::Win32::System::Environment::GetCommandLineW()) }?,
+            #[cfg(not(windows))]
+            true => String::new(),
+            // SAFETY: the caller's NUL-terminated string.
+            false => unsafe { ffi::in_string(command_line) }?,
+        };
+        let command = parse_command_line(&line)?;
+        #[cfg(not(windows))]
+        {
+            let _ = (table, descriptions, command);
+            Err(E_NOTIMPL.into())
+        }
+        #[cfg(windows)]
+        windows::run(&o, &table, &descriptions, command)
+    })
+}
+
+/// Reads the caller's options, honouring `struct_size`.
+///
+/// # Safety
+/// `options` NULL or valid as documented on OpcExeServerOptions.
+unsafe fn read_options(options: *const OpcExeServerOptions) -> Result<OpcExeServerOptions, Fail> {
+    if options.is_null() {
+        return Err(Fail::Null);
+    }
+    let defaults = OpcExeServerOptions {
+        struct_size: 0,
+        classes: ptr::null(),
+        class_count: 0,
+        stop_event_name: ptr::null(),
+        on_stop: None,
+        context: ptr::null_mut(),
+        first_client_timeout_ms: 0,
+        release_timeout_ms: 0,
+    };
+    // SAFETY: repr(C), starting with struct_size, integers, raw pointers and an optional function
+    // pointer; the caller vouches for `options`.
+    let o = unsafe { read_sized(options, &[core::mem::size_of::<OpcExeServerOptions>()], defaults) }?;
+    if o.class_count == 0 || o.class_count > MAX_CLASSES {
+        return Err(Fail::Code(E_INVALIDARG));
+    }
+    Ok(o)
+}
+
+/// Stops the EXE server that OpcExeServerRun runs in this process, as its operator would: the host
+/// calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
+/// for example a service's control handler or the server's own user interface.
+///
+/// Returns S_OK; S_FALSE when no host runs.
+#[no_mangle]
+pub extern "C" fn OpcExeServerStop() -> Hr {
+    ffi::guard!(E_UNEXPECTED, {
+        #[cfg(windows)]
+        {
+            windows::stop()
+        }
+        #[cfg(not(windows))]
+        {
+            S_FALSE
+        }
+    })
+}

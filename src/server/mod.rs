@@ -1,0 +1,452 @@
+//! The COM plumbing of an OPC server's own classes: the class object (IClassFactory) of each class, the
+//! count that keeps a server loaded or running while anything it handed out is referenced, the DLL
+//! entry points over a table of classes (this module) and, on Windows, the EXE host (`exe`).
+//!
+//! A server describes each class with an [`OpcServerClass`]: its CLSID, the function that makes an
+//! instance, whether it may be aggregated, and optionally the registration `/RegServer` and
+//! DllRegisterServer write for it. Everything else is the library's:
+//!
+//! - **Class objects** ([`OpcClassFactoryCreate`]): CreateInstance checks the arguments, refuses an
+//!   outer object unless the class allows aggregation (and then wants IID_IUnknown, as COM does),
+//!   calls the server's function and makes sure `*ppv` is NULL on every failure; LockServer counts.
+//! - **The server count** ([`OpcServerLock`], [`OpcServerUnlock`]): what keeps the server: LockServer
+//!   locks, the server's own objects (each locks when made and unlocks when freed), and every object
+//!   of the library (in an EXE host through the module lock). An object that aggregates one of the
+//!   library's objects (an IOPCCommon session, the shutdown connection point) is counted through it.
+//! - **A DLL server** forwards its four `Dll*` exports to [`OpcModuleGetClassObject`],
+//!   [`OpcModuleCanUnloadNow`], [`OpcModuleRegister`] and [`OpcModuleUnregister`].
+
+pub mod exe;
+
+use core::ffi::c_void;
+use core::ptr;
+use core::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Mutex;
+
+use crate::com::ffi::{self, Fail, FfiResult, Hr};
+use crate::com::iids::{IID_ICLASSFACTORY, IID_IUNKNOWN};
+use crate::com::interfaces::{IClassFactoryImpl, IClassFactoryVtbl};
+use crate::com::object::{live_objects, ComClass, ComObject, Delegating, Slot};
+use crate::com::options::read_sized;
+use crate::com::{
+    IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, CLASS_E_NOAGGREGATION, CLSID, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT,
+    REFCLSID, REFIID, S_FALSE, S_OK,
+};
+use crate::registry::register::{register, unregister, OpcServerRegistration, ServerDescription};
+use crate::registry::{registries, OpcRegistry, Registries};
+
+/// Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
+/// into `outer` when `outer` is not NULL (only for a class with OPC_CLASS_AGGREGATABLE; `riid` is then
+/// IID_IUnknown and the result the inner, non-delegating IUnknown), its interface `riid` in `*ppv`.
+/// Return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...). The library has
+/// already checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+pub type OpcCreateInstanceFn = Option<
+    unsafe extern "C" fn(context: *mut c_void, outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT,
+>;
+
+/// `OpcServerClass::flags`: instances may be aggregated (CreateInstance with an outer object).
+pub const OPC_CLASS_AGGREGATABLE: u32 = 1;
+
+/// One class of a server: what its class object makes, and what registration writes for it.
+/// Zero-initialise it, set `struct_size` to `sizeof(OpcServerClass)`, then set what you need; the
+/// library reads only the first `struct_size` bytes. Keep it (and everything it points at) alive
+/// while the class objects made from it may be used: a static table is usual.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct OpcServerClass {
+    /// `sizeof(OpcServerClass)` as the caller's header declares it.
+    pub struct_size: u32,
+    /// The class identifier (required).
+    pub clsid: *const CLSID,
+    /// Makes an instance (required).
+    pub create: OpcCreateInstanceFn,
+    /// Passed to `create`.
+    pub context: *mut c_void,
+    /// OPC_CLASS_AGGREGATABLE or 0.
+    pub flags: u32,
+    /// What `/RegServer` (OpcExeServerMain) and OpcModuleRegister write for the class, NULL for a
+    /// class that is not registered by them. Its `clsid` must be this class's.
+    pub registration: *const OpcServerRegistration,
+}
+
+/// The most classes one table may hold.
+pub(crate) const MAX_CLASSES: u32 = 256;
+
+/// A class as the library keeps it.
+#[derive(Clone, Copy)]
+pub(crate) struct ServerClass {
+    pub(crate) clsid: GUID,
+    create: unsafe extern "C" fn(*mut c_void, *mut IUnknown, REFIID, *mut *mut c_void) -> HRESULT,
+    context: *mut c_void,
+    aggregatable: bool,
+    pub(crate) registration: *const OpcServerRegistration,
+}
+
+// SAFETY: OpcServerClass's contract: `create` may be called with `context` from any thread, and the
+// registration stays valid and unchanged while the class is in use.
+unsafe impl Send for ServerClass {}
+// SAFETY: as above; a ServerClass is never modified.
+unsafe impl Sync for ServerClass {}
+
+impl ServerClass {
+    /// Reads one class, honouring `struct_size`.
+    ///
+    /// # Safety
+    /// `class` must be non-NULL and valid as documented on OpcServerClass.
+    pub(crate) unsafe fn read(class: *const OpcServerClass) -> Result<ServerClass, HRESULT> {
+        // The first version: one size. Fields added later make more.
+        let sizes = [core::mem::size_of::<OpcServerClass>()];
+        let defaults = OpcServerClass {
+            struct_size: 0,
+            clsid: ptr::null(),
+            create: None,
+            context: ptr::null_mut(),
+            flags: 0,
+            registration: ptr::null(),
+        };
+        // SAFETY: OpcServerClass is repr(C), starts with struct_size and holds integers, raw pointers
+        // and an optional function pointer; the caller vouches for `class`.
+        let c = unsafe { read_sized(class, &sizes, defaults) }?;
+        // SAFETY: the caller vouches a non-NULL `clsid` is readable.
+        let clsid = unsafe { c.clsid.as_ref() }.copied().ok_or(E_INVALIDARG)?;
+        let create = c.create.ok_or(E_INVALIDARG)?;
+        if c.flags & !OPC_CLASS_AGGREGATABLE != 0 {
+            return Err(E_INVALIDARG);
+        }
+        Ok(ServerClass {
+            clsid,
+            create,
+            context: c.context,
+            aggregatable: c.flags & OPC_CLASS_AGGREGATABLE != 0,
+            registration: c.registration,
+        })
+    }
+
+    /// Reads a table of `count` classes.
+    ///
+    /// # Safety
+    /// `classes` must point at `count` classes valid as documented on OpcServerClass.
+    pub(crate) unsafe fn read_table(classes: *const OpcServerClass, count: u32) -> Result<Vec<ServerClass>, Fail> {
+        if classes.is_null() {
+            return Err(Fail::Null);
+        }
+        if count == 0 || count > MAX_CLASSES {
+            return Err(Fail::Code(E_INVALIDARG));
+        }
+        (0..count as usize)
+            .map(|i| {
+                // The entries are read one by one, each by its own `struct_size`: the table's stride is
+                // the caller's `sizeof(OpcServerClass)`, which the first entry states.
+                // SAFETY: the caller vouches for `count` readable entries; `stride` is read from the
+                // first, which is readable.
+                let stride = unsafe { (*classes).struct_size } as usize;
+                // SAFETY: as above.
+                unsafe { ServerClass::read(classes.cast::<u8>().add(i * stride).cast()) }.map_err(Fail::Code)
+            })
+            .collect()
+    }
+}
+
+/// The server count: LockServer locks and the server's own objects (OpcServerLock). In an EXE host
+/// it is kept by COM instead (see `exe`), and this counts nothing.
+static SERVER_LOCKS: AtomicU32 = AtomicU32::new(0);
+
+/// What the server count calls in an EXE host: COM's server process count (CoAddRefServerProcess),
+/// so that COM stops handing out the class objects at once when it falls to zero.
+#[derive(Clone, Copy)]
+#[cfg_attr(not(windows), allow(dead_code))]
+pub(crate) struct ProcessCount {
+    pub(crate) lock: fn(),
+    pub(crate) unlock: fn(),
+}
+
+static PROCESS_COUNT: Mutex<Option<ProcessCount>> = Mutex::new(None);
+
+#[cfg_attr(not(windows), allow(dead_code))]
+pub(crate) fn set_process_count(count: Option<ProcessCount>) {
+    *PROCESS_COUNT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = count;
+}
+
+fn process_count() -> Option<ProcessCount> {
+    *PROCESS_COUNT.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+pub(crate) fn server_lock() {
+    match process_count() {
+        Some(count) => (count.lock)(),
+        None => {
+            // Saturates rather than wraps: a server that never unlocks stays loaded.
+            let _ = SERVER_LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_add(1));
+        }
+    }
+}
+
+pub(crate) fn server_unlock() {
+    match process_count() {
+        Some(count) => (count.unlock)(),
+        None => {
+            // An unlock without a lock is ignored rather than wrapping around.
+            let _ = SERVER_LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+        }
+    }
+}
+
+/// The class object of one class.
+struct ClassObject {
+    slot: Slot,
+    class: ServerClass,
+}
+
+impl ComClass for ClassObject {
+    fn interface(&self, iid: &GUID) -> Option<&Slot> {
+        (*iid == IID_ICLASSFACTORY).then_some(&self.slot)
+    }
+}
+
+static CLASS_OBJECT_VTBL: IClassFactoryVtbl = IClassFactoryVtbl::new::<Delegating, ClassObject>();
+
+impl IClassFactoryImpl for ClassObject {
+    unsafe fn CreateInstance(
+        this: &ComObject<Self>,
+        outer: *mut IUnknown,
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+    ) -> FfiResult {
+        // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
+        let (out, riid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?) };
+        if !outer.is_null() && (!this.class.aggregatable || *riid != IID_IUNKNOWN) {
+            return Err(CLASS_E_NOAGGREGATION.into());
+        }
+        let class = this.class;
+        // SAFETY: the server's function, with its context, the caller's outer object and checked
+        // `riid` and `ppv` (already NULL).
+        let hr = unsafe { (class.create)(class.context, outer, riid, out.as_ptr()) };
+        // SAFETY: `out` is writable; read back what the server's function left there.
+        let made = unsafe { *out.as_ptr() };
+        if hr < 0 {
+            // A pointer left behind with a failure is neither used nor released (it may be garbage);
+            // the boundary resets the out-parameter.
+            return Err(hr.into());
+        }
+        if made.is_null() {
+            // Success without an object: the server's function is broken.
+            return Err(E_UNEXPECTED.into());
+        }
+        Ok(hr)
+    }
+
+    fn LockServer(_this: &ComObject<Self>, lock: BOOL) -> FfiResult {
+        if lock != 0 {
+            server_lock();
+        } else {
+            server_unlock();
+        }
+        Ok(S_OK)
+    }
+}
+
+/// A new class object for `class`, as `riid` (IID_IClassFactory or IID_IUnknown).
+///
+/// # Safety
+/// `riid` NULL or readable, `ppv` NULL or writable.
+pub(crate) unsafe fn class_object(class: ServerClass, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
+    // A class object does not count on the server: COM holds the EXE's for as long as they are
+    // registered, and a client that keeps one uses LockServer (COM's rule).
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        ComObject::<ClassObject>::create_class_object(riid, ppv, |binder| {
+            Ok(ClassObject {
+                slot: binder.slot(&CLASS_OBJECT_VTBL),
+                class,
+            })
+        })
+    }
+}
+
+/// Creates the class object (IClassFactory) of one of the server's classes: CreateInstance calls
+/// `class->create` (checking the arguments first, refusing an outer object with CLASS_E_NOAGGREGATION
+/// unless the class is OPC_CLASS_AGGREGATABLE and `riid` is IID_IUnknown, and making sure `*ppv` is
+/// NULL on every failure: a function that reports success without an object gets E_UNEXPECTED);
+/// LockServer(TRUE/FALSE) is OpcServerLock/OpcServerUnlock. The class object itself does not count
+/// on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerMain, or a
+/// DllGetClassObject of its own.
+///
+/// Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
+/// a NULL `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is
+/// IID_IClassFactory or IID_IUnknown. `*ppv` is NULL on failure.
+///
+/// # Safety
+/// `cls` NULL or valid as documented on OpcServerClass (and kept so while the class object lives);
+/// `riid` NULL or readable; `ppv` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcClassFactoryCreate(cls: *const OpcServerClass, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: the caller's contract.
+        let (out, riid, cls) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?, ffi::in_ref(cls)?) };
+        // SAFETY: as above.
+        let class = unsafe { ServerClass::read(cls) }?;
+        // SAFETY: `riid` readable, `out` writable.
+        Ok(unsafe { class_object(class, riid, out.as_ptr()) })
+    })
+}
+
+/// Counts one more reference to the server: call it when an object of the server's own is made (and
+/// OpcServerUnlock when it is freed), so that a DLL server is not unloaded and an EXE server does not
+/// exit while a client holds it. LockServer and the library's objects are counted without it, and so
+/// is an object that aggregates one of the library's objects (IOPCCommon, the shutdown connection
+/// point) for as long as it holds it. Under OpcExeServerMain this is COM's server process count
+/// (CoAddRefServerProcess); elsewhere a count OpcModuleCanUnloadNow reads. Any thread.
+#[no_mangle]
+pub extern "C" fn OpcServerLock() {
+    ffi::guard!((), { server_lock() })
+}
+
+/// Takes back one OpcServerLock. Under OpcExeServerMain the last one ends the server once it has had
+/// a client (COM stops handing out its class objects at once). An unlock without a lock is ignored.
+/// Any thread.
+#[no_mangle]
+pub extern "C" fn OpcServerUnlock() {
+    ffi::guard!((), { server_unlock() })
+}
+
+/// DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)
+/// whose CLSID is `rclsid`, as OpcClassFactoryCreate makes it.
+///
+/// Returns S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count
+/// of 0 or over 256, or a class OpcClassFactoryCreate refuses; CLASS_E_CLASSNOTAVAILABLE for a
+/// CLSID not in the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown. `*ppv` is
+/// NULL on failure.
+///
+/// # Safety
+/// `classes` NULL or `count` classes valid as documented on OpcServerClass (kept so while the DLL is
+/// loaded); `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn OpcModuleGetClassObject(
+    classes: *const OpcServerClass,
+    count: u32,
+    rclsid: REFCLSID,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> Hr {
+    ffi::boundary!(Com, [ppv], {
+        // SAFETY: the caller's contract.
+        let (out, rclsid, riid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(rclsid)?, ffi::in_ref(riid)?) };
+        // SAFETY: as above.
+        let table = unsafe { ServerClass::read_table(classes, count) }?;
+        let class = table
+            .into_iter()
+            .find(|c| c.clsid == *rclsid)
+            .ok_or(CLASS_E_CLASSNOTAVAILABLE)?;
+        // SAFETY: `riid` readable, `out` writable.
+        Ok(unsafe { class_object(class, riid, out.as_ptr()) })
+    })
+}
+
+/// DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock or
+/// LockServer lock is held) and no object of the library is alive (the server's sessions, connection
+/// points and enumerators among them; with opccomn.dll shared between modules, every module's), else
+/// S_FALSE.
+#[no_mangle]
+pub extern "C" fn OpcModuleCanUnloadNow() -> Hr {
+    ffi::guard!(S_FALSE, {
+        if SERVER_LOCKS.load(Ordering::Acquire) == 0 && live_objects() == 0 {
+            S_OK
+        } else {
+            S_FALSE
+        }
+    })
+}
+
+/// Registers every class of the table that has a `registration` (OpcRegisterServer for each, in
+/// order), in `reg` (NULL: the system registry): for DllRegisterServer, or `/RegServer`. A DLL that
+/// uses opccomn.dll must set `module_path` in its registrations (NULL would be opccomn.dll's path).
+/// When one fails, the classes registered before it are unregistered again.
+///
+/// Returns S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a
+/// registration whose CLSID is not its class's; the errors of OpcRegisterServer.
+///
+/// # Safety
+/// `classes` NULL or `count` classes valid as documented on OpcServerClass; `reg` NULL or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn OpcModuleRegister(classes: *const OpcServerClass, count: u32, reg: *const OpcRegistry) -> Hr {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller's contract.
+        let (descriptions, regs) = unsafe { (registrations(classes, count)?, registries(reg)) };
+        register_all(&regs, &descriptions)?;
+        Ok(S_OK)
+    })
+}
+
+/// Unregisters every class of the table that has a `registration` (OpcUnregisterServer for each, in
+/// reverse order), from `reg` (NULL: the system registry): for DllUnregisterServer, or `/UnregServer`.
+/// Goes on after a class that fails and returns the first failure; a class that is not registered
+/// (REGDB_E_KEYMISSING) is no failure.
+///
+/// Returns S_OK; the errors of OpcModuleRegister for a bad table; the errors of OpcUnregisterServer.
+///
+/// # Safety
+/// As for OpcModuleRegister.
+#[no_mangle]
+pub unsafe extern "C" fn OpcModuleUnregister(
+    classes: *const OpcServerClass,
+    count: u32,
+    reg: *const OpcRegistry,
+) -> Hr {
+    ffi::boundary!(Opc, [], {
+        // SAFETY: the caller's contract.
+        let (descriptions, regs) = unsafe { (registrations(classes, count)?, registries(reg)) };
+        unregister_all(&regs, &descriptions)?;
+        Ok(S_OK)
+    })
+}
+
+/// Registers every description in order; when one fails, unregisters those before it again.
+pub(crate) fn register_all(regs: &Registries, descriptions: &[ServerDescription]) -> Result<(), HRESULT> {
+    for (i, d) in descriptions.iter().enumerate() {
+        if let Err(hr) = register(regs, d) {
+            for done in descriptions[..i].iter().rev() {
+                let _ = unregister(regs, done);
+            }
+            return Err(hr);
+        }
+    }
+    Ok(())
+}
+
+/// Unregisters every description in reverse order, going on after a failure; the first failure (a
+/// description that is not registered is none).
+pub(crate) fn unregister_all(regs: &Registries, descriptions: &[ServerDescription]) -> Result<(), HRESULT> {
+    let mut first = Ok(());
+    for d in descriptions.iter().rev() {
+        match unregister(regs, d) {
+            Err(hr) if hr != crate::registry::REGDB_E_KEYMISSING && first.is_ok() => first = Err(hr),
+            _ => {}
+        }
+    }
+    first
+}
+
+/// The registrations of a table's classes, checked.
+///
+/// # Safety
+/// As for OpcModuleRegister.
+pub(crate) unsafe fn registrations(classes: *const OpcServerClass, count: u32) -> Result<Vec<ServerDescription>, Fail> {
+    // SAFETY: the caller's contract.
+    let table = unsafe { ServerClass::read_table(classes, count) }?;
+    let mut out = Vec::new();
+    for class in table {
+        if class.registration.is_null() {
+            continue;
+        }
+        // SAFETY: a non-NULL registration is valid, per OpcServerClass's contract.
+        let d = unsafe { ServerDescription::read(class.registration) }?;
+        if d.clsid != class.clsid {
+            return Err(Fail::Code(E_INVALIDARG));
+        }
+        out.push(d);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests;
