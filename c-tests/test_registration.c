@@ -417,8 +417,53 @@ static void test_versions(void) {
     CHECK(text == NULL);
 }
 
+/* The AppID's DCOM security: PKT_INTEGRITY unless told otherwise, the permissions from SDDL as
+ * binary security descriptors (REG_BINARY), all of it gone with unregistration. */
+static void test_app_id_security(void) {
+    OpcRegistry *reg = memory_registry(NULL);
+    OpcServerRegistration r = local_server();
+    LPWSTR text = (LPWSTR)(uintptr_t)0x1;
+    CHECK_HR(OpcRegisterServer(&r, reg), S_OK);
+    text = dump(reg);
+    CHECK(wcontains(text, "\"AuthenticationLevel\"=dword:00000005\r\n"));
+    CHECK(!wcontains(text, "Permission"));
+    OpcTaskMemFree(text);
+    CHECK_HR(OpcUnregisterServer(&r, reg), S_OK);
+
+    r.app_id_access_permission = K("O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)");
+    r.app_id_launch_permission = K("O:BAG:BAD:(A;;0x1F;;;BA)(A;;0x1F;;;SY)(A;;0xB;;;IU)");
+    r.app_id_authentication_level = 6; /* RPC_C_AUTHN_LEVEL_PKT_PRIVACY */
+    CHECK_HR(OpcRegisterServer(&r, reg), S_OK);
+    text = dump(reg);
+    CHECK(wcontains(text, "\"AuthenticationLevel\"=dword:00000006\r\n"));
+    /* Revision 1, self-relative with a DACL; owner at 0x14, group at 0x24, DACL at 0x34. */
+    CHECK(wcontains(text, "\"AccessPermission\"=hex:01,00,04,80,14,00,00,00,24,00,00,00,00,00,00,00,34,00,00,00,"));
+    CHECK(wcontains(text, "\"LaunchPermission\"=hex:01,00,04,80,"));
+    OpcTaskMemFree(text);
+    CHECK_HR(OpcUnregisterServer(&r, reg), S_OK);
+    text = dump(reg);
+    CHECK(wstr_is(text, "Windows Registry Editor Version 5.00\r\n\r\n"));
+    OpcTaskMemFree(text);
+
+    /* Refused before anything is written: SDDL outside the subset, a level above 6, security
+     * without an AppID. */
+    r.app_id_access_permission = K("D:(A;;0xB;;;AU");
+    CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
+    r.app_id_access_permission = NULL;
+    r.app_id_authentication_level = 7;
+    CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
+    r.app_id_authentication_level = 5;
+    r.app_id = NULL;
+    CHECK_HR(OpcRegisterServer(&r, reg), E_INVALIDARG);
+    text = dump(reg);
+    CHECK(wstr_is(text, "Windows Registry Editor Version 5.00\r\n\r\n"));
+    OpcTaskMemFree(text);
+    OpcRegistryRelease(reg);
+}
+
 int main(void) {
     uint32_t before = OpcObjectCount();
+    test_app_id_security();
     test_what_registration_writes();
     test_in_process_server();
     test_unregistration_is_symmetric();

@@ -1,11 +1,13 @@
 // opccomn-check: a conformance checker for the OPC Common interfaces of any OPC Classic server.
 //
 //   opccomn-check <ProgID | {CLSID}> [--host NAME] [--kind da|ae|hda] [--format text|json|junit]
-//                 [--context all|inproc|local|remote] [--hostile] [--timeout MS]
+//                 [--context all|inproc|local|remote] [--hostile] [--dcom] [--timeout MS]
 //
 // It creates the server as a client would and runs the checks of the OPC Common specification
 // (IOPCCommon, the IOPCShutdown connection point, registration, server browsing; the opt-in
-// --hostile set passes NULL out-parameters and absurd counts). One line per check: passed, failed
+// --hostile set passes NULL out-parameters and absurd counts; the opt-in --dcom set reads the
+// server's AppID and the machine's DCOM settings as Windows' hardening, KB5004442, needs them).
+// One line per check: passed, failed
 // (what was expected and what came back), warning, or not applicable, each citing the section of
 // the specification it comes from; then a summary. The exit code is 0 when nothing failed, 1 when a
 // check failed, 2 for a usage error.
@@ -24,6 +26,7 @@
 #include <objbase.h>
 #include <ocidl.h>
 #include <olectl.h>
+#include <sddl.h>
 
 #include <opccomn/opccomn.h>
 
@@ -122,8 +125,12 @@ struct Options {
     std::string format = "text";
     DWORD context = CLSCTX_ALL;
     bool hostile = false;
+    bool dcom = false;
     DWORD timeout_ms = 10000;
 } g_opt;
+
+// CoInitializeSecurity's result: the checker's calls go out at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
+HRESULT g_security_hr = E_FAIL;
 
 // What the registration and browsing checks learn; filled once, read by later checks.
 struct Facts {
@@ -206,7 +213,7 @@ LONG WINAPI CrashFilter(EXCEPTION_POINTERS *info) {
 struct Ctx;
 typedef void (*CheckFn)(Ctx &);
 
-enum { kDefault = 0, kHostile = 1 };
+enum { kDefault = 0, kHostile = 1, kDcom = 2 };
 
 struct CheckDef {
     const char *id;
@@ -1167,6 +1174,260 @@ void CheckBrowseProgId(Ctx &x) {
     x.Pass("CLSIDFromProgID(" + Utf8(g_facts.prog_id.c_str()) + ") = " + GuidText(clsid));
 }
 
+// ---- DCOM security (--dcom): the AppID and the machine's settings, as Windows' DCOM hardening
+// (KB5004442, CVE-2021-26414, enforced since March 2023) needs them ----
+
+const wchar_t kOleKey[] = L"SOFTWARE\\Microsoft\\Ole";
+const wchar_t kAppCompatKey[] = L"SOFTWARE\\Microsoft\\Ole\\AppCompat";
+const DWORD kPktIntegrity = 5;  // RPC_C_AUTHN_LEVEL_PKT_INTEGRITY
+
+// A registry value of any type: false when it does not exist.
+bool RegRaw(HKEY root, const std::wstring &key, LPCWSTR name, DWORD *type, std::vector<BYTE> *data) {
+    DWORD size = 0;
+    if (RegGetValueW(root, key.c_str(), name, RRF_RT_ANY | RRF_NOEXPAND, type, nullptr, &size) != ERROR_SUCCESS) return false;
+    data->assign(size, 0);
+    if (size && RegGetValueW(root, key.c_str(), name, RRF_RT_ANY | RRF_NOEXPAND, type, data->data(), &size) != ERROR_SUCCESS)
+        return false;
+    data->resize(size);
+    return true;
+}
+
+// A value read for the report: "not set", a number, text, or what it is when it is neither.
+struct RegFact {
+    bool exists = false;
+    DWORD type = REG_NONE;
+    std::vector<BYTE> data;
+    bool Dword(DWORD *v) const {
+        if (!exists || type != REG_DWORD || data.size() != 4) return false;
+        memcpy(v, data.data(), 4);
+        return true;
+    }
+};
+
+RegFact ReadFact(HKEY root, const std::wstring &key, LPCWSTR name) {
+    RegFact f;
+    f.exists = RegRaw(root, key, name, &f.type, &f.data);
+    return f;
+}
+
+const char *LevelName(DWORD level) {
+    static const char *const names[] = {"DEFAULT", "NONE", "CONNECT", "CALL", "PKT", "PKT_INTEGRITY", "PKT_PRIVACY"};
+    return level < 7 ? names[level] : "not a level";
+}
+
+std::string LevelText(DWORD level) { return Format("%lu (RPC_C_AUTHN_LEVEL_%s)", static_cast<unsigned long>(level), LevelName(level)); }
+
+// The SDDL of a binary self-relative security descriptor, as Windows writes it; false when it is
+// not a valid descriptor.
+bool SddlOf(const std::vector<BYTE> &sd, std::string *sddl) {
+    if (sd.size() < 20 || !IsValidSecurityDescriptor(const_cast<BYTE *>(sd.data()))) return false;
+    LPWSTR text = nullptr;
+    if (!ConvertSecurityDescriptorToStringSecurityDescriptorW(const_cast<BYTE *>(sd.data()), SDDL_REVISION_1,
+                                                              OWNER_SECURITY_INFORMATION | GROUP_SECURITY_INFORMATION |
+                                                                  DACL_SECURITY_INFORMATION,
+                                                              &text, nullptr))
+        return false;
+    *sddl = Utf8(text);
+    LocalFree(text);
+    return true;
+}
+
+// What the machine's value `name` under HKLM\SOFTWARE\Microsoft\Ole says, for reports.
+std::string MachineLevelText() {
+    RegFact f = ReadFact(HKEY_LOCAL_MACHINE, kOleKey, L"LegacyAuthenticationLevel");
+    DWORD v;
+    if (f.Dword(&v)) return "HKLM\\SOFTWARE\\Microsoft\\Ole LegacyAuthenticationLevel = " + LevelText(v);
+    return "HKLM\\SOFTWARE\\Microsoft\\Ole LegacyAuthenticationLevel not set (Windows then uses CONNECT)";
+}
+
+std::string MachinePermissionText(LPCWSTR name) {
+    RegFact f = ReadFact(HKEY_LOCAL_MACHINE, kOleKey, name);
+    std::string sddl;
+    if (!f.exists) return "HKLM\\SOFTWARE\\Microsoft\\Ole " + Utf8(name) + " not set (Windows' built-in default)";
+    if (f.type != REG_BINARY || !SddlOf(f.data, &sddl)) return "HKLM\\SOFTWARE\\Microsoft\\Ole " + Utf8(name) + " is not a valid security descriptor";
+    return "HKLM\\SOFTWARE\\Microsoft\\Ole " + Utf8(name) + " = " + sddl;
+}
+
+struct AppIdFacts {
+    bool read = false;
+    bool named = false;      // CLSID\{clsid} has an AppID value
+    bool key = false;        // HKCR\AppID\{appid} exists
+    bool local = false;      // the class has a LocalServer32
+    std::wstring app_id;     // "{...}" as registered
+    std::wstring exe;        // the LocalServer32 program's file name
+    std::wstring exe_app_id; // HKCR\AppID\<exe> AppID, if any
+} g_app;
+
+void ReadAppId() {
+    if (g_app.read) return;
+    g_app.read = true;
+    bool ok;
+    g_app.app_id = RegString(ClsidKey(), L"AppID", &ok);
+    g_app.named = ok && !g_app.app_id.empty();
+    if (g_app.named) g_app.key = KeyExists(L"AppID\\" + g_app.app_id);
+    std::wstring command = RegString(ClsidKey() + L"\\LocalServer32", nullptr, &ok);
+    g_app.local = ok;
+    if (ok) {
+        std::wstring path = ModulePathOf(command);
+        size_t slash = path.find_last_of(L"\\/");
+        g_app.exe = slash == std::wstring::npos ? path : path.substr(slash + 1);
+        if (!g_app.exe.empty()) {
+            g_app.exe_app_id = RegString(L"AppID\\" + g_app.exe, L"AppID", &ok);
+            if (!ok) g_app.exe_app_id.clear();
+        }
+    }
+}
+
+std::wstring AppKey() { return L"AppID\\" + g_app.app_id; }
+
+// Why a DCOM check does not apply, or "" when it does.
+std::string DcomNotApplicable() {
+    if (!Local()) return "a server on another machine: its registry is not read";
+    if (!g_facts.clsid_key) return "no CLSID key (see reg.clsid)";
+    ReadAppId();
+    if (!g_app.named || !g_app.key) return "no AppID (see dcom.appid)";
+    return "";
+}
+
+void CheckDcomAppId(Ctx &x) {
+    if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    if (!g_facts.clsid_key) return x.NotApplicable("no CLSID key (see reg.clsid)");
+    ReadAppId();
+    std::string app = Utf8(g_app.app_id.c_str());
+    if (!g_app.named) {
+        if (!g_app.local)
+            return x.NotApplicable("an in-process server without an AppID: the client's process security applies");
+        return x.Warn("an AppID for the EXE server's DCOM settings (CLSID\\{clsid} AppID)", "none",
+                      "the machine's defaults apply: " + MachineLevelText() + "; " + MachinePermissionText(L"DefaultAccessPermission") +
+                          "; " + MachinePermissionText(L"DefaultLaunchPermission"));
+    }
+    if (!g_app.key) return x.Fail("HKCR\\AppID\\" + app, "no such key (CLSID\\{clsid} names AppID " + app + ")");
+    bool ok;
+    std::wstring name = RegString(AppKey(), nullptr, &ok);
+    std::string detail = "AppID " + app + (ok ? " \"" + Utf8(name.c_str()) + "\"" : "");
+    if (g_app.local) {
+        if (g_app.exe_app_id.empty())
+            return x.Warn("HKCR\\AppID\\" + Utf8(g_app.exe.c_str()) + " AppID = " + app, "no such value",
+                          "COM finds the AppID of an EXE server started by hand (not by COM) through its file name");
+        if (_wcsicmp(g_app.exe_app_id.c_str(), g_app.app_id.c_str()) != 0)
+            return x.Fail("HKCR\\AppID\\" + Utf8(g_app.exe.c_str()) + " AppID = " + app, Utf8(g_app.exe_app_id.c_str()));
+        detail += "; AppID\\" + Utf8(g_app.exe.c_str()) + " names it";
+    }
+    x.Pass(detail);
+}
+
+void CheckDcomLevel(Ctx &x) {
+    std::string why = DcomNotApplicable();
+    if (!why.empty()) return x.NotApplicable(why);
+    RegFact f = ReadFact(HKEY_CLASSES_ROOT, AppKey(), L"AuthenticationLevel");
+    DWORD level = 0;
+    if (!f.exists || (f.Dword(&level) && level == 0))
+        return x.Warn("AuthenticationLevel 5 (PKT_INTEGRITY) or 6 (PKT_PRIVACY)", f.exists ? "0 (DEFAULT)" : "not set",
+                      "the machine default applies: " + MachineLevelText());
+    if (!f.Dword(&level)) return x.Fail("AuthenticationLevel as a REG_DWORD", Format("a value of type %lu", static_cast<unsigned long>(f.type)));
+    if (level > 6) return x.Fail("AuthenticationLevel 5 (PKT_INTEGRITY) or 6 (PKT_PRIVACY)", Format("%lu, not an authentication level", static_cast<unsigned long>(level)));
+    if (level < kPktIntegrity)
+        return x.Fail("AuthenticationLevel 5 (PKT_INTEGRITY) or 6 (PKT_PRIVACY)", LevelText(level),
+                      "below PKT_INTEGRITY: since Windows' DCOM hardening (KB5004442, CVE-2021-26414; enforced since "
+                      "March 2023) clients on other machines are refused or lose their calls; register the AppID "
+                      "with level 5 or more");
+    x.Pass("AuthenticationLevel = " + LevelText(level));
+}
+
+// A permission of the AppID: set (printed as SDDL) or the machine default.
+void CheckDcomPermission(Ctx &x, LPCWSTR name, LPCWSTR machine_default) {
+    std::string why = DcomNotApplicable();
+    if (!why.empty()) return x.NotApplicable(why);
+    RegFact f = ReadFact(HKEY_CLASSES_ROOT, AppKey(), name);
+    std::string sddl;
+    if (!f.exists)
+        return x.Warn(Utf8(name) + " of the AppID", "not set", "the machine default applies: " + MachinePermissionText(machine_default));
+    if (f.type != REG_BINARY || !SddlOf(f.data, &sddl))
+        return x.Fail(Utf8(name) + " as a REG_BINARY self-relative security descriptor", "a value that is not one");
+    // Everyone and ANONYMOUS LOGON allowed in: what the hardening is meant to end.
+    for (const char *who : {";WD)", ";AN)"}) {
+        for (size_t at = sddl.find("(A;"); at != std::string::npos; at = sddl.find("(A;", at + 1)) {
+            size_t end = sddl.find(')', at);
+            if (end != std::string::npos && sddl.compare(end - 3, 4, who) == 0)
+                return x.Warn(Utf8(name) + " without Everyone (WD) or ANONYMOUS LOGON (AN) allowed", sddl,
+                              "anyone on the network may use the server as far as the machine limits allow");
+        }
+    }
+    x.Pass(Utf8(name) + " = " + sddl);
+}
+
+void CheckDcomAccess(Ctx &x) { CheckDcomPermission(x, L"AccessPermission", L"DefaultAccessPermission"); }
+void CheckDcomLaunch(Ctx &x) { CheckDcomPermission(x, L"LaunchPermission", L"DefaultLaunchPermission"); }
+
+void CheckDcomRunAs(Ctx &x) {
+    std::string why = DcomNotApplicable();
+    if (!why.empty()) return x.NotApplicable(why);
+    bool ok, service;
+    std::wstring run_as = RegString(AppKey(), L"RunAs", &ok);
+    std::wstring local_service = RegString(AppKey(), L"LocalService", &service);
+    if (service) return x.Pass("LocalService = " + Utf8(local_service.c_str()) + " (runs as that Windows service's account)");
+    if (!ok) return x.Pass("no RunAs: the server runs as the user who launched it");
+    if (_wcsicmp(run_as.c_str(), L"Interactive User") == 0)
+        return x.Pass("RunAs = Interactive User (runs in the logged-on user's session; not without one)");
+    x.Pass("RunAs = " + Utf8(run_as.c_str()));
+}
+
+void CheckDcomMachine(Ctx &x) {
+    if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read");
+    std::string detail;
+    auto dword = [&](const wchar_t *key, LPCWSTR name, const char *missing) {
+        DWORD v;
+        RegFact f = ReadFact(HKEY_LOCAL_MACHINE, key, name);
+        detail += (detail.empty() ? "" : "; ") + Utf8(name) + " = " +
+                  (f.Dword(&v) ? Format("%lu", static_cast<unsigned long>(v)) : f.exists ? std::string("(not a DWORD)") : std::string(missing));
+        return f.Dword(&v) ? static_cast<long>(v) : -1L;
+    };
+    bool ok;
+    std::wstring enable = L"";
+    {
+        RegFact f = ReadFact(HKEY_LOCAL_MACHINE, kOleKey, L"EnableDCOM");
+        if (f.exists && (f.type == REG_SZ || f.type == REG_EXPAND_SZ) && f.data.size() >= 2) enable = reinterpret_cast<const wchar_t *>(f.data.data());
+        ok = f.exists;
+    }
+    detail = "EnableDCOM = " + (ok ? "\"" + Utf8(enable.c_str()) + "\"" : std::string("not set (Y)"));
+    dword(kOleKey, L"LegacyAuthenticationLevel", "not set (CONNECT)");
+    dword(kOleKey, L"LegacyImpersonationLevel", "not set (IDENTIFY)");
+    for (LPCWSTR name : {L"DefaultAccessPermission", L"DefaultLaunchPermission", L"MachineAccessRestriction", L"MachineLaunchRestriction"})
+        detail += std::string("; ") + Utf8(name) + (ReadFact(HKEY_LOCAL_MACHINE, kOleKey, name).exists ? " set" : " not set");
+    long require = dword(kAppCompatKey, L"RequireIntegrityActivationAuthenticationLevel", "not set (on)");
+    dword(kAppCompatKey, L"RaiseActivationAuthenticationLevel", "not set (2 since November 2022)");
+    detail += Format("; this checker's calls: CoInitializeSecurity(RPC_C_AUTHN_LEVEL_PKT_INTEGRITY) = %s", Hr(g_security_hr).c_str());
+    if (ok && (enable == L"N" || enable == L"n")) return x.Warn("EnableDCOM = \"Y\"", "\"N\"", "no remote client reaches any server here; " + detail);
+    if (require == 0)
+        return x.Warn("RequireIntegrityActivationAuthenticationLevel on", "0 (off)",
+                      "the KB5004442 hardening is turned off on this machine (Windows updates since March 2023 ignore that); " + detail);
+    x.Pass(detail);
+}
+
+void CheckDcomBrowser(Ctx &x) {
+    if (!Local()) return x.NotApplicable("a server on another machine: its registry is not read (its browser answered if the ProgID resolved)");
+    std::wstring key = L"CLSID\\" + GuidWide(CLSID_OPCServerList);
+    bool ok;
+    std::wstring command = RegString(key + L"\\LocalServer32", nullptr, &ok);
+    if (!ok) {
+        bool inproc = KeyExists(key + L"\\InprocServer32");
+        return x.Warn("CLSID_OPCServerList registered as an EXE server (OpcEnum or opccomn_browser)",
+                      inproc ? "an in-process server list only" : "none",
+                      "clients on other machines cannot browse this machine's servers (specification 7.1)");
+    }
+    std::string detail = "CLSID_OPCServerList: " + Utf8(command.c_str());
+    std::wstring app = RegString(key, L"AppID", &ok);
+    if (ok) {
+        RegFact f = ReadFact(HKEY_CLASSES_ROOT, L"AppID\\" + app, L"AuthenticationLevel");
+        DWORD level;
+        if (f.Dword(&level) && level != 0 && level < kPktIntegrity)
+            return x.Warn("the browser's AppID at PKT_INTEGRITY or above", LevelText(level),
+                          "remote browsing fails since KB5004442; " + detail);
+        detail += ", AppID " + Utf8(app.c_str()) + " AuthenticationLevel " + (f.Dword(&level) ? LevelText(level) : std::string("not set"));
+    }
+    x.Pass(detail);
+}
+
 // ---- Hostile (--hostile): NULL out-parameters and absurd counts ----
 
 void HostileNullLocale(Ctx &x) {
@@ -1350,6 +1611,13 @@ const CheckDef kChecks[] = {
     {"browse.listed", "7.5.1", "IOPCServerList lists the server under each category it claims", CheckBrowseListed, kDefault},
     {"browse.details", "7.5.2", "GetClassDetails gives the registry's ProgID, user type and version-independent ProgID", CheckBrowseDetails, kDefault},
     {"browse.progid", "7.5.3", "CLSIDFromProgID gives the class", CheckBrowseProgId, kDefault},
+    {"dcom.appid", "6.3", "the class's AppID (its DCOM settings) is registered", CheckDcomAppId, kDcom},
+    {"dcom.authentication-level", "6.3", "the AppID's AuthenticationLevel is PKT_INTEGRITY or above (KB5004442)", CheckDcomLevel, kDcom},
+    {"dcom.access-permission", "6.3", "the AppID's AccessPermission is set (SDDL) or the machine default applies", CheckDcomAccess, kDcom},
+    {"dcom.launch-permission", "6.3", "the AppID's LaunchPermission is set (SDDL) or the machine default applies", CheckDcomLaunch, kDcom},
+    {"dcom.runas", "6.3", "whom the server runs as (RunAs, LocalService)", CheckDcomRunAs, kDcom},
+    {"dcom.machine", "6.3", "the machine's DCOM and hardening settings", CheckDcomMachine, kDcom},
+    {"dcom.browser", "7.1, 7.2", "a server browser (CLSID_OPCServerList) serves remote clients", CheckDcomBrowser, kDcom},
     {"hostile.getlocale-null", "5.1.2, 3.1.3", "GetLocaleID(NULL) fails cleanly", HostileNullLocale, kHostile},
     {"hostile.locales-null", "5.1.3, 3.1.3", "QueryAvailableLocaleIDs with a NULL out-parameter fails and clears the other", HostileNullLocaleArray, kHostile},
     {"hostile.errorstring-null", "5.1.4", "GetErrorString(code, NULL) fails cleanly", HostileNullErrorString, kHostile},
@@ -1362,7 +1630,9 @@ const CheckDef kChecks[] = {
 };
 const int kCheckCount = static_cast<int>(sizeof kChecks / sizeof kChecks[0]);
 
-bool Selected(int i) { return kChecks[i].set == kDefault || g_opt.hostile; }
+bool Selected(int i) {
+    return kChecks[i].set == kDefault || (kChecks[i].set == kHostile && g_opt.hostile) || (kChecks[i].set == kDcom && g_opt.dcom);
+}
 
 // ---------------------------------------------------------------------------------------------
 // The worker thread and the watchdog
@@ -1594,8 +1864,9 @@ int Usage(const char *why) {
     if (why) fprintf(stderr, "opccomn-check: %s\n", why);
     fprintf(stderr,
             "usage: opccomn-check <ProgID | {CLSID}> [--host NAME] [--kind da|ae|hda] [--format text|json|junit]\n"
-            "                     [--context all|inproc|local|remote] [--hostile] [--timeout MS]\n"
-            "Checks the OPC Common interfaces of an OPC server (IOPCCommon, IOPCShutdown, registration, browsing).\n"
+            "                     [--context all|inproc|local|remote] [--hostile] [--dcom] [--timeout MS]\n"
+            "Checks the OPC Common interfaces of an OPC server (IOPCCommon, IOPCShutdown, registration, browsing);\n"
+            "--dcom adds the AppID's and the machine's DCOM security (KB5004442).\n"
             "Exit code: 0 nothing failed, 1 a check failed, 2 usage error.\n");
     return 2;
 }
@@ -1630,6 +1901,8 @@ bool ParseArgs(int argc, wchar_t **argv) {
             else return false;
         } else if (a == L"--hostile") {
             g_opt.hostile = true;
+        } else if (a == L"--dcom") {
+            g_opt.dcom = true;
         } else if (a == L"--timeout") {
             std::wstring v = value("--timeout");
             wchar_t *end = nullptr;
@@ -1694,7 +1967,10 @@ int wmain(int argc, wchar_t **argv) {
     // The main thread stays in the multithreaded apartment for the whole run, so objects a worker
     // created stay usable after that worker is gone.
     CoInitializeEx(nullptr, COINIT_MULTITHREADED);
-    CoInitializeSecurity(nullptr, -1, nullptr, nullptr, RPC_C_AUTHN_LEVEL_DEFAULT, RPC_C_IMP_LEVEL_IMPERSONATE, nullptr, EOAC_NONE, nullptr);
+    // Calls go out at PKT_INTEGRITY, the least a hardened Windows server accepts (KB5004442), and the
+    // checker's own shutdown sink accepts no less from servers calling back.
+    g_security_hr = CoInitializeSecurity(nullptr, -1, nullptr, nullptr, RPC_C_AUTHN_LEVEL_PKT_INTEGRITY, RPC_C_IMP_LEVEL_IMPERSONATE,
+                                         nullptr, EOAC_NONE, nullptr);
 
     HRESULT hr = Resolve();
     if (FAILED(hr)) {
@@ -1708,7 +1984,7 @@ int wmain(int argc, wchar_t **argv) {
     g_facts.clsid_known = true;
     DecideKind();
     g_server_text = Utf8(g_opt.server.c_str()) + (g_opt.server[0] == L'{' ? "" : " " + GuidText(g_facts.clsid)) + (Local() ? "" : " on " + Utf8(g_opt.host.c_str())) +
-                    ", kind " + KindName() + (g_opt.hostile ? ", hostile checks on" : "");
+                    ", kind " + KindName() + (g_opt.hostile ? ", hostile checks on" : "") + (g_opt.dcom ? ", DCOM checks on" : "");
     fprintf(stderr, "opccomn-check: checking %s (timeout %lu ms per call)\n", g_server_text.c_str(),
             static_cast<unsigned long>(g_opt.timeout_ms));
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every parser of the library for a bounded time: MatchPattern (all entry points against the
 # reference matcher), `.reg` import (OpcRegistryApply), EXE command lines (OpcParseCommandLine) and
-# version strings (OpcVersionParse/Format). The targets are in fuzz/fuzz_targets/, their committed seed
+# version strings (OpcVersionParse/Format), the SDDL of AppID permissions (registry::sddl). The targets are in fuzz/fuzz_targets/, their committed seed
 # corpus in fuzz/seeds/<target>/. Built with nightly Rust, libFuzzer (crate libfuzzer-sys) and
 # AddressSanitizer; a crash, a failed assertion, a leak or a timeout is a finding and fails the run
 # (the input is kept in build/fuzz/artifacts/).
@@ -18,7 +18,7 @@ need_fuzz_tools
 seconds=${1:-${OPCCOMN_FUZZ_SECONDS:-30}}
 shift || true
 targets=("$@")
-[ "${#targets[@]}" -eq 0 ] && targets=(pattern regfile cmdline version)
+[ "${#targets[@]}" -eq 0 ] && targets=(pattern regfile cmdline version sddl)
 
 out="$root/build/fuzz"
 triple=x86_64-unknown-linux-gnu

@@ -65,6 +65,7 @@ while read -r number name want flags; do
     for flag in $flags; do
         case "$flag" in
             hostile) args+=(--hostile) ;;
+            dcom) args+=(--dcom) ;;
             warn=*) warn=${flag#warn=} ;;
             inproc-only) oop=0 ;;
             *) echo "defects.txt: unknown flag $flag" >&2; exit 1 ;;
@@ -174,8 +175,56 @@ for check, s in status.items():
 assert status["server.create"] == "passed" and status["browse.progid"] == "passed", status
 print("--host localhost: the server checked through the host's server list; registration checks not applicable")
 PY
+
+# DCOM security (--dcom). The example's EXE server as registered (AppID at PKT_INTEGRITY, both
+# permissions) with the browser registered (its AppID hardened too): every check passes, with no
+# warning. Then the same AppID at AuthenticationLevel 1 and 2, as installers of old wrote it:
+# dcom.authentication-level fails, naming KB5004442, and nothing else; without a level it is a
+# warning naming the machine default. Wine enforces none of this: what is checked is the registry
+# the checker reads and its verdicts (docs/guide/dcom-appid.md).
+(cd "$bin" && wine opccomn_browser.exe /RegServer >/dev/null)
+app_key='HKCR\AppID\{C906C0A4-7001-4E1E-8827-B369541ED7F7}'
+for format in json junit text; do
+    run_checker example-dcom "$format" OpcComn.ExampleServer.1 --context local --dcom
+    $report "$format" "$out/example-dcom.$format" "$rc"
+done
+python3 - "$out/example-dcom.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+status = {c["id"]: (c["status"], c["detail"]) for c in r["checks"]}
+dcom = [k for k in status if k.startswith("dcom.")]
+assert len(dcom) == 7 and all(status[k][0] == "passed" for k in dcom), {k: status[k] for k in dcom}
+assert "5 (RPC_C_AUTHN_LEVEL_PKT_INTEGRITY)" in status["dcom.authentication-level"][1], status
+assert status["dcom.access-permission"][1] == "AccessPermission = O:BAG:BAD:(A;;CCDCLC;;;AU)(A;;CCDCLC;;;SY)", status
+assert status["dcom.launch-permission"][1] == "LaunchPermission = O:BAG:BAD:(A;;CCDCLCSWRP;;;AU)(A;;CCDCLCSWRP;;;SY)", status
+assert "opccomn_browser.exe" in status["dcom.browser"][1] and "PKT_INTEGRITY" in status["dcom.browser"][1], status
+print("--dcom: the example's AppID passes (PKT_INTEGRITY, its permissions as SDDL), the browser is reported")
+PY
+for level in 1 2; do
+    wine reg add "$app_key" /v AuthenticationLevel /t REG_DWORD /d "$level" /f >/dev/null
+    for format in json junit; do
+        run_checker "example-dcom-level$level" "$format" OpcComn.ExampleServer.1 --context local --dcom
+        $report "$format" "$out/example-dcom-level$level.$format" "$rc" dcom.authentication-level
+    done
+    grep -q 'KB5004442' "$out/example-dcom-level$level.json" ||
+        { echo "dcom.authentication-level at level $level does not name KB5004442" >&2; exit 1; }
+done
+wine reg delete "$app_key" /v AuthenticationLevel /f >/dev/null
+run_checker example-dcom-nolevel json OpcComn.ExampleServer.1 --context local --dcom
+$report json "$out/example-dcom-nolevel.json" "$rc" - dcom.authentication-level
+grep -q 'LegacyAuthenticationLevel' "$out/example-dcom-nolevel.json" ||
+    { echo "dcom.authentication-level without a level does not name the machine default" >&2; exit 1; }
+# Back to what registration wrote, so that unregistration removes the AppID entirely (a level changed
+# by someone else would stay, by design).
+wine reg add "$app_key" /v AuthenticationLevel /t REG_DWORD /d 5 /f >/dev/null
+(cd "$bin" && wine opccomn_browser.exe /UnregServer >/dev/null)
+passed=$((passed + 1))
 (cd "$bin" && wine regsvr32 /u /s /n /i:ProxyStub opccomn.dll)
 (cd "$example" && wine opccomn_example_server.exe /UnregServer)
+if wine reg query "$app_key" >/dev/null 2>&1; then
+    echo "the example's AppID is still registered after /UnregServer" >&2
+    exit 1
+fi
 passed=$((passed + 1))
 
 echo "test-conformance: $passed passed, 0 failed"

@@ -23,7 +23,10 @@
  *
  * DCOM security: OpcInitializeServerSecurity with the AppID {CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}
  * (EOAC_APPID), so its AuthenticationLevel and access and launch permissions decide (editable with
- * dcomcnfg; where it has none, the machine-wide defaults apply). See docs/guide/out-of-process.md.
+ * dcomcnfg). Registration writes them hardened (Windows' DCOM hardening, KB5004442):
+ * AuthenticationLevel 5 (PKT_INTEGRITY), and authenticated users may browse, locally and remotely,
+ * while anonymous and unauthenticated callers may not (BROWSER_ACCESS, BROWSER_LAUNCH). See
+ * docs/guide/dcom-appid.md and docs/guide/out-of-process.md.
  *
  * Lifetime: the library's EXE host (OpcExeServerRun) keeps the process while a client holds any
  * object it handed out, the server list's enumerators included. */
@@ -35,6 +38,14 @@
 
 
 static const CLSID APPID_OpcComnBrowser = {0xCCD63ADF, 0xD02D, 0x46DD, {0xB1, 0x70, 0xFA, 0x6E, 0x0F, 0x08, 0x6F, 0xE3}};
+/* AccessPermission: authenticated users (AU) and SYSTEM may call, locally and remotely
+ * (COM_RIGHTS_EXECUTE | EXECUTE_LOCAL | EXECUTE_REMOTE = 0x7). */
+#define BROWSER_ACCESS L"O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)"
+/* LaunchPermission: authenticated users and SYSTEM may start and activate it, locally and remotely
+ * (EXECUTE | EXECUTE_LOCAL | EXECUTE_REMOTE | ACTIVATE_LOCAL | ACTIVATE_REMOTE = 0x1F). The machine's
+ * MachineLaunchRestriction still applies on top (by default remote launch only for Administrators and
+ * Distributed COM Users). */
+#define BROWSER_LAUNCH L"O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)"
 #define SERVER_LIST_KEY L"CLSID\\{13486D51-4821-11D2-A494-3CB306C10000}\\LocalServer32"
 /* A browser nobody connects to gives up after this long (COM starts it for a client, so one comes). */
 #define IDLE_MS 60000
@@ -85,6 +96,9 @@ static OpcServerRegistration registration(const WCHAR *self) {
     r.user_type = L"Opc ServerList Class";
     r.module_path = self;
     r.app_id = &APPID_OpcComnBrowser;
+    r.app_id_access_permission = BROWSER_ACCESS;
+    r.app_id_launch_permission = BROWSER_LAUNCH;
+    r.app_id_authentication_level = OPC_AUTHN_LEVEL_PKT_INTEGRITY;
     return r;
 }
 

@@ -280,5 +280,17 @@ OpcServerRegistration ExampleRegistration(bool inproc, LPCWSTR module_path) {
     r.implemented_categories = categories;
     r.implemented_category_count = 1;
     r.implemented_category_descriptions = descriptions;  // creates the category if it is new
+    if (!inproc) {
+        // The EXE server's DCOM settings, hardened for Windows' DCOM hardening (KB5004442): calls at
+        // PKT_INTEGRITY or above only; authenticated users (AU) and SYSTEM may call it
+        // (COM_RIGHTS_EXECUTE | EXECUTE_LOCAL | EXECUTE_REMOTE = 0x7) and start it (and
+        // ACTIVATE_LOCAL | ACTIVATE_REMOTE: 0x1F), locally and remotely; anonymous callers may not.
+        // The server does not call CoInitializeSecurity, so COM takes these from the AppID.
+        // docs/guide/dcom-appid.md explains each part.
+        r.app_id = &APPID_ExampleServer;
+        r.app_id_access_permission = L"O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)";
+        r.app_id_launch_permission = L"O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)";
+        r.app_id_authentication_level = OPC_AUTHN_LEVEL_PKT_INTEGRITY;
+    }
     return r;
 }

@@ -47,6 +47,8 @@ __CRT_UUID_DECL(IExampleAddressSpace, 0x9834816c, 0x39e4, 0x4bb0, 0x81, 0xf9, 0x
 // The EXE server (LocalServer32) and the DLL server (InprocServer32): the same class.
 EXTERN_C const CLSID CLSID_ExampleServer;
 EXTERN_C const CLSID CLSID_ExampleServerInProc;
+// The EXE server's AppID (DCOM settings; see ExampleRegistration).
+EXTERN_C const GUID APPID_ExampleServer;
 // The category both are registered in.
 EXTERN_C const CATID CATID_ExampleServers;
 #define EXAMPLE_PROGID L"OpcComn.ExampleServer.1"

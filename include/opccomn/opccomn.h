@@ -165,6 +165,13 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_REGISTRATION_KEEP_EXISTING 1
 
 /**
+ * `RPC_C_AUTHN_LEVEL_PKT_INTEGRITY`: the `AuthenticationLevel` registration gives an AppID unless
+ * told otherwise, the lowest level Windows accepts for activation since its DCOM hardening
+ * (KB5004442, enforced since March 2023).
+ */
+#define OPC_AUTHN_LEVEL_PKT_INTEGRITY 5
+
+/**
  * `OpcSecurityOptions::flags`: accept an authentication level below RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
  * Warning: Windows hardened DCOM against it (KB5004442, CVE-2021-26414; enforced since March
  * 2023): servers refuse activation requests below PKT_INTEGRITY, so a process using a weaker level
@@ -579,7 +586,8 @@ typedef const CLSID *REFCLSID;
  * A server's registration, described once and passed to `OpcRegisterServer`,
  * `OpcUnregisterServer` and `OpcRegistrationExport`. Zero-initialise it, set `struct_size` to
  * `sizeof(OpcServerRegistration)` and fill what applies; NULL strings and arrays mean "none". Fields
- * added in later versions go at the end; the library reads only `struct_size` bytes.
+ * added in later versions go at the end; the library reads only `struct_size` bytes, and takes the
+ * fields of a shorter (older) structure as zero.
  */
 typedef struct OpcServerRegistration {
   /**
@@ -667,6 +675,31 @@ typedef struct OpcServerRegistration {
    * `OPC_REGISTRATION_KEEP_EXISTING` or 0.
    */
   uint32_t flags;
+  /**
+   * `AccessPermission` of the AppID, as SDDL text (who may call the server; for example
+   * `O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)`), written as the binary self-relative security
+   * descriptor dcomcnfg writes; NULL writes none (the machine's default access permission then
+   * applies). Owner, group and a DACL of allow and deny ACEs: docs/guide/dcom-appid.md says which
+   * SDDL is accepted. Needs `app_id`. (Version 2 of the structure.)
+   */
+  LPCWSTR app_id_access_permission;
+  /**
+   * `LaunchPermission` of the AppID, as SDDL text (who may start and activate the server, for
+   * example `O:BAG:BAD:(A;;0x1F;;;BA)(A;;0x1F;;;SY)(A;;0xB;;;IU)`), as for
+   * `app_id_access_permission`; NULL writes none (the machine's default launch permission applies).
+   * Needs `app_id`. (Version 2 of the structure.)
+   */
+  LPCWSTR app_id_launch_permission;
+  /**
+   * `AuthenticationLevel` of the AppID, an `RPC_C_AUTHN_LEVEL_*` value: 0 gives
+   * `OPC_AUTHN_LEVEL_PKT_INTEGRITY` (5), the level every AppID gets unless told otherwise (also when
+   * an older, shorter structure is passed); 1 to 6 is written as given. Below 5 (NONE 1, CONNECT 2,
+   * CALL 3, PKT 4), clients on other machines cannot activate the server since Windows' DCOM
+   * hardening (KB5004442, CVE-2021-26414), and `opccomn-check --dcom` fails the AppID: set a lower
+   * level only for a reason. A value above 6, or a level without `app_id`, is E_INVALIDARG.
+   * (Version 2 of the structure.)
+   */
+  uint32_t app_id_authentication_level;
 } OpcServerRegistration;
 
 /**

@@ -285,7 +285,7 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
     // What registration writes, for entries of ledgers that did not record it (the module path of
     // our own class: whatever it is).
     let ours = CLSID_OpcComnProxyStub.to_string();
-    let expected = |key: &str, name: &str| -> Option<String> {
+    let expected = |key: &str, name: &str| -> Option<RegValue> {
         let (key, name) = (RegPath::new(key), RegPath::new(name));
         if key == RegPath::new(class.as_str()) && name == RegPath::new("") {
             return Some("PSFactoryBuffer".into());
@@ -298,11 +298,11 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
             if name != RegPath::new("") {
                 None
             } else if key == RegPath::new(k.as_str()) {
-                Some(iname.to_string())
+                Some(iname.into())
             } else if key == RegPath::new(format!("{k}\\NumMethods")) {
-                Some(methods.to_string())
+                Some(methods.to_string().into())
             } else if key == RegPath::new(format!("{k}\\ProxyStubClsid32")) {
-                Some(ours.clone())
+                Some(ours.clone().into())
             } else {
                 None
             }
@@ -315,7 +315,7 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
         }
         match entry {
             Entry::Added(key, name, _) => reg.delete_value(key, name)?,
-            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, old)?,
             _ => {}
         }
     }

@@ -17,6 +17,7 @@ pub mod memory;
 pub mod path;
 pub mod regfile;
 pub mod register;
+pub mod sddl;
 pub mod version;
 #[cfg(windows)]
 pub mod windows;
@@ -42,8 +43,9 @@ pub(crate) const MAX_NAME_UNITS: usize = 255;
 /// `.reg` import before anything is written, so no walk meets a deeper tree.
 pub(crate) const MAX_KEY_DEPTH: usize = 512;
 
-/// One registry value. Registration writes strings only; the other kinds exist so an export of the
-/// real registry is faithful.
+/// One registry value. Registration writes strings, and for an AppID a `REG_DWORD`
+/// (`AuthenticationLevel`) and `REG_BINARY` security descriptors (`AccessPermission`,
+/// `LaunchPermission`); the other kinds exist so an export of the real registry is faithful.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum RegValue {
     /// `REG_SZ`.
@@ -54,6 +56,18 @@ pub enum RegValue {
     Dword(u32),
     /// Any other type, as its raw bytes (`REG_BINARY` is 3, `REG_MULTI_SZ` 7, ...).
     Other { kind: u32, bytes: Vec<u8> },
+}
+
+impl From<&str> for RegValue {
+    fn from(text: &str) -> RegValue {
+        RegValue::Sz(text.to_string())
+    }
+}
+
+impl From<String> for RegValue {
+    fn from(text: String) -> RegValue {
+        RegValue::Sz(text)
+    }
 }
 
 impl RegValue {

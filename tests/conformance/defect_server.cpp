@@ -11,7 +11,8 @@
 // passed on raw, no version resource, a category with a non-standard description, a DA 1.0 server
 // without its OPC key, a call that never returns, a NULL out-pointer written through, and an Alarms &
 // Events server answering with Data Access texts (a warning, not a failure); number 16 is an Alarms &
-// Events server without a defect.
+// Events server without a defect; 17 and 18 register their AppID with AuthenticationLevel 1 (NONE) and
+// 2 (CONNECT), set explicitly, as installers wrote it before Windows' DCOM hardening (KB5004442).
 #include <windows.h>
 #include <objbase.h>
 #include <ocidl.h>
@@ -45,6 +46,8 @@ enum Defect {
     kGetLocaleNullCrash = 14,
     kAlarmsEventsDaTexts = 15,  // an Alarms & Events server that tells the library it is Data Access
     kAlarmsEvents = 16,         // an Alarms & Events server without a defect
+    kAppIdLevelNone = 17,       // AppID AuthenticationLevel 1 (RPC_C_AUTHN_LEVEL_NONE), given explicitly
+    kAppIdLevelConnect = 18,    // AppID AuthenticationLevel 2 (RPC_C_AUTHN_LEVEL_CONNECT), given explicitly
 };
 const int kDefect = OPCCOMN_DEFECT;
 
@@ -330,6 +333,12 @@ HRESULT Register(bool add) {
     if (kDefect == kDa10NoOpcKey) {
         r.implemented_categories = da10;  // DA 1.0 claimed, but no da10_vendor: no ProgID\OPC key
         r.implemented_category_count = 2;
+    }
+    if (kDefect == kAppIdLevelNone || kDefect == kAppIdLevelConnect) {
+        // Permissions as the library's examples set them, so that the level is the one defect.
+        r.app_id_access_permission = L"O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)";
+        r.app_id_launch_permission = L"O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)";
+        r.app_id_authentication_level = kDefect == kAppIdLevelNone ? 1 : 2;
     }
     if (!add) return OpcUnregisterServer(&r, nullptr);
     HRESULT hr = OpcRegisterServer(&r, nullptr);

@@ -1,5 +1,6 @@
 /* The server browser service (service/opccomn_browser.c) under Wine: registered as LocalServer32 with
- * its AppID, a client in this process enumerates fake servers registered in the system registry
+ * its AppID (hardened: PKT_INTEGRITY and the documented permissions, read back through Windows' own
+ * descriptor conversion), a client in this process enumerates fake servers registered in the system registry
  * through CLSCTX_LOCAL_SERVER, the browser process exits when the client lets go (and not before: a
  * client holding only the enumerator keeps it), and next to an
  * OpcEnum-style registration it stays inactive unless told to take over, after which unregistration
@@ -11,6 +12,8 @@
  * proxy/stub and fakes 3..5 in the 32-bit view and browses through CLSCTX_LOCAL_SERVER, which only the
  * 64-bit browser serves, expecting all six; `test_browser wow64-cleanup` (64-bit) undoes the first. */
 #include "oop.h"
+
+#include <sddl.h>
 
 static WCHAR dir[MAX_PATH];
 static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
@@ -354,6 +357,39 @@ static int wow64_client(void) {
     return test_summary("test_browser (wow64-client)");
 }
 
+#define BROWSER_APPID_KEY L"AppID\\{CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}"
+
+/* One permission of the browser's AppID as Windows reads it back (REG_BINARY, a self-relative
+ * descriptor, converted by ConvertSecurityDescriptorToStringSecurityDescriptorW). */
+static void check_permission(const WCHAR *name, const char *sddl) {
+    BYTE sd[1024];
+    DWORD size = sizeof sd, type = 0;
+    LPWSTR text = NULL;
+    CHECK(RegGetValueW(HKEY_CLASSES_ROOT, BROWSER_APPID_KEY, name, RRF_RT_ANY, &type, sd, &size) == ERROR_SUCCESS);
+    CHECK(type == REG_BINARY && IsValidSecurityDescriptor(sd));
+    CHECK(ConvertSecurityDescriptorToStringSecurityDescriptorW(
+        sd, SDDL_REVISION_1, OWNER_SECURITY_INFORMATION | GROUP_SECURITY_INFORMATION | DACL_SECURITY_INFORMATION, &text, NULL));
+    CHECK(text && wstr_is(text, sddl));
+    if (text && !wstr_is(text, sddl)) {
+        fputs("  got: ", stderr);
+        wprint(stderr, text);
+        fputc('\n', stderr);
+    }
+    LocalFree(text);
+}
+
+/* The browser's AppID after /RegServer: PKT_INTEGRITY, and the documented permissions
+ * (authenticated users and SYSTEM may call, 0x7, and launch, 0x1F; Windows writes the COM rights
+ * with the directory-service letters). */
+static void check_app_id(void) {
+    DWORD level = 0, size = sizeof level;
+    CHECK(RegGetValueW(HKEY_CLASSES_ROOT, BROWSER_APPID_KEY, L"AuthenticationLevel", RRF_RT_REG_DWORD, NULL, &level, &size) ==
+              ERROR_SUCCESS &&
+          level == 5);
+    check_permission(L"AccessPermission", "O:BAG:BAD:(A;;CCDCLC;;;AU)(A;;CCDCLC;;;SY)");
+    check_permission(L"LaunchPermission", "O:BAG:BAD:(A;;CCDCLCSWRP;;;AU)(A;;CCDCLCSWRP;;;SY)");
+}
+
 int main(int argc, char **argv) {
     OpcRegistry *sys = NULL;
     OpcServerRegistration fakes[FAKES];
@@ -384,6 +420,7 @@ int main(int argc, char **argv) {
     before = snapshot(sys);
     CHECK(run(L"/RegServer") == 0);
     CHECK(run(L"/Status") == 0);
+    check_app_id();
     browse();
     walk_after_releasing_the_list();
     CHECK(run(L"/UnregServer") == 0);

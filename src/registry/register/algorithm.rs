@@ -26,7 +26,7 @@ pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), H
         rec.ledger.push(Entry::OtherServer);
     }
     for (key, name, data, ours) in d.values()? {
-        rec.value(&key, &name, &data, ours || !d.keep_existing)?;
+        rec.set(&key, &name, &data, ours || !d.keep_existing)?;
     }
     if let Some(vendor_key) = d.da10_vendor.as_ref().map(|_| format!("{}\\OPC", d.prog_id)) {
         rec.key(&vendor_key)?;
@@ -38,7 +38,7 @@ pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), H
         if let (None, Some(text)) = (reg.value(&key, &name), description) {
             rec.note_missing_keys(&key);
             rec.values.insert((RegPath::new(&key), RegPath::new(&name)));
-            rec.ledger.push(Entry::Added(key, name, Some(text.to_string())));
+            rec.ledger.push(Entry::Added(key, name, Some(text.into())));
             reg.register_category(catid, LCID_ENGLISH, text)?;
         }
         rec.note_missing_keys(&format!("{}\\{catid}", class_categories_key(&d.clsid, false)));
@@ -136,7 +136,7 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
                 }
                 reg.delete_value(key, name)?
             }
-            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, &RegValue::Sz(old.clone()))?,
+            Entry::Replaced(key, name, old, _) => reg.set_value(key, name, old)?,
             Entry::Key(_) | Entry::OtherServer => {}
         }
     }
@@ -168,12 +168,12 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
 /// What registration writes to each value, for the entries of ledgers that did not record it.
 struct Written {
     /// (key, value name, data)
-    values: Vec<(RegPath, RegPath, String)>,
+    values: Vec<(RegPath, RegPath, RegValue)>,
 }
 
 impl Written {
     fn new(d: &ServerDescription) -> Result<Written, HRESULT> {
-        let mut values: Vec<(RegPath, RegPath, String)> = d
+        let mut values: Vec<(RegPath, RegPath, RegValue)> = d
             .values()?
             .into_iter()
             .map(|(key, name, data, _)| (RegPath::new(key), RegPath::new(name), data))
@@ -181,13 +181,13 @@ impl Written {
         for (catid, given) in &d.implemented {
             if let Some(text) = given.as_deref().or(standard_description(catid)) {
                 let name = format!("{LCID_ENGLISH:x}");
-                values.push((RegPath::new(category_key(catid)), RegPath::new(name), text.to_string()));
+                values.push((RegPath::new(category_key(catid)), RegPath::new(name), text.into()));
             }
         }
         Ok(Written { values })
     }
 
-    fn data(&self, key: &str, name: &str) -> Option<String> {
+    fn data(&self, key: &str, name: &str) -> Option<RegValue> {
         let (key, name) = (RegPath::new(key), RegPath::new(name));
         self.values
             .iter()
@@ -214,7 +214,13 @@ fn fallback_ledger(reg: &dyn Registry, d: &ServerDescription) -> Result<Vec<Entr
     }
     let mut ledger: Vec<Entry> = d.own_keys().into_iter().map(Entry::Key).collect();
     for (key, name, data, _) in d.values()? {
-        if reg.value(&key, &name).as_ref().and_then(RegValue::as_str) == Some(data.as_str()) {
+        let holds = reg
+            .value(&key, &name)
+            .is_some_and(|current| match (current.as_str(), data.as_str()) {
+                (Some(current), Some(data)) => current == data,
+                _ => current == data,
+            });
+        if holds {
             ledger.push(Entry::Added(key, name, Some(data)));
         }
     }

@@ -1,10 +1,10 @@
 //! The C description of a server's registration, [`OpcServerRegistration`], and its validation into
 //! the [`ServerDescription`] the rest of the registration code works with.
 
-use core::ptr;
-
 use crate::com::ffi::{self, Fail, FfiResult};
+use crate::com::options::read_sized;
 use crate::com::{CATID, CLSID, E_INVALIDARG, GUID, HRESULT, LPCWSTR};
+use crate::registry::sddl::SecurityDescriptor;
 use crate::registry::MAX_NAME_UNITS;
 
 /// The most categories one registration may list.
@@ -25,11 +25,21 @@ pub enum OpcServerType {
 /// another product registers too (opccomn's own server list under the CLSID of OpcEnum).
 pub const OPC_REGISTRATION_KEEP_EXISTING: u32 = 1;
 
+/// `RPC_C_AUTHN_LEVEL_PKT_INTEGRITY`: the `AuthenticationLevel` registration gives an AppID unless
+/// told otherwise, the lowest level Windows accepts for activation since its DCOM hardening
+/// (KB5004442, enforced since March 2023).
+pub const OPC_AUTHN_LEVEL_PKT_INTEGRITY: u32 = 5;
+
+/// `RPC_C_AUTHN_LEVEL_PKT_PRIVACY`, the highest authentication level.
+const AUTHN_LEVEL_PKT_PRIVACY: u32 = 6;
+
 /// A server's registration, described once and passed to `OpcRegisterServer`,
 /// `OpcUnregisterServer` and `OpcRegistrationExport`. Zero-initialise it, set `struct_size` to
 /// `sizeof(OpcServerRegistration)` and fill what applies; NULL strings and arrays mean "none". Fields
-/// added in later versions go at the end; the library reads only `struct_size` bytes.
+/// added in later versions go at the end; the library reads only `struct_size` bytes, and takes the
+/// fields of a shorter (older) structure as zero.
 #[repr(C)]
+#[derive(Clone, Copy)]
 pub struct OpcServerRegistration {
     /// `sizeof(OpcServerRegistration)` as the caller's header declares it.
     pub struct_size: u32,
@@ -78,6 +88,40 @@ pub struct OpcServerRegistration {
     pub app_id_dll_surrogate: LPCWSTR,
     /// `OPC_REGISTRATION_KEEP_EXISTING` or 0.
     pub flags: u32,
+    /// `AccessPermission` of the AppID, as SDDL text (who may call the server; for example
+    /// `O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)`), written as the binary self-relative security
+    /// descriptor dcomcnfg writes; NULL writes none (the machine's default access permission then
+    /// applies). Owner, group and a DACL of allow and deny ACEs: docs/guide/dcom-appid.md says which
+    /// SDDL is accepted. Needs `app_id`. (Version 2 of the structure.)
+    pub app_id_access_permission: LPCWSTR,
+    /// `LaunchPermission` of the AppID, as SDDL text (who may start and activate the server, for
+    /// example `O:BAG:BAD:(A;;0x1F;;;BA)(A;;0x1F;;;SY)(A;;0xB;;;IU)`), as for
+    /// `app_id_access_permission`; NULL writes none (the machine's default launch permission applies).
+    /// Needs `app_id`. (Version 2 of the structure.)
+    pub app_id_launch_permission: LPCWSTR,
+    /// `AuthenticationLevel` of the AppID, an `RPC_C_AUTHN_LEVEL_*` value: 0 gives
+    /// `OPC_AUTHN_LEVEL_PKT_INTEGRITY` (5), the level every AppID gets unless told otherwise (also when
+    /// an older, shorter structure is passed); 1 to 6 is written as given. Below 5 (NONE 1, CONNECT 2,
+    /// CALL 3, PKT 4), clients on other machines cannot activate the server since Windows' DCOM
+    /// hardening (KB5004442, CVE-2021-26414), and `opccomn-check --dcom` fails the AppID: set a lower
+    /// level only for a reason. A value above 6, or a level without `app_id`, is E_INVALIDARG.
+    /// (Version 2 of the structure.)
+    pub app_id_authentication_level: u32,
+}
+
+/// The `struct_size` values accepted: every size at which a version of OpcServerRegistration ends,
+/// after its last field, with or without C's trailing padding.
+fn registration_sizes() -> [usize; 4] {
+    use core::mem::{offset_of, size_of};
+    type R = OpcServerRegistration;
+    [
+        // Version 1: up to `flags`.
+        offset_of!(R, flags) + size_of::<u32>(),
+        offset_of!(R, app_id_access_permission),
+        // Version 2: the AppID's security.
+        offset_of!(R, app_id_authentication_level) + size_of::<u32>(),
+        size_of::<R>(),
+    ]
 }
 
 /// A registration as the library works with it.
@@ -99,6 +143,12 @@ pub struct ServerDescription {
     pub run_as: Option<String>,
     pub local_service: Option<String>,
     pub dll_surrogate: Option<String>,
+    /// `AuthenticationLevel` given explicitly (1 to 6); `None` writes PKT_INTEGRITY with an AppID.
+    pub authentication_level: Option<u32>,
+    /// `AccessPermission` as SDDL text.
+    pub access_permission: Option<String>,
+    /// `LaunchPermission` as SDDL text.
+    pub launch_permission: Option<String>,
     pub keep_existing: bool,
 }
 
@@ -125,14 +175,12 @@ impl ServerDescription {
         if r.is_null() {
             return Err(Fail::Null);
         }
-        // SAFETY: the first field is always present.
-        let size = unsafe { ptr::addr_of!((*r).struct_size).read_unaligned() } as usize;
-        if size != core::mem::size_of::<OpcServerRegistration>() {
-            // One version of the structure so far: anything else is a caller error.
-            return Err(E_INVALIDARG.into());
-        }
-        // SAFETY: the size matches, so the whole structure is readable.
-        let r = unsafe { &*r };
+        // SAFETY: all zero is a valid OpcServerRegistration (integers, a GUID and raw pointers).
+        let defaults: OpcServerRegistration = unsafe { core::mem::zeroed() };
+        // SAFETY: the caller vouches for `struct_size` readable bytes; read_sized copies no more, and
+        // only sizes at which a version of the structure ends.
+        let r = unsafe { read_sized(r, &registration_sizes(), defaults) }?;
+        let r = &r;
         let local = match r.server_type {
             0 => false,
             1 => true,
@@ -172,6 +220,12 @@ impl ServerDescription {
                 run_as: ffi::in_string_opt(r.app_id_run_as)?,
                 local_service: ffi::in_string_opt(r.app_id_local_service)?,
                 dll_surrogate: ffi::in_string_opt(r.app_id_dll_surrogate)?,
+                authentication_level: match r.app_id_authentication_level {
+                    0 => None,
+                    level => Some(level),
+                },
+                access_permission: ffi::in_string_opt(r.app_id_access_permission)?,
+                launch_permission: ffi::in_string_opt(r.app_id_launch_permission)?,
                 keep_existing: r.flags & OPC_REGISTRATION_KEEP_EXISTING != 0,
             };
             d.check()?;
@@ -191,7 +245,28 @@ impl ServerDescription {
         if self.module_path.as_deref().is_some_and(str::is_empty) {
             return Err(E_INVALIDARG);
         }
+        // The AppID's security: a level from 1 to 6, permissions in the SDDL the library converts,
+        // and neither without an AppID to hold them.
+        if self
+            .authentication_level
+            .is_some_and(|l| !(1..=AUTHN_LEVEL_PKT_PRIVACY).contains(&l))
+        {
+            return Err(E_INVALIDARG);
+        }
+        for sddl in [&self.access_permission, &self.launch_permission].into_iter().flatten() {
+            SecurityDescriptor::parse(sddl)?;
+        }
+        let security =
+            self.authentication_level.is_some() || self.access_permission.is_some() || self.launch_permission.is_some();
+        if security && self.app_id.is_none() {
+            return Err(E_INVALIDARG);
+        }
         Ok(())
+    }
+
+    /// The AppID's `AuthenticationLevel`: as given, else PKT_INTEGRITY.
+    pub(super) fn authentication_level(&self) -> u32 {
+        self.authentication_level.unwrap_or(OPC_AUTHN_LEVEL_PKT_INTEGRITY)
     }
 
     pub(super) fn module_path(&self) -> Result<String, HRESULT> {

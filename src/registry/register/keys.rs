@@ -4,7 +4,11 @@
 use super::description::ServerDescription;
 use crate::com::HRESULT;
 use crate::registry::cmdline::{command_line_of, program_path};
-use crate::registry::{class_categories_key, class_key, MAX_NAME_UNITS};
+use crate::registry::sddl::sddl_to_bytes;
+use crate::registry::{class_categories_key, class_key, RegValue, MAX_NAME_UNITS};
+
+/// `REG_BINARY`.
+const REG_BINARY: u32 = 3;
 
 impl ServerDescription {
     pub(super) fn module_key(&self) -> String {
@@ -19,7 +23,44 @@ impl ServerDescription {
     }
 
     /// The values registration writes: (key, value name, data, always replaced).
-    pub(super) fn values(&self) -> Result<Vec<(String, String, String, bool)>, HRESULT> {
+    pub(super) fn values(&self) -> Result<Vec<(String, String, RegValue, bool)>, HRESULT> {
+        let mut v: Vec<(String, String, RegValue, bool)> = self
+            .text_values()?
+            .into_iter()
+            .map(|(key, name, data, ours)| (key, name, RegValue::Sz(data), ours))
+            .collect();
+        if let Some(app_id) = &self.app_id {
+            // The AppID's security, after its text values (see the module documentation).
+            let app = format!("AppID\\{app_id}");
+            v.push((
+                app.clone(),
+                "AuthenticationLevel".into(),
+                RegValue::Dword(self.authentication_level()),
+                false,
+            ));
+            for (name, sddl) in [
+                ("AccessPermission", &self.access_permission),
+                ("LaunchPermission", &self.launch_permission),
+            ] {
+                if let Some(sddl) = sddl {
+                    let bytes = sddl_to_bytes(sddl)?;
+                    v.push((
+                        app.clone(),
+                        name.into(),
+                        RegValue::Other {
+                            kind: REG_BINARY,
+                            bytes,
+                        },
+                        false,
+                    ));
+                }
+            }
+        }
+        Ok(v)
+    }
+
+    /// The string values registration writes: (key, value name, data, always replaced).
+    fn text_values(&self) -> Result<Vec<(String, String, String, bool)>, HRESULT> {
         let class = class_key(&self.clsid);
         let clsid = self.clsid.to_string();
         let mut v = vec![(class.clone(), String::new(), self.user_type.clone(), false)];

@@ -21,9 +21,9 @@ pub(crate) enum Entry {
     Key(String),
     /// Added this value (key, name, data written). The data is `None` in ledgers written before the
     /// data was recorded.
-    Added(String, String, Option<String>),
+    Added(String, String, Option<RegValue>),
     /// Replaced this value (key, name, previous data, data written; `None` as for `Added`).
-    Replaced(String, String, String, Option<String>),
+    Replaced(String, String, RegValue, Option<RegValue>),
     /// At the first registration another server already registered the class in the other module key
     /// (`LocalServer32` for an in-process server, and the reverse).
     OtherServer,
@@ -37,19 +37,80 @@ fn unescape(s: &str) -> String {
     s.replace("%3B", ";").replace("%7C", "|").replace("%25", "%")
 }
 
+/// A value's data as ledger text with its registry type (`REG_SZ` 1, `REG_EXPAND_SZ` 2, `REG_DWORD`
+/// 4 in decimal, anything else, `REG_BINARY` 3 for the AppID's permissions, in hex).
+fn data_text(value: &RegValue) -> (String, u32) {
+    match value {
+        RegValue::Sz(s) => (s.clone(), 1),
+        RegValue::ExpandSz(s) => (s.clone(), 2),
+        RegValue::Dword(d) => (d.to_string(), 4),
+        RegValue::Other { kind, bytes } => (bytes.iter().map(|b| format!("{b:02x}")).collect(), *kind),
+    }
+}
+
+/// The value [`data_text`] wrote (None for text that is not of its form).
+fn data_of(text: &str, kind: &str) -> Option<RegValue> {
+    let kind: u32 = kind.parse().ok()?;
+    Some(match kind {
+        1 => RegValue::Sz(text.to_string()),
+        2 => RegValue::ExpandSz(text.to_string()),
+        4 => RegValue::Dword(text.parse().ok()?),
+        _ if text.len() % 2 == 0 && text.is_ascii() => RegValue::Other {
+            kind,
+            bytes: (0..text.len())
+                .step_by(2)
+                .map(|i| u8::from_str_radix(&text[i..i + 2], 16).ok())
+                .collect::<Option<Vec<u8>>>()?,
+        },
+        _ => return None,
+    })
+}
+
+/// True when the entry's data must be recorded with its type: not all of it is `REG_SZ`. (Ledgers
+/// of only strings keep the form they always had.)
+fn typed(values: &[&RegValue]) -> bool {
+    values.iter().any(|v| !matches!(v, RegValue::Sz(_)))
+}
+
 impl Entry {
     pub(crate) fn encode(&self) -> String {
         match self {
             Entry::Key(k) => format!("K{}", escape(k)),
             Entry::OtherServer => "O".to_string(),
+            // Typed entries have one more field (V) or two (R): the registry types. A library that
+            // predates them finds no entry it knows there and leaves the value alone.
             Entry::Added(k, n, data) => match data {
-                Some(data) => format!("V{}|{}|{}", escape(k), escape(n), escape(data)),
+                Some(data) if typed(&[data]) => {
+                    let (text, kind) = data_text(data);
+                    format!("V{}|{}|{}|{kind}", escape(k), escape(n), escape(&text))
+                }
+                Some(data) => format!("V{}|{}|{}", escape(k), escape(n), escape(&data_text(data).0)),
                 None => format!("V{}|{}", escape(k), escape(n)),
             },
-            Entry::Replaced(k, n, old, data) => match data {
-                Some(data) => format!("R{}|{}|{}|{}", escape(k), escape(n), escape(old), escape(data)),
-                None => format!("R{}|{}|{}", escape(k), escape(n), escape(old)),
-            },
+            Entry::Replaced(k, n, old, data) => {
+                let (old_text, old_kind) = data_text(old);
+                match data {
+                    Some(data) if typed(&[old, data]) => {
+                        let (text, kind) = data_text(data);
+                        format!(
+                            "R{}|{}|{}|{}|{old_kind}|{kind}",
+                            escape(k),
+                            escape(n),
+                            escape(&old_text),
+                            escape(&text)
+                        )
+                    }
+                    Some(data) => format!(
+                        "R{}|{}|{}|{}",
+                        escape(k),
+                        escape(n),
+                        escape(&old_text),
+                        escape(&data_text(data).0)
+                    ),
+                    // (Only ledgers of strings have entries without the data written.)
+                    None => format!("R{}|{}|{}", escape(k), escape(n), escape(&old_text)),
+                }
+            }
         }
     }
 
@@ -60,9 +121,21 @@ impl Entry {
         match (tag, fields.as_slice()) {
             ('K', [k]) => Some(Entry::Key(k.clone())),
             ('V', [k, n]) => Some(Entry::Added(k.clone(), n.clone(), None)),
-            ('V', [k, n, data]) => Some(Entry::Added(k.clone(), n.clone(), Some(data.clone()))),
-            ('R', [k, n, old]) => Some(Entry::Replaced(k.clone(), n.clone(), old.clone(), None)),
-            ('R', [k, n, old, data]) => Some(Entry::Replaced(k.clone(), n.clone(), old.clone(), Some(data.clone()))),
+            ('V', [k, n, data]) => Some(Entry::Added(k.clone(), n.clone(), Some(RegValue::Sz(data.clone())))),
+            ('V', [k, n, data, kind]) => Some(Entry::Added(k.clone(), n.clone(), Some(data_of(data, kind)?))),
+            ('R', [k, n, old]) => Some(Entry::Replaced(k.clone(), n.clone(), RegValue::Sz(old.clone()), None)),
+            ('R', [k, n, old, data]) => Some(Entry::Replaced(
+                k.clone(),
+                n.clone(),
+                RegValue::Sz(old.clone()),
+                Some(RegValue::Sz(data.clone())),
+            )),
+            ('R', [k, n, old, data, old_kind, kind]) => Some(Entry::Replaced(
+                k.clone(),
+                n.clone(),
+                data_of(old, old_kind)?,
+                Some(data_of(data, kind)?),
+            )),
             ('O', [empty]) if empty.is_empty() => Some(Entry::OtherServer),
             _ => None,
         }
@@ -80,7 +153,7 @@ impl Entry {
     /// taking it back harms nobody. `expected` gives the data for entries of older ledgers, which did
     /// not record it (`None` from it too: the value is taken as still written, the rule of those
     /// ledgers). A missing value, or one of another type, no longer holds it. Always true for keys.
-    pub(crate) fn still_written(&self, reg: &dyn Registry, expected: impl Fn(&str, &str) -> Option<String>) -> bool {
+    pub(crate) fn still_written(&self, reg: &dyn Registry, expected: impl Fn(&str, &str) -> Option<RegValue>) -> bool {
         let (key, name, written) = match self {
             Entry::Key(_) | Entry::OtherServer => return true,
             Entry::Added(k, n, w) | Entry::Replaced(k, n, _, w) => (k, n, w),
@@ -88,10 +161,10 @@ impl Entry {
         let Some(current) = reg.value(key, name) else {
             return false;
         };
-        let Some(current) = current.as_str() else { return false };
         match written.clone().or_else(|| expected(key, name)) {
-            Some(written) => same_data(key, name, current, &written),
-            None => true,
+            Some(written) => same_data(key, name, &current, &written),
+            // Ledgers that did not record the data only ever wrote strings.
+            None => current.as_str().is_some(),
         }
     }
 
@@ -109,10 +182,14 @@ impl Entry {
     }
 }
 
-/// True when `current`, the data of value `name` of `key`, is `written`. A `LocalServer32` command
-/// line compares by its program path as well, so a registration from before command lines were
-/// quoted (the same path unquoted) still counts as this registration's.
-fn same_data(key: &str, name: &str, current: &str, written: &str) -> bool {
+/// True when `current`, the data of value `name` of `key`, is `written`: the same type (`REG_SZ` and
+/// `REG_EXPAND_SZ` count as text) and data. A `LocalServer32` command line compares by its program
+/// path as well, so a registration from before command lines were quoted (the same path unquoted)
+/// still counts as this registration's.
+fn same_data(key: &str, name: &str, current: &RegValue, written: &RegValue) -> bool {
+    let (Some(current), Some(written)) = (current.as_str(), written.as_str()) else {
+        return current == written;
+    };
     if current == written {
         return true;
     }
@@ -184,10 +261,17 @@ impl<'a> Recorder<'a> {
         self.reg.create_key(path)
     }
 
+    /// Writes the string `data` to the value `name` of `path` (see [`Recorder::set`]).
     pub(crate) fn value(&mut self, path: &str, name: &str, data: &str, replace: bool) -> Result<(), HRESULT> {
+        self.set(path, name, &RegValue::Sz(data.to_string()), replace)
+    }
+
+    /// Writes `data` to the value `name` of `path`, recording it as added, or as replaced with the
+    /// previous data; a value that exists is left as it is unless `replace`.
+    pub(crate) fn set(&mut self, path: &str, name: &str, data: &RegValue, replace: bool) -> Result<(), HRESULT> {
         let id = (RegPath::new(path), RegPath::new(name));
         match self.reg.value(path, name) {
-            Some(RegValue::Sz(old)) if old == data => {
+            Some(old) if old == *data => {
                 // Already so; if this registration wrote it, the record says so too.
                 self.note_written(&id, data);
                 return Ok(());
@@ -197,12 +281,12 @@ impl<'a> Recorder<'a> {
                 if self.values.contains(&id) {
                     // Ours already (registering again, say at a new path): the record follows.
                     self.note_written(&id, data);
-                } else if let Some(old) = old.as_str() {
+                } else {
                     self.ledger.push(Entry::Replaced(
                         path.to_string(),
                         name.to_string(),
-                        old.to_string(),
-                        Some(data.to_string()),
+                        old,
+                        Some(data.clone()),
                     ));
                     self.values.insert(id);
                 }
@@ -211,21 +295,21 @@ impl<'a> Recorder<'a> {
                 self.note_missing_keys(path);
                 if self.values.insert(id.clone()) {
                     self.ledger
-                        .push(Entry::Added(path.to_string(), name.to_string(), Some(data.to_string())));
+                        .push(Entry::Added(path.to_string(), name.to_string(), Some(data.clone())));
                 } else {
                     self.note_written(&id, data);
                 }
             }
         }
-        self.reg.set_value(path, name, &RegValue::Sz(data.to_string()))
+        self.reg.set_value(path, name, data)
     }
 
     /// Records `data` as what this registration wrote to the value `id`, if the ledger has it.
-    fn note_written(&mut self, id: &(RegPath, RegPath), data: &str) {
+    fn note_written(&mut self, id: &(RegPath, RegPath), data: &RegValue) {
         for entry in &mut self.ledger {
             if entry.value().as_ref() == Some(id) {
                 if let Entry::Added(_, _, written) | Entry::Replaced(_, _, _, written) = entry {
-                    *written = Some(data.to_string());
+                    *written = Some(data.clone());
                 }
             }
         }

@@ -18,7 +18,11 @@
 //! <VersionIndependentProgID>             @ = user type
 //! <VersionIndependentProgID>\CLSID       @ = {clsid}
 //! <VersionIndependentProgID>\CurVer      @ = ProgID
-//! AppID\{appid}                          @ = user type, RunAs, LocalService, DllSurrogate (as given)
+//! AppID\{appid}                          @ = user type, RunAs, LocalService, DllSurrogate (as given),
+//!                                        AuthenticationLevel (DWORD: as given, else 5 = PKT_INTEGRITY),
+//!                                        AccessPermission, LaunchPermission (REG_BINARY
+//!                                        self-relative security descriptors, from SDDL; see
+//!                                        registry::sddl)
 //! AppID\<exe file name>                  AppID = {appid}       (EXE servers with an AppID)
 //! ```
 //!
@@ -39,7 +43,10 @@
 //! still names this server). Without a ledger (a registration written by other means)
 //! unregistration treats the values whose data is what this registration would write as added by it,
 //! under the same rules. `LocalServer32` is written as a command line with the path in quotes
-//! (CWE-428), `InprocServer32` as the plain DLL path COM loads. See docs/registration-safety.md.
+//! (CWE-428), `InprocServer32` as the plain DLL path COM loads. The ledger records the AppID's DWORD
+//! and binary values with their type, and they follow the same rule: a level or permission another
+//! installer or an administrator changed since stays. See docs/registration-safety.md and
+//! docs/guide/dcom-appid.md.
 //!
 //! Files, one concern each: `description` (the C struct and its validation), `keys` (the key list),
 //! `ledger` (the record format of what was written), `algorithm` (register and unregister); the
@@ -52,7 +59,10 @@ mod ledger;
 
 pub(crate) use algorithm::{register, unregister, LCID_ENGLISH};
 pub(crate) use description::this_module_path;
-pub use description::{OpcServerRegistration, OpcServerType, ServerDescription, OPC_REGISTRATION_KEEP_EXISTING};
+pub use description::{
+    OpcServerRegistration, OpcServerType, ServerDescription, OPC_AUTHN_LEVEL_PKT_INTEGRITY,
+    OPC_REGISTRATION_KEEP_EXISTING,
+};
 pub(crate) use ledger::{read_ledger, Entry, Recorder, LEDGER};
 
 use crate::com::alloc::alloc_wstr_from_str;
@@ -139,3 +149,5 @@ pub unsafe extern "C" fn OpcRegistrationExport(server: *const OpcServerRegistrat
 
 #[cfg(test)]
 pub(crate) mod tests;
+#[cfg(test)]
+mod tests_app_id;

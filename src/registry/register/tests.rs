@@ -255,6 +255,9 @@ fn browser() -> ServerDescription {
         user_type: "Opc ServerList Class".into(),
         module_path: Some("C:\\Program Files\\OPC Tools\\opccomn_browser.exe".into()),
         app_id: Some(GUID::from_u128(0xCCD63ADF_D02D_46DD_B170_FA6E0F086FE3)),
+        access_permission: Some("O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)".into()),
+        launch_permission: Some("O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)".into()),
+        authentication_level: Some(5),
         ..Default::default()
     }
 }
@@ -469,6 +472,31 @@ fn ledger_entries_survive_awkward_names() {
         Entry::Added("K".into(), "".into(), Some("C:\\a|b;c%".into())),
         Entry::Replaced("K".into(), "n|;".into(), "old;data%".into(), None),
         Entry::Replaced("K".into(), "n".into(), "old".into(), Some("".into())),
+        Entry::Added("K".into(), "AuthenticationLevel".into(), Some(RegValue::Dword(5))),
+        Entry::Added(
+            "K".into(),
+            "AccessPermission".into(),
+            Some(RegValue::Other {
+                kind: 3,
+                bytes: vec![1, 0, 0x7C, 0x3B, 0x25, 0xFF],
+            }),
+        ),
+        Entry::Added(
+            "K".into(),
+            "Odd".into(),
+            Some(RegValue::Other {
+                kind: 11,
+                bytes: vec![],
+            }),
+        ),
+        Entry::Replaced("K".into(), "n".into(), "old|;".into(), Some(RegValue::Dword(u32::MAX))),
+        Entry::Replaced("K".into(), "n".into(), RegValue::Dword(2), Some(RegValue::Dword(5))),
+        Entry::Replaced(
+            "K".into(),
+            "n".into(),
+            RegValue::ExpandSz("%x%".into()),
+            Some("y".into()),
+        ),
         Entry::OtherServer,
     ] {
         assert_eq!(Entry::decode(&e.encode()), Some(e.clone()));
@@ -479,6 +507,26 @@ fn ledger_entries_survive_awkward_names() {
         Entry::decode("RK|n|old"),
         Some(Entry::Replaced("K".into(), "n".into(), "old".into(), None))
     );
+    // String entries keep the form they always had (older libraries read them); typed ones have
+    // fields older libraries do not know, so they skip them and leave those values alone.
+    assert_eq!(
+        Entry::Added("K".into(), "n".into(), Some("x".into())).encode(),
+        "VK|n|x"
+    );
+    assert_eq!(
+        Entry::Added("K".into(), "n".into(), Some(RegValue::Dword(5))).encode(),
+        "VK|n|5|4"
+    );
+    for bad in [
+        "VK|n|5|x",
+        "VK|n|x|4",
+        "VK|n|abc|3",
+        "VK|n|zz|3",
+        "RK|n|1|2|4",
+        "RK|n|a|b|4|4",
+    ] {
+        assert_eq!(Entry::decode(bad), None, "{bad}");
+    }
 }
 
 #[test]
@@ -588,6 +636,9 @@ fn the_c_entry_points_read_the_structure_and_write_through_a_handle() {
         app_id_local_service: ptr::null(),
         app_id_dll_surrogate: ptr::null(),
         flags: 0,
+        app_id_access_permission: ptr::null(),
+        app_id_launch_permission: ptr::null(),
+        app_id_authentication_level: 0,
     };
     let r = make();
     let mut reg = ptr::null_mut();
