@@ -3795,7 +3795,10 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  * - `/RegServer` (or `-RegServer`): registers every class with a `registration` (NULL `module_path`:
  *   this EXE), unregistering again what it wrote when one fails; returns.
  * - `/UnregServer`: unregisters them, in reverse order (a class not registered is no failure); returns.
- * - Otherwise it serves: initialises COM (multithreaded apartment), registers the class objects
+ * - Otherwise it serves: initialises COM (multithreaded apartment); when a class's registration has an
+ *   AppID, sets the process's security from it (OpcInitializeServerSecurity with `appid`: EOAC_APPID,
+ *   so the AppID's AuthenticationLevel and permissions apply) unless the server set process security
+ *   itself before the call; registers the class objects
  *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
  *   library makes (through the module lock, which the host sets), LockServer, and the server's own
  *   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
