@@ -323,25 +323,8 @@ impl<T: ComClass> ComObject<T> {
         ppv: *mut *mut c_void,
         build: impl FnOnce(&Binder) -> Result<T, HRESULT>,
     ) -> HRESULT {
-        if ppv.is_null() {
-            return E_POINTER;
-        }
-        // SAFETY: checked non-NULL; the caller vouches it is writable.
-        unsafe { *ppv = ptr::null_mut() };
-        if riid.is_null() {
-            return E_POINTER;
-        }
-        // SAFETY: checked non-NULL; the caller vouches it is readable.
-        if !outer.is_null() && unsafe { *riid } != IID_IUNKNOWN {
-            return CLASS_E_NOAGGREGATION;
-        }
-        let obj = match guard(Err(E_UNEXPECTED), || Self::try_new(outer, build)) {
-            Ok(obj) => obj,
-            Err(hr) => return hr,
-        };
-        // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
-        unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
-        // `obj` drops here, releasing the construction reference.
+        // SAFETY: forwarded from the caller's contract.
+        unsafe { Self::create_as(outer, true, riid, ppv, build) }
     }
 
     /// The creation protocol of a class object (IClassFactory): as [`ComObject::create`] without an
@@ -354,6 +337,21 @@ impl<T: ComClass> ComObject<T> {
         ppv: *mut *mut c_void,
         build: impl FnOnce(&Binder) -> Result<T, HRESULT>,
     ) -> HRESULT {
+        // SAFETY: forwarded from the caller's contract; no outer object.
+        unsafe { Self::create_as(ptr::null_mut(), false, riid, ppv, build) }
+    }
+
+    /// The creation protocol, for an object that counts on the module lock or not (`counted`).
+    ///
+    /// # Safety
+    /// As for [`ComObject::create`].
+    unsafe fn create_as(
+        outer: *mut IUnknown,
+        counted: bool,
+        riid: REFIID,
+        ppv: *mut *mut c_void,
+        build: impl FnOnce(&Binder) -> Result<T, HRESULT>,
+    ) -> HRESULT {
         if ppv.is_null() {
             return E_POINTER;
         }
@@ -362,12 +360,17 @@ impl<T: ComClass> ComObject<T> {
         if riid.is_null() {
             return E_POINTER;
         }
-        let obj = match guard(Err(E_UNEXPECTED), || Self::make(ptr::null_mut(), false, build)) {
+        // SAFETY: checked non-NULL; the caller vouches it is readable.
+        if !outer.is_null() && unsafe { *riid } != IID_IUNKNOWN {
+            return CLASS_E_NOAGGREGATION;
+        }
+        let obj = match guard(Err(E_UNEXPECTED), || Self::make(outer, counted, build)) {
             Ok(obj) => obj,
             Err(hr) => return hr,
         };
         // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
         unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
+        // `obj` drops here, releasing the construction reference.
     }
 
     /// The object behind one of its interface pointers.
