@@ -116,6 +116,40 @@ static IPSFactoryBuffer *load_factory(int argc, char **argv) {
 
 /* ---- NDR messages ---- */
 
+/* ---- A test's stand-in RPC channel: a static object (no reference count), local destination ---- */
+
+static HRESULT STDMETHODCALLTYPE ps_chan_qi(IRpcChannelBuffer *This, REFIID riid, void **ppv) {
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IRpcChannelBuffer)) {
+        *ppv = This;
+        return S_OK;
+    }
+    *ppv = NULL;
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE ps_chan_addref(IRpcChannelBuffer *This) {
+    (void)This;
+    return 2;
+}
+static ULONG STDMETHODCALLTYPE ps_chan_release(IRpcChannelBuffer *This) {
+    (void)This;
+    return 1;
+}
+static HRESULT STDMETHODCALLTYPE ps_chan_get_dest_ctx(IRpcChannelBuffer *This, DWORD *ctx, void **pv) {
+    (void)This;
+    *ctx = MSHCTX_LOCAL;
+    *pv = NULL;
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE ps_chan_is_connected(IRpcChannelBuffer *This) {
+    (void)This;
+    return S_OK;
+}
+
+/* The vtable of a channel whose buffer handling is the test's own. */
+#define PS_CHANNEL_VTBL(get_buffer, send_receive, free_buffer)                                            \
+    {ps_chan_qi,   ps_chan_addref,       ps_chan_release,      (get_buffer),                             \
+     (send_receive), (free_buffer), ps_chan_get_dest_ctx, ps_chan_is_connected}
+
 typedef struct ndr_msg {
     unsigned char b[8192];
     size_t n;

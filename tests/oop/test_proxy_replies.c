@@ -41,22 +41,6 @@ static unsigned reply_drep = NDR_LOCAL;
 static guarded reply_memory;
 static LONG buffers_out, sends;
 
-static HRESULT STDMETHODCALLTYPE chan_qi(IRpcChannelBuffer *This, REFIID riid, void **ppv) {
-    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IRpcChannelBuffer)) {
-        *ppv = This;
-        return S_OK;
-    }
-    *ppv = NULL;
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE chan_addref(IRpcChannelBuffer *This) {
-    (void)This;
-    return 2;
-}
-static ULONG STDMETHODCALLTYPE chan_release(IRpcChannelBuffer *This) {
-    (void)This;
-    return 1;
-}
 static HRESULT STDMETHODCALLTYPE chan_get_buffer(IRpcChannelBuffer *This, RPCOLEMESSAGE *msg, REFIID riid) {
     (void)This, (void)riid;
     msg->Buffer = HeapAlloc(GetProcessHeap(), HEAP_ZERO_MEMORY, msg->cbBuffer ? msg->cbBuffer : 1);
@@ -83,18 +67,7 @@ static HRESULT STDMETHODCALLTYPE chan_free_buffer(IRpcChannelBuffer *This, RPCOL
     buffers_out--;
     return S_OK;
 }
-static HRESULT STDMETHODCALLTYPE chan_get_dest_ctx(IRpcChannelBuffer *This, DWORD *ctx, void **pv) {
-    (void)This;
-    *ctx = MSHCTX_LOCAL;
-    *pv = NULL;
-    return S_OK;
-}
-static HRESULT STDMETHODCALLTYPE chan_is_connected(IRpcChannelBuffer *This) {
-    (void)This;
-    return S_OK;
-}
-static IRpcChannelBufferVtbl chan_vtbl = {chan_qi,          chan_addref,      chan_release,      chan_get_buffer,
-                                          chan_send_receive, chan_free_buffer, chan_get_dest_ctx, chan_is_connected};
+static IRpcChannelBufferVtbl chan_vtbl = PS_CHANNEL_VTBL(chan_get_buffer, chan_send_receive, chan_free_buffer);
 static IRpcChannelBuffer client_channel = {&chan_vtbl};
 
 /* ---- The caller's memory: out-parameters in a zone of canary bytes ---- */

@@ -223,22 +223,6 @@ static IOPCServerList2Vtbl list2_vtbl = {IOPCServerList2_qi, IOPCServerList2_add
 
 static void *reply_buffer;
 
-static HRESULT STDMETHODCALLTYPE chan_qi(IRpcChannelBuffer *This, REFIID riid, void **ppv) {
-    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IRpcChannelBuffer)) {
-        *ppv = This;
-        return S_OK;
-    }
-    *ppv = NULL;
-    return E_NOINTERFACE;
-}
-static ULONG STDMETHODCALLTYPE chan_addref(IRpcChannelBuffer *This) {
-    (void)This;
-    return 2;
-}
-static ULONG STDMETHODCALLTYPE chan_release(IRpcChannelBuffer *This) {
-    (void)This;
-    return 1;
-}
 static HRESULT STDMETHODCALLTYPE chan_get_buffer(IRpcChannelBuffer *This, RPCOLEMESSAGE *msg, REFIID riid) {
     (void)This, (void)riid;
     if (reply_buffer) HeapFree(GetProcessHeap(), 0, reply_buffer);
@@ -255,18 +239,7 @@ static HRESULT STDMETHODCALLTYPE chan_free_buffer(IRpcChannelBuffer *This, RPCOL
     (void)This, (void)msg;
     return S_OK;
 }
-static HRESULT STDMETHODCALLTYPE chan_get_dest_ctx(IRpcChannelBuffer *This, DWORD *ctx, void **pv) {
-    (void)This;
-    *ctx = MSHCTX_LOCAL;
-    *pv = NULL;
-    return S_OK;
-}
-static HRESULT STDMETHODCALLTYPE chan_is_connected(IRpcChannelBuffer *This) {
-    (void)This;
-    return S_OK;
-}
-static IRpcChannelBufferVtbl chan_vtbl = {chan_qi,          chan_addref,      chan_release,      chan_get_buffer,
-                                          chan_send_receive, chan_free_buffer, chan_get_dest_ctx, chan_is_connected};
+static IRpcChannelBufferVtbl chan_vtbl = PS_CHANNEL_VTBL(chan_get_buffer, chan_send_receive, chan_free_buffer);
 static IRpcChannelBuffer server_channel = {&chan_vtbl};
 
 /* ---- Invoking a stub ---- */
