@@ -39,6 +39,9 @@ static CLSID oop_fake_clsid(unsigned n) {
 /* sends OpcShutdownNotifyBounded (deadline OOP_BOUNDED_MS); "notified=N failed=M timed_out=T" */
 #define OOP_CODE_SHUTDOWN_BOUNDED ((HRESULT)0xE0040205L)
 #define OOP_BOUNDED_MS 3000
+/* calls OpcExeServerStop, as an operator's tool would; "stop=HR". The host then calls the server's
+ * on_stop, which notifies the sinks of the object asked (bounded by OOP_BOUNDED_MS). */
+#define OOP_CODE_STOP ((HRESULT)0xE0040206L)
 /* The sinks a test server object takes at once (its advise limit). */
 #define OOP_ADVISE_LIMIT 4
 #define OOP_REASON "Maintenance at 12:00 \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac"

@@ -74,6 +74,9 @@ static void client_name_changed(void *context, LPCWSTR name) {
     LeaveCriticalSection(&s->lock);
 }
 
+/* The server object whose client asked for the operator's stop (OOP_CODE_STOP), held for on_stop. */
+static Server *volatile stopping;
+
 static void set_answer(Server *s, const char *text) {
     size_t i;
     for (i = 0; text[i] && i + 1 < sizeof s->answer / sizeof s->answer[0]; i++) s->answer[i] = (WCHAR)text[i];
@@ -109,6 +112,17 @@ static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *te
         hr = OpcShutdownNotifyBounded(&s->unk, W(OOP_REASON), &bounds, &notified, &failed, &timed_out);
         snprintf(buf, sizeof buf, "hr=%08lX notified=%lu failed=%lu timed_out=%lu", (unsigned long)hr,
                  (unsigned long)notified, (unsigned long)failed, (unsigned long)timed_out);
+        set_answer(s, buf);
+        *text = s->answer;
+        return S_OK;
+    }
+    if (code == OOP_CODE_STOP) {
+        HRESULT hr;
+        s->unk.lpVtbl->AddRef(&s->unk);
+        if (InterlockedCompareExchangePointer((void *volatile *)&stopping, s, NULL) != NULL)
+            s->unk.lpVtbl->Release(&s->unk);
+        hr = OpcExeServerStop();
+        snprintf(buf, sizeof buf, "stop=%08lX", (unsigned long)hr);
         set_answer(s, buf);
         *text = s->answer;
         return S_OK;
@@ -167,6 +181,20 @@ static HRESULT OPCCOMN_CDECL create_list(void *context, IUnknown *outer, REFIID 
     (void)context;
     (void)outer;
     return OpcServerListCreateOver(fake_registry, NULL, riid, ppv);
+}
+
+/* The operator's stop (the host calls it on its own thread): the client of the server object that
+ * asked is told to disconnect, within a bound; then the host waits for the clients to let go. */
+static void OPCCOMN_CDECL on_stop(void *context) {
+    Server *s = (Server *)InterlockedExchangePointer((void *volatile *)&stopping, NULL);
+    OpcShutdownNotifyOptions bounds;
+    (void)context;
+    if (!s) return; /* the watchdog's stop */
+    memset(&bounds, 0, sizeof bounds);
+    bounds.struct_size = sizeof bounds;
+    bounds.timeout_ms = OOP_BOUNDED_MS;
+    OpcShutdownNotifyBounded(&s->unk, W(OOP_REASON), &bounds, NULL, NULL, NULL);
+    s->unk.lpVtbl->Release(&s->unk);
 }
 
 /* A client that died leaves its references (Wine runs no rundown of a dead client's references):
@@ -230,7 +258,8 @@ int main(void) {
     options.classes = classes;
     options.class_count = 2;
     options.first_client_timeout_ms = 120000; /* a server nobody connects to gives up after two minutes */
-    options.release_timeout_ms = 30000;       /* after the watchdog's stop: 30 s for what is left */
+    options.release_timeout_ms = 30000;       /* after a stop: 30 s for what is left */
+    options.on_stop = on_stop;
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
     if (SUCCEEDED(hr) && widl_mode) hr = use_widl_proxy_stub();

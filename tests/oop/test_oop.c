@@ -524,6 +524,33 @@ static void check_enumerator_outlives_list(void) {
     CHECK(process_running(L"opccomn_test_server.exe") == 0); /* and exits once it is released */
 }
 
+/* The operator stops the server while a client is connected, by OpcExeServerStop (what a service's
+ * control handler or the server's own window calls): the host calls the server's on_stop, which tells
+ * the client's sink across processes, waits for the client to let go, and then the process exits. */
+static void check_operator_stop(void) {
+    IOPCCommon *c = NULL;
+    IUnknown *sink = NULL;
+    LONG calls = 0;
+    DWORD cookie = 0;
+    WCHAR *answer;
+    int waited;
+    CHECK_HR(CoCreateInstance(&CLSID_OopServer, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCCommon, (void **)&c), S_OK);
+    if (!c) return;
+    CHECK_HR(OpcShutdownSinkCreate(on_shutdown_counting, &calls, &IID_IUnknown, (void **)&sink), S_OK);
+    CHECK_HR(OpcShutdownAdvise((IUnknown *)c, sink, &cookie), S_OK);
+    answer = ask(c, OOP_CODE_STOP);
+    CHECK(wstr_is(answer, "stop=00000000"));
+    free(answer);
+    for (waited = 0; waited < 100 && InterlockedCompareExchange(&calls, 0, 0) == 0; waited++) Sleep(100);
+    CHECK(InterlockedCompareExchange(&calls, 0, 0) == 1);     /* on_stop told the client */
+    CHECK(process_stays(L"opccomn_test_server.exe", 1000));    /* and the server waits for it */
+    CHECK_HR(OpcShutdownUnadvise((IUnknown *)c, cookie), S_OK);
+    c->lpVtbl->Release(c);
+    if (sink) sink->lpVtbl->Release(sink);
+    for (waited = 0; waited < 100 && process_running(L"opccomn_test_server.exe") == 1; waited++) Sleep(100);
+    CHECK(process_running(L"opccomn_test_server.exe") == 0); /* gone once the client let go */
+}
+
 int main(int argc, char **argv) {
     OpcServerRegistration server, list;
     IOPCCommon *c = NULL;
@@ -578,6 +605,7 @@ int main(int argc, char **argv) {
     }
     check_server_list();
     check_enumerator_outlives_list();
+    check_operator_stop();
     CoUninitialize();
     CHECK(OpcObjectCount() == 0); /* the shutdown sink is gone in this process too */
     CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
