@@ -3656,8 +3656,8 @@ BOOL OPCCOMN_CDECL OpcVersionIsNewer(const struct OpcVersion *candidate, const s
  * `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
  * Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
  * CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
- * Off Windows the options are checked as above (the access list's text excepted: only Windows can
- * read SDDL), then the result is E_NOTIMPL.
+ * Off Windows the options are checked as above (the access list with the library's SDDL subset, that
+ * of registration: `docs/guide/dcom-appid.md`), then the result is E_NOTIMPL.
  *
  * @par Safety
  * `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or

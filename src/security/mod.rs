@@ -165,7 +165,10 @@ pub(crate) unsafe fn plan(role: Role, options: *const OpcSecurityOptions) -> Ffi
         (Some(_), None) | (None, Some(_)) if role == Role::Proxy => return Err(E_INVALIDARG.into()),
         (Some(appid), None) => Access::AppId(appid),
         (None, Some([])) => return Err(E_INVALIDARG.into()),
-        (None, Some(units)) => Access::Sddl(units.to_vec()),
+        (None, Some(units)) => {
+            check_access_list(units)?;
+            Access::Sddl(units.to_vec())
+        }
         (None, None) => Access::Anyone,
     };
     Ok(Plan {
@@ -173,6 +176,24 @@ pub(crate) unsafe fn plan(role: Role, options: *const OpcSecurityOptions) -> Ffi
         imp_level,
         access,
     })
+}
+
+/// Off Windows, where no system reads SDDL, the access list is checked with the library's own codec
+/// (`registry::sddl`, the subset registration writes): valid SDDL with an owner and a group, as
+/// CoInitializeSecurity requires (the subset has no SACL). On Windows the system's conversion checks it,
+/// with SDDL beyond the subset accepted.
+fn check_access_list(units: &[u16]) -> Result<(), HRESULT> {
+    #[cfg(not(windows))]
+    {
+        let text = String::from_utf16(units).map_err(|_| E_INVALIDARG)?;
+        let sd = crate::registry::sddl::SecurityDescriptor::parse(&text)?;
+        if sd.owner.is_none() || sd.group.is_none() {
+            return Err(E_INVALIDARG);
+        }
+    }
+    #[cfg(windows)]
+    let _ = units;
+    Ok(())
 }
 
 /// The nine arguments of one CoInitializeSecurity call, exactly as the library passes them.
@@ -339,8 +360,8 @@ pub(crate) unsafe fn set_blanket(
 /// `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
 /// Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
 /// CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
-/// Off Windows the options are checked as above (the access list's text excepted: only Windows can
-/// read SDDL), then the result is E_NOTIMPL.
+/// Off Windows the options are checked as above (the access list with the library's SDDL subset, that
+/// of registration: `docs/guide/dcom-appid.md`), then the result is E_NOTIMPL.
 ///
 /// # Safety
 /// `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or

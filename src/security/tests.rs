@@ -206,7 +206,7 @@ const E_OUTOFMEMORY_: HRESULT = crate::com::E_OUTOFMEMORY;
 
 #[cfg(not(windows))]
 #[test]
-fn off_windows_an_access_list_is_not_implemented_and_com_is_not_called() {
+fn off_windows_an_access_list_is_checked_then_not_implemented_and_com_is_not_called() {
     let sddl = utf16("O:BAG:BAD:(A;;0x7;;;AU)");
     let o = OpcSecurityOptions {
         access_sddl: sddl.as_ptr(),
@@ -215,6 +215,22 @@ fn off_windows_an_access_list_is_not_implemented_and_com_is_not_called() {
     let (r, seen) = initialize_with(Role::Server, Some(&o), S_OK);
     assert_eq!(r, Err(Fail::Code(crate::com::E_NOTIMPL)));
     assert!(seen.is_empty());
+    // Not SDDL, no owner or group, a SACL: refused before anything else.
+    for bad in [
+        "not sddl",
+        "D:(A;;0x7;;;AU)",
+        "O:BAD:(A;;0x7;;;AU)",
+        "O:BAG:BAS:(AU;SA;0x7;;;WD)",
+    ] {
+        let text = utf16(bad);
+        let o = OpcSecurityOptions {
+            access_sddl: text.as_ptr(),
+            ..options()
+        };
+        let (r, seen) = initialize_with(Role::Server, Some(&o), S_OK);
+        assert_eq!(r, Err(Fail::Code(E_INVALIDARG)), "{bad}");
+        assert!(seen.is_empty());
+    }
 }
 
 #[cfg(not(windows))]
