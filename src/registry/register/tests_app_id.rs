@@ -34,6 +34,10 @@ fn sddl_of(value: Option<RegValue>) -> Option<String> {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn an_app_id_gets_pkt_integrity_unless_told_otherwise() {
     let regs = memory();
     let d = local_server(1);
@@ -56,6 +60,10 @@ fn an_app_id_gets_pkt_integrity_unless_told_otherwise() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn levels_and_permissions_are_written_as_given_and_taken_back_exactly() {
     let regs = memory();
     let before = regfile::export(&*regs.write, "").unwrap();
@@ -94,6 +102,10 @@ fn levels_and_permissions_are_written_as_given_and_taken_back_exactly() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn values_another_installer_changed_stay() {
     let regs = memory();
     let mut d = local_server(4);
@@ -131,6 +143,10 @@ fn values_another_installer_changed_stay() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn values_found_at_registration_come_back() {
     let regs = memory();
     let d = local_server(5);
@@ -164,6 +180,10 @@ fn values_found_at_registration_come_back() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn without_a_ledger_only_matching_values_go() {
     let regs = memory();
     let mut d = local_server(6);
@@ -180,6 +200,10 @@ fn without_a_ledger_only_matching_values_go() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn bad_security_settings_are_refused_before_anything_is_written() {
     for change in [
         (|d: &mut ServerDescription| d.authentication_level = Some(7)) as fn(&mut ServerDescription),

@@ -38,6 +38,10 @@ const VECTORS: [(&str, &str, &str); 5] = [
 ];
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn known_byte_vectors() {
     for (sddl, bytes, back) in VECTORS {
         let bytes: String = bytes.split_whitespace().collect();
@@ -47,6 +51,10 @@ fn known_byte_vectors() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn round_trips() {
     for sddl in [
         "O:BAG:BAD:(A;;CCDCSW;;;AU)(A;;CCDCLCSWRP;;;BA)(A;;CCDCLCSWRP;;;SY)",
@@ -75,6 +83,10 @@ fn round_trips() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn rights_are_written_as_windows_writes_them() {
     for (mask, text) in [
         (0xB, "CCDCSW"),
@@ -94,6 +106,10 @@ fn rights_are_written_as_windows_writes_them() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn malformed_sddl_is_refused() {
     for bad in [
         "",
@@ -154,6 +170,10 @@ fn malformed_sddl_is_refused() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn malformed_binary_is_refused() {
     let good = sddl_to_bytes("O:BAG:BAD:(A;;0xB;;;AU)").unwrap();
     for cut in 0..good.len() {
@@ -196,6 +216,10 @@ fn malformed_binary_is_refused() {
 /// A cheap property test: random edits of valid SDDL and random bytes never panic, and whatever
 /// parses round-trips through the binary form.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
 fn random_input_never_panics() {
     let mut seed = 0x2545F4914F6CDD1Du64;
     let mut next = move || {
