@@ -3756,9 +3756,9 @@ HRESULT OPCCOMN_CDECL OpcModuleGetClassObject(const struct OpcServerClass *class
 
 /**
  * DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock or
- * LockServer lock is held) and no object of the library is alive (the server's sessions, connection
- * points and enumerators among them; with opccomn.dll shared between modules, every module's), else
- * S_FALSE.
+ * LockServer lock is held), no object of the library is alive (the server's sessions, connection
+ * points and enumerators among them; with opccomn.dll shared between modules, every module's), and
+ * no proxy, stub or bounded shutdown notification of the library is at work, else S_FALSE.
  */
 HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
 

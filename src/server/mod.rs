@@ -191,6 +191,17 @@ pub(crate) fn server_unlock() {
     }
 }
 
+/// Whether nothing of the library's code is in use: no server count (OpcServerLock, LockServer), no
+/// object of the library alive, no proxy or stub in use, no worker of `OpcShutdownNotifyBounded`
+/// calling a sink. What opccomn.dll's DllCanUnloadNow and a server DLL's OpcModuleCanUnloadNow answer
+/// (a DLL linking the library statically runs that code too).
+pub(crate) fn can_unload() -> bool {
+    SERVER_LOCKS.load(Ordering::Acquire) == 0
+        && live_objects() == 0
+        && crate::proxy::can_unload()
+        && crate::shutdown::bounded::workers_running() == 0
+}
+
 /// The class object of one class.
 struct ClassObject {
     slot: Slot,
@@ -343,13 +354,13 @@ pub unsafe extern "C" fn OpcModuleGetClassObject(
 }
 
 /// DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock or
-/// LockServer lock is held) and no object of the library is alive (the server's sessions, connection
-/// points and enumerators among them; with opccomn.dll shared between modules, every module's), else
-/// S_FALSE.
+/// LockServer lock is held), no object of the library is alive (the server's sessions, connection
+/// points and enumerators among them; with opccomn.dll shared between modules, every module's), and
+/// no proxy, stub or bounded shutdown notification of the library is at work, else S_FALSE.
 #[no_mangle]
 pub extern "C" fn OpcModuleCanUnloadNow() -> Hr {
     ffi::guard!(S_FALSE, {
-        if SERVER_LOCKS.load(Ordering::Acquire) == 0 && live_objects() == 0 {
+        if can_unload() {
             S_OK
         } else {
             S_FALSE

@@ -15,12 +15,11 @@
 
 use core::ffi::c_void;
 use core::ptr;
-use core::sync::atomic::{AtomicU32, Ordering};
 
 use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::{CLSID_OPCServerList, IID_ICLASSFACTORY};
 use crate::com::interfaces::{IClassFactoryImpl, IClassFactoryVtbl};
-use crate::com::object::{live_objects, ComClass, ComObject, Delegating, Slot};
+use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::{IUnknown, BOOL, GUID, HRESULT, REFCLSID, REFIID, S_FALSE, S_OK};
 use crate::registry::register::{register, unregister, ServerDescription};
 use crate::registry::{registries, REGDB_E_KEYMISSING};
@@ -28,9 +27,6 @@ use crate::registry::{registries, REGDB_E_KEYMISSING};
 /// `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
 #[cfg(not(system_com_headers))]
 pub const SELFREG_E_CLASS: HRESULT = 0x80040201_u32 as HRESULT;
-
-/// Server locks taken with IClassFactory::LockServer(TRUE) and not yet released.
-static LOCKS: AtomicU32 = AtomicU32::new(0);
 
 /// The class factory of OPCServerList.
 struct Factory {
@@ -57,11 +53,11 @@ impl IClassFactoryImpl for Factory {
     }
 
     fn LockServer(_this: &ComObject<Self>, lock: BOOL) -> FfiResult {
+        // The server count every class object of the library keeps (OpcServerLock).
         if lock != 0 {
-            LOCKS.fetch_add(1, Ordering::AcqRel);
+            crate::server::server_lock();
         } else {
-            // An unlock without a lock is ignored rather than wrapping around.
-            let _ = LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+            crate::server::server_unlock();
         }
         Ok(S_OK)
     }
@@ -102,11 +98,7 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
 #[no_mangle]
 pub extern "C" fn OpcDllCanUnloadNow() -> Hr {
     ffi::guard!(S_FALSE, {
-        if live_objects() == 0
-            && LOCKS.load(Ordering::Acquire) == 0
-            && crate::proxy::can_unload()
-            && crate::shutdown::bounded::workers_running() == 0
-        {
+        if crate::server::can_unload() {
             S_OK
         } else {
             S_FALSE
