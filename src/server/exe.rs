@@ -3,23 +3,28 @@
 //!
 //! **Lifetime.** While it serves, the server count ([`super::OpcServerLock`], LockServer, and through
 //! the module lock every object of the library) is COM's server process count: CoAddRefServerProcess
-//! and CoReleaseServerProcess. When it falls to zero COM suspends the class objects at once (a client
-//! activating now gets a new process, never this exiting one) and the host returns: COM's rule for
-//! local servers, kept while **any** object handed out is referenced. Started by COM (`-Embedding`),
+//! and CoReleaseServerProcess: COM's rule for local servers, kept while **any** object handed out is
+//! referenced. When it falls to zero (Windows then suspends the class objects) the host serves one
+//! second more: a client that released its last object and connects again at once is served, and the
+//! host serves on. Otherwise it ends: from that moment, decided atomically with the count, any new
+//! instance or LockServer is refused with CO_E_SERVER_STOPPING (COM then starts a new process) and the
+//! class objects are revoked, so no client is handed an object of a process about to exit. Started by
+//! COM (`-Embedding`),
 //! a server no client comes to gives up after `first_client_timeout_ms`. Started by hand, it holds one
 //! count of its own until it is stopped.
 //!
 //! **Stop.** Console control (Ctrl+C, the console closing, log-off, shutdown), the named event
 //! `stop_event_name`, or [`OpcExeServerStop`] from any thread: the host calls `on_stop` (where the
 //! server notifies its clients, within a bound: `OpcShutdownNotifyBounded`), lets go of its own count,
-//! waits `release_timeout_ms` at most for the clients to release what they hold, revokes the class
-//! objects and returns.
+//! waits `release_timeout_ms` at most for the clients to release what they hold, and returns. From the
+//! stop on, the class objects are revoked and new instances and LockServer refused.
 //!
 //! Off Windows the functions exist (a server's `main` builds everywhere) and OpcExeServerRun returns
 //! E_NOTIMPL after checking its arguments.
 
 use core::ffi::c_void;
 use core::ptr;
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use super::{registrations, OpcServerClass, ServerClass, MAX_CLASSES};
 use crate::com::ffi::{self, Fail, Hr};
@@ -33,6 +38,76 @@ use crate::registry::cmdline::parse_command_line;
 
 #[cfg(windows)]
 mod windows;
+
+/// The host's count of what is held on the server (its mirror of COM's server process count), and
+/// whether it is ending. Ending is decided once, atomically with the count: [`HostCount::close_if_idle`]
+/// only when nothing is held, and from then on [`HostCount::enter`] (a new instance, LockServer)
+/// refuses, so that no client is handed an object of a process about to exit.
+pub(crate) struct HostCount(AtomicU32);
+
+/// The bit of `HostCount` that says the host is ending; the rest is the count.
+const CLOSING: u32 = 1 << 31;
+
+#[cfg_attr(not(windows), allow(dead_code))]
+impl HostCount {
+    pub(crate) const fn new() -> HostCount {
+        HostCount(AtomicU32::new(0))
+    }
+
+    /// Serving again from nothing held (the host starts).
+    pub(crate) fn reset(&self) {
+        self.0.store(0, Ordering::SeqCst);
+    }
+
+    /// A count for something new a client asked for; false (nothing counted) when ending.
+    pub(crate) fn enter(&self) -> bool {
+        self.0
+            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+                if n & CLOSING != 0 {
+                    None
+                } else {
+                    (n + 1 < CLOSING).then_some(n + 1)
+                }
+            })
+            .is_ok()
+    }
+
+    /// A count that is not refused, even when ending (an object made by an object still alive).
+    /// Saturates rather than reaching the closing bit.
+    pub(crate) fn lock(&self) {
+        let _ = self.0.fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+            (n & !CLOSING < CLOSING - 1).then_some(n + 1)
+        });
+    }
+
+    /// Gives back one count: the count left, or `None` when none was held (an unlock too many,
+    /// ignored).
+    pub(crate) fn unlock(&self) -> Option<u32> {
+        self.0
+            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+                (n & !CLOSING != 0).then(|| n - 1)
+            })
+            .ok()
+            .map(|n| (n & !CLOSING) - 1)
+    }
+
+    /// How much is held.
+    pub(crate) fn held(&self) -> u32 {
+        self.0.load(Ordering::SeqCst) & !CLOSING
+    }
+
+    /// Ends serving if nothing is held, atomically: true when it did.
+    pub(crate) fn close_if_idle(&self) -> bool {
+        self.0
+            .compare_exchange(0, CLOSING, Ordering::SeqCst, Ordering::SeqCst)
+            .is_ok()
+    }
+
+    /// Ends serving now, whatever is held (a stop).
+    pub(crate) fn close(&self) {
+        self.0.fetch_or(CLOSING, Ordering::SeqCst);
+    }
+}
 
 /// Called when an EXE server is stopped by its operator, on the host's thread (COM initialised, in the
 /// multithreaded apartment) while clients may still be connected: ask them to disconnect here
@@ -79,7 +154,9 @@ pub struct OpcExeServerOptions {
 ///   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
 ///   library makes (through the module lock, which the host sets), LockServer, and the server's own
 ///   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
-///   last goes it returns (COM stops handing out the class objects at that moment). Started by COM
+///   last goes it serves one second more (a client that connects again at once keeps it serving), then
+///   revokes the class objects and returns, answering any later CreateInstance or LockServer with
+///   CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
 ///   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
 ///   serves until stopped. A stop (console control, the named event `stop_event_name`,
 ///   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let

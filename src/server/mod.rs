@@ -156,6 +156,10 @@ static SERVER_LOCKS: AtomicU32 = AtomicU32::new(0);
 #[derive(Clone, Copy)]
 #[cfg_attr(not(windows), allow(dead_code))]
 pub(crate) struct ProcessCount {
+    /// A count for something new a client asked for (an instance, LockServer): false when the host
+    /// is ending and takes no more.
+    pub(crate) enter: fn() -> bool,
+    /// A count that cannot be refused (an object made by an object still alive).
     pub(crate) lock: fn(),
     pub(crate) unlock: fn(),
 }
@@ -181,6 +185,20 @@ pub(crate) fn server_lock() {
     }
 }
 
+/// A count for something new a client asked for: an instance (held while the server's function makes
+/// it) or a LockServer. False, with nothing counted, when an EXE host is ending (its last client left,
+/// or it was stopped) and takes no more: the caller answers CO_E_SERVER_STOPPING, and COM activates a
+/// new server process.
+pub(crate) fn server_enter() -> bool {
+    match process_count() {
+        Some(count) => (count.enter)(),
+        None => {
+            server_lock();
+            true
+        }
+    }
+}
+
 pub(crate) fn server_unlock() {
     match process_count() {
         Some(count) => (count.unlock)(),
@@ -200,6 +218,30 @@ pub(crate) fn can_unload() -> bool {
         && live_objects() == 0
         && crate::proxy::can_unload()
         && crate::shutdown::bounded::workers_running() == 0
+}
+
+/// The object server is ending: an EXE host whose last client left, or that was stopped, takes no
+/// more (COM then starts a new server process for the client).
+const CO_E_SERVER_STOPPING: HRESULT = 0x80080008_u32 as HRESULT;
+
+/// IClassFactory::LockServer of every class object of the library: TRUE takes a server count (refused
+/// with CO_E_SERVER_STOPPING by an EXE host that is ending), FALSE gives one back.
+pub(crate) fn lock_server(lock: BOOL) -> FfiResult {
+    if lock == 0 {
+        server_unlock();
+    } else if !server_enter() {
+        return Err(CO_E_SERVER_STOPPING.into());
+    }
+    Ok(S_OK)
+}
+
+/// A count taken by `server_enter`, given back when dropped.
+struct Entered;
+
+impl Drop for Entered {
+    fn drop(&mut self) {
+        server_unlock();
+    }
 }
 
 /// The class object of one class.
@@ -228,6 +270,12 @@ impl IClassFactoryImpl for ClassObject {
         if !outer.is_null() && (!this.class.aggregatable || *riid != IID_IUNKNOWN) {
             return Err(CLASS_E_NOAGGREGATION.into());
         }
+        if !server_enter() {
+            return Err(CO_E_SERVER_STOPPING.into());
+        }
+        // The count is held while the object is made (the object takes its own), so that an EXE host
+        // cannot end meanwhile.
+        let _entered = Entered;
         let class = this.class;
         // SAFETY: the server's function, with its context, the caller's outer object and checked
         // `riid` and `ppv` (already NULL).
@@ -247,12 +295,7 @@ impl IClassFactoryImpl for ClassObject {
     }
 
     fn LockServer(_this: &ComObject<Self>, lock: BOOL) -> FfiResult {
-        if lock != 0 {
-            server_lock();
-        } else {
-            server_unlock();
-        }
-        Ok(S_OK)
+        lock_server(lock)
     }
 }
 

@@ -70,6 +70,13 @@ fn server(behaviour: Behaviour) -> Server {
     }
 }
 
+/// The tests of this module one at a time: one of them sets the host's process count, through which
+/// every class object's CreateInstance and LockServer go.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    SERIAL.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 /// The class object of `c`, as IClassFactory.
 fn factory(c: &OpcServerClass) -> *mut IClassFactory {
     let mut p: *mut c_void = ptr::null_mut();
@@ -80,6 +87,7 @@ fn factory(c: &OpcServerClass) -> *mut IClassFactory {
 
 #[test]
 fn create_instance_makes_objects_and_refuses_aggregation_the_class_does_not_allow() {
+    let _serial = serial();
     let s = server(Behaviour::Make);
     let plain = class(&CLSID_A, &s, 0);
     let f = factory(&plain);
@@ -140,6 +148,7 @@ fn create_instance_makes_objects_and_refuses_aggregation_the_class_does_not_allo
 
 #[test]
 fn a_failing_or_broken_create_function_leaves_no_object_behind() {
+    let _serial = serial();
     for (behaviour, expected) in [
         (Behaviour::FailWithGarbage, E_OUTOFMEMORY),
         (Behaviour::OkWithNull, E_UNEXPECTED),
@@ -163,6 +172,7 @@ fn a_failing_or_broken_create_function_leaves_no_object_behind() {
 
 #[test]
 fn bad_classes_are_refused() {
+    let _serial = serial();
     let s = server(Behaviour::Make);
     let good = class(&CLSID_A, &s, 0);
     let mut bad = [good; 5];
@@ -200,6 +210,7 @@ fn bad_classes_are_refused() {
 
 #[test]
 fn the_module_finds_each_class_by_its_clsid() {
+    let _serial = serial();
     let (sa, sb) = (server(Behaviour::Make), server(Behaviour::Make));
     let table = [class(&CLSID_A, &sa, 0), class(&CLSID_B, &sb, 0)];
     // SAFETY: a live table of two classes; valid or deliberately wrong arguments.
@@ -248,6 +259,7 @@ fn the_module_finds_each_class_by_its_clsid() {
 
 #[test]
 fn lock_server_and_server_locks_count() {
+    let _serial = serial();
     let s = server(Behaviour::Make);
     let c = class(&CLSID_A, &s, 0);
     let f = factory(&c);
@@ -271,6 +283,7 @@ fn w(s: &str) -> Vec<u16> {
 
 #[test]
 fn the_module_registers_and_unregisters_every_class_with_a_registration() {
+    let _serial = serial();
     let (sa, sb) = (server(Behaviour::Make), server(Behaviour::Make));
     let (prog_a, prog_b, user, path) = (
         w("Vendor.A.1"),
@@ -327,5 +340,159 @@ fn the_module_registers_and_unregisters_every_class_with_a_registration() {
         assert_eq!(OpcModuleRegister(ptr::null(), 3, reg), E_INVALIDARG);
         assert_eq!(OpcModuleRegister(table.as_ptr(), MAX_CLASSES + 1, reg), E_INVALIDARG);
         OpcRegistryRelease(reg);
+    }
+}
+
+#[test]
+fn the_host_count_ends_only_when_nothing_is_held_and_then_refuses_new_work() {
+    let count = exe::HostCount::new();
+    assert!(count.enter());
+    count.lock();
+    assert_eq!(count.held(), 2);
+    assert!(!count.close_if_idle(), "objects are held");
+    assert!(count.enter(), "not ending: still serving");
+    assert_eq!(count.unlock(), Some(2));
+    assert_eq!(count.unlock(), Some(1));
+    assert_eq!(count.unlock(), Some(0));
+    assert_eq!(count.unlock(), None, "an unlock too many is ignored");
+    assert_eq!(count.held(), 0);
+    assert!(count.close_if_idle());
+    assert!(!count.enter(), "ending: no new instance, no LockServer");
+    assert_eq!(count.held(), 0);
+    count.lock(); // an object of a live object still counts
+    assert_eq!(count.unlock(), Some(0));
+
+    // A stop ends at once, with objects held; they still give back their counts.
+    count.reset();
+    assert!(count.enter());
+    count.close();
+    assert!(!count.enter());
+    assert_eq!(count.held(), 1);
+    assert!(!count.close_if_idle());
+    assert_eq!(count.unlock(), Some(0));
+    assert_eq!(count.held(), 0);
+}
+
+/// While clients come and go on other threads, the host's decision to end is atomic with the count:
+/// once it ended, no client gets a count; a client that got one kept the host from ending.
+#[test]
+fn ending_races_no_client() {
+    let rounds = if cfg!(miri) { 20 } else { 2000 };
+    for _ in 0..rounds / 20 {
+        let count = std::sync::Arc::new(exe::HostCount::new());
+        let entered_after_end = std::sync::Arc::new(AtomicU32::new(0));
+        let ended = std::sync::Arc::new(core::sync::atomic::AtomicBool::new(false));
+        let client = {
+            let (count, entered_after_end, ended) = (count.clone(), entered_after_end.clone(), ended.clone());
+            std::thread::spawn(move || {
+                for _ in 0..20 {
+                    if count.enter() {
+                        if ended.load(Ordering::SeqCst) {
+                            entered_after_end.fetch_add(1, Ordering::SeqCst);
+                        }
+                        assert!(count.unlock().is_some());
+                    }
+                }
+            })
+        };
+        loop {
+            if count.close_if_idle() {
+                ended.store(true, Ordering::SeqCst);
+                break;
+            }
+            std::thread::yield_now();
+        }
+        client.join().unwrap();
+        assert_eq!(entered_after_end.load(Ordering::SeqCst), 0);
+        assert_eq!(count.held(), 0);
+        assert!(!count.enter());
+    }
+}
+
+static HOST_COUNT: exe::HostCount = exe::HostCount::new();
+/// What HOST_COUNT held while the server's function ran.
+static HELD_WHILE_MAKING: AtomicU32 = AtomicU32::new(u32::MAX);
+
+fn host_enter() -> bool {
+    HOST_COUNT.enter()
+}
+fn host_lock() {
+    HOST_COUNT.lock()
+}
+fn host_unlock() {
+    let _ = HOST_COUNT.unlock();
+}
+
+unsafe extern "C" fn create_seeing_count(
+    context: *mut c_void,
+    outer: *mut IUnknown,
+    riid: REFIID,
+    ppv: *mut *mut c_void,
+) -> HRESULT {
+    HELD_WHILE_MAKING.store(HOST_COUNT.held(), Ordering::SeqCst);
+    // SAFETY: forwarded as the library passed them.
+    unsafe { create(context, outer, riid, ppv) }
+}
+
+/// In an EXE host that is ending, a class object makes nothing and takes no LockServer: the client
+/// gets CO_E_SERVER_STOPPING (and COM a new server process), never an object of a process about to
+/// exit. While serving, the count is held while the server's function makes the object.
+#[test]
+fn an_ending_host_refuses_instances_and_lock_server() {
+    let _serial = serial();
+    let s = server(Behaviour::Make);
+    let mut c = class(&CLSID_A, &s, 0);
+    c.create = Some(create_seeing_count);
+    let f = factory(&c);
+    let iid_common = crate::com::iids::IID_IOPCCommon;
+    HOST_COUNT.reset();
+    set_process_count(Some(ProcessCount {
+        enter: host_enter,
+        lock: host_lock,
+        unlock: host_unlock,
+    }));
+    // SAFETY: `f` is a live class object; every pointer passed is valid.
+    unsafe {
+        let mut p: *mut c_void = ptr::null_mut();
+        assert_eq!(
+            IClassFactory::CreateInstance(f, ptr::null_mut(), &iid_common, &mut p),
+            S_OK
+        );
+        assert_eq!(HELD_WHILE_MAKING.load(Ordering::SeqCst), 1, "counted while made");
+        assert_eq!(
+            HOST_COUNT.held(),
+            0,
+            "and given back after (the object counts for itself)"
+        );
+        assert_eq!(release(p.cast()), 0);
+        assert_eq!(IClassFactory::LockServer(f, 1), S_OK);
+        assert_eq!(HOST_COUNT.held(), 1);
+        assert_eq!(IClassFactory::LockServer(f, 0), S_OK);
+
+        assert!(HOST_COUNT.close_if_idle());
+        p = ptr::NonNull::<u64>::dangling().as_ptr().cast();
+        assert_eq!(
+            IClassFactory::CreateInstance(f, ptr::null_mut(), &iid_common, &mut p),
+            CO_E_SERVER_STOPPING
+        );
+        assert!(p.is_null());
+        assert_eq!(s.calls.load(Ordering::SeqCst), 1, "the server's function is not called");
+        assert_eq!(IClassFactory::LockServer(f, 1), CO_E_SERVER_STOPPING);
+        assert_eq!(HOST_COUNT.held(), 0);
+        // The server list's class object answers the same.
+        let mut list: *mut c_void = ptr::null_mut();
+        assert_eq!(
+            crate::serverlist::server::OpcDllGetClassObject(
+                &crate::com::iids::CLSID_OPCServerList,
+                &IID_ICLASSFACTORY,
+                &mut list
+            )
+            .get(),
+            S_OK
+        );
+        assert_eq!(IClassFactory::LockServer(list.cast(), 1), CO_E_SERVER_STOPPING);
+        IClassFactory::Release(list.cast());
+        set_process_count(None);
+        IClassFactory::Release(f);
     }
 }

@@ -54,12 +54,7 @@ impl IClassFactoryImpl for Factory {
 
     fn LockServer(_this: &ComObject<Self>, lock: BOOL) -> FfiResult {
         // The server count every class object of the library keeps (OpcServerLock).
-        if lock != 0 {
-            crate::server::server_lock();
-        } else {
-            crate::server::server_unlock();
-        }
-        Ok(S_OK)
+        crate::server::lock_server(lock)
     }
 }
 

@@ -503,6 +503,33 @@ static void check_server_list(void) {
     l2->lpVtbl->Release(l2);
 }
 
+/* A client that releases its last object and connects again at once (as clients do that browse and
+ * then connect) is served every time: by the ending process, which then serves on, or by a new one,
+ * never by a process that exits under its call. After the longest pause the ending process is gone. */
+static void check_reconnect_at_once(void) {
+    static const DWORD pauses[] = {0, 0, 1, 20, 300, 1500};
+    IOPCServerList2 *l2;
+    IOPCEnumGUID *e;
+    GUID buf[128];
+    ULONG fetched;
+    size_t i;
+    for (i = 0; i < sizeof pauses / sizeof pauses[0]; i++) {
+        l2 = NULL;
+        e = NULL;
+        fetched = 0;
+        CHECK_HR(CoCreateInstance(&CLSID_OopServerList, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&l2), S_OK);
+        if (!l2) continue;
+        CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+        if (e) {
+            CHECK_HR(e->lpVtbl->Next(e, 128, buf, &fetched), S_FALSE);
+            CHECK(fetched == OOP_FAKE_SERVERS);
+            e->lpVtbl->Release(e);
+        }
+        l2->lpVtbl->Release(l2);
+        Sleep(pauses[i]);
+    }
+}
+
 /* A client that releases the server list and then walks the enumerator it got (as many OPC clients
  * do) keeps the server process: every object an EXE server hands out counts until it is released. */
 static void check_enumerator_outlives_list(void) {
@@ -604,6 +631,8 @@ int main(int argc, char **argv) {
         c->lpVtbl->Release(c);
     }
     check_server_list();
+    /* The server's lifetime does not depend on the proxy/stub: checked once. */
+    if (!widl_client && !widl_server) check_reconnect_at_once();
     check_enumerator_outlives_list();
     check_operator_stop();
     CoUninitialize();

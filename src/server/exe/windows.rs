@@ -2,7 +2,7 @@
 
 use core::ffi::c_void;
 use core::ptr;
-use core::sync::atomic::{AtomicBool, AtomicPtr, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicPtr, Ordering};
 
 use windows_sys::Win32::Foundation::{CloseHandle, HANDLE, WAIT_OBJECT_0, WAIT_TIMEOUT};
 use windows_sys::Win32::System::Com::{
@@ -10,7 +10,7 @@ use windows_sys::Win32::System::Com::{
     CoRevokeClassObject, CLSCTX_LOCAL_SERVER, COINIT_MULTITHREADED, REGCLS_MULTIPLEUSE, REGCLS_SUSPENDED,
 };
 use windows_sys::Win32::System::Console::SetConsoleCtrlHandler;
-use windows_sys::Win32::System::Threading::{CreateEventW, SetEvent, WaitForMultipleObjects};
+use windows_sys::Win32::System::Threading::{CreateEventW, ResetEvent, SetEvent, WaitForMultipleObjects};
 
 use super::OpcExeServerOptions;
 use crate::com::ffi::{self, Fail};
@@ -22,6 +22,7 @@ use crate::registry::cmdline::OpcServerCommand;
 use crate::registry::register::ServerDescription;
 use crate::registry::registries;
 use crate::security::{OpcInitializeServerSecurity, OpcSecurityOptions, RPC_E_TOO_LATE};
+use crate::server::exe::HostCount;
 use crate::server::{
     class_object, register_all, server_lock, server_unlock, set_process_count, unregister_all, ProcessCount,
     ServerClass,
@@ -33,20 +34,40 @@ static IDLE: AtomicPtr<c_void> = AtomicPtr::new(ptr::null_mut());
 static RUNNING: AtomicBool = AtomicBool::new(false);
 /// Set once anything counted on the server: a client came.
 static USED: AtomicBool = AtomicBool::new(false);
-/// Counts taken through the host, for the result (objects left when it returns).
-static HELD: AtomicU32 = AtomicU32::new(0);
+/// The host's count (beside COM's server process count) and whether it is ending.
+static COUNT: HostCount = HostCount::new();
 
-fn process_lock() {
+/// After the last client left, how long the host keeps serving before it ends: a client that
+/// released its last object and connects again at once is served by this process, which then serves
+/// on. Under Wine, whose CoReleaseServerProcess does not suspend the class objects, an activation
+/// already on its way to a process whose class objects are revoked fails (E_FAIL) and one to a process
+/// that exits fails too (RPC_S_CALL_FAILED): this second is what spares such a client.
+const LINGER_MS: u32 = 1000;
+
+fn process_enter() -> bool {
+    if !COUNT.enter() {
+        return false;
+    }
     // SAFETY: no arguments; COM keeps the count.
     unsafe { CoAddRefServerProcess() };
-    HELD.fetch_add(1, Ordering::AcqRel);
+    USED.store(true, Ordering::Release);
+    true
+}
+
+fn process_lock() {
+    COUNT.lock();
+    // SAFETY: no arguments; COM keeps the count.
+    unsafe { CoAddRefServerProcess() };
     USED.store(true, Ordering::Release);
 }
 
 fn process_unlock() {
-    let _ = HELD.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
-    // SAFETY: no arguments; at zero COM suspends the class objects itself.
-    if unsafe { CoReleaseServerProcess() } == 0 {
+    let Some(left) = COUNT.unlock() else {
+        return; // an unlock too many: COM's count is left alone too
+    };
+    // SAFETY: no arguments; at zero Windows suspends the class objects itself.
+    unsafe { CoReleaseServerProcess() };
+    if left == 0 {
         let idle = IDLE.load(Ordering::Acquire);
         if !idle.is_null() {
             // SAFETY: the host's event, alive while it runs (the count is only kept then).
@@ -113,8 +134,46 @@ fn last_error() -> HRESULT {
 /// The class objects registered with COM, revoked and released when dropped.
 struct Registered(Vec<(u32, *mut IUnknown)>);
 
-impl Drop for Registered {
-    fn drop(&mut self) {
+impl Registered {
+    /// Registers the class object of each class with COM, suspended; `CoResumeClassObjects` hands
+    /// them out.
+    fn new(table: &[ServerClass]) -> Result<Registered, Fail> {
+        let mut registered = Registered(Vec::new());
+        for class in table {
+            let mut unknown: *mut c_void = ptr::null_mut();
+            // SAFETY: a valid IID and out-pointer.
+            let hr = unsafe { class_object(*class, &IID_IUNKNOWN, &mut unknown) };
+            if hr < 0 {
+                return Err(hr.into());
+            }
+            let mut cookie = 0;
+            // SAFETY: a valid CLSID and class object; COM keeps its own reference while registered.
+            let hr = unsafe {
+                CoRegisterClassObject(
+                    (&class.clsid as *const crate::com::GUID).cast(),
+                    unknown,
+                    CLSCTX_LOCAL_SERVER,
+                    (REGCLS_MULTIPLEUSE | REGCLS_SUSPENDED) as u32,
+                    &mut cookie,
+                )
+            };
+            if hr < 0 {
+                // SAFETY: the reference class_object gave us.
+                unsafe { release(unknown.cast()) };
+                return Err(hr.into());
+            }
+            registered.0.push((cookie, unknown.cast()));
+        }
+        // SAFETY: no arguments: every class object is registered, hand them out from now on.
+        let hr = unsafe { CoResumeClassObjects() };
+        if hr < 0 {
+            return Err(hr.into());
+        }
+        Ok(registered)
+    }
+
+    /// Revokes every registration: COM hands out none of them from now on.
+    fn revoke(&mut self) {
         for (cookie, unknown) in self.0.drain(..) {
             // SAFETY: a registration of ours and the reference we kept for it.
             unsafe {
@@ -122,6 +181,12 @@ impl Drop for Registered {
                 release(unknown);
             }
         }
+    }
+}
+
+impl Drop for Registered {
+    fn drop(&mut self) {
+        self.revoke();
     }
 }
 
@@ -219,8 +284,9 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
     STOP.store(stop.0, Ordering::Release);
     IDLE.store(idle.0, Ordering::Release);
     USED.store(false, Ordering::Release);
-    HELD.store(0, Ordering::Release);
+    COUNT.reset();
     set_process_count(Some(ProcessCount {
+        enter: process_enter,
         lock: process_lock,
         unlock: process_unlock,
     }));
@@ -232,38 +298,7 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
         process_lock();
         USED.store(false, Ordering::Release);
     }
-
-    let mut registered = Registered(Vec::new());
-    for class in table {
-        let mut unknown: *mut c_void = ptr::null_mut();
-        // SAFETY: a valid IID and out-pointer.
-        let hr = unsafe { class_object(*class, &IID_IUNKNOWN, &mut unknown) };
-        if hr < 0 {
-            return Err(hr.into());
-        }
-        let mut cookie = 0;
-        // SAFETY: a valid CLSID and class object; COM keeps its own reference while registered.
-        let hr = unsafe {
-            CoRegisterClassObject(
-                (&class.clsid as *const crate::com::GUID).cast(),
-                unknown,
-                CLSCTX_LOCAL_SERVER,
-                (REGCLS_MULTIPLEUSE | REGCLS_SUSPENDED) as u32,
-                &mut cookie,
-            )
-        };
-        if hr < 0 {
-            // SAFETY: the reference class_object gave us.
-            unsafe { release(unknown.cast()) };
-            return Err(hr.into());
-        }
-        registered.0.push((cookie, unknown.cast()));
-    }
-    // SAFETY: no arguments: every class object is registered, hand them out from now on.
-    let hr = unsafe { CoResumeClassObjects() };
-    if hr < 0 {
-        return Err(hr.into());
-    }
+    let mut registered = Registered::new(table)?;
 
     let first_client = if o.first_client_timeout_ms == 0 {
         60_000
@@ -275,25 +310,48 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
     } else {
         o.release_timeout_ms
     };
-    let mut events = vec![idle.0, stop.0];
+    let mut stops = vec![stop.0];
     if let Some(named) = &named {
-        events.push(named.0);
+        stops.push(named.0);
     }
+    let mut events = vec![idle.0];
+    events.extend_from_slice(&stops);
     let mut waited = 0u32;
     let stopped = loop {
         match wait(&events, 500) {
-            Some(0) => break false,
-            Some(_) => break true,
-            None => {
-                waited = waited.saturating_add(500);
-                if by_com && !USED.load(Ordering::Acquire) && waited >= first_client {
-                    break false;
-                }
+            Some(0) => {
+                // SAFETY: the host's event; the count is read again below, so a wake-up is not lost.
+                unsafe { ResetEvent(idle.0) };
             }
+            Some(_) => break true,
+            None => waited = waited.saturating_add(500),
         }
+        let ending = if USED.load(Ordering::Acquire) {
+            COUNT.held() == 0
+        } else {
+            by_com && waited >= first_client
+        };
+        if !ending {
+            continue;
+        }
+        // The last client left (or none came): a while for a client already on its way here, then
+        // the end, decided atomically with the count.
+        if wait(&stops, LINGER_MS).is_some() {
+            break true;
+        }
+        if COUNT.close_if_idle() {
+            break false;
+        }
+        // A client came meanwhile: serve on, with the class objects handed out again (Windows
+        // suspended them when the count fell to zero).
+        // SAFETY: no arguments.
+        unsafe { CoResumeClassObjects() };
     };
     let mut result = S_OK;
     if stopped {
+        // No new client from now on; those connected are asked to go.
+        COUNT.close();
+        registered.revoke();
         if let Some(on_stop) = o.on_stop {
             // SAFETY: the server's function, with its context, on this thread (COM initialised).
             unsafe { on_stop(o.context) };
@@ -301,7 +359,7 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
         if !by_com {
             process_unlock();
         }
-        if HELD.load(Ordering::Acquire) > 0 && wait(&[idle.0], release_timeout).is_none() {
+        if !released_within(idle.0, release_timeout) {
             result = S_FALSE;
         }
     } else if !by_com {
@@ -309,6 +367,25 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
     }
     drop(registered);
     Ok(result)
+}
+
+/// Whether nothing is held on the server within `ms` milliseconds.
+fn released_within(idle: HANDLE, ms: u32) -> bool {
+    let mut left = ms;
+    while COUNT.held() > 0 {
+        if left == 0 {
+            return false;
+        }
+        let step = left.min(100);
+        // SAFETY: the host's event; the count is read again, so a wake-up is not lost.
+        unsafe { ResetEvent(idle) };
+        if COUNT.held() == 0 {
+            break;
+        }
+        let _ = wait(&[idle], step);
+        left -= step;
+    }
+    true
 }
 
 /// Sets the running host's stop event: S_OK, or S_FALSE when no host runs.
