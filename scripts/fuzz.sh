@@ -42,17 +42,31 @@ max_len() {
 }
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:symbolize=1
-total=0
-for t in "${targets[@]}"; do
-    corpus="$out/corpus/$t"     # what this run found, on top of the committed seeds (left unchanged)
+# One target: its libFuzzer run, its exit status in $out/$t.status.
+run_target() {
+    local t=$1 corpus="$out/corpus/$1" status=0   # corpus: what this run found, beside the committed seeds
     mkdir -p "$corpus" "$out/artifacts"
-    log="$out/$t.log"
-    status=0
     "$out/target/$triple/release/$t" "$corpus" "fuzz/seeds/$t" -max_total_time="$seconds" \
         -max_len="$(max_len "$t")" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-        -artifact_prefix="$out/artifacts/$t-" >"$log" 2>&1 || status=$?
+        -artifact_prefix="$out/artifacts/$t-" >"$out/$t.log" 2>&1 || status=$?
+    echo "$status" >"$out/$t.status"
+}
+# Two targets at a time (one per core); each still gets its full time.
+for ((i = 0; i < ${#targets[@]}; i += 2)); do
+    pids=()
+    for t in "${targets[@]:i:2}"; do
+        rm -f "$out/$t.status"
+        run_target "$t" &
+        pids+=($!)
+    done
+    wait "${pids[@]}" || true
+done
+total=0
+for t in "${targets[@]}"; do
+    log="$out/$t.log"
+    status=$(cat "$out/$t.status" 2>/dev/null || echo "none")
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-    if [ "$status" -ne 0 ]; then
+    if [ "$status" != 0 ]; then
         tail -40 "$log" >&2
         echo "fuzz $t: FINDING after ${runs:-?} cases (exit $status); input in $out/artifacts/" >&2
         exit 1

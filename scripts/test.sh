@@ -33,7 +33,7 @@ rust-linux|linux|Rust tests (Linux)
 c-asan|linux|C tests (Linux, AddressSanitizer + UBSan) and the exported symbols
 c-valgrind|linux|C tests (Linux, valgrind --leak-check=full, no sanitizer)
 tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
-miri|linux|Miri (Stacked Borrows and Tree Borrows): every test that does not call the operating system
+miri|linux|Miri: every test that does not call the operating system (Stacked Borrows); the tests of the COM objects (Tree Borrows)
 package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
 docs|linux|C API reference (Doxygen): 0 undocumented items, every function listed, rendered in headless Chromium

@@ -3802,9 +3802,9 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
  *   library makes (through the module lock, which the host sets), LockServer, and the server's own
  *   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
- *   last goes it serves one second more (a client that connects again at once keeps it serving), then
- *   revokes the class objects and returns, answering any later CreateInstance or LockServer with
- *   CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
+ *   last goes it serves a quarter of a second more (a client that connects again at once keeps it
+ *   serving), then revokes the class objects and returns, answering any later CreateInstance or
+ *   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
  *   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
  *   serves until stopped. A stop (console control, the named event `stop_event_name`,
  *   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let

@@ -4,13 +4,13 @@
 //! **Lifetime.** While it serves, the server count ([`super::OpcServerLock`], LockServer, and through
 //! the module lock every object of the library) is COM's server process count: CoAddRefServerProcess
 //! and CoReleaseServerProcess: COM's rule for local servers, kept while **any** object handed out is
-//! referenced. When it falls to zero (Windows then suspends the class objects) the host serves one
-//! second more: a client that released its last object and connects again at once is served, and the
-//! host serves on. Otherwise it ends: from that moment, decided atomically with the count, any new
-//! instance or LockServer is refused with CO_E_SERVER_STOPPING (COM then starts a new process) and the
-//! class objects are revoked, so no client is handed an object of a process about to exit. Started by
-//! COM (`-Embedding`),
-//! a server no client comes to gives up after `first_client_timeout_ms`. Started by hand, it holds one
+//! referenced. When it falls to zero (Windows then suspends the class objects) the host serves a
+//! quarter of a second more: a client that released its last object and connects again at once is
+//! served, and the host serves on. Otherwise it ends: from that moment, decided atomically with the
+//! count, any new instance or LockServer is refused with CO_E_SERVER_STOPPING (COM then starts a new
+//! process) and the class objects are revoked, so no client is handed an object of a process about
+//! to exit. Started by COM (`-Embedding`), a server no client comes to gives up after
+//! `first_client_timeout_ms`. Started by hand, it holds one
 //! count of its own until it is stopped.
 //!
 //! **Stop.** Console control (Ctrl+C, the console closing, log-off, shutdown), the named event
@@ -154,9 +154,9 @@ pub struct OpcExeServerOptions {
 ///   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
 ///   library makes (through the module lock, which the host sets), LockServer, and the server's own
 ///   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
-///   last goes it serves one second more (a client that connects again at once keeps it serving), then
-///   revokes the class objects and returns, answering any later CreateInstance or LockServer with
-///   CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
+///   last goes it serves a quarter of a second more (a client that connects again at once keeps it
+///   serving), then revokes the class objects and returns, answering any later CreateInstance or
+///   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
 ///   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
 ///   serves until stopped. A stop (console control, the named event `stop_event_name`,
 ///   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let

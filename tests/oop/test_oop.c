@@ -507,7 +507,7 @@ static void check_server_list(void) {
  * then connect) is served every time: by the ending process, which then serves on, or by a new one,
  * never by a process that exits under its call. After the longest pause the ending process is gone. */
 static void check_reconnect_at_once(void) {
-    static const DWORD pauses[] = {0, 0, 1, 20, 300, 1500};
+    static const DWORD pauses[] = {0, 0, 1, 20, 100, 500};
     IOPCServerList2 *l2;
     IOPCEnumGUID *e;
     GUID buf[128];

@@ -41,8 +41,9 @@ static COUNT: HostCount = HostCount::new();
 /// released its last object and connects again at once is served by this process, which then serves
 /// on. Under Wine, whose CoReleaseServerProcess does not suspend the class objects, an activation
 /// already on its way to a process whose class objects are revoked fails (E_FAIL) and one to a process
-/// that exits fails too (RPC_S_CALL_FAILED): this second is what spares such a client.
-const LINGER_MS: u32 = 1000;
+/// that exits fails too (RPC_S_CALL_FAILED): this quarter of a second is what spares such a client
+/// (reconnecting takes milliseconds), and what every exit of the server costs.
+const LINGER_MS: u32 = 250;
 
 fn process_enter() -> bool {
     if !COUNT.enter() {
