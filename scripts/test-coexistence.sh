@@ -176,6 +176,13 @@ link_matrix() { # arch build_dir run(1/0)
     local dir="$out/run-$arch"
     mkdir -p "$dir"
     cp "$dll" "$dir/"
+    # The *_i.c files are C (MIDL's form, with its stray #endif token); compiled as such, once, and
+    # linked into the C and the C++ programs alike.
+    local foundation_objs=()
+    for stem in opccomn opcda opc_ae opchda; do
+        $triple-gcc -w -c -o "$dir/${stem}_i.o" "$out/foundation/${stem}_i.c" -I"$out/foundation"
+        foundation_objs+=("$dir/${stem}_i.o")
+    done
     for lib in static dll; do
         for with_i in 1 0; do
             for first in 1 0; do
@@ -185,13 +192,7 @@ link_matrix() { # arch build_dir run(1/0)
                     cc=$triple-gcc
                     local extra=() iobjs=() macros=()
                     if [ "$lang" = c++ ]; then cc=$triple-g++; extra=(-static-libstdc++); fi
-                    # The *_i.c files are C (MIDL's form, with its stray #endif token); compiled as such.
-                    if [ "$with_i" = 1 ]; then
-                        for stem in opccomn opcda opc_ae opchda; do
-                            $triple-gcc -w -c -o "$dir/${stem}_i-$lang.o" "$out/foundation/${stem}_i.c" -I"$out/foundation"
-                            iobjs+=("$dir/${stem}_i-$lang.o")
-                        done
-                    fi
+                    [ "$with_i" = 1 ] && iobjs=("${foundation_objs[@]}")
                     # C through the COBJMACROS call macros, C++ through the classes.
                     [ "$lang" = c ] && macros=(-DCOBJMACROS)
                     compile "$cc" "$lang" "${macros[@]}" -DOURS_FIRST=$first -c -o "$name.o" "$root/tests/coexistence/program.c"

@@ -285,7 +285,10 @@ fn the_c_structure_versions() {
         let regs = crate::registry::registries(reg);
         let level = || regs.write.value(&format!("AppID\\{app_id}"), "AuthenticationLevel");
         let permission = || regs.write.value(&format!("AppID\\{app_id}"), "AccessPermission");
-        for size in [v1_end, v1_sizeof] {
+        // Under Miri one size per version: the structure is allocated whole for every size, so the
+        // second size of a version shows Miri no other memory access (the native run checks both).
+        let sizes = |a: usize, b: usize| if cfg!(miri) { vec![a] } else { vec![a, b] };
+        for size in sizes(v1_end, v1_sizeof) {
             // A version-1 caller knows nothing of the new fields: they are taken as zero.
             let r = make(size);
             assert_eq!(OpcRegisterServer(&r, reg), crate::com::S_OK, "size {size}");
@@ -294,7 +297,7 @@ fn the_c_structure_versions() {
             assert_eq!(OpcUnregisterServer(&r, reg), crate::com::S_OK);
             assert!(regs.write.subkeys("").is_empty());
         }
-        for size in [v2_end, full] {
+        for size in sizes(v2_end, full) {
             let r = make(size);
             assert_eq!(OpcRegisterServer(&r, reg), crate::com::S_OK, "size {size}");
             assert_eq!(level(), Some(RegValue::Dword(2)), "explicitly asked for");
