@@ -858,6 +858,13 @@ typedef struct OpcExeServerOptions {
    * 0 means 10000.
    */
   uint32_t release_timeout_ms;
+  /**
+   * After the last client left, how long the host keeps serving before it ends, in milliseconds; 0
+   * means 250. A client that connects again within it is served by this process (under Wine, whose
+   * COM does not suspend the class objects, an activation that meets the end can fail); every exit
+   * of the server waits for it.
+   */
+  uint32_t idle_linger_ms;
 } OpcExeServerOptions;
 
 /**
@@ -3802,7 +3809,7 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
  *   library makes (through the module lock, which the host sets), LockServer, and the server's own
  *   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
- *   last goes it serves a quarter of a second more (a client that connects again at once keeps it
+ *   last goes it serves `idle_linger_ms` more (a client that connects again at once keeps it
  *   serving), then revokes the class objects and returns, answering any later CreateInstance or
  *   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
  *   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it

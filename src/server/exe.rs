@@ -4,14 +4,14 @@
 //! **Lifetime.** While it serves, the server count ([`super::OpcServerLock`], LockServer, and through
 //! the module lock every object of the library) is COM's server process count: CoAddRefServerProcess
 //! and CoReleaseServerProcess: COM's rule for local servers, kept while **any** object handed out is
-//! referenced. When it falls to zero (Windows then suspends the class objects) the host serves a
-//! quarter of a second more: a client that released its last object and connects again at once is
-//! served, and the host serves on. Otherwise it ends: from that moment, decided atomically with the
-//! count, any new instance or LockServer is refused with CO_E_SERVER_STOPPING (COM then starts a new
-//! process) and the class objects are revoked, so no client is handed an object of a process about
-//! to exit. Started by COM (`-Embedding`), a server no client comes to gives up after
-//! `first_client_timeout_ms`. Started by hand, it holds one
-//! count of its own until it is stopped.
+//! referenced. When it falls to zero (Windows then suspends the class objects) the host serves
+//! `idle_linger_ms` (a quarter of a second) more: a client that released its last object and connects
+//! again at once is served, and the host serves on. Otherwise it ends: from that moment, decided
+//! atomically with the count, any new instance or LockServer is refused with CO_E_SERVER_STOPPING
+//! (COM then starts a new process) and the class objects are revoked, so no client is handed an
+//! object of a process about to exit. Started by COM (`-Embedding`), a server no client comes to gives
+//! up after `first_client_timeout_ms`. Started by hand, it holds one count of its own until it is
+//! stopped.
 //!
 //! **Stop.** Console control (Ctrl+C, the console closing, log-off, shutdown), the named event
 //! `stop_event_name`, or [`OpcExeServerStop`] from any thread: the host calls `on_stop` (where the
@@ -140,6 +140,11 @@ pub struct OpcExeServerOptions {
     /// After a stop, how long the host waits for clients to release what they hold, in milliseconds;
     /// 0 means 10000.
     pub release_timeout_ms: u32,
+    /// After the last client left, how long the host keeps serving before it ends, in milliseconds; 0
+    /// means 250. A client that connects again within it is served by this process (under Wine, whose
+    /// COM does not suspend the class objects, an activation that meets the end can fail); every exit
+    /// of the server waits for it.
+    pub idle_linger_ms: u32,
 }
 
 /// Runs an EXE server (LocalServer32) as its `main`: everything but the server's own objects.
@@ -154,7 +159,7 @@ pub struct OpcExeServerOptions {
 ///   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
 ///   library makes (through the module lock, which the host sets), LockServer, and the server's own
 ///   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
-///   last goes it serves a quarter of a second more (a client that connects again at once keeps it
+///   last goes it serves `idle_linger_ms` more (a client that connects again at once keeps it
 ///   serving), then revokes the class objects and returns, answering any later CreateInstance or
 ///   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
 ///   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
@@ -222,6 +227,7 @@ unsafe fn read_options(options: *const OpcExeServerOptions) -> Result<OpcExeServ
         context: ptr::null_mut(),
         first_client_timeout_ms: 0,
         release_timeout_ms: 0,
+        idle_linger_ms: 0,
     };
     // SAFETY: repr(C), starting with struct_size, integers, raw pointers and an optional function
     // pointer; the caller vouches for `options`.

@@ -42,6 +42,9 @@ static CLSID oop_fake_clsid(unsigned n) {
 /* calls OpcExeServerStop, as an operator's tool would; "stop=HR". The host then calls the server's
  * on_stop, which notifies the sinks of the object asked (bounded by OOP_BOUNDED_MS). */
 #define OOP_CODE_STOP ((HRESULT)0xE0040206L)
+#define OOP_CODE_PROCESS_ID ((HRESULT)0xE0040207L) /* the server's process identifier, as text */
+/* How long the test server keeps serving after its last client left (OpcExeServerOptions). */
+#define OOP_LINGER_MS 1000
 /* The sinks a test server object takes at once (its advise limit). */
 #define OOP_ADVISE_LIMIT 4
 #define OOP_REASON "Maintenance at 12:00 \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac"

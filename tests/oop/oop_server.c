@@ -127,6 +127,12 @@ static HRESULT vendor_text(void *context, HRESULT code, LCID locale, LPCWSTR *te
         *text = s->answer;
         return S_OK;
     }
+    if (code == OOP_CODE_PROCESS_ID) {
+        snprintf(buf, sizeof buf, "%lu", (unsigned long)GetCurrentProcessId());
+        set_answer(s, buf);
+        *text = s->answer;
+        return S_OK;
+    }
     if (code == OOP_CODE_CPU_TIME) {
         snprintf(buf, sizeof buf, "%llu", process_cpu_time());
         set_answer(s, buf);
@@ -259,6 +265,7 @@ int main(void) {
     options.class_count = 2;
     options.first_client_timeout_ms = 120000; /* a server nobody connects to gives up after two minutes */
     options.release_timeout_ms = 30000;       /* after a stop: 30 s for what is left */
+    options.idle_linger_ms = OOP_LINGER_MS;   /* the reconnect test's pauses stay far from its end */
     options.on_stop = on_stop;
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);

@@ -37,12 +37,12 @@ static USED: AtomicBool = AtomicBool::new(false);
 /// The host's count (beside COM's server process count) and whether it is ending.
 static COUNT: HostCount = HostCount::new();
 
-/// After the last client left, how long the host keeps serving before it ends: a client that
-/// released its last object and connects again at once is served by this process, which then serves
-/// on. Under Wine, whose CoReleaseServerProcess does not suspend the class objects, an activation
-/// already on its way to a process whose class objects are revoked fails (E_FAIL) and one to a process
-/// that exits fails too (RPC_S_CALL_FAILED): this quarter of a second is what spares such a client
-/// (reconnecting takes milliseconds), and what every exit of the server costs.
+/// After the last client left, how long the host keeps serving before it ends, unless the server says
+/// (`idle_linger_ms`): a client that released its last object and connects again at once is served by
+/// this process, which then serves on. Under Wine, whose CoReleaseServerProcess does not suspend the
+/// class objects, an activation already on its way to a process whose class objects are revoked fails
+/// (E_FAIL) and one to a process that exits fails too (RPC_S_CALL_FAILED): this quarter of a second
+/// is what spares such a client (reconnecting takes milliseconds), and what every exit costs.
 const LINGER_MS: u32 = 250;
 
 fn process_enter() -> bool {
@@ -311,6 +311,11 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
     } else {
         o.release_timeout_ms
     };
+    let linger = if o.idle_linger_ms == 0 {
+        LINGER_MS
+    } else {
+        o.idle_linger_ms
+    };
     let mut stops = vec![stop.0];
     if let Some(named) = &named {
         stops.push(named.0);
@@ -337,7 +342,7 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
         }
         // The last client left (or none came): a while for a client already on its way here, then
         // the end, decided atomically with the count.
-        if wait(&stops, LINGER_MS).is_some() {
+        if wait(&stops, linger).is_some() {
             break true;
         }
         if COUNT.close_if_idle() {
