@@ -803,7 +803,7 @@ typedef struct OpcServerClass {
    */
   uint32_t flags;
   /**
-   * What `/RegServer` (OpcExeServerMain) and OpcModuleRegister write for the class, NULL for a
+   * What `/RegServer` (OpcExeServerRun) and OpcModuleRegister write for the class, NULL for a
    * class that is not registered by them. Its `clsid` must be this class's.
    */
   const struct OpcServerRegistration *registration;
@@ -837,7 +837,11 @@ typedef struct OpcExeServerOptions {
   uint32_t class_count;
   /**
    * The name of an event the operator's tools set to stop the server (for example
-   * `L"Local\\VendorServerStop"`), NULL for none.
+   * `L"Local\\VendorServerStop"`), NULL for none. The host creates it (manual reset, not set) with
+   * access for SYSTEM, the administrators and the account the server runs as, and nobody else:
+   * they may set it (OpenEventW with EVENT_MODIFY_STATE, then SetEvent). If an object of that name
+   * already exists, OpcExeServerRun refuses to serve (0x800700B7): it never adopts an event someone
+   * else created.
    */
   LPCWSTR stop_event_name;
   /**
@@ -859,10 +863,13 @@ typedef struct OpcExeServerOptions {
    */
   uint32_t release_timeout_ms;
   /**
-   * After the last client left, how long the host keeps serving before it ends, in milliseconds; 0
-   * means 250. A client that connects again within it is served by this process (under Wine, whose
-   * COM does not suspend the class objects, an activation that meets the end can fail); every exit
-   * of the server waits for it.
+   * After the last client left, how long the host keeps serving before it ends, in milliseconds,
+   * counted from the last release; 0 means 5000 (as ATL's EXE module). A client that connects again
+   * within it is served by this process. After it the host revokes its class objects, serves one
+   * second more for a client already on its way, then ends. Shorter values end the process sooner
+   * after its last client, at a price under Wine, whose COM does not suspend the class objects: a
+   * client whose activation meets the end can fail there (docs/guide/server-plumbing.md). Every
+   * exit of the server that is not a stop waits for it.
    */
   uint32_t idle_linger_ms;
 } OpcExeServerOptions;
@@ -3716,7 +3723,7 @@ HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecuri
  * unless the class is OPC_CLASS_AGGREGATABLE and `riid` is IID_IUnknown, and making sure `*ppv` is
  * NULL on every failure: a function that reports success without an object gets E_UNEXPECTED);
  * LockServer(TRUE/FALSE) is OpcServerLock/OpcServerUnlock. The class object itself does not count
- * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerMain, or a
+ * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun, or a
  * DllGetClassObject of its own.
  *
  * Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
@@ -3734,15 +3741,16 @@ HRESULT OPCCOMN_CDECL OpcClassFactoryCreate(const struct OpcServerClass *cls, RE
  * OpcServerUnlock when it is freed), so that a DLL server is not unloaded and an EXE server does not
  * exit while a client holds it. LockServer and the library's objects are counted without it, and so
  * is an object that aggregates one of the library's objects (IOPCCommon, the shutdown connection
- * point) for as long as it holds it. Under OpcExeServerMain this is COM's server process count
+ * point) for as long as it holds it. Under OpcExeServerRun this is COM's server process count
  * (CoAddRefServerProcess); elsewhere a count OpcModuleCanUnloadNow reads. Any thread.
  */
 void OPCCOMN_CDECL OpcServerLock(void);
 
 /**
- * Takes back one OpcServerLock. Under OpcExeServerMain the last one ends the server once it has had
- * a client (COM stops handing out its class objects at once). An unlock without a lock is ignored.
- * Any thread.
+ * Takes back one OpcServerLock. Under OpcExeServerRun the last count on the server ends it once it
+ * has had a client (COM stops handing out its class objects at once). An unlock without an
+ * OpcServerLock still held is ignored: it never takes the count of a LockServer lock or of an object
+ * of the library. Any thread.
  */
 void OPCCOMN_CDECL OpcServerUnlock(void);
 
@@ -3809,13 +3817,16 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
  *   library makes (through the module lock, which the host sets), LockServer, and the server's own
  *   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
- *   last goes it serves `idle_linger_ms` more (a client that connects again at once keeps it
- *   serving), then revokes the class objects and returns, answering any later CreateInstance or
- *   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
+ *   last goes it serves `idle_linger_ms` more after the last release (a client that connects again
+ *   meanwhile keeps it serving), then revokes the class objects, serves one second more for a client
+ *   already on its way, and returns, answering any later CreateInstance or LockServer with
+ *   CO_E_SERVER_STOPPING (COM then starts a new server process). LockServer(FALSE) and
+ *   OpcServerUnlock give back only what LockServer(TRUE) and OpcServerLock took. Started by COM
  *   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
  *   serves until stopped. A stop (console control, the named event `stop_event_name`,
  *   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
- *   go.
+ *   go. The host creates the named event itself, not set, with access for SYSTEM, the administrators
+ *   and the server's own account only; a name that already exists is refused.
  *
  * `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
  * CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
@@ -3825,8 +3836,11 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  * Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
  * after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
  * a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
- * command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process; the errors
- * of CoInitializeEx, CoRegisterClassObject and of registration.
+ * command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the
+ * process; HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named
+ * `stop_event_name` already exists (an event or any other kind: another instance of the server, or
+ * a name someone took first), before anything is served; the errors of CoInitializeEx,
+ * CoRegisterClassObject and of registration.
  *
  * @par Safety
  * `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
