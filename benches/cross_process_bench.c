@@ -13,11 +13,12 @@
  * this process, so that neither pays a registry lookup the other does not); before each batch of
  * Enum+Next it registers the batch's one again, as every call makes a new enumerator proxy. Each
  * server and each kind of proxy is checked to be the one it should be before anything is timed.
- * Client and servers register their proxy/stubs in their own processes only: the machine's
- * registration of the five interfaces (Interface\{iid}\ProxyStubClsid32, opccomn's or the
- * Foundation's) is neither read nor changed, so out-of-process clients of that machine keep working
- * during and after a run. What the benchmark registers is its three servers' classes, removed at its
- * end, after a failure and after a stall (and by `--unregister`, for a run killed from outside).
+ * Client and servers register their proxy/stubs in their own processes only (COM prefers them to the
+ * registry): the machine's registration of the five interfaces (Interface\{iid}\ProxyStubClsid32,
+ * opccomn's or the Foundation's) is not changed, so out-of-process clients of that machine keep
+ * working during and after a run. What the benchmark registers is its three servers' classes,
+ * removed at its end, after a failure and after a stall (and by `--unregister`, for a run killed from
+ * outside).
  *
  * The contenders run in interleaved rounds (--rounds, 51 by default, the order rotating), a batch of
  * calls a round. Printed per operation: the median wall-clock time per round trip of each, the median
