@@ -279,6 +279,9 @@ stage_package_linux() {
         $(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --cflags --libs opccomn) \
         -Wl,-rpath,"$build/install/lib"
     "$build/consumer/pkgconfig_demo" >/dev/null
+    # The version as the installed package states it (Cargo.toml's, "0.3.0-dev" while in development).
+    [ "$(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --modversion opccomn)" = "$version" ]
+    grep -qx "set(opccomn_VERSION_FULL \"$version\")" "$build/install/lib/cmake/opccomn/opccomnConfig.cmake"
 }
 
 stage_no_dll_exports() {

@@ -20,11 +20,15 @@
 /** The library's major version (from Cargo.toml). */
 #define OPCCOMN_VERSION_MAJOR 0
 /** The library's minor version. */
-#define OPCCOMN_VERSION_MINOR 2
+#define OPCCOMN_VERSION_MINOR 3
 /** The library's patch version. */
 #define OPCCOMN_VERSION_PATCH 0
-/** The library's version as text, "MAJOR.MINOR.PATCH". */
-#define OPCCOMN_VERSION "0.2.0"
+/** The library's version as text: "MAJOR.MINOR.PATCH", with "-PRERELEASE" after it for a version in
+    development (OPCCOMN_VERSION_PRERELEASE). */
+#define OPCCOMN_VERSION "0.3.0-dev"
+/** Defined only in the header of a version in development (a build of the main branch, not a
+    release): the pre-release part of OPCCOMN_VERSION, which then names the version to come. */
+#define OPCCOMN_VERSION_PRERELEASE "dev"
 
 /* On Windows the COM base types (GUID, HRESULT, IUnknown, ...) come from the system headers; elsewhere
    this header defines them, with UTF-16 WCHAR as COM requires. */
