@@ -46,7 +46,7 @@ example-x64|wine|C++ example server and client (x64, under Wine, against the ins
 third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64 and x86 clients, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
-coexistence|wine|header and library beside the OPC Foundation'"'"'s MIDL headers and *_i.c; a server DLL with its own .def; the static library linked with the documented and pkg-config'"'"'s lists (x64, x86, Linux)
+coexistence|wine|header and library beside the OPC Foundation'"'"'s headers (MIDL'"'"'s and widl'"'"'s) and *_i.c; a server DLL with its own .def; the static library linked with the documented and pkg-config'"'"'s lists (x64, x86, Linux)
 rust-x86|wine32|Rust tests (Windows x86, under 32-bit Wine)
 c-x86|wine32|C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)
 conformance-x86|wine32|conformance checker (x86) against the x86 seeded-defect servers, under 32-bit Wine

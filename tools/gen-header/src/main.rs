@@ -190,9 +190,10 @@ fn generate_header(
     let mut section = String::from(
         "/* ---- The interfaces, from idl/combase.idl (off Windows) and idl/opccomn.idl, in MIDL's shape: a\n\
          \x20  MIDL-generated header (the OPC Foundation's opccomn.h) and this one skip each other's\n\
-         \x20  declarations whichever comes first. ---- */\n\n\
-         #ifdef __cplusplus\nextern \"C\" {\n#endif\n\n#if !defined(_WIN32)\n\n",
+         \x20  declarations whichever comes first. ---- */\n\n",
     );
+    section += emit::UUIDOF_PROLOGUE;
+    section += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n#if !defined(_WIN32)\n\n";
     for i in base {
         section += &emit::interface(
             catalog,
@@ -207,6 +208,7 @@ fn generate_header(
     section += "/* ---- The component categories and classes (idl/opcguids.txt). ---- */\n\n";
     section += &emit::table_declarations(table);
     section += "#ifdef __cplusplus\n}  /* extern \"C\" */\n#endif\n\n";
+    section += emit::UUIDOF_EPILOGUE;
 
     let marker = "#ifdef __cplusplus\nextern \"C\" {\n#endif // __cplusplus\n";
     let at = text.find(marker).ok_or("no extern \"C\" block in cbindgen's output")?;
