@@ -23,7 +23,7 @@
 # 3. Link matrix, x64 and x86: static library or DLL import library x with or without the *_i.c files x
 #    both include orders x C (COBJMACROS) / C++ (__uuidof of every OPC Common interface), each program
 #    run under Wine (x86 under 32-bit Wine, or linked only when it is missing); with widl's headers the
-#    C++ programs, both orders, against either library (with widl's *_i.c beside the import library).
+#    C and C++ programs, both orders, against either library (widl's *_i.c beside the import library).
 # 4. A server DLL with its own .def naming DllRegisterServer etc. undecorated, x64 and x86, linked
 #    against libopccomn.dll.a and against opccomn.lib: exports its own functions (none imported from
 #    opccomn.dll) and regsvr32 registers its own class under Wine; neither import library offers the
@@ -254,9 +254,9 @@ link_matrix() { # arch build_dir run(1/0)
             done
         done
     done
-    # widl's headers (what mingw users who compile the Foundation's IDL include): C++, __uuidof of every
-    # interface whichever header came first, against either library (widl's *_i.c beside the import
-    # library, as a project that compiles the IDL links them).
+    # widl's headers (what mingw users who compile the Foundation's IDL include): C (COBJMACROS) and
+    # C++ (__uuidof of every interface), whichever header came first, against either library (widl's
+    # *_i.c beside the import library, as a project that compiles the IDL links them).
     local widl_objs=()
     for stem in opccomn opcda opc_ae opchda; do
         $triple-gcc -w -c -o "$dir/widl_${stem}_i.o" "$out/foundation/widl/${stem}_i.c"
@@ -265,24 +265,28 @@ link_matrix() { # arch build_dir run(1/0)
     foundation_kind=widl
     for lib in static dll; do
         for first in 1 0; do
-            name="$dir/link-widl-$lib-first$first-c++.exe"
-            libarg=$([ "$lib" = static ] && echo "$static" || echo "$implib")
-            local iobjs=()
-            [ "$lib" = dll ] && iobjs=("${widl_objs[@]}")
-            compile "$triple-g++" c++ -DOURS_FIRST=$first -c -o "$name.o" "$root/tests/coexistence/program.c"
-            "$triple-g++" -o "$name" "$name.o" "${iobjs[@]}" "$libarg" "${deps[@]}" -static-libstdc++ ||
-                fail "link ($arch): widl's headers, $lib library, ours-first=$first, C++"
-            if [ "$run" = 1 ]; then
-                result=$(cd "$dir" && wine "$name" 2>/dev/null | tr -d '\r')
-                [ "$result" = "coexistence program: 0 failure(s)" ] ||
-                    fail "run ($arch): widl's headers, $lib library, ours-first=$first, C++: '$result'"
-            fi
-            ok
+            for lang in c c++; do
+                name="$dir/link-widl-$lib-first$first-$lang.exe"
+                libarg=$([ "$lib" = static ] && echo "$static" || echo "$implib")
+                local iobjs=() extra=() macros=()
+                [ "$lib" = dll ] && iobjs=("${widl_objs[@]}")
+                cc=$triple-gcc
+                if [ "$lang" = c++ ]; then cc=$triple-g++; extra=(-static-libstdc++); else macros=(-DCOBJMACROS); fi
+                compile "$cc" "$lang" "${macros[@]}" -DOURS_FIRST=$first -c -o "$name.o" "$root/tests/coexistence/program.c"
+                "$cc" -o "$name" "$name.o" "${iobjs[@]}" "$libarg" "${deps[@]}" "${extra[@]}" ||
+                    fail "link ($arch): widl's headers, $lib library, ours-first=$first, $lang"
+                if [ "$run" = 1 ]; then
+                    result=$(cd "$dir" && wine "$name" 2>/dev/null | tr -d '\r')
+                    [ "$result" = "coexistence program: 0 failure(s)" ] ||
+                        fail "run ($arch): widl's headers, $lib library, ours-first=$first, $lang: '$result'"
+                fi
+                ok
+            done
         done
     done
     foundation_kind=midl
     if [ "$run" = 1 ]; then
-        echo "coexistence: link matrix ($arch: static and import library x with/without the *_i.c files x both orders x C with COBJMACROS/C++ with __uuidof; widl's headers in C++, both orders, either library) ran under Wine"
+        echo "coexistence: link matrix ($arch: static and import library x with/without the *_i.c files x both orders x C with COBJMACROS/C++ with __uuidof; widl's headers in C and C++, both orders, either library) ran under Wine"
     else
         echo "coexistence: link matrix ($arch) linked; NOT RUN (no 32-bit Wine)" >&2
     fi
