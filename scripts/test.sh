@@ -475,6 +475,18 @@ stage_package_windows() {
     (cd "$pkg/x64" && wine opccomn_browser.exe /Status >/dev/null) || status_rc=$?
     [ "$status_rc" = 0 ] || [ "$status_rc" = 2 ] || { echo "package: x64/opccomn_browser.exe /Status exited $status_rc" >&2; return 1; }
     echo "package: every file its README names is there, the DLLs are stripped with their debug files beside them, the browser runs"
+    # The static library's libraries as docs/windows.md lists them, per folder (scripts/test-static-link.sh
+    # links with the x64 and x86 lists in the coexistence stage).
+    local listed listed_win7
+    listed=$(sed -nE 's|.*Static: link `libopccomn\.a` and `([^`]*)`.*|\1|p' docs/windows.md)
+    listed_win7=$(sed -nE 's|.*the `win7/` builds: `([^`]*)`.*|\1|p' docs/windows.md)
+    for folder in x64 x86 win7/x64 win7/x86; do
+        want=$listed
+        [[ "$folder" = win7/* ]] && want=$listed_win7
+        [ -n "$want" ] && [ "$(cat "$pkg/$folder/opccomn-static-libs.txt")" = "$want" ] ||
+            { echo "package: $folder/opccomn-static-libs.txt says '$(cat "$pkg/$folder/opccomn-static-libs.txt")', docs/windows.md '$want'" >&2; return 1; }
+    done
+    echo "package: each folder's opccomn-static-libs.txt is the list docs/windows.md gives"
     for variant in x64:x86_64:OFF x86:i686:OFF x64:x86_64:ON; do
         IFS=: read -r arch toolchain win7 <<<"$variant"
         dir="$build/package-test/consumer-$arch-win7-$win7"
