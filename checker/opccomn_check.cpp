@@ -39,9 +39,9 @@
 #include <string>
 #include <vector>
 
-#ifndef OPCCOMN_CHECK_VERSION
-#define OPCCOMN_CHECK_VERSION "0.0.0"
-#endif
+// The checker is the library's version ("0.3.0-dev" while that version is in development), from the
+// header, which takes it from Cargo.toml.
+#define OPCCOMN_CHECK_VERSION OPCCOMN_VERSION
 
 namespace {
 

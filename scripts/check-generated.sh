@@ -2,7 +2,8 @@
 # Fails when a generated file differs from what its generator makes now, as `gen-header --check` does
 # for the header: the test stages' list (docs/dev/test-stages.txt from scripts/test.sh --list), the C test vectors (c-tests/like_vectors.inc from src/pattern/like-vectors.tsv) and the
 # case-folding table (src/pattern/fold_table.rs from the Unicode Character Database's CaseFolding.txt,
-# which Debian's unicode-data package installs; Debian 12 ships Unicode 15.0.0, the table's version).
+# which Debian's unicode-data package installs; Debian 12 ships Unicode 15.0.0, the table's version), and
+# the hand-written mentions of the version in the README and docs/ against Cargo.toml (tools/check-versions.py).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -21,6 +22,8 @@ check() { # FILE COMMAND...
 check c-tests/like_vectors.inc python3 tools/gen-like-vectors.py
 # The test stages as the docs list them: what `scripts/test.sh --list` prints.
 check docs/dev/test-stages.txt scripts/test.sh --list
+# The version as the README and the docs write it (find_package requests, file names, sample output).
+python3 tools/check-versions.py || status=1
 folding=${OPCCOMN_CASE_FOLDING:-/usr/share/unicode/CaseFolding.txt}
 table_version=$(sed -n 's/^pub(crate) const UNICODE_VERSION: &str = "\(.*\)";/\1/p' src/pattern/fold_table.rs)
 data_version=$(sed -n '1s/^# CaseFolding-\(.*\)\.txt.*/\1/p' "$folding")

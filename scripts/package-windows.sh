@@ -42,7 +42,8 @@ build_variant() {
 copy_variant() {
     local rust_out="$1/cargo/$2/release" dest=$3 objcopy=$4-objcopy
     mkdir -p "$dest"
-    cp "$rust_out/libopccomn.dll.a" "$1/opccomn/libopccomn.a" \
+    # opccomn-static-libs.txt: what rustc reported the static library needs besides itself.
+    cp "$rust_out/libopccomn.dll.a" "$1/opccomn/libopccomn.a" "$1/opccomn-static-libs.txt" \
         "$rust_out/msvc/opccomn.lib" "$rust_out/msvc/opccomn.def" "$dest/"
     "$objcopy" --only-keep-debug "$rust_out/opccomn.dll" "$dest/opccomn.dll.debug"
     "$objcopy" --strip-debug --add-gnu-debuglink="$dest/opccomn.dll.debug" "$rust_out/opccomn.dll" "$dest/opccomn.dll"

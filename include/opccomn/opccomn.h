@@ -20,11 +20,15 @@
 /** The library's major version (from Cargo.toml). */
 #define OPCCOMN_VERSION_MAJOR 0
 /** The library's minor version. */
-#define OPCCOMN_VERSION_MINOR 2
+#define OPCCOMN_VERSION_MINOR 3
 /** The library's patch version. */
 #define OPCCOMN_VERSION_PATCH 0
-/** The library's version as text, "MAJOR.MINOR.PATCH". */
-#define OPCCOMN_VERSION "0.2.0"
+/** The library's version as text: "MAJOR.MINOR.PATCH", with "-PRERELEASE" after it for a version in
+    development (OPCCOMN_VERSION_PRERELEASE). */
+#define OPCCOMN_VERSION "0.3.0-dev"
+/** Defined only in the header of a version in development (a build of the main branch, not a
+    release): the pre-release part of OPCCOMN_VERSION, which then names the version to come. */
+#define OPCCOMN_VERSION_PRERELEASE "dev"
 
 /* On Windows the COM base types (GUID, HRESULT, IUnknown, ...) come from the system headers; elsewhere
    this header defines them, with UTF-16 WCHAR as COM requires. */
@@ -1143,6 +1147,47 @@ typedef const WCHAR *LPCOLESTR;
    MIDL-generated header (the OPC Foundation's opccomn.h) and this one skip each other's
    declarations whichever comes first. ---- */
 
+/* C++ with mingw-w64 (g++, clang++): __uuidof of the interfaces another header declared first.
+   MIDL's output (the OPC Foundation's headers) declares no __uuidof for them, and __uuidof(IOPCCommon)
+   would compile and fail to link; widl's output declares it with __CRT_UUID_DECL, and a second
+   declaration would be a redefinition. No preprocessor test tells the two apart, so for such an
+   interface this header declares the identifier in a table of its own, opccomn_uuidof_s<T>, and at its
+   end __uuidof reads that table, which hands every other type to mingw's __mingw_uuidof<T>(). An
+   interface this header declares itself gets mingw's declaration (__CRT_UUID_DECL) with it, and
+   __uuidof stays mingw's. Defining OPCCOMN_FOREIGN_UUIDOF leaves __uuidof to the other header. */
+#if defined(__cplusplus) && !defined(CINTERFACE) && defined(__uuidof) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF)
+#define OPCCOMN_UUIDOF_TABLE_ 1
+extern "C++" {
+#if __cpp_constexpr >= 200704L && __cpp_inline_variables >= 201606L
+template<typename T> struct opccomn_uuidof_s {
+    static constexpr const GUID &get() { return __mingw_uuidof<T>(); }
+};
+#define OPCCOMN_UUIDOF_DECL_(type, l, w1, w2, b1, b2, b3, b4, b5, b6, b7, b8) \
+    extern "C++" { \
+    template<> struct opccomn_uuidof_s<type> { \
+        static constexpr IID value = {l, w1, w2, {b1, b2, b3, b4, b5, b6, b7, b8}}; \
+        static constexpr const GUID &get() { return value; } \
+    }; \
+    template<> struct opccomn_uuidof_s<type *> : opccomn_uuidof_s<type> {}; \
+    }
+#else
+template<typename T> struct opccomn_uuidof_s {
+    static const GUID &get() { return __mingw_uuidof<T>(); }
+};
+#define OPCCOMN_UUIDOF_DECL_(type, l, w1, w2, b1, b2, b3, b4, b5, b6, b7, b8) \
+    extern "C++" { \
+    template<> struct opccomn_uuidof_s<type> { \
+        static const GUID &get() { \
+            static const IID value = {l, w1, w2, {b1, b2, b3, b4, b5, b6, b7, b8}}; \
+            return value; \
+        } \
+    }; \
+    template<> struct opccomn_uuidof_s<type *> : opccomn_uuidof_s<type> {}; \
+    }
+#endif
+}
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -1241,9 +1286,10 @@ struct IUnknown
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IUnknown)
-/* IUnknown was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IUnknown)
+/* IUnknown was declared by another header: __uuidof(IUnknown) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IUnknown_INTERFACE_DEFINED__ */
 
 /* IEnumGUID (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1382,9 +1428,10 @@ struct IEnumGUID
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumGUID)
-/* IEnumGUID was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IEnumGUID)
+/* IEnumGUID was declared by another header: __uuidof(IEnumGUID) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IEnumGUID_INTERFACE_DEFINED__ */
 
 /* IEnumConnections (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1523,9 +1570,10 @@ struct IEnumConnections
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumConnections)
-/* IEnumConnections was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IEnumConnections)
+/* IEnumConnections was declared by another header: __uuidof(IEnumConnections) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IEnumConnections_INTERFACE_DEFINED__ */
 
 /* IConnectionPoint (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1679,9 +1727,10 @@ struct IConnectionPoint
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IConnectionPoint)
-/* IConnectionPoint was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IConnectionPoint)
+/* IConnectionPoint was declared by another header: __uuidof(IConnectionPoint) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IConnectionPoint_INTERFACE_DEFINED__ */
 
 /* IEnumConnectionPoints (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1820,9 +1869,10 @@ struct IEnumConnectionPoints
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumConnectionPoints)
-/* IEnumConnectionPoints was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IEnumConnectionPoints)
+/* IEnumConnectionPoints was declared by another header: __uuidof(IEnumConnectionPoints) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IEnumConnectionPoints_INTERFACE_DEFINED__ */
 
 /* IConnectionPointContainer (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1931,9 +1981,10 @@ struct IConnectionPointContainer
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IConnectionPointContainer)
-/* IConnectionPointContainer was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IConnectionPointContainer)
+/* IConnectionPointContainer was declared by another header: __uuidof(IConnectionPointContainer) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IConnectionPointContainer_INTERFACE_DEFINED__ */
 
 /* IClassFactory (the standard COM interface; <windows.h> declares it on Windows) */
@@ -2046,9 +2097,10 @@ struct IClassFactory
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IClassFactory)
-/* IClassFactory was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IClassFactory)
+/* IClassFactory was declared by another header: __uuidof(IClassFactory) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IClassFactory_INTERFACE_DEFINED__ */
 
 #endif /* !defined(_WIN32) */
@@ -2152,9 +2204,10 @@ struct IOPCShutdown
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCShutdown)
-/* IOPCShutdown was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCShutdown)
+/* IOPCShutdown was declared by another header: __uuidof(IOPCShutdown) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCShutdown_INTERFACE_DEFINED__ */
 
 /* IOPCCommon (OPC Common, idl/opccomn.idl) */
@@ -2326,9 +2379,10 @@ struct IOPCCommon
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCCommon)
-/* IOPCCommon was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCCommon)
+/* IOPCCommon was declared by another header: __uuidof(IOPCCommon) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCCommon_INTERFACE_DEFINED__ */
 
 /* IOPCServerList (OPC Common, idl/opccomn.idl) */
@@ -2476,9 +2530,10 @@ struct IOPCServerList
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCServerList)
-/* IOPCServerList was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,0x06,0xc1,0x00,0x00)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCServerList)
+/* IOPCServerList was declared by another header: __uuidof(IOPCServerList) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,0x06,0xc1,0x00,0x00)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCServerList_INTERFACE_DEFINED__ */
 
 /* IOPCEnumGUID (OPC Common, idl/opccomn.idl) */
@@ -2623,9 +2678,10 @@ struct IOPCEnumGUID
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCEnumGUID)
-/* IOPCEnumGUID was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0xb1,0xe3,0xf4,0x83)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCEnumGUID)
+/* IOPCEnumGUID was declared by another header: __uuidof(IOPCEnumGUID) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0xb1,0xe3,0xf4,0x83)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCEnumGUID_INTERFACE_DEFINED__ */
 
 /* IOPCServerList2 (OPC Common, idl/opccomn.idl) */
@@ -2767,9 +2823,10 @@ struct IOPCServerList2
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCServerList2)
-/* IOPCServerList2 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f,0x31,0x88,0xbf,0x7a)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCServerList2)
+/* IOPCServerList2 was declared by another header: __uuidof(IOPCServerList2) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f,0x31,0x88,0xbf,0x7a)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCServerList2_INTERFACE_DEFINED__ */
 
 /* ---- The component categories and classes (idl/opcguids.txt). ---- */
@@ -2813,9 +2870,10 @@ struct CATID_OPCDAServer10
     CONST_VTBL struct CATID_OPCDAServer10Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer10)
-/* CATID_OPCDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCDAServer10)
+/* CATID_OPCDAServer10 was declared by another header: __uuidof(CATID_OPCDAServer10) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer10
 /** The category OPC Data Access Servers Version 1.0: `IID_CATID_OPCDAServer10` under the name code uses. */
@@ -2861,9 +2919,10 @@ struct CATID_OPCDAServer20
     CONST_VTBL struct CATID_OPCDAServer20Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer20)
-/* CATID_OPCDAServer20 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCDAServer20)
+/* CATID_OPCDAServer20 was declared by another header: __uuidof(CATID_OPCDAServer20) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer20_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer20
 /** The category OPC Data Access Servers Version 2.0: `IID_CATID_OPCDAServer20` under the name code uses. */
@@ -2909,9 +2968,10 @@ struct CATID_OPCDAServer30
     CONST_VTBL struct CATID_OPCDAServer30Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer30)
-/* CATID_OPCDAServer30 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCDAServer30)
+/* CATID_OPCDAServer30 was declared by another header: __uuidof(CATID_OPCDAServer30) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer30_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer30
 /** The category OPC Data Access Servers Version 3.0: `IID_CATID_OPCDAServer30` under the name code uses. */
@@ -2957,9 +3017,10 @@ struct CATID_XMLDAServer10
     CONST_VTBL struct CATID_XMLDAServer10Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_XMLDAServer10)
-/* CATID_XMLDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_XMLDAServer10)
+/* CATID_XMLDAServer10 was declared by another header: __uuidof(CATID_XMLDAServer10) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_XMLDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_XMLDAServer10
 /** The category OPC XML Data Access Servers Version 1.0: `IID_CATID_XMLDAServer10` under the name code uses. */
@@ -3005,9 +3066,10 @@ struct OPCEventServerCATID
     CONST_VTBL struct OPCEventServerCATIDVtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(OPCEventServerCATID)
-/* OPCEventServerCATID was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(OPCEventServerCATID)
+/* OPCEventServerCATID was declared by another header: __uuidof(OPCEventServerCATID) from this header's table */
+OPCCOMN_UUIDOF_DECL_(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __OPCEventServerCATID_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCAEServer10
 /** The category OPC Alarm & Event Server Version 1.0: `IID_OPCEventServerCATID` under the name code uses. */
@@ -3053,9 +3115,10 @@ struct CATID_OPCHDAServer10
     CONST_VTBL struct CATID_OPCHDAServer10Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCHDAServer10)
-/* CATID_OPCHDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCHDAServer10)
+/* CATID_OPCHDAServer10 was declared by another header: __uuidof(CATID_OPCHDAServer10) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCHDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCHDAServer10
 /** The category OPC History Data Access Servers Version 1.0: `IID_CATID_OPCHDAServer10` under the name code uses. */
@@ -3100,6 +3163,13 @@ EXTERN_C const CLSID CLSID_OpcComnProxyStub;
 
 #ifdef __cplusplus
 }  /* extern "C" */
+#endif
+
+/* An interface above was declared by another header first: __uuidof reads this header's table,
+   which answers for every other type as mingw-w64's __uuidof does. */
+#if defined(OPCCOMN_UUIDOF_REDIRECT_)
+#undef __uuidof
+#define __uuidof(type) opccomn_uuidof_s<__typeof(type)>::get()
 #endif
 
 #ifdef __cplusplus
