@@ -185,6 +185,12 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_CLASS_AGGREGATABLE 1
 
 /**
+ * The most threads the library runs at the same time, in the whole process, to call sinks for
+ * `OpcShutdownNotifyBounded` (every notification of every shutdown object together).
+ */
+#define OPC_SHUTDOWN_MAX_NOTIFY_THREADS 64
+
+/**
  * A timeout that never ends: the notification waits for the answer however long it takes.
  */
 #define OPC_SHUTDOWN_NO_TIMEOUT 4294967295
@@ -907,8 +913,8 @@ typedef struct OpcShutdownNotifyOptions {
    */
   uint32_t timeout_ms;
   /**
-   * The longest one sink is waited for, in milliseconds from the moment its call starts (all
-   * start together), within the whole deadline. 0 or OPC_SHUTDOWN_NO_TIMEOUT: only the whole.
+   * The longest one sink is waited for, in milliseconds from the moment its call starts (usually
+   * all start together), within the whole deadline. 0 or OPC_SHUTDOWN_NO_TIMEOUT: only the whole.
    */
   uint32_t sink_timeout_ms;
 } OpcShutdownNotifyOptions;
@@ -3973,25 +3979,36 @@ HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, UL
 
 /**
  * Asks every client advised on `shutdown` to disconnect, as `OpcShutdownNotify`, but waits for them
- * only until a deadline: every advised sink is called at the same time, each on a worker thread of
- * its own, so a slow or hung client delays nobody else, and the call returns when every sink has
- * answered or passed its deadline (`options`: the whole notification's deadline, by default
- * OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS, and one per sink; NULL gives the defaults).
+ * only until a deadline: the advised sinks are called at the same time on worker threads, so a slow
+ * or hung client delays nobody else, and the call returns when every sink has answered or passed its
+ * deadline (`options`: the whole notification's deadline, by default OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS,
+ * and one per sink; NULL gives the defaults).
  *
  * The counts (each pointer may be NULL; all are set, to 0 on failure, before anything else happens)
  * say what became of every sink advised when the call started: `*pNotified` accepted the request,
  * `*pFailed` refused it or could not be reached (a client process that died), `*pTimedOut` had not
- * answered at its deadline. A timed-out call may still return later on its worker thread; the worker
- * holds its own reference to the sink and its own copy of `reason`, so the caller may release the
- * server and free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow`
- * says S_FALSE.
+ * answered at its deadline, or was not called because its call from an earlier notification has not
+ * returned yet. A timed-out call may still return later on its worker thread; the worker holds its
+ * own reference to the sink and its own copy of `reason`, so the caller may release the server and
+ * free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow` says
+ * S_FALSE.
  *
- * A sink unadvised before its call starts is not called (a sink unadvised by another sink during
- * the notification may already have been called: they run at the same time). On Windows each
- * worker calls from the multithreaded apartment, fetching the sink from the Global Interface Table;
- * a sink advised from a single-threaded apartment that the GIT could not take (no IOPCShutdown
- * proxy/stub registered) cannot be called from there and counts as failed. Call it from a thread
- * that has initialised COM.
+ * Threads: the workers are one pool for the whole process, shared by every notification of every
+ * shutdown object, of at most OPC_SHUTDOWN_MAX_NOTIFY_THREADS threads, whatever the clients do; a
+ * worker ends when no call is waiting. A sink is never called again while its earlier call has not
+ * returned, so a hung client holds one thread however often the server notifies. Every other sink
+ * is called, also when hung clients hold every worker: a call waiting while every worker is inside a
+ * call, when all those calls are past their deadlines (OPC_SHUTDOWN_MAX_NOTIFY_THREADS clients hung
+ * at once) or its own deadline has passed, or when no worker thread can be created, is made by the
+ * calling thread itself, one after the other. Only then can this call last longer than its
+ * deadline: it waits for each call it makes itself, so a client that hangs there holds it.
+ *
+ * A sink unadvised before its call starts is not called and not counted (a sink unadvised by another
+ * sink during the notification may already have been called: they run at the same time). On Windows
+ * each worker calls from the multithreaded apartment (the calling thread from its own), fetching the
+ * sink from the Global Interface Table; a sink advised from a single-threaded apartment that the GIT
+ * could not take (no IOPCShutdown proxy/stub registered) cannot be called from there and counts as
+ * failed. Call it from a thread that has initialised COM.
  *
  * Returns S_OK when every sink accepted the request (also when none is advised), S_FALSE when at
  * least one failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of

@@ -10,6 +10,7 @@
 //! by the connections; a sink that holds the server is the client's business (it must Unadvise).
 
 use core::ffi::c_void;
+use core::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::apartment::SinkRef;
@@ -51,10 +52,58 @@ pub struct OpcShutdownOptions {
 /// The advise limit when the server sets none.
 pub(crate) const DEFAULT_ADVISE_LIMIT: u32 = 1;
 
+/// One advised sink, as the connection and the notifications under way share it.
+pub(crate) struct Advised {
+    sink: SinkRef,
+    /// Cleared when the connection ends (Unadvise, or the object's end): a call that has not
+    /// started by then is not made.
+    connected: AtomicBool,
+    /// Set while a bounded notification's call to the sink is waiting for a thread or under way, so
+    /// that no other bounded notification calls it again meanwhile (see `bounded`).
+    calling: AtomicBool,
+}
+
+impl Advised {
+    /// The sink, to be fetched for the calling thread.
+    pub(crate) fn sink(&self) -> &SinkRef {
+        &self.sink
+    }
+
+    /// Whether the sink is still advised.
+    pub(crate) fn is_connected(&self) -> bool {
+        self.connected.load(Ordering::Acquire)
+    }
+
+    /// Claims the sink for one call; false when a call to it is already waiting or under way.
+    pub(crate) fn claim_call(&self) -> bool {
+        self.calling
+            .compare_exchange(false, true, Ordering::AcqRel, Ordering::Acquire)
+            .is_ok()
+    }
+
+    /// Gives back the claim of `claim_call` once the call has returned (or was not made).
+    pub(crate) fn end_call(&self) {
+        self.calling.store(false, Ordering::Release);
+    }
+
+    /// Whether a call claimed by `claim_call` has not ended yet.
+    #[cfg(test)]
+    pub(crate) fn is_calling(&self) -> bool {
+        self.calling.load(Ordering::Acquire)
+    }
+}
+
 /// One advised sink.
 struct Connection {
     cookie: DWORD,
-    sink: Arc<SinkRef>,
+    sink: Arc<Advised>,
+}
+
+impl Drop for Connection {
+    fn drop(&mut self) {
+        // A notification may still hold the sink: from now on it does not start a call to it.
+        self.sink.connected.store(false, Ordering::Release);
+    }
 }
 
 /// The connections of the point and the cookie the next Advise gets.
@@ -131,7 +180,11 @@ impl OpcShutdown {
     /// For each connection, whether its sink went through the Global Interface Table.
     #[cfg(all(test, windows))]
     pub(crate) fn held_globally(&self) -> Vec<bool> {
-        self.connections().list.iter().map(|c| c.sink.is_global()).collect()
+        self.connections()
+            .list
+            .iter()
+            .map(|c| c.sink.sink.is_global())
+            .collect()
     }
 
     /// IConnectionPoint::Advise after the argument checks.
@@ -145,7 +198,12 @@ impl OpcShutdown {
             .into_raw();
         // Registering in the GIT may call into the sink, so it happens before the lock is taken.
         // SAFETY: a counted IOPCShutdown pointer of the calling apartment.
-        let sink = Arc::new(unsafe { SinkRef::adopt(shutdown) });
+        let held = unsafe { SinkRef::adopt(shutdown) };
+        let sink = Arc::new(Advised {
+            sink: held,
+            connected: AtomicBool::new(true),
+            calling: AtomicBool::new(false),
+        });
         let mut connections = self.connections();
         if connections.list.len() >= self.advise_limit as usize || connections.next_cookie == 0 {
             drop(connections);
@@ -174,16 +232,12 @@ impl OpcShutdown {
     }
 
     /// The advised sinks, as counted references taken under the lock.
-    pub(super) fn snapshot(&self) -> Vec<(DWORD, Arc<SinkRef>)> {
+    pub(super) fn snapshot(&self) -> Vec<(DWORD, Arc<Advised>)> {
         self.connections()
             .list
             .iter()
             .map(|c| (c.cookie, c.sink.clone()))
             .collect()
-    }
-
-    pub(super) fn is_connected(&self, cookie: DWORD) -> bool {
-        self.connections().list.iter().any(|c| c.cookie == cookie)
     }
 
     /// Calls ShutdownRequest on every advised sink, never holding the lock during a call. Just before
@@ -195,11 +249,11 @@ impl OpcShutdown {
     /// `reason` must point at a NUL-terminated UTF-16 string.
     pub(crate) unsafe fn notify(&self, reason: LPCWSTR) -> Notified {
         let mut result = Notified::default();
-        for (cookie, sink) in self.snapshot() {
-            if !self.is_connected(cookie) {
+        for (_, advised) in self.snapshot() {
+            if !advised.is_connected() {
                 continue;
             }
-            let ok = match sink.get() {
+            let ok = match advised.sink().get() {
                 Ok(call) => {
                     let p = call.as_ptr();
                     // SAFETY: `p` is a counted IOPCShutdown pointer valid on this thread; no lock is held.
@@ -213,7 +267,7 @@ impl OpcShutdown {
             } else {
                 result.failed += 1;
             }
-            // `sink` (and `call`) drop here, outside any lock.
+            // `advised` (and `call`) drop here, outside any lock.
         }
         result
     }
@@ -223,9 +277,9 @@ impl OpcShutdown {
     /// sink held directly, asked for from another thread, gives RPC_E_WRONG_THREAD).
     fn enum_connections(&self) -> Result<*mut IEnumConnections, HRESULT> {
         let mut data = Vec::new();
-        for (cookie, sink) in self.snapshot() {
+        for (cookie, advised) in self.snapshot() {
             // On failure `data` drops, releasing the sinks fetched so far.
-            let call = sink.get()?;
+            let call = advised.sink().get()?;
             // SAFETY: `into_raw` gives up a counted, non-NULL pointer that the element now owns.
             let sink = unsafe { Counted::adopt(call.into_raw().cast::<IUnknown>()) }.ok_or(E_UNEXPECTED)?;
             data.push(EnumeratedConnection { sink, cookie });

@@ -1106,3 +1106,209 @@ fn a_sink_that_never_returns_does_not_hold_the_notification() {
     assert!(timed_out >= 1 && notified + timed_out == 2);
     assert_eq!((good.calls(), stuck.calls()), (1, 1));
 }
+
+// ---------------------------------------------------------------------------------------------
+// The bounded notification's threads: one call per sink at a time, a pool of bounded size, and every
+// healthy sink called however many sinks hang.
+
+use super::bounded::Pool;
+use std::sync::{Arc, Condvar};
+
+/// Holds the sinks that call `wait` inside ShutdownRequest until the test opens it.
+#[derive(Clone, Default)]
+struct Gate(Arc<(Mutex<bool>, Condvar)>);
+
+impl Gate {
+    fn wait(&self) {
+        let (open, changed) = &*self.0;
+        let mut open = open.lock().unwrap();
+        while !*open {
+            open = changed.wait(open).unwrap();
+        }
+    }
+    fn open(&self) {
+        *self.0 .0.lock().unwrap() = true;
+        self.0 .1.notify_all();
+    }
+}
+
+/// A sink that hangs in ShutdownRequest until `gate` opens.
+fn hung_sink(gate: &Gate) -> Box<MockSink> {
+    let sink = MockSink::new(true, S_OK);
+    let gate = gate.clone();
+    sink.set_hook(move || gate.wait());
+    sink
+}
+
+/// A sink that answers at once and records the thread each call came on.
+fn healthy_sink() -> (Box<MockSink>, Arc<Mutex<Vec<std::thread::ThreadId>>>) {
+    let sink = MockSink::new(true, S_OK);
+    let threads = Arc::new(Mutex::new(Vec::new()));
+    let record = threads.clone();
+    sink.set_hook(move || record.lock().unwrap().push(std::thread::current().id()));
+    (sink, threads)
+}
+
+impl Server {
+    /// `OpcShutdownNotifyBounded` through `pool`: the result and the counts notified, failed, timed out.
+    fn notify_in(&self, pool: &'static Pool, options: &OpcShutdownNotifyOptions) -> (HRESULT, u32, u32, u32) {
+        // SAFETY: a live container of ours.
+        let obj = unsafe { from_container(self.0) }.unwrap();
+        // SAFETY: the options are valid; the reason is a NUL string.
+        let bounds = unsafe { super::bounded::read_notify_options(options) }.unwrap();
+        // SAFETY: a NUL-terminated reason.
+        let c = unsafe { obj.notify_bounded_in(pool, w("").as_ptr(), bounds) };
+        let hr = if c.failed == 0 && c.timed_out == 0 {
+            S_OK
+        } else {
+            S_FALSE
+        };
+        (hr, c.notified, c.failed, c.timed_out)
+    }
+    /// For each advised sink, whether a bounded notification's call to it has not ended yet.
+    fn calling(&self) -> Vec<bool> {
+        // SAFETY: a live container of ours.
+        let obj = unsafe { from_container(self.0) }.unwrap();
+        obj.snapshot().iter().map(|(_, advised)| advised.is_calling()).collect()
+    }
+}
+
+/// A client hung in ShutdownRequest is called once, however often the server notifies: while that
+/// call has not returned, each notification counts it as timed out without calling it (and so
+/// without another thread), and still calls the healthy sink. Once the call returns, the next
+/// notification calls it again.
+#[test]
+fn a_sink_whose_call_has_not_returned_is_not_called_again() {
+    let server = Server::with_limit(Some(2));
+    let point = server.point();
+    let gate = Gate::default();
+    let hung = hung_sink(&gate);
+    let (healthy, _) = healthy_sink();
+    for s in [&hung, &healthy] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    let options = bounds(20, 0);
+    let rounds = if cfg!(miri) { 3 } else { 10 };
+    for round in 0..rounds {
+        // The healthy sink's last call has ended (answered in time it has; on a loaded machine, or
+        // under Miri's clock, it may have missed the deadline and still be ending).
+        wait_until(|| !server.calling()[1]);
+        let (hr, notified, failed, timed_out) = server.notify_bounded(ptr::null(), &options);
+        // The healthy sink answers at once; on a loaded machine it may still miss the 20 ms.
+        assert_eq!((hr, failed), (S_FALSE, 0), "round {round}");
+        assert!(timed_out >= 1 && notified + timed_out == 2, "round {round}");
+        assert_eq!((hung.calls(), healthy.calls()), (1, round + 1), "round {round}");
+    }
+    gate.open();
+    wait_until(|| server.calling() == [false, false]);
+    assert_eq!(
+        server.notify_bounded(ptr::null(), &bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0)),
+        (S_OK, 2, 0, 0)
+    );
+    assert_eq!((hung.calls(), healthy.calls()), (2, rounds + 1));
+    drop(point);
+    drop(server);
+    wait_until(|| hung.refs() == 1 && healthy.refs() == 1);
+}
+
+/// With every worker of a pool held by a hung client, a pool of two threads still calls every other
+/// sink: the notifying thread makes the call itself. The pool never has more than its two workers.
+#[test]
+fn hung_sinks_that_hold_every_worker_do_not_keep_a_healthy_sink_from_its_call() {
+    static TWO: Pool = Pool::new(2);
+    let gate = Gate::default();
+    let (hung1, hung2) = (hung_sink(&gate), hung_sink(&gate));
+    let (healthy, threads) = healthy_sink();
+    let (first, second) = (Server::with_limit(Some(3)), Server::new());
+    let (p1, p2) = (first.point(), second.point());
+    for s in [&hung1, &hung2, &healthy] {
+        assert_eq!(p1.advise(s.unk()).0, S_OK);
+    }
+    let (other, other_threads) = healthy_sink();
+    assert_eq!(p2.advise(other.unk()).0, S_OK);
+    let options = bounds(20, 0);
+    // The two workers take the hung sinks; the healthy one is made by this thread once they are
+    // past their deadline (so after it, and it may count as timed out).
+    let (_, notified, failed, timed_out) = first.notify_in(&TWO, &options);
+    assert!(failed == 0 && notified <= 1 && notified + timed_out == 3);
+    assert_eq!((hung1.calls(), hung2.calls(), healthy.calls()), (1, 1, 1));
+    // Again, and on another object: the hung sinks are not called again, the workers are still held
+    // by them, the healthy sinks are made here at once.
+    for _ in 0..3 {
+        let (_, _, failed, timed_out) = first.notify_in(&TWO, &options);
+        assert!(failed == 0 && timed_out >= 2);
+        let (_, _, failed, _) = second.notify_in(&TWO, &options);
+        assert_eq!(failed, 0);
+    }
+    assert_eq!(
+        (hung1.calls(), hung2.calls(), healthy.calls(), other.calls()),
+        (1, 1, 4, 3)
+    );
+    let me = std::thread::current().id();
+    assert!(threads
+        .lock()
+        .unwrap()
+        .iter()
+        .chain(other_threads.lock().unwrap().iter())
+        .all(|t| *t == me));
+    assert_eq!(TWO.workers(), (2, 2));
+    gate.open();
+    wait_until(|| TWO.workers().1 == 0);
+    drop((p1, p2, first, second));
+    for s in [&hung1, &hung2, &healthy, &other] {
+        assert_eq!(s.refs(), 1);
+    }
+}
+
+/// When no worker thread can be had at all (here a pool of none, as when the system refuses to
+/// create threads), every sink is still called, on the notifying thread, one after the other.
+#[test]
+fn without_worker_threads_the_notifying_thread_calls_every_sink() {
+    static NONE: Pool = Pool::new(0);
+    let server = Server::with_limit(Some(3));
+    let point = server.point();
+    let (good, threads) = healthy_sink();
+    let bad = MockSink::new(true, E_FAIL);
+    let (good2, threads2) = healthy_sink();
+    for s in [&good, &bad, &good2] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0);
+    assert_eq!(server.notify_in(&NONE, &options), (S_FALSE, 2, 1, 0));
+    assert_eq!((good.calls(), bad.calls(), good2.calls()), (1, 1, 1));
+    let me = std::thread::current().id();
+    assert_eq!((threads.lock().unwrap()[0], threads2.lock().unwrap()[0]), (me, me));
+    assert_eq!(NONE.workers(), (0, 0));
+    drop(point);
+    drop(server);
+    for s in [&good, &bad, &good2] {
+        assert_eq!(s.refs(), 1);
+    }
+}
+
+/// A call waiting for a worker is not made when its sink is unadvised meanwhile (here by the sink
+/// whose call holds the only worker), and is then in no count.
+#[test]
+fn a_sink_unadvised_while_its_call_waits_for_a_worker_is_not_called() {
+    static ONE: Pool = Pool::new(1);
+    let server = Arc::new(Server::with_limit(Some(2)));
+    let point = server.point();
+    let first = MockSink::new(true, S_OK);
+    let second = MockSink::new(true, S_OK);
+    assert_eq!(point.advise(first.unk()).0, S_OK);
+    let (hr, cookie) = point.advise(second.unk());
+    assert_eq!(hr, S_OK);
+    let target = Arc::clone(&server);
+    first.set_hook(move || {
+        let p = target.point();
+        assert_eq!(p.unadvise(cookie), S_OK);
+    });
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0);
+    assert_eq!(server.notify_in(&ONE, &options), (S_OK, 1, 0, 0));
+    assert_eq!((first.calls(), second.calls()), (1, 0));
+    first.set_hook(|| {});
+    wait_until(|| ONE.workers().1 == 0);
+    drop(point);
+    drop(server);
+    assert_eq!((first.refs(), second.refs()), (1, 1));
+}
