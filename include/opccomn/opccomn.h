@@ -888,6 +888,24 @@ typedef struct OpcShutdownOptions {
    * specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
    */
   uint32_t advise_limit;
+  /**
+   * For a server object that forwards to the shutdown object instead of aggregating it (it
+   * implements IConnectionPointContainer itself and passes FindConnectionPoint and
+   * EnumConnectionPoints on): the server object (any of its interfaces), so that the connection
+   * point names it as its container. NULL: the container is the shutdown object itself, or the
+   * outer object when it is aggregated (then this must be NULL).
+   *
+   * The connection point then counts its references on this object, as an interface of an
+   * aggregated object counts on its outer object: whoever holds the connection point (or an
+   * enumerator of it) keeps the server object alive, and through it the shutdown object;
+   * IConnectionPoint::GetConnectionPointContainer returns the server object's
+   * IConnectionPointContainer (QueryInterface on it), so the container has the server's COM
+   * identity. The shutdown object holds no reference to the server object (no cycle). So the
+   * server object keeps its own reference to the shutdown object (which may be any of its
+   * interfaces) until it is destroyed, and hands none of the shutdown object's own interfaces to
+   * its clients: they count only on the shutdown object, which could outlive the server.
+   */
+  IUnknown *container;
 } OpcShutdownOptions;
 
 #if !defined(_WIN32)
@@ -3917,7 +3935,9 @@ HRESULT OPCCOMN_CDECL OpcDllUnregisterServer(void);
  * With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
  * object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
  * as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
- * it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+ * it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to. A server object
+ * that cannot aggregate (windows-rs objects, for one) and forwards instead names itself as the
+ * container with `OpcShutdownCreateEx` (`OpcShutdownOptions::container`).
  *
  * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
  * `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
@@ -3932,11 +3952,13 @@ HRESULT OPCCOMN_CDECL OpcShutdownCreate(IUnknown *outer, REFIID riid, void **ppv
  * As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
  *
  * Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
- * `OpcShutdownOptions` (4, or 8 as of this version).
+ * `OpcShutdownOptions` (4, 8, or `sizeof` as of this version: 16 on 64-bit, 12 on 32-bit), and for
+ * a `container` together with an `outer` object.
  *
  * @par Safety
- * `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
- * `OpcShutdownCreate`.
+ * `options` must be NULL or point at `options->struct_size` readable bytes, and its `container`
+ * NULL or a valid IUnknown that outlives every reference to the connection point (they count on
+ * it); otherwise as for `OpcShutdownCreate`.
  */
 HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv);
 
@@ -3945,7 +3967,8 @@ HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *optio
  * each advised sink with `reason` (a NUL string when `reason` is NULL).
  *
  * `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
- * IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+ * IUnknown from `OpcShutdownCreate`, or the server object that aggregates it or forwards to it (the
+ * server's IConnectionPointContainer hands out the shutdown object's connection point). The sinks are taken
  * from a snapshot made under the object's lock and called without holding it, one after the other
  * on the calling thread, so a sink may Unadvise, release the server or call back in from inside
  * ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is

@@ -27,7 +27,7 @@ use core::ptr;
 
 use crate::com::ffi::{self, Hr};
 use crate::com::object::ComObject;
-use crate::com::{IUnknown, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
+use crate::com::{IUnknown, E_INVALIDARG, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
 use bounded::{read_notify_options, OpcShutdownNotifyOptions};
 use client::NUL_STRING;
 use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
@@ -38,7 +38,9 @@ use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 /// With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
 /// object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
 /// as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
-/// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+/// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to. A server object
+/// that cannot aggregate (windows-rs objects, for one) and forwards instead names itself as the
+/// container with `OpcShutdownCreateEx` (`OpcShutdownOptions::container`).
 ///
 /// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
 /// `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
@@ -57,11 +59,13 @@ pub unsafe extern "C" fn OpcShutdownCreate(outer: *mut IUnknown, riid: REFIID, p
 /// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
 ///
 /// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
-/// `OpcShutdownOptions` (4, or 8 as of this version).
+/// `OpcShutdownOptions` (4, 8, or `sizeof` as of this version: 16 on 64-bit, 12 on 32-bit), and for
+/// a `container` together with an `outer` object.
 ///
 /// # Safety
-/// `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
-/// `OpcShutdownCreate`.
+/// `options` must be NULL or point at `options->struct_size` readable bytes, and its `container`
+/// NULL or a valid IUnknown that outlives every reference to the connection point (they count on
+/// it); otherwise as for `OpcShutdownCreate`.
 #[no_mangle]
 pub unsafe extern "C" fn OpcShutdownCreateEx(
     options: *const OpcShutdownOptions,
@@ -73,8 +77,12 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
         // SAFETY: forwarded from the caller's contract.
         Ok(unsafe {
             ComObject::<OpcShutdown>::create(outer, riid, ppv, |binder| {
-                let limit = read_options(options)?;
-                Ok(OpcShutdown::build(binder, limit))
+                let settings = read_options(options)?;
+                if !outer.is_null() && !settings.container.is_null() {
+                    // An aggregated object's container is its outer object.
+                    return Err(E_INVALIDARG);
+                }
+                Ok(OpcShutdown::build(binder, settings))
             })
         })
     })
@@ -84,7 +92,8 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
 /// each advised sink with `reason` (a NUL string when `reason` is NULL).
 ///
 /// `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
-/// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+/// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it or forwards to it (the
+/// server's IConnectionPointContainer hands out the shutdown object's connection point). The sinks are taken
 /// from a snapshot made under the object's lock and called without holding it, one after the other
 /// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
 /// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is

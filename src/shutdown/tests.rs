@@ -149,6 +149,7 @@ impl Server {
         let options = limit.map(|advise_limit| OpcShutdownOptions {
             struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
             advise_limit,
+            container: ptr::null_mut(),
         });
         let mut p: *mut c_void = ptr::null_mut();
         let opts = options.as_ref().map_or(ptr::null(), |o| o as *const OpcShutdownOptions);
@@ -240,6 +241,7 @@ fn creation_follows_the_standard_protocol() {
         let bad = OpcShutdownOptions {
             struct_size: 2,
             advise_limit: 1,
+            container: ptr::null_mut(),
         };
         assert_eq!(
             OpcShutdownCreateEx(&bad, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
@@ -248,6 +250,7 @@ fn creation_follows_the_standard_protocol() {
         let bad = OpcShutdownOptions {
             struct_size: 64,
             advise_limit: 1,
+            container: ptr::null_mut(),
         };
         assert_eq!(
             OpcShutdownCreateEx(&bad, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
@@ -1311,4 +1314,323 @@ fn a_sink_unadvised_while_its_call_waits_for_a_worker_is_not_called() {
     drop(point);
     drop(server);
     assert_eq!((first.refs(), second.refs()), (1, 1));
+}
+
+// ---------------------------------------------------------------------------------------------
+// A server object that forwards to the shutdown object instead of aggregating it, naming itself as
+// the connection point's container (`OpcShutdownOptions::container`).
+
+use crate::com::interfaces::{IConnectionPointContainerVtbl, IUnknownVtbl};
+use core::sync::atomic::{AtomicBool, AtomicPtr};
+
+/// A server object written by hand, as a windows-rs or C++ server is: its own IUnknown (the identity)
+/// and IConnectionPointContainer, whose FindConnectionPoint and EnumConnectionPoints pass the call on
+/// to the shutdown object it keeps. Counts its references; releases the shutdown object when the last
+/// one goes (its memory stays, owned by the test, so the test can look at it afterwards).
+#[repr(C)]
+struct Forwarding {
+    unk: &'static IUnknownVtbl,
+    cpc: &'static IConnectionPointContainerVtbl,
+    refs: AtomicU32,
+    destroyed: AtomicBool,
+    /// The shutdown object's own IConnectionPointContainer (counted on the shutdown object).
+    shutdown: AtomicPtr<IConnectionPointContainer>,
+}
+
+static FORWARDING_UNK: IUnknownVtbl = IUnknownVtbl {
+    QueryInterface: fwd_qi,
+    AddRef: fwd_add_ref,
+    Release: fwd_release,
+};
+
+static FORWARDING_CPC: IConnectionPointContainerVtbl = IConnectionPointContainerVtbl {
+    QueryInterface: fwd_cpc_qi,
+    AddRef: fwd_cpc_add_ref,
+    Release: fwd_cpc_release,
+    EnumConnectionPoints: fwd_enum_points,
+    FindConnectionPoint: fwd_find_point,
+};
+
+/// The server behind its IUnknown (the first field).
+unsafe fn fwd(this: *mut IUnknown) -> &'static Forwarding {
+    // SAFETY: only Forwarding objects present these vtables; the test keeps them alive.
+    unsafe { &*(this as *const Forwarding) }
+}
+
+/// The server behind its IConnectionPointContainer (the second field).
+unsafe fn fwd_of_cpc(this: *mut IConnectionPointContainer) -> &'static Forwarding {
+    // SAFETY: as above; `cpc` sits one pointer after the start.
+    unsafe { &*(this.cast::<u8>().sub(core::mem::offset_of!(Forwarding, cpc)) as *const Forwarding) }
+}
+
+unsafe extern "system" fn fwd_qi(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: the caller passes valid pointers.
+        unsafe {
+            let s = fwd(this);
+            *ppv = ptr::null_mut();
+            let found: *mut c_void = if *riid == IID_IUNKNOWN {
+                this.cast()
+            } else if *riid == IID_ICONNECTIONPOINTCONTAINER {
+                // From `this`, whose provenance is the whole object's.
+                this.cast::<u8>().add(core::mem::offset_of!(Forwarding, cpc)).cast()
+            } else {
+                return E_NOINTERFACE;
+            };
+            s.refs.fetch_add(1, Ordering::SeqCst);
+            *ppv = found;
+            S_OK
+        }
+    })
+}
+
+unsafe extern "system" fn fwd_add_ref(this: *mut IUnknown) -> Crossed<ULONG> {
+    // SAFETY: as above.
+    Crossed::from_c(|| unsafe { fwd(this) }.refs.fetch_add(1, Ordering::SeqCst) + 1)
+}
+
+unsafe extern "system" fn fwd_release(this: *mut IUnknown) -> Crossed<ULONG> {
+    Crossed::from_c(|| {
+        // SAFETY: as above.
+        let s = unsafe { fwd(this) };
+        let before = s.refs.fetch_sub(1, Ordering::SeqCst);
+        assert!(before > 0, "Release without a reference");
+        if before == 1 {
+            // The server object's end: it lets go of the shutdown object.
+            s.destroyed.store(true, Ordering::SeqCst);
+            let shutdown = s.shutdown.swap(ptr::null_mut(), Ordering::SeqCst);
+            if !shutdown.is_null() {
+                // SAFETY: the reference the server kept.
+                unsafe { release(shutdown.cast()) };
+            }
+        }
+        before - 1
+    })
+}
+
+unsafe extern "system" fn fwd_cpc_qi(this: *mut IConnectionPointContainer, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    // SAFETY: the IUnknown methods of every interface are the object's.
+    unsafe { fwd_qi((fwd_of_cpc(this) as *const Forwarding).cast_mut().cast(), riid, ppv) }
+}
+
+unsafe extern "system" fn fwd_cpc_add_ref(this: *mut IConnectionPointContainer) -> Crossed<ULONG> {
+    // SAFETY: as above.
+    unsafe { fwd_add_ref((fwd_of_cpc(this) as *const Forwarding).cast_mut().cast()) }
+}
+
+unsafe extern "system" fn fwd_cpc_release(this: *mut IConnectionPointContainer) -> Crossed<ULONG> {
+    // SAFETY: as above.
+    unsafe { fwd_release((fwd_of_cpc(this) as *const Forwarding).cast_mut().cast()) }
+}
+
+unsafe extern "system" fn fwd_enum_points(
+    this: *mut IConnectionPointContainer,
+    pp: *mut *mut IEnumConnectionPoints,
+) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: the shutdown object is alive while the server is; the caller's pointer is passed on.
+        unsafe {
+            let shutdown = fwd_of_cpc(this).shutdown.load(Ordering::SeqCst);
+            IConnectionPointContainer::EnumConnectionPoints(shutdown, pp)
+        }
+    })
+}
+
+unsafe extern "system" fn fwd_find_point(
+    this: *mut IConnectionPointContainer,
+    riid: REFIID,
+    pp: *mut *mut IConnectionPoint,
+) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: as above.
+        unsafe {
+            let shutdown = fwd_of_cpc(this).shutdown.load(Ordering::SeqCst);
+            IConnectionPointContainer::FindConnectionPoint(shutdown, riid, pp)
+        }
+    })
+}
+
+impl Forwarding {
+    /// A server object with one reference (the test's); `create_shutdown` gives it its shutdown
+    /// object (once the box has its place: the pointers handed out come from it).
+    fn new() -> Box<Forwarding> {
+        Box::new(Forwarding {
+            unk: &FORWARDING_UNK,
+            cpc: &FORWARDING_CPC,
+            refs: AtomicU32::new(1),
+            destroyed: AtomicBool::new(false),
+            shutdown: AtomicPtr::new(ptr::null_mut()),
+        })
+    }
+    /// Creates the shutdown object, which names this server as its container.
+    fn create_shutdown(&self) {
+        let options = OpcShutdownOptions {
+            struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
+            advise_limit: 0,
+            container: self.unk(),
+        };
+        let mut p: *mut c_void = ptr::null_mut();
+        // SAFETY: valid arguments; the server outlives every reference to the connection point.
+        let hr = unsafe { OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_ICONNECTIONPOINTCONTAINER, &mut p) };
+        assert_eq!(hr, S_OK);
+        self.shutdown.store(p.cast(), Ordering::SeqCst);
+    }
+    fn unk(&self) -> *mut IUnknown {
+        self as *const Forwarding as *mut IUnknown
+    }
+    fn refs(&self) -> u32 {
+        self.refs.load(Ordering::SeqCst)
+    }
+}
+
+/// QueryInterface(IID_IUnknown) on `p`, released at once: the object's identity.
+fn identity(p: *mut IUnknown) -> *mut c_void {
+    let mut id: *mut c_void = ptr::null_mut();
+    // SAFETY: a live object.
+    unsafe {
+        assert_eq!(query_interface(p, &IID_IUNKNOWN, &mut id), S_OK);
+        release(id.cast());
+    }
+    id
+}
+
+/// The connection point of a forwarding server names the server as its container (COM identity),
+/// counts on it, and keeps it alive: a client holding only the point still gets the server back, and
+/// the server (with the shutdown object) goes when the point is released.
+#[test]
+fn a_forwarding_server_is_the_container_of_its_connection_point() {
+    let objects = crate::com::object::live_objects();
+    let server = Forwarding::new();
+    server.create_shutdown();
+    assert_eq!(server.refs(), 1, "the shutdown object holds no reference to the server");
+    // SAFETY: live objects; every reference obtained is released.
+    unsafe {
+        let mut p: *mut c_void = ptr::null_mut();
+        assert_eq!(
+            query_interface(server.unk(), &IID_ICONNECTIONPOINTCONTAINER, &mut p),
+            S_OK
+        );
+        let cpc = p.cast::<IConnectionPointContainer>();
+        let mut cp: *mut IConnectionPoint = ptr::null_mut();
+        assert_eq!(
+            IConnectionPointContainer::FindConnectionPoint(cpc, &IID_IOPCShutdown, &mut cp),
+            S_OK
+        );
+        assert_eq!(server.refs(), 3, "the connection point counts on the server");
+
+        let mut back: *mut IConnectionPointContainer = ptr::null_mut();
+        assert_eq!(((*(*cp).lpVtbl).GetConnectionPointContainer)(cp, &mut back), S_OK);
+        assert_eq!(back, cpc, "the server's own container");
+        assert_eq!(identity(back.cast()), server.unk().cast());
+        release(back.cast());
+
+        // Enumerated connection points count on the server too.
+        let mut points: *mut IEnumConnectionPoints = ptr::null_mut();
+        assert_eq!(IConnectionPointContainer::EnumConnectionPoints(cpc, &mut points), S_OK);
+        let (mut got, mut fetched): (*mut IConnectionPoint, ULONG) = (ptr::null_mut(), 0);
+        assert_eq!(IEnumConnectionPoints::Next(points, 1, &mut got, &mut fetched), S_OK);
+        assert_eq!((got, fetched), (cp, 1));
+        release(got.cast());
+        release(points.cast());
+        assert_eq!(server.refs(), 3);
+
+        // The helpers and the notifications take the server object.
+        let sink = MockSink::new(true, S_OK);
+        let mut cookie = 0;
+        assert_eq!(OpcShutdownAdvise(server.unk(), sink.unk(), &mut cookie).get(), S_OK);
+        let (mut n, mut f) = (99, 99);
+        assert_eq!(
+            OpcShutdownNotifyEx(server.unk(), w("Bye").as_ptr(), &mut n, &mut f).get(),
+            S_OK
+        );
+        assert_eq!((n, f, sink.calls()), (1, 0, 1));
+
+        // The client lets go of everything but the connection point: the server stays.
+        release(cpc.cast());
+        release(server.unk());
+        assert_eq!(server.refs(), 1);
+        assert!(!server.destroyed.load(Ordering::SeqCst));
+        assert_eq!(((*(*cp).lpVtbl).GetConnectionPointContainer)(cp, &mut back), S_OK);
+        assert_eq!(identity(back.cast()), server.unk().cast());
+        release(back.cast());
+        assert_eq!(sink.refs(), 2, "still advised");
+
+        // The last reference to the point is the server's last: it goes, and the shutdown object
+        // with it.
+        release(cp.cast());
+        assert!(server.destroyed.load(Ordering::SeqCst));
+        assert_eq!(sink.refs(), 1);
+        assert_eq!(crate::com::object::live_objects(), objects);
+    }
+}
+
+/// The container's options: only without an outer object, every size of the struct, and a named
+/// container that is no IConnectionPointContainer gets its failure passed on.
+#[test]
+fn a_named_container_is_checked() {
+    let sink = MockSink::new(true, S_OK);
+    let mut options = OpcShutdownOptions {
+        struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
+        advise_limit: 0,
+        container: sink.unk(),
+    };
+    let mut p: *mut c_void = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
+    // SAFETY: valid arguments throughout; every object made is released.
+    unsafe {
+        // With an outer object the container is the outer object: naming another is refused.
+        let outer = MockSink::new(false, S_OK);
+        assert_eq!(
+            OpcShutdownCreateEx(&options, outer.unk(), &IID_IUNKNOWN, &mut p),
+            E_INVALIDARG
+        );
+        assert!(p.is_null());
+        assert_eq!(outer.refs(), 1);
+
+        // Each version's size; nothing between.
+        let ptr_size = core::mem::size_of::<*mut c_void>();
+        assert_eq!(super::server::options_sizes(), [4, 8, 8 + ptr_size]);
+        for (size, want) in [
+            (4, S_OK),
+            (8, S_OK),
+            (8 + ptr_size as u32, S_OK),
+            (12 + ptr_size as u32, E_INVALIDARG),
+        ] {
+            options.struct_size = size;
+            assert_eq!(
+                OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
+                want,
+                "{size}"
+            );
+            if want == S_OK {
+                release(p.cast());
+            }
+        }
+        // 64-bit: 12 cuts the pointer in half.
+        if ptr_size == 8 {
+            options.struct_size = 12;
+            assert_eq!(
+                OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
+                E_INVALIDARG
+            );
+        }
+
+        // The sink as "container": it has no IConnectionPointContainer.
+        options.struct_size = core::mem::size_of::<OpcShutdownOptions>() as u32;
+        assert_eq!(
+            OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_ICONNECTIONPOINTCONTAINER, &mut p),
+            S_OK
+        );
+        let server = Server(p.cast());
+        let point = server.point();
+        assert_eq!(sink.refs(), 2, "the point counts on the named container");
+        let mut back = core::ptr::null_mut::<IConnectionPointContainer>().wrapping_byte_add(1);
+        assert_eq!(
+            ((*(*point.0).lpVtbl).GetConnectionPointContainer)(point.0, &mut back).get(),
+            E_NOINTERFACE
+        );
+        assert!(back.is_null());
+        drop(point);
+        drop(server);
+    }
+    assert_eq!(sink.refs(), 1);
 }
