@@ -8,6 +8,11 @@
 //! reference to its point. Enumerators of connection points hold counted references (and so keep
 //! the server alive while they exist); nothing the server holds refers back to them. Sinks are held
 //! by the connections; a sink that holds the server is the client's business (it must Unadvise).
+//!
+//! A server object that forwards to this object instead of aggregating it names itself as the
+//! container (`OpcShutdownOptions::container`): the point's AddRef/Release then count on that server
+//! object, which holds this object, so holding the point keeps both alive; this object holds no
+//! reference to the server (the pointer is not counted), so again there is no cycle.
 
 use core::ffi::c_void;
 use core::ptr::NonNull;
