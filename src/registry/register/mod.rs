@@ -72,10 +72,11 @@ use crate::registry::{registries, OpcRegistry, Registries};
 
 /// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
 /// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
-/// (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the categories (created with their standard
-/// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
-/// on the calling thread, else by writing the same keys) and, for Data Access
-/// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+/// (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the
+/// categories (created with their standard descriptions when missing; on Windows through the Component
+/// Categories Manager when COM can create it on the calling thread, else, COM not being initialised
+/// there, as EXE servers registering before CoInitializeEx do, by writing the same keys) and, for Data
+/// Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
 /// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
 /// reports OPC_SERVER_COMMAND_REGISTER.
 ///
@@ -102,7 +103,8 @@ pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration,
 /// wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
 /// re-registered after a take-over) is left as it is, never set back to older data, and while the
 /// class serves another server what it shares with it stays. A category's description stays while
-/// another class implements the category.
+/// another class implements the category. Like registration it works with or without COM
+/// initialised on the calling thread.
 ///
 /// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
 /// `OpcRegisterServer` for a bad description or a failing registry write.
