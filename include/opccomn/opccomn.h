@@ -656,7 +656,9 @@ typedef struct OpcServerRegistration {
    */
   LPCWSTR da10_vendor;
   /**
-   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none. Classes that name one
+   * AppID share it (COM applies it to their process): it holds what the latest registration wrote,
+   * and stays until the last of them is unregistered; give them the same settings.
    */
   const CLSID *app_id;
   /**
@@ -3559,8 +3561,11 @@ HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *serv
  * wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
  * re-registered after a take-over) is left as it is, never set back to older data, and while the
  * class serves another server what it shares with it stays. A category's description stays while
- * another class implements the category. Like registration it works with or without COM
- * initialised on the calling thread.
+ * another class implements the category. An AppID another registered class names stays whole (the
+ * AppID key with every value, and `AppID\<exe>` while that class runs in the same program) until
+ * the last of them is unregistered, which removes what the registrations wrote and restores what was
+ * there before the first. Like registration it works with or without COM initialised on the calling
+ * thread.
  *
  * Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
  * `OpcRegisterServer` for a bad description or a failing registry write.

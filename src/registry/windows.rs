@@ -391,6 +391,21 @@ impl Registry for WindowsRegistry {
             .collect()
     }
 
+    /// One open of `parent`, then one relative open per subkey, as `scan`.
+    fn subkey_values(&self, parent: &str, name: &str) -> Vec<(String, RegValue)> {
+        let Some(parent_key) = self.open(parent, KEY_READ) else {
+            return Vec::new();
+        };
+        parent_key
+            .subkeys()
+            .into_iter()
+            .filter_map(|sub| {
+                let value = parent_key.open(&sub, KEY_QUERY_VALUE | self.view)?.value(name)?;
+                Some((sub, value))
+            })
+            .collect()
+    }
+
     /// One open of the class key from the root, then relative opens: the fewest registry calls.
     fn class_strings(&self, clsid: &GUID, version_independent: bool) -> Option<ClassStrings> {
         let class = self.open(&class_key(clsid), KEY_READ)?;
