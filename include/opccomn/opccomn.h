@@ -666,7 +666,9 @@ typedef struct OpcServerRegistration {
    */
   LPCWSTR da10_vendor;
   /**
-   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none. Classes that name one
+   * AppID share it (COM applies it to their process): it holds what the latest registration wrote,
+   * and stays until the last of them is unregistered; give them the same settings.
    */
   const CLSID *app_id;
   /**
@@ -3534,7 +3536,9 @@ HRESULT OPCCOMN_CDECL OpcRegistryGetString(const struct OpcRegistry *reg, LPCWST
  * Creates the component category `catid` with `description` in English (0x409), as the
  * specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
  * `description` uses the standard text of an OPC category. On Windows this goes through the Component
- * Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
+ * Categories Manager (ICatRegister::RegisterCategories) when COM can create it on the calling thread;
+ * where COM is not initialised (a server registering before CoInitializeEx) the library writes the
+ * same value itself.
  *
  * Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
  * is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
@@ -3546,8 +3550,9 @@ HRESULT OPCCOMN_CDECL OpcCreateComponentCategory(const struct OpcRegistry *reg, 
 
 /**
  * Registers `clsid` as implementing the category `catid` (the specification's
- * RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
- * Categories Manager on Windows.
+ * RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the
+ * Component Categories Manager when COM can create it on the calling thread, else (COM not
+ * initialised there) by creating the key itself.
  *
  * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
  *
@@ -3558,7 +3563,8 @@ HRESULT OPCCOMN_CDECL OpcRegisterClassInCategory(const struct OpcRegistry *reg, 
 
 /**
  * Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
- * `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
+ * `CLSID\{clsid}\Implemented Categories\{catid}`, through the Component Categories Manager or
+ * directly as `OpcRegisterClassInCategory` does. Succeeds when it was not registered.
  *
  * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
  *
@@ -3624,10 +3630,11 @@ HRESULT OPCCOMN_CDECL OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR te
 /**
  * Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
  * registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
- * (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the categories (created with their standard
- * descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
- * on the calling thread, else by writing the same keys) and, for Data Access
- * 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+ * (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the
+ * categories (created with their standard descriptions when missing; on Windows through the Component
+ * Categories Manager when COM can create it on the calling thread, else, COM not being initialised
+ * there, as EXE servers registering before CoInitializeEx do, by writing the same keys) and, for Data
+ * Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
  * that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
  * reports OPC_SERVER_COMMAND_REGISTER.
  *
@@ -3648,7 +3655,11 @@ HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *serv
  * wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
  * re-registered after a take-over) is left as it is, never set back to older data, and while the
  * class serves another server what it shares with it stays. A category's description stays while
- * another class implements the category.
+ * another class implements the category. An AppID another registered class names stays whole (the
+ * AppID key with every value, and `AppID\<exe>` while that class runs in the same program) until
+ * the last of them is unregistered, which removes what the registrations wrote and restores what was
+ * there before the first. Like registration it works with or without COM initialised on the calling
+ * thread.
  *
  * Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
  * `OpcRegisterServer` for a bad description or a failing registry write.

@@ -25,7 +25,7 @@ use super::interfaces::{
     IEnumConnectionPoints, IEnumConnectionPointsVtbl, IEnumConnections, IEnumConnectionsVtbl, IOPCShutdown,
     CONNECTDATA,
 };
-use crate::com::enumerator::{Counted, Element, EnumInterface, Enumerator};
+use crate::com::enumerator::{Element, EnumInterface, Enumerator, Listed};
 use crate::com::ffi::{self, FfiResult};
 use crate::com::iids::{
     IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
@@ -36,10 +36,10 @@ use crate::com::interfaces::{
 };
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::options::read_sized;
-use crate::com::unknown::{add_ref, query, release};
+use crate::com::unknown::{add_ref, query, release, Counted};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
-    E_NOINTERFACE, E_UNEXPECTED, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
+    E_NOINTERFACE, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
 };
 
 /// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
@@ -235,9 +235,8 @@ impl OpcShutdown {
     /// `sink` must be a valid COM interface pointer.
     unsafe fn advise(&self, sink: *mut IUnknown) -> Result<DWORD, HRESULT> {
         // SAFETY: `sink` is valid per the caller.
-        let shutdown = unsafe { query::<IOPCShutdown>(sink, &IID_IOPCShutdown) }
-            .map_err(|_| CONNECT_E_CANNOTCONNECT)?
-            .into_raw();
+        let shutdown =
+            unsafe { query::<IOPCShutdown>(sink, &IID_IOPCShutdown) }.map_err(|_| CONNECT_E_CANNOTCONNECT)?;
         // Registering in the GIT may call into the sink, so it happens before the lock is taken.
         // SAFETY: a counted IOPCShutdown pointer of the calling apartment.
         let held = unsafe { SinkRef::adopt(shutdown) };
@@ -322,8 +321,8 @@ impl OpcShutdown {
         for (cookie, advised) in self.snapshot() {
             // On failure `data` drops, releasing the sinks fetched so far.
             let call = advised.sink().get()?;
-            // SAFETY: `into_raw` gives up a counted, non-NULL pointer that the element now owns.
-            let sink = unsafe { Counted::adopt(call.into_raw().cast::<IUnknown>()) }.ok_or(E_UNEXPECTED)?;
+            // SAFETY: fetched for this thread's apartment, to which COM confines the enumerator.
+            let sink = unsafe { Listed::new(call.into_unknown()) };
             data.push(EnumeratedConnection { sink, cookie });
         }
         Ok(Enumerator::<ConnectionsEnum>::create(data.into(), 0))
@@ -332,7 +331,7 @@ impl OpcShutdown {
 
 /// One connection of an IEnumConnections snapshot: the sink (one counted reference) and its cookie.
 pub(crate) struct EnumeratedConnection {
-    sink: Counted<IUnknown>,
+    sink: Listed<IUnknown>,
     cookie: DWORD,
 }
 
@@ -371,7 +370,7 @@ static ENUM_POINTS_VTBL: IEnumConnectionPointsVtbl =
 crate::enum_impl!(IEnumConnectionPointsImpl, ConnectionPointsEnum);
 
 impl EnumInterface for ConnectionPointsEnum {
-    type Item = Counted<IConnectionPoint>;
+    type Item = Listed<IConnectionPoint>;
     type Iface = IEnumConnectionPoints;
     type Vtbl = IEnumConnectionPointsVtbl;
     const IIDS: &'static [GUID] = &[IID_IENUMCONNECTIONPOINTS];
@@ -399,12 +398,12 @@ impl IConnectionPointContainerImpl for OpcShutdown {
         let out = unsafe { ffi::out(ppEnum) }?;
         let point = this.point_ptr();
         // The snapshot's reference to the point counts on the server, which it keeps alive.
-        // SAFETY: `point` is a slot of the live object; the element takes over the reference added.
+        // SAFETY: `point` is a slot of the live, free-threaded object; the element takes over the
+        // reference added.
         let item = unsafe {
             add_ref(point.cast());
-            Counted::adopt(point)
-        }
-        .expect("slot pointers are never NULL");
+            Listed::new(Counted::adopt(point).expect("slot pointers are never NULL"))
+        };
         out.write(Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0));
         Ok(S_OK)
     }

@@ -78,7 +78,9 @@ pub struct OpcServerRegistration {
     /// For Data Access 1.0 servers only: the vendor name written to `<ProgID>\OPC\Vendor`, by which
     /// OpcEnum and DA 1.0 clients find servers registered the old way.
     pub da10_vendor: LPCWSTR,
-    /// The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+    /// The AppID (a GUID) of a local server's DCOM settings, or NULL for none. Classes that name one
+    /// AppID share it (COM applies it to their process): it holds what the latest registration wrote,
+    /// and stays until the last of them is unregistered; give them the same settings.
     pub app_id: *const CLSID,
     /// `RunAs` of the AppID ("Interactive User", an account), or NULL.
     pub app_id_run_as: LPCWSTR,
