@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use super::apartment::SinkRef;
 use super::server::OpcShutdown;
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{HRESULT, WCHAR};
 
 /// A timeout that never ends: the notification waits for the answer however long it takes.
@@ -39,6 +39,12 @@ pub struct OpcShutdownNotifyOptions {
     pub sink_timeout_ms: u32,
 }
 
+// SAFETY: repr(C), struct_size first, integers only.
+unsafe impl SizedStruct for OpcShutdownNotifyOptions {
+    /// One version so far.
+    const SIZES: &'static [usize] = &[core::mem::size_of::<OpcShutdownNotifyOptions>()];
+}
+
 /// The deadlines of one notification; `None` waits without limit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Bounds {
@@ -55,7 +61,6 @@ fn millis(ms: u32) -> Option<Duration> {
 /// # Safety
 /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcShutdownNotifyOptions.
 pub(crate) unsafe fn read_notify_options(options: *const OpcShutdownNotifyOptions) -> Result<Bounds, HRESULT> {
-    let sizes = [core::mem::size_of::<OpcShutdownNotifyOptions>()];
     let defaults = OpcShutdownNotifyOptions {
         struct_size: 0,
         timeout_ms: 0,
@@ -63,7 +68,7 @@ pub(crate) unsafe fn read_notify_options(options: *const OpcShutdownNotifyOption
     };
     // SAFETY: OpcShutdownNotifyOptions is repr(C), starts with struct_size and holds only integers;
     // the caller vouches for `options`.
-    let o = unsafe { read_sized(options, &sizes, defaults) }?;
+    let o = unsafe { read_sized(options, defaults) }?;
     let whole = if o.timeout_ms == 0 {
         OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS
     } else {

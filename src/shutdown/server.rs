@@ -28,7 +28,7 @@ use crate::com::interfaces::{
     IConnectionPointContainerImpl, IConnectionPointImpl, IEnumConnectionPointsImpl, IEnumConnectionsImpl, IUnknownImpl,
 };
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::unknown::{add_ref, query};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
@@ -46,6 +46,15 @@ pub struct OpcShutdownOptions {
     /// The most sinks that may be advised at the same time; 0 means the default, 1 (the
     /// specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
     pub advise_limit: u32,
+}
+
+// SAFETY: repr(C), struct_size first, integers only.
+unsafe impl SizedStruct for OpcShutdownOptions {
+    /// Version 1 (`struct_size` only) and version 2 (`advise_limit`).
+    const SIZES: &'static [usize] = &[
+        core::mem::offset_of!(OpcShutdownOptions, advise_limit),
+        core::mem::size_of::<OpcShutdownOptions>(),
+    ];
 }
 
 /// The advise limit when the server sets none.
@@ -416,17 +425,13 @@ impl IConnectionPointImpl for OpcShutdown {
 /// # Safety
 /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcShutdownOptions.
 pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<u32, HRESULT> {
-    let sizes = [
-        core::mem::offset_of!(OpcShutdownOptions, advise_limit),
-        core::mem::size_of::<OpcShutdownOptions>(),
-    ];
     let defaults = OpcShutdownOptions {
         struct_size: 0,
         advise_limit: 0,
     };
     // SAFETY: OpcShutdownOptions is repr(C), starts with struct_size and holds only integers; the
     // caller vouches for `options`.
-    Ok(unsafe { read_sized(options, &sizes, defaults) }?.advise_limit)
+    Ok(unsafe { read_sized(options, defaults) }?.advise_limit)
 }
 
 /// Finds the shutdown object behind any interface of it (or of a server aggregating it) and runs
