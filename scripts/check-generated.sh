@@ -2,7 +2,8 @@
 # Fails when a generated file differs from what its generator makes now, as `gen-header --check` does
 # for the header: the test stages' list (docs/dev/test-stages.txt from scripts/test.sh --list), the C test vectors (c-tests/like_vectors.inc from src/pattern/like-vectors.tsv), the
 # table of accepted struct_size values in docs/api-conventions.md (from the code, x86_64 column; the
-# i686 column is checked by the same test in the rust-x86 stage) and the
+# i686 column is checked by the same test in the rust-x86 stage), the docs' snippets taken from compiled
+# examples (tools/check-doc-snippets.py) and the
 # case-folding table (src/pattern/fold_table.rs from the Unicode Character Database's CaseFolding.txt,
 # which Debian's unicode-data package installs; Debian 12 ships Unicode 15.0.0, the table's version).
 set -euo pipefail
@@ -31,6 +32,8 @@ else
     echo "docs/api-conventions.md's struct_size table differs from the code: run scripts/gen-struct-size-table.sh and commit it" >&2
     status=1
 fi
+# The docs' snippets marked as taken from a file ctest builds are still in that file.
+python3 tools/check-doc-snippets.py || status=1
 folding=${OPCCOMN_CASE_FOLDING:-/usr/share/unicode/CaseFolding.txt}
 table_version=$(sed -n 's/^pub(crate) const UNICODE_VERSION: &str = "\(.*\)";/\1/p' src/pattern/fold_table.rs)
 data_version=$(sed -n '1s/^# CaseFolding-\(.*\)\.txt.*/\1/p' "$folding")
