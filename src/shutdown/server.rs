@@ -50,7 +50,7 @@ pub struct OpcShutdownOptions {
 
 // SAFETY: repr(C), struct_size first, integers only.
 unsafe impl SizedStruct for OpcShutdownOptions {
-    /// Version 1 (`struct_size` only) and version 2 (`advise_limit`).
+    /// `struct_size` alone, and with `advise_limit`.
     const SIZES: &'static [usize] = &[
         core::mem::offset_of!(OpcShutdownOptions, advise_limit),
         core::mem::size_of::<OpcShutdownOptions>(),
