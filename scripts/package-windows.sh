@@ -83,7 +83,7 @@ rm -rf "$stage/docs/dev"
 # The C API reference, built from the header (scripts/docs.sh fails on any undocumented item).
 scripts/docs.sh >/dev/null
 cp -r "$build/docs/html" "$stage/docs/reference/"
-cp -r examples/cpp-server "$stage/examples/"
+cp -r examples/cpp-server examples/server-plumbing "$stage/examples/"
 printf '%s\n' "$version" >"$stage/VERSION"
 (cd "$stage" && find . -type f ! -name SHA256SUMS | sort | sed 's|^\./||' | xargs sha256sum >SHA256SUMS)
 (cd "$out" && cmake -E tar cf "$name.zip" --format=zip "$name")

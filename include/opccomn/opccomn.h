@@ -3282,8 +3282,12 @@ HRESULT OPCCOMN_CDECL OpcCommonGetClientName(IUnknown *common, LPWSTR *ppName);
  *
  * `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
  * pointer itself is the cheap form: the library recognises its own object and reads the locale
- * without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
- * interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
+ * without a QueryInterface. For any other interface the library asks for IOPCCommon first (one
+ * QueryInterface and Release). A server that aggregates the session keeps the inner IUnknown from
+ * `OpcCommonCreate` and passes that, not an IOPCCommon pointer: every interface of an aggregated
+ * object but its inner IUnknown counts its references on the outer object, so a kept IOPCCommon
+ * pointer would keep the server object alive for ever. `locale_changed` tells a server of every change
+ * without a call. `*lcid` receives the locale, or 0 on failure.
  * Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
  *
  * @par Safety

@@ -28,7 +28,7 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use super::server::{Advised, OpcShutdown};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{HRESULT, WCHAR};
 
 /// The most threads the library runs at the same time, in the whole process, to call sinks for
@@ -57,6 +57,12 @@ pub struct OpcShutdownNotifyOptions {
     pub sink_timeout_ms: u32,
 }
 
+// SAFETY: repr(C), struct_size first, integers only.
+unsafe impl SizedStruct for OpcShutdownNotifyOptions {
+    /// One version so far.
+    const SIZES: &'static [usize] = &[core::mem::size_of::<OpcShutdownNotifyOptions>()];
+}
+
 /// The deadlines of one notification; `None` waits without limit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Bounds {
@@ -73,7 +79,6 @@ fn millis(ms: u32) -> Option<Duration> {
 /// # Safety
 /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcShutdownNotifyOptions.
 pub(crate) unsafe fn read_notify_options(options: *const OpcShutdownNotifyOptions) -> Result<Bounds, HRESULT> {
-    let sizes = [core::mem::size_of::<OpcShutdownNotifyOptions>()];
     let defaults = OpcShutdownNotifyOptions {
         struct_size: 0,
         timeout_ms: 0,
@@ -81,7 +86,7 @@ pub(crate) unsafe fn read_notify_options(options: *const OpcShutdownNotifyOption
     };
     // SAFETY: OpcShutdownNotifyOptions is repr(C), starts with struct_size and holds only integers;
     // the caller vouches for `options`.
-    let o = unsafe { read_sized(options, &sizes, defaults) }?;
+    let o = unsafe { read_sized(options, defaults) }?;
     let whole = if o.timeout_ms == 0 {
         OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS
     } else {

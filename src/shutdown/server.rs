@@ -35,7 +35,7 @@ use crate::com::interfaces::{
     IConnectionPointContainerImpl, IConnectionPointImpl, IEnumConnectionPointsImpl, IEnumConnectionsImpl, IUnknownImpl,
 };
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::unknown::{add_ref, query, release, Counted};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
@@ -75,6 +75,16 @@ pub struct OpcShutdownOptions {
 pub(crate) struct ShutdownSettings {
     pub(crate) advise_limit: u32,
     pub(crate) container: *mut IUnknown,
+}
+
+// SAFETY: repr(C), struct_size first, integers and a raw pointer.
+unsafe impl SizedStruct for OpcShutdownOptions {
+    /// `struct_size` alone, with `advise_limit`, and with `container`.
+    const SIZES: &'static [usize] = &[
+        core::mem::offset_of!(OpcShutdownOptions, advise_limit),
+        core::mem::offset_of!(OpcShutdownOptions, container),
+        core::mem::size_of::<OpcShutdownOptions>(),
+    ];
 }
 
 /// The advise limit when the server sets none.
@@ -541,17 +551,6 @@ impl IConnectionPointImpl for OpcShutdown {
     }
 }
 
-/// Every size `sizeof(OpcShutdownOptions)` is or was in some version: the struct ends after a whole
-/// field (with or without the padding C adds).
-pub(crate) fn options_sizes() -> [usize; 3] {
-    use core::mem::{offset_of, size_of};
-    [
-        offset_of!(OpcShutdownOptions, advise_limit),
-        offset_of!(OpcShutdownOptions, container),
-        size_of::<OpcShutdownOptions>(),
-    ]
-}
-
 /// Reads the caller's options, honouring `struct_size`.
 ///
 /// # Safety
@@ -564,7 +563,7 @@ pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<
     };
     // SAFETY: OpcShutdownOptions is repr(C), starts with struct_size and holds integers and a raw
     // pointer; the caller vouches for `options`.
-    let o = unsafe { read_sized(options, &options_sizes(), defaults) }?;
+    let o = unsafe { read_sized(options, defaults) }?;
     Ok(ShutdownSettings {
         advise_limit: o.advise_limit,
         container: o.container,

@@ -1588,7 +1588,10 @@ fn a_named_container_is_checked() {
 
         // Each version's size; nothing between.
         let ptr_size = core::mem::size_of::<*mut c_void>();
-        assert_eq!(super::server::options_sizes(), [4, 8, 8 + ptr_size]);
+        assert_eq!(
+            <super::server::OpcShutdownOptions as crate::com::options::SizedStruct>::SIZES,
+            [4, 8, 8 + ptr_size]
+        );
         for (size, want) in [
             (4, S_OK),
             (8, S_OK),

@@ -2,7 +2,7 @@
 //! the [`ServerDescription`] the rest of the registration code works with.
 
 use crate::com::ffi::{self, Fail, FfiResult};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{CATID, CLSID, E_INVALIDARG, GUID, HRESULT, LPCWSTR};
 use crate::registry::sddl::SecurityDescriptor;
 use crate::registry::MAX_NAME_UNITS;
@@ -111,19 +111,22 @@ pub struct OpcServerRegistration {
     pub app_id_authentication_level: u32,
 }
 
-/// The `struct_size` values accepted: every size at which a version of OpcServerRegistration ends,
-/// after its last field, with or without C's trailing padding.
-fn registration_sizes() -> [usize; 4] {
-    use core::mem::{offset_of, size_of};
-    type R = OpcServerRegistration;
-    [
-        // Version 1: up to `flags`.
-        offset_of!(R, flags) + size_of::<u32>(),
-        offset_of!(R, app_id_access_permission),
-        // Version 2: the AppID's security.
-        offset_of!(R, app_id_authentication_level) + size_of::<u32>(),
-        size_of::<R>(),
-    ]
+// SAFETY: repr(C), struct_size first; integers, a GUID and raw pointers.
+unsafe impl SizedStruct for OpcServerRegistration {
+    /// Every size at which a version of OpcServerRegistration ends, after its last field, with or
+    /// without C's trailing padding.
+    const SIZES: &'static [usize] = {
+        use core::mem::{offset_of, size_of};
+        type R = OpcServerRegistration;
+        &[
+            // Version 1: up to `flags`.
+            offset_of!(R, flags) + size_of::<u32>(),
+            offset_of!(R, app_id_access_permission),
+            // Version 2: the AppID's security.
+            offset_of!(R, app_id_authentication_level) + size_of::<u32>(),
+            size_of::<R>(),
+        ]
+    };
 }
 
 /// A registration as the library works with it.
@@ -181,7 +184,7 @@ impl ServerDescription {
         let defaults: OpcServerRegistration = unsafe { core::mem::zeroed() };
         // SAFETY: the caller vouches for `struct_size` readable bytes; read_sized copies no more, and
         // only sizes at which a version of the structure ends.
-        let r = unsafe { read_sized(r, &registration_sizes(), defaults) }?;
+        let r = unsafe { read_sized(r, defaults) }?;
         let r = &r;
         let local = match r.server_type {
             0 => false,
