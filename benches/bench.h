@@ -130,9 +130,17 @@ static int bench_fewest_rounds;       /* the fewest rounds a case ran, when the 
 static int bench_failures;            /* goals not met */
 static int bench_goals;
 
-/* Reads BENCH_ROUNDS and BENCH_ROUND_MS (a benchmark may set other defaults before) and picks the clock. */
+/* Reads BENCH_ROUNDS and BENCH_ROUND_MS (a benchmark may set other defaults before), picks the clock and
+   makes the output unbuffered. */
 static void bench_init(void)
 {
+    /* Each line as it is printed (Windows' C runtime has no line buffering): what a run stopped by
+       scripts/bench.sh's time limit printed is not lost with its buffer. */
+#if defined(_WIN32)
+    setvbuf(stdout, NULL, _IONBF, 0);
+#else
+    setvbuf(stdout, NULL, _IOLBF, BUFSIZ);
+#endif
     bench_choose_clock();
     const char *r = getenv("BENCH_ROUNDS"), *ms = getenv("BENCH_ROUND_MS"), *budget = getenv("BENCH_BUDGET_S");
     if (r && atoi(r) >= 3)

@@ -13,18 +13,43 @@
  * this process, so that neither pays a registry lookup the other does not); before each batch of
  * Enum+Next it registers the batch's one again, as every call makes a new enumerator proxy. Each
  * server and each kind of proxy is checked to be the one it should be before anything is timed.
+ * Client and servers register their proxy/stubs in their own processes only (COM prefers them to the
+ * registry): the machine's registration of the five interfaces (Interface\{iid}\ProxyStubClsid32,
+ * opccomn's or the Foundation's) is not changed, so out-of-process clients of that machine keep
+ * working during and after a run. What the benchmark registers is its three servers' classes,
+ * removed at its end, after a failure and after a stall (and by `--unregister`, for a run killed from
+ * outside).
  *
- * The contenders run in interleaved rounds (ROUNDS of each, the order rotating), a batch of calls a
- * round. Printed per operation: the median wall-clock time per round trip of each, the median of the
- * rounds' ratios with their spread (lowest-highest), the CPU time of this process and the server
- * (summed over the run: it advances in 10 ms ticks under Wine), and a GOAL line (median ratio
- * opccomn/widl <= 1.1x) with met or NOT MET, as the other benchmarks do; exit code 1 when a goal is
- * missed or a round trip failed (the failing call and its HRESULT are printed). Run with
+ * The contenders run in interleaved rounds (--rounds, 51 by default, the order rotating), a batch of
+ * calls a round. Printed per operation: the median wall-clock time per round trip of each, the median
+ * of the rounds' ratios with their spread (lowest-highest), the CPU time of this process and the
+ * server (summed over the run: it advances in 10 ms ticks under Wine), and a GOAL line (median ratio
+ * opccomn/widl <= 1.1x) with met or NOT MET, as the other benchmarks do.
+ *
+ * Bounded in time. A round trip can hang for ever under Wine (Wine 8: a stub's teardown waiting in
+ * RpcServerUnregisterIf while the client waits in IUnknown_Release_Proxy), so a watchdog thread
+ * watches each step: a batch of round trips that does not end within --stall-s seconds (60 by
+ * default), or a server's start or end within twice that (120 s at least), is a stall. The watchdog
+ * then prints the figures of the rounds complete so far, marked partial (none when no round was), and
+ * what stalled, removes the benchmark's classes, ends its servers and ends the process with exit code
+ * 3. Rounds also stop once --budget-s seconds (1200 by default) have passed since the first; the
+ * figures then say how many of the rounds they come from.
+ *
+ * Exit code: 0 when every goal is met, 1 when one is missed or a round trip failed (the failing call
+ * and its HRESULT are printed), 3 after a stall, 2 for a usage error. Run with
  * scripts/bench-cross-process.sh [N]: N GetErrorString and N/5 Enum+Next per contender in all
- * (default 10200). */
+ * (default 10200).
+ *
+ *   cross_process_bench [--rounds R] [--budget-s S] [--stall-s S] [--simulate-stall ROUND] [N]
+ *   cross_process_bench --unregister      removes the classes a run killed from outside left
+ *
+ * --simulate-stall ROUND makes the first batch of that round hang as a round trip that never returns
+ * does (tests/oop/test_bench_registration.c uses it). */
 #include "oop.h"
 
-#define ROUNDS 51
+#include <stdarg.h>
+
+#define MAX_ROUNDS 101
 #define CONTENDERS 3
 static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
 static WCHAR server_path[MAX_PATH];
@@ -36,13 +61,44 @@ typedef struct {
     unsigned set;            /* the server's CLSIDs: oop_class(set, ...) */
     IOPCCommon *common;
     IOPCServerList2 *list;
-    double wall[2][ROUNDS];  /* per operation and round: seconds per round trip */
+    DWORD server_pid;        /* its server's process, ended after a stall */
+    double wall[2][MAX_ROUNDS]; /* per operation and round: seconds per round trip */
     unsigned long long cpu[2]; /* per operation: CPU time of both processes over the run, 100 ns units */
     long long calls[2];      /* per operation: timed round trips */
 } Contender;
 
 static Contender contenders[CONTENDERS] = {
     {.name = "opccomn", .widl = 0, .set = 1}, {.name = "widl", .widl = 1, .set = 2}, {.name = "widl (control)", .widl = 1, .set = 3}};
+
+/* The run's settings (command line). */
+static int rounds = 51;
+static double budget_s = 1200, stall_s = 60;
+static int simulate_stall_round = -2; /* (-1 is the warm-up) */
+
+/* ---- The watchdog: every step of the run is named and timed; one that ends too late is a stall ---- */
+
+static CRITICAL_SECTION step_lock;   /* the step's name, start and limit */
+static char step_name[160];
+static ULONGLONG step_started;       /* GetTickCount64 */
+static ULONGLONG step_limit_ms;
+static volatile LONG rounds_done;    /* complete rounds: each contender's batch of both operations */
+static CRITICAL_SECTION output_lock; /* the figures, printed once, by the run or by the watchdog */
+static int figures_printed;
+static HANDLE run_finished;
+
+/* A new step (what it is, for the report) with its time limit. */
+static void step(double limit_s, const char *format, ...) {
+    va_list ap;
+    EnterCriticalSection(&step_lock);
+    va_start(ap, format);
+    vsnprintf(step_name, sizeof step_name, format, ap);
+    va_end(ap);
+    step_started = GetTickCount64();
+    step_limit_ms = (ULONGLONG)(limit_s * 1000);
+    LeaveCriticalSection(&step_lock);
+}
+/* A server's start or end: under Wine on a loaded machine it takes seconds, at times tens of them. */
+static double setup_limit_s(void) { return stall_s * 2 > 120 ? stall_s * 2 : 120; }
 
 static double now(void) {
     LARGE_INTEGER f, c;
@@ -117,15 +173,26 @@ static void unregister_classes(const Contender *k) {
     }
 }
 
+static void unregister_all(void) {
+    int i;
+    for (i = 0; i < CONTENDERS; i++) unregister_classes(&contenders[i]);
+}
+
+/* A vendor code's answer from the contender's server, as text (0 when it gave none). */
+static int ask_server(Contender *k, HRESULT code, char *out, size_t size) {
+    LPWSTR text = NULL;
+    HRESULT hr = k->common->lpVtbl->GetErrorString(k->common, code, &text);
+    if (FAILED(hr) || !text) return failed(k, "asking the server", hr), 0;
+    snprintf(out, size, "%ls", text);
+    CoTaskMemFree(text);
+    return 1;
+}
+
 /* The contender's server makes its stubs with the proxy/stub it should. */
 static int server_checked(Contender *k) {
-    LPWSTR text = NULL;
     char narrow[32];
     const char *expected = k->widl ? "widl" : "opccomn";
-    HRESULT hr = k->common->lpVtbl->GetErrorString(k->common, OOP_CODE_PROXY_STUB, &text);
-    if (FAILED(hr) || !text) return failed(k, "asking the server for its proxy/stub", hr), 0;
-    snprintf(narrow, sizeof narrow, "%ls", text);
-    CoTaskMemFree(text);
+    if (!ask_server(k, OOP_CODE_PROXY_STUB, narrow, sizeof narrow)) return 0;
     if (strcmp(narrow, expected) != 0) {
         fprintf(stderr, "cross_process_bench: the %s server's stubs come from %s\n", k->name, narrow);
         return 0;
@@ -154,9 +221,14 @@ static int connect_contender(Contender *k) {
     CLSID server = oop_class(k->set, 0), list = oop_class(k->set, 1);
     LONG before = widl_proxy_stub_refs();
     int widl_enum = -1;
+    char pid[32];
     if (FAILED(hr)) return failed(k, "CoRegisterPSClsid", hr);
+    step(setup_limit_s(), "starting the %s server (CoCreateInstance)", k->name);
     hr = CoCreateInstance(&server, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCCommon, (void **)&k->common);
     if (FAILED(hr)) return failed(k, "creating the server", hr);
+    step(setup_limit_s(), "checking the %s server", k->name);
+    if (!ask_server(k, OOP_CODE_PROCESS_ID, pid, sizeof pid)) return 1;
+    k->server_pid = (DWORD)strtoul(pid, NULL, 10);
     hr = CoCreateInstance(&list, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&k->list);
     if (FAILED(hr)) return failed(k, "creating the server list", hr);
     if ((widl_proxy_stub_refs() > before) != k->widl) {
@@ -188,8 +260,11 @@ static int batch(Contender *k, int op, int round, int calls) {
     double t0, t1;
     HRESULT hr = S_OK;
     int i;
+    if (round < 0) step(stall_s, "the warm-up's %s batch of the %s contender", OPERATIONS[op], k->name);
+    else step(stall_s, "round %d: the %s batch of the %s contender", round + 1, OPERATIONS[op], k->name);
     if (op == 1 && FAILED(hr = select_proxy_stub(k))) return failed(k, "CoRegisterPSClsid", hr);
     if (FAILED(hr = cpu_time(k, &cpu_before))) return failed(k, "reading CPU times", hr);
+    if (round == simulate_stall_round) Sleep(INFINITE); /* a round trip that never returns */
     t0 = now();
     for (i = 0; i < calls; i++) {
         if (op == 0) {
@@ -215,46 +290,164 @@ static int compare(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
     return x < y ? -1 : x > y;
 }
-static double median(const double *v) {
-    double s[ROUNDS];
-    memcpy(s, v, sizeof s);
-    qsort(s, ROUNDS, sizeof s[0], compare);
-    return s[ROUNDS / 2];
+static double median(const double *v, int n) {
+    double s[MAX_ROUNDS];
+    memcpy(s, v, (size_t)n * sizeof s[0]);
+    qsort(s, (size_t)n, sizeof s[0], compare);
+    return n % 2 ? s[n / 2] : (s[n / 2 - 1] + s[n / 2]) / 2;
 }
 
-/* The median of the rounds' ratios a/b, and their lowest and highest. */
-static double paired_ratio(const double *a, const double *b, double *lo, double *hi) {
-    double r[ROUNDS];
+/* The median of the first n rounds' ratios a/b, and their lowest and highest. */
+static double paired_ratio(const double *a, const double *b, int n, double *lo, double *hi) {
+    double r[MAX_ROUNDS];
     int i;
     *lo = 1e9;
     *hi = 0;
-    for (i = 0; i < ROUNDS; i++) {
+    for (i = 0; i < n; i++) {
         r[i] = a[i] / b[i];
         if (r[i] < *lo) *lo = r[i];
         if (r[i] > *hi) *hi = r[i];
     }
-    return median(r);
+    return median(r, n);
 }
 
-static double cpu_per_call(const Contender *k, int op) { return (double)k->cpu[op] / 10.0 / (double)k->calls[op]; }
+static double cpu_per_call(const Contender *k, int op) {
+    return k->calls[op] ? (double)k->cpu[op] / 10.0 / (double)k->calls[op] : 0;
+}
+
+/* The figures of the first n rounds and the GOAL lines; returns 1 when a goal is missed. `why`, when
+ * given, says why there are fewer rounds than asked for. */
+static int print_figures(int n, const char *why) {
+    int op, missed = 0;
+    EnterCriticalSection(&output_lock);
+    figures_printed = 1;
+    if (n == 0) {
+        printf("no round was complete: no figures (%s)\n", why ? why : "");
+        LeaveCriticalSection(&output_lock);
+        return 1;
+    }
+    if (why) printf("PARTIAL: the figures of %d of the %d rounds (%s)\n", n, rounds, why);
+    printf("%-16s %-44s | %-31s\n", "", "wall clock: median per round trip (us), ratio", "CPU, both processes (us)");
+    printf("%-16s %8s %8s %8s %10s %8s | %8s %8s %8s\n", "round trip", "opccomn", "widl", "ratio", "spread",
+           "control", "opccomn", "widl", "ratio");
+    for (op = 0; op < 2; op++) {
+        double lo, hi, clo, chi, ratio, control;
+        double cpu_ours = cpu_per_call(&contenders[0], op), cpu_widl = cpu_per_call(&contenders[1], op);
+        char cpu_ratio[16] = "       -"; /* a short run can see no 10 ms tick of CPU time */
+        if (cpu_ours > 0 && cpu_widl > 0) snprintf(cpu_ratio, sizeof cpu_ratio, "%7.2fx", cpu_ours / cpu_widl);
+        ratio = paired_ratio(contenders[0].wall[op], contenders[1].wall[op], n, &lo, &hi);
+        control = paired_ratio(contenders[2].wall[op], contenders[1].wall[op], n, &clo, &chi);
+        printf("%-16s %8.1f %8.1f %7.2fx %4.2f-%.2fx %7.2fx | %8.1f %8.1f %s\n", OPERATIONS[op],
+               median(contenders[0].wall[op], n) * 1e6, median(contenders[1].wall[op], n) * 1e6, ratio, lo, hi,
+               control, cpu_ours, cpu_widl, cpu_ratio);
+    }
+    printf("(control: the stand-in against itself, %s; spread: the lowest and highest of the rounds' ratios)\n",
+           "the difference this run's machine makes between equal contenders");
+    for (op = 0; op < 2; op++) {
+        double lo, hi, ratio = paired_ratio(contenders[0].wall[op], contenders[1].wall[op], n, &lo, &hi);
+        int met = ratio <= 1.1;
+        printf("GOAL %-40s %7.2fx  goal <= 1.10x  %s%s\n", OPERATIONS[op], ratio, met ? "met" : "NOT MET",
+               n < rounds ? " (partial)" : "");
+        missed |= !met;
+    }
+    fflush(stdout);
+    LeaveCriticalSection(&output_lock);
+    return missed;
+}
+
+/* After a stall: what stalled, the figures so far, then the benchmark's classes and servers go. The
+ * stalled thread is never waited for: the process ends here. */
+static void end_stalled(const char *what, ULONGLONG waited_ms) {
+    char why[300];
+    int i;
+    EnterCriticalSection(&output_lock);
+    printf("STALLED: %s did not end within %.0f s (waited %.1f s)\n", what, (double)step_limit_ms / 1000,
+           (double)waited_ms / 1000);
+    snprintf(why, sizeof why, "stalled in %s", what);
+    if (!figures_printed) print_figures((int)rounds_done, why);
+    else printf("(the figures above are complete: the stall came after the last round)\n");
+    LeaveCriticalSection(&output_lock);
+    unregister_all();
+    for (i = 0; i < CONTENDERS; i++) {
+        HANDLE process = contenders[i].server_pid ? OpenProcess(PROCESS_TERMINATE, FALSE, contenders[i].server_pid) : NULL;
+        if (process) {
+            TerminateProcess(process, 3);
+            CloseHandle(process);
+        }
+    }
+    printf("cross_process_bench: stopped after a stall; its classes removed, its servers ended\n");
+    fflush(stdout);
+    fflush(stderr);
+    TerminateProcess(GetCurrentProcess(), 3);
+}
+
+static DWORD WINAPI watchdog(void *unused) {
+    (void)unused;
+    while (WaitForSingleObject(run_finished, 250) == WAIT_TIMEOUT) {
+        char what[sizeof step_name];
+        ULONGLONG waited;
+        int late;
+        EnterCriticalSection(&step_lock);
+        waited = GetTickCount64() - step_started;
+        late = waited > step_limit_ms;
+        memcpy(what, step_name, sizeof what);
+        LeaveCriticalSection(&step_lock);
+        if (late) end_stalled(what, waited);
+    }
+    return 0;
+}
+
+static int usage(void) {
+    fprintf(stderr, "usage: cross_process_bench [--rounds R] [--budget-s S] [--stall-s S] [--simulate-stall ROUND] [N]\n"
+                    "       cross_process_bench --unregister\n");
+    return 2;
+}
 
 int main(int argc, char **argv) {
-    int total = 10200, calls[2], round, op, i, failure = 0, missed = 0;
-    double goal_ratio[2];
+    int total = 10200, calls[2], round, op, i, a, failure = 0, missed = 0, cut = 0;
+    double started;
+    char why[120] = "";
     WCHAR *slash;
-    if (argc > 1 && atoi(argv[1]) >= 5 * ROUNDS) total = atoi(argv[1]);
-    calls[0] = total / ROUNDS;
-    calls[1] = total / 5 / ROUNDS;
-    printf("%d rounds of each contender, interleaved: %d x GetErrorString and %d x Enum+Next(100) a round\n", ROUNDS,
-           calls[0], calls[1]);
+    HANDLE thread;
+    setvbuf(stdout, NULL, _IONBF, 0); /* what was printed survives a kill from outside */
     GetModuleFileNameW(NULL, server_path, MAX_PATH);
     slash = wcsrchr(server_path, L'\\');
     wcscpy(slash ? slash + 1 : server_path, L"opccomn_test_server.exe");
+    for (a = 1; a < argc; a++) {
+        const char *value = a + 1 < argc ? argv[a + 1] : NULL;
+        if (!strcmp(argv[a], "--unregister")) {
+            unregister_all();
+            printf("cross_process_bench: the benchmark's classes removed\n");
+            return 0;
+        } else if (!strcmp(argv[a], "--rounds") && value) {
+            rounds = atoi(value), a++;
+        } else if (!strcmp(argv[a], "--budget-s") && value) {
+            budget_s = atof(value), a++;
+        } else if (!strcmp(argv[a], "--stall-s") && value) {
+            stall_s = atof(value), a++;
+        } else if (!strcmp(argv[a], "--simulate-stall") && value && atoi(value) >= 1) {
+            simulate_stall_round = atoi(value) - 1, a++;
+        } else if (argv[a][0] != '-' && atoi(argv[a]) > 0) {
+            total = atoi(argv[a]);
+        } else {
+            return usage();
+        }
+    }
+    if (rounds < 1 || rounds > MAX_ROUNDS || budget_s <= 0 || stall_s <= 0) return usage();
+    if (total < 5 * rounds) total = 5 * rounds;
+    calls[0] = total / rounds;
+    calls[1] = total / 5 / rounds;
+    printf("%d rounds of each contender, interleaved: %d x GetErrorString and %d x Enum+Next(100) a round "
+           "(limits: %.0f s for the rounds, %.0f s for a batch)\n", rounds, calls[0], calls[1], budget_s, stall_s);
+    InitializeCriticalSection(&step_lock);
+    InitializeCriticalSection(&output_lock);
+    run_finished = CreateEventW(NULL, TRUE, FALSE, NULL);
+    step(setup_limit_s(), "the start (COM, the proxy/stubs' class objects)");
+    thread = run_finished ? CreateThread(NULL, 0, watchdog, NULL, 0, NULL) : NULL;
+    if (!thread) return failed(&contenders[0], "starting the watchdog", HRESULT_FROM_WIN32(GetLastError()));
     if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_widl_proxy_stub()) ||
         FAILED(use_opccomn_proxy_stub_directly()))
         return 1;
-    OpcUnregisterProxyStub(NULL); /* whatever an interrupted earlier run left */
-    if (FAILED(OpcRegisterProxyStub(NULL, 0))) failure = failed(&contenders[0], "OpcRegisterProxyStub", E_FAIL);
     for (i = 0; i < CONTENDERS && !failure; i++) {
         HRESULT hr = register_classes(&contenders[i]);
         if (FAILED(hr)) failure = failed(&contenders[i], "registering the test server", hr);
@@ -262,39 +455,32 @@ int main(int argc, char **argv) {
     for (i = 0; i < CONTENDERS && !failure; i++) failure = connect_contender(&contenders[i]);
     for (op = 0; op < 2 && !failure; op++)
         for (i = 0; i < CONTENDERS && !failure; i++) failure = batch(&contenders[i], op, -1, calls[op]);
-    for (round = 0; round < ROUNDS && !failure; round++)
+    started = now();
+    for (round = 0; round < rounds && !failure; round++) {
+        if (round > 0 && now() - started > budget_s) {
+            cut = 1;
+            snprintf(why, sizeof why, "the rounds' time limit of %.0f s (--budget-s) was reached", budget_s);
+            break;
+        }
         for (op = 0; op < 2 && !failure; op++)
             for (i = 0; i < CONTENDERS && !failure; i++)
                 failure = batch(&contenders[(round + i) % CONTENDERS], op, round, calls[op]);
+        if (!failure) InterlockedIncrement(&rounds_done);
+    }
+    if (!failure) missed = print_figures((int)rounds_done, cut ? why : NULL);
     for (i = 0; i < CONTENDERS; i++) {
+        step(setup_limit_s(), "releasing the %s server's objects", contenders[i].name);
         if (contenders[i].list) contenders[i].list->lpVtbl->Release(contenders[i].list);
         if (contenders[i].common) contenders[i].common->lpVtbl->Release(contenders[i].common);
-        unregister_classes(&contenders[i]);
     }
-    OpcUnregisterProxyStub(NULL);
+    unregister_all();
+    step(setup_limit_s(), "CoUninitialize");
     CoUninitialize();
+    SetEvent(run_finished);
+    WaitForSingleObject(thread, INFINITE);
     if (failure) {
         fprintf(stderr, "cross_process_bench: stopped, no figures\n");
         return 1;
-    }
-    printf("%-16s %-44s | %-31s\n", "", "wall clock: median per round trip (us), ratio", "CPU, both processes (us)");
-    printf("%-16s %8s %8s %8s %10s %8s | %8s %8s %8s\n", "round trip", "opccomn", "widl", "ratio", "spread",
-           "control", "opccomn", "widl", "ratio");
-    for (op = 0; op < 2; op++) {
-        double lo, hi, clo, chi, control;
-        goal_ratio[op] = paired_ratio(contenders[0].wall[op], contenders[1].wall[op], &lo, &hi);
-        control = paired_ratio(contenders[2].wall[op], contenders[1].wall[op], &clo, &chi);
-        printf("%-16s %8.1f %8.1f %7.2fx %4.2f-%.2fx %7.2fx | %8.1f %8.1f %7.2fx\n", OPERATIONS[op],
-               median(contenders[0].wall[op]) * 1e6, median(contenders[1].wall[op]) * 1e6, goal_ratio[op], lo, hi,
-               control, cpu_per_call(&contenders[0], op), cpu_per_call(&contenders[1], op),
-               cpu_per_call(&contenders[0], op) / cpu_per_call(&contenders[1], op));
-    }
-    printf("(control: the stand-in against itself, %s; spread: the lowest and highest of the rounds' ratios)\n",
-           "the difference this run's machine makes between equal contenders");
-    for (op = 0; op < 2; op++) {
-        int met = goal_ratio[op] <= 1.1;
-        printf("GOAL %-40s %7.2fx  goal <= 1.10x  %s\n", OPERATIONS[op], goal_ratio[op], met ? "met" : "NOT MET");
-        missed |= !met;
     }
     return missed;
 }

@@ -85,12 +85,16 @@ fn compile(out_dir: &Path, catalogs: &[Vec<Entry>], toolchain: &Toolchain) -> Pa
     let major: u32 = env::var("CARGO_PKG_VERSION_MAJOR").unwrap().parse().unwrap();
     let minor: u32 = env::var("CARGO_PKG_VERSION_MINOR").unwrap().parse().unwrap();
     let build: u32 = env::var("CARGO_PKG_VERSION_PATCH").unwrap().parse().unwrap();
-    let version = format!("{major}.{minor}.{build}");
+    // The whole version, pre-release included ("0.3.0-dev"): the numbers alone would stamp a build of a
+    // version in development as the release it leads to. Such a build also sets VS_FF_PRERELEASE.
+    let version = env::var("CARGO_PKG_VERSION").unwrap();
+    let prerelease = !env::var("CARGO_PKG_VERSION_PRE").unwrap_or_default().is_empty();
     let description = env::var("CARGO_PKG_DESCRIPTION")
         .unwrap_or_default()
         .replace('"', "\"\"");
     let license = env::var("CARGO_PKG_LICENSE").unwrap_or_default();
-    let debug = u32::from(env::var("PROFILE").as_deref() == Ok("debug"));
+    // VS_FF_DEBUG (1) and VS_FF_PRERELEASE (2).
+    let flags = u32::from(env::var("PROFILE").as_deref() == Ok("debug")) | (u32::from(prerelease) << 1);
     let mut rc = messages_rc;
     write!(
         rc,
@@ -100,7 +104,7 @@ LANGUAGE 0x9, 0x1
  FILEVERSION {major},{minor},0,{build}
  PRODUCTVERSION {major},{minor},0,{build}
  FILEFLAGSMASK 0x3fL
- FILEFLAGS 0x{debug}L
+ FILEFLAGS 0x{flags:x}L
  FILEOS 0x40004L
  FILETYPE 0x2L
  FILESUBTYPE 0x0L

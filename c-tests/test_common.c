@@ -496,6 +496,42 @@ static void test_vendor_text_in_task_memory(void) {
     c->lpVtbl->Release(c);
 }
 
+/* What docs/guide/iopccommon-and-errors.md tells a server that aggregates its session: keep the inner
+ * IUnknown, which does not count on the server object, and read the session through it; an IOPCCommon
+ * pointer kept instead counts on the server object, which then outlives its last client (a cycle). */
+static void test_aggregating_server_keeps_the_inner_unknown(void) {
+    AggregatingServer s;
+    IOPCCommon *c = NULL, *kept = NULL;
+    LCID lcid = 0x1234;
+    uint32_t before = OpcObjectCount();
+    aggregating_server_init(&s, &IID_IOPCCommon);
+    CHECK_HR(OpcCommonCreate(NULL, &s.unk, &IID_Unknown_, (void **)&s.inner), S_OK);
+    if (!s.inner) return;
+
+    /* A client sets its locale through the server object and lets go of the interface. */
+    CHECK_HR(aggregating_qi(&s.unk, &IID_IOPCCommon, (void **)&c), S_OK);
+    if (!c) return;
+    CHECK_HR(c->lpVtbl->SetLocaleID(c, 0x0407), S_OK);
+    c->lpVtbl->Release(c);
+
+    /* The server reads it through the inner IUnknown; what that costs the server object's count is
+     * given back at once. */
+    CHECK_HR(OpcCommonGetLocale(s.inner, &lcid), S_OK);
+    CHECK(lcid == 0x0407);
+    CHECK(s.refs == 1 && s.add_refs == s.releases);
+
+    /* An IOPCCommon pointer the server keeps is a reference the server object holds on itself: the
+     * client's last Release leaves it alive. */
+    CHECK_HR(s.inner->lpVtbl->QueryInterface(s.inner, &IID_IOPCCommon, (void **)&kept), S_OK);
+    if (!kept) return;
+    CHECK(s.refs == 2);
+    CHECK(aggregating_release(&s.unk) == 1); /* the client's last reference */
+    CHECK(!s.destroyed);
+    kept->lpVtbl->Release(kept); /* the cycle broken by hand */
+    CHECK(s.destroyed);
+    CHECK(OpcObjectCount() == before);
+}
+
 int main(void) {
     test_create_errors();
     test_locale();
@@ -508,6 +544,7 @@ int main(void) {
     test_sessions_apart();
     test_refcount_and_identity();
     test_aggregation();
+    test_aggregating_server_keeps_the_inner_unknown();
     test_allocator();
     CHECK(OpcObjectCount() == 0);
     return test_summary("test_common");

@@ -402,17 +402,45 @@ static void test_dll_version_resource(void)
               (unsigned long)fixed->dwFileVersionMS, (unsigned long)fixed->dwFileVersionLS);
         CHECKF(fixed->dwProductVersionMS == ms && fixed->dwProductVersionLS == ls, "product version");
         CHECKF(fixed->dwFileType == VFT_DLL, "file type");
+        /* A build of a version in development says so (VS_FF_PRERELEASE); a release does not. */
+#ifdef OPCCOMN_VERSION_PRERELEASE
+        CHECKF((fixed->dwFileFlags & fixed->dwFileFlagsMask & VS_FF_PRERELEASE) != 0, "pre-release flag missing (flags %08lX)",
+              (unsigned long)fixed->dwFileFlags);
+#else
+        CHECKF((fixed->dwFileFlags & VS_FF_PRERELEASE) == 0, "pre-release flag on a release (flags %08lX)",
+              (unsigned long)fixed->dwFileFlags);
+#endif
     }
+    /* The strings carry the whole version, "0.3.0-dev" for a version in development. */
     WCHAR *value = NULL;
     CHECKF(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\FileVersion", (void **)&value, &len) &&
               same(value, OPCCOMN_VERSION),
           "FileVersion string \"%s\"", show(value));
+    CHECKF(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\ProductVersion", (void **)&value, &len) &&
+              same(value, OPCCOMN_VERSION),
+          "ProductVersion string \"%s\"", show(value));
     CHECKF(VerQueryValueW(info, L"\\StringFileInfo\\040904b0\\OriginalFilename", (void **)&value, &len) &&
               same(value, "opccomn.dll"),
           "OriginalFilename");
     free(info);
 }
 #endif
+
+/* OPCCOMN_VERSION is MAJOR.MINOR.PATCH, then "-" and OPCCOMN_VERSION_PRERELEASE for a version in
+   development. */
+static void test_version_macros(void)
+{
+    char expected[64];
+#ifdef OPCCOMN_VERSION_PRERELEASE
+    snprintf(expected, sizeof expected, "%d.%d.%d-%s", OPCCOMN_VERSION_MAJOR, OPCCOMN_VERSION_MINOR,
+             OPCCOMN_VERSION_PATCH, OPCCOMN_VERSION_PRERELEASE);
+    CHECKF(OPCCOMN_VERSION_PRERELEASE[0] != '\0', "an empty pre-release");
+#else
+    snprintf(expected, sizeof expected, "%d.%d.%d", OPCCOMN_VERSION_MAJOR, OPCCOMN_VERSION_MINOR,
+             OPCCOMN_VERSION_PATCH);
+#endif
+    CHECKF(strcmp(OPCCOMN_VERSION, expected) == 0, "OPCCOMN_VERSION \"%s\", expected \"%s\"", OPCCOMN_VERSION, expected);
+}
 
 int main(void)
 {
@@ -422,6 +450,7 @@ int main(void)
     setenv("LC_MESSAGES", "de_DE.UTF-8", 1);
     setenv("LANG", "en_US.UTF-8", 1);
 #endif
+    test_version_macros();
     test_default_locales_resolve();
     test_every_published_english_text();
     test_codes_of_each_kind();

@@ -461,9 +461,99 @@ static void test_app_id_security(void) {
     OpcRegistryRelease(reg);
 }
 
+/* One product, two classes, one AppID (the usual layout): the AppID stays whole while either class is
+ * registered and goes with the last, in either order, back to what was there before the first (a
+ * level an older installation left, another product's value); with different access permissions the
+ * AppID holds the latest registration's. */
+static OpcServerRegistration sharing_server(const CLSID *clsid, const char *prog_id, const char *access) {
+    static const CLSID app_id = {0xC1000000, 0x1111, 0x2222, {0x33, 0x33, 0x44, 0x44, 0x55, 0x55, 0x66, 0xAA}};
+    OpcServerRegistration r;
+    memset(&r, 0, sizeof r);
+    r.struct_size = sizeof r;
+    r.server_type = OPC_SERVER_TYPE_LOCAL;
+    r.clsid = *clsid;
+    r.prog_id = K(prog_id);
+    r.user_type = K(prog_id);
+    r.module_path = K("C:\\Vendor\\server.exe");
+    r.app_id = &app_id;
+    r.app_id_access_permission = K(access);
+    r.app_id_launch_permission = K("O:BAG:BAD:(A;;0x1F;;;AU)(A;;0x1F;;;SY)");
+    return r;
+}
+
+static LPWSTR export_key(OpcRegistry *reg, const char *key) {
+    LPWSTR text = NULL;
+    OpcRegistryExport(reg, W(key), &text); /* NULL when the key is missing */
+    return text;
+}
+
+static void test_shared_app_id(void) {
+    static const CLSID a_clsid = {0xC1000000, 0x1111, 0x2222, {0x33, 0x33, 0x44, 0x44, 0x55, 0x55, 0x66, 0xA1}};
+    static const CLSID b_clsid = {0xC1000000, 0x1111, 0x2222, {0x33, 0x33, 0x44, 0x44, 0x55, 0x55, 0x66, 0xB1}};
+    const char *app_key = "AppID\\{C1000000-1111-2222-3333-4444555566AA}";
+    const char *access = "O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)";
+    int round, first;
+    for (round = 0; round < 3; round++) {
+        for (first = 0; first < 2; first++) {
+            /* As on Windows, CLSID and AppID exist; round 2: an older installation's level and another
+               product's value in the AppID. */
+            OpcRegistry *reg = memory_registry(
+                round == 2 ? "Windows Registry Editor Version 5.00\r\n[HKEY_CLASSES_ROOT\\CLSID]\r\n"
+                             "[HKEY_CLASSES_ROOT\\AppID\\{C1000000-1111-2222-3333-4444555566AA}]\r\n"
+                             "\"AuthenticationLevel\"=dword:00000002\r\n\"TheirValue\"=\"theirs\"\r\n"
+                           : "Windows Registry Editor Version 5.00\r\n[HKEY_CLASSES_ROOT\\CLSID]\r\n"
+                             "[HKEY_CLASSES_ROOT\\AppID]\r\n");
+            OpcServerRegistration a = sharing_server(&a_clsid, "Vendor.A.1", access);
+            OpcServerRegistration b =
+                sharing_server(&b_clsid, "Vendor.B.1", round == 1 ? "O:BAG:BAD:(A;;0x7;;;SY)" : access);
+            OpcServerRegistration *order[2];
+            LPWSTR before = dump(reg), whole, now;
+            order[0] = first == 0 ? &a : &b;
+            order[1] = first == 0 ? &b : &a;
+            CHECK_HR(OpcRegisterServer(&a, reg), S_OK);
+            CHECK_HR(OpcRegisterServer(&b, reg), S_OK);
+            whole = export_key(reg, app_key);
+            CHECK(wcontains(whole, "\"AuthenticationLevel\"=dword:00000005\r\n"));
+            CHECK(wcontains(whole, "\"AccessPermission\"=hex:"));
+            CHECK(wcontains(whole, "\"LaunchPermission\"=hex:"));
+            if (round < 2) {
+                /* What the latest registration (B) wrote, as if it were alone: its description, and
+                   in round 1 its access permission, not A's. */
+                OpcRegistry *alone = memory_registry(NULL);
+                LPWSTR b_alone;
+                CHECK_HR(OpcRegisterServer(&b, alone), S_OK);
+                b_alone = export_key(alone, app_key);
+                CHECK(wsame(whole, b_alone));
+                OpcTaskMemFree(b_alone);
+                OpcRegistryRelease(alone);
+            }
+            CHECK_HR(OpcUnregisterServer(order[0], reg), S_OK);
+            now = export_key(reg, app_key);
+            CHECK(wsame(now, whole)); /* the other class still names it: all of it stays */
+            OpcTaskMemFree(now);
+            now = export_key(reg, "AppID\\server.exe");
+            CHECK(wcontains(now, "\"AppID\"=\"{C1000000-1111-2222-3333-4444555566AA}\""));
+            OpcTaskMemFree(now);
+            CHECK_HR(OpcUnregisterServer(order[1], reg), S_OK);
+            now = dump(reg);
+            CHECK(wsame(now, before)); /* as it was before the first */
+            if (!wsame(now, before)) {
+                fprintf(stderr, "  shared AppID, round %d, %s first: left\n", round, first == 0 ? "A" : "B");
+                wprint(stderr, now);
+                fputc('\n', stderr);
+            }
+            OpcTaskMemFree(now);
+            OpcTaskMemFree(whole);
+            OpcTaskMemFree(before);
+            OpcRegistryRelease(reg);
+        }
+    }
+}
+
 int main(void) {
     uint32_t before = OpcObjectCount();
     test_app_id_security();
+    test_shared_app_id();
     test_what_registration_writes();
     test_in_process_server();
     test_unregistration_is_symmetric();

@@ -1,6 +1,7 @@
 /* Shutdown (specification chapter 4) through the public header: the server's connection point with
  * every return code, re-entrant and failing sinks, enumerations, the advise limit, aggregation into a
- * C server object, exact reference counts with counting mock sinks, the client-side sink and advise
+ * C server object, a C server object that forwards to it and names itself as the container (COM
+ * identity, lifetimes), exact reference counts with counting mock sinks, the client-side sink and advise
  * helpers, and (on Windows) a sink living in another apartment. */
 #include <stddef.h>
 
@@ -590,6 +591,174 @@ static void test_aggregation(void) {
     CHECK(OpcObjectCount() == before);
 }
 
+/* ---- A server object that forwards to the shutdown object instead of aggregating it, as a server
+ * whose objects cannot be aggregated (windows-rs) does: its own IUnknown and IConnectionPointContainer,
+ * passing FindConnectionPoint and EnumConnectionPoints on to the shutdown object it keeps, and named
+ * as the connection point's container (OpcShutdownOptions::container). Counts its references; lets
+ * go of the shutdown object when the last one goes. ---- */
+typedef struct ForwardingServer {
+    IUnknown unk; /* the identity */
+    IConnectionPointContainer cpc;
+    ULONG refs;
+    int destroyed;
+    IConnectionPointContainer *shutdown; /* the shutdown object's own container: counts on it only */
+} ForwardingServer;
+
+#define FORWARDING_OF_CPC(p) ((ForwardingServer *)((char *)(p) - offsetof(ForwardingServer, cpc)))
+
+static HRESULT STDMETHODCALLTYPE fwd_qi(IUnknown *This, REFIID riid, void **ppv) {
+    ForwardingServer *s = (ForwardingServer *)This;
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (same_iid(riid, &IID_Unknown_)) *ppv = &s->unk;
+    else if (same_iid(riid, &IID_IConnectionPointContainer)) *ppv = &s->cpc;
+    else return E_NOINTERFACE;
+    s->refs++;
+    return S_OK;
+}
+static ULONG STDMETHODCALLTYPE fwd_add_ref(IUnknown *This) { return ++((ForwardingServer *)This)->refs; }
+static ULONG STDMETHODCALLTYPE fwd_release(IUnknown *This) {
+    ForwardingServer *s = (ForwardingServer *)This;
+    CHECK(s->refs > 0);
+    if (--s->refs == 0) {
+        IConnectionPointContainer *shutdown = s->shutdown;
+        s->destroyed = 1;
+        s->shutdown = NULL;
+        if (shutdown) shutdown->lpVtbl->Release(shutdown);
+    }
+    return s->refs;
+}
+static HRESULT STDMETHODCALLTYPE fwd_cpc_qi(IConnectionPointContainer *This, REFIID riid, void **ppv) {
+    return fwd_qi(&FORWARDING_OF_CPC(This)->unk, riid, ppv);
+}
+static ULONG STDMETHODCALLTYPE fwd_cpc_add_ref(IConnectionPointContainer *This) {
+    return fwd_add_ref(&FORWARDING_OF_CPC(This)->unk);
+}
+static ULONG STDMETHODCALLTYPE fwd_cpc_release(IConnectionPointContainer *This) {
+    return fwd_release(&FORWARDING_OF_CPC(This)->unk);
+}
+static HRESULT STDMETHODCALLTYPE fwd_enum_points(IConnectionPointContainer *This, IEnumConnectionPoints **ppEnum) {
+    IConnectionPointContainer *shutdown = FORWARDING_OF_CPC(This)->shutdown;
+    return shutdown->lpVtbl->EnumConnectionPoints(shutdown, ppEnum);
+}
+static HRESULT STDMETHODCALLTYPE fwd_find_point(IConnectionPointContainer *This, REFIID riid, IConnectionPoint **ppCP) {
+    IConnectionPointContainer *shutdown = FORWARDING_OF_CPC(This)->shutdown;
+    return shutdown->lpVtbl->FindConnectionPoint(shutdown, riid, ppCP);
+}
+static IUnknownVtbl fwd_vtbl = {fwd_qi, fwd_add_ref, fwd_release};
+static IConnectionPointContainerVtbl fwd_cpc_vtbl = {fwd_cpc_qi, fwd_cpc_add_ref, fwd_cpc_release, fwd_enum_points,
+                                                     fwd_find_point};
+
+/* The server with one reference (the creator's) and its shutdown object, naming the server. */
+static void forwarding_server_init(ForwardingServer *s) {
+    OpcShutdownOptions o;
+    memset(s, 0, sizeof *s);
+    s->unk.lpVtbl = &fwd_vtbl;
+    s->cpc.lpVtbl = &fwd_cpc_vtbl;
+    s->refs = 1;
+    memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
+    o.container = &s->unk;
+    CHECK_HR(OpcShutdownCreateEx(&o, NULL, &IID_IConnectionPointContainer, (void **)&s->shutdown), S_OK);
+}
+
+/* The identity of `p` (QueryInterface(IID_IUnknown), released at once). */
+static IUnknown *identity_of(IUnknown *p) {
+    IUnknown *id = NULL;
+    CHECK_HR(p->lpVtbl->QueryInterface(p, &IID_Unknown_, (void **)&id), S_OK);
+    if (id) id->lpVtbl->Release(id);
+    return id;
+}
+
+static void test_forwarding_server(void) {
+    uint32_t before = OpcObjectCount();
+    ForwardingServer s;
+    Mock sink;
+    IConnectionPointContainer *cpc = NULL, *back = (IConnectionPointContainer *)GARBAGE_PTR;
+    IConnectionPoint *cp = NULL, *got[2] = {NULL, NULL};
+    IEnumConnectionPoints *e = NULL;
+    IUnknown *inner = (IUnknown *)GARBAGE_PTR;
+    OpcShutdownOptions o;
+    AggregatingServer outer;
+    DWORD cookie = 0;
+    ULONG n, f, fetched = 0;
+    mock_init(&sink, 1, S_OK);
+
+    forwarding_server_init(&s);
+    if (!s.shutdown) return;
+    CHECK(s.refs == 1); /* the shutdown object holds no reference to the server: no cycle */
+    CHECK(OpcObjectCount() == before + 1);
+    CHECK_HR(fwd_qi(&s.unk, &IID_IConnectionPointContainer, (void **)&cpc), S_OK);
+    CHECK(cpc == &s.cpc);
+    cp = find_point(cpc); /* through the server: forwarded */
+    CHECK(s.refs == 3);   /* the connection point counts on the server */
+
+    /* The point names the server as its container: the server's own IConnectionPointContainer, with
+       the server's COM identity. */
+    CHECK_HR(cp->lpVtbl->GetConnectionPointContainer(cp, &back), S_OK);
+    CHECK(back == &s.cpc);
+    if (back == &s.cpc) {
+        CHECK(identity_of((IUnknown *)back) == identity_of((IUnknown *)cpc));
+        CHECK(identity_of((IUnknown *)back) == &s.unk);
+        back->lpVtbl->Release(back);
+    }
+    CHECK(s.refs == 3);
+
+    /* Enumerated connection points count on the server too. */
+    CHECK_HR(cpc->lpVtbl->EnumConnectionPoints(cpc, &e), S_OK);
+    if (e) {
+        CHECK_HR(e->lpVtbl->Next(e, 2, got, &fetched), S_FALSE);
+        CHECK(fetched == 1 && got[0] == cp);
+        CHECK(s.refs == 5); /* the enumerator's point and the one it handed out */
+        if (got[0]) got[0]->lpVtbl->Release(got[0]);
+        e->lpVtbl->Release(e);
+    }
+    CHECK(s.refs == 3);
+
+    /* The helpers and the notification take the server object. */
+    CHECK_HR(OpcShutdownAdvise(&s.unk, mock_unk(&sink), &cookie), S_OK);
+    CHECK_HR(OpcShutdownNotifyEx(&s.unk, W("forwarded"), &n, &f), S_OK);
+    CHECK(n == 1 && f == 0 && sink.calls == 1 && wstr_is(sink.reason, "forwarded"));
+
+    /* The client lets go of everything but the connection point: the server stays, and is still
+       its container. */
+    cpc->lpVtbl->Release(cpc);
+    CHECK(fwd_release(&s.unk) == 1);
+    CHECK(!s.destroyed);
+    back = NULL;
+    CHECK_HR(cp->lpVtbl->GetConnectionPointContainer(cp, &back), S_OK);
+    CHECK(back == &s.cpc);
+    if (back) back->lpVtbl->Release(back);
+    CHECK(sink.refs == 2); /* still advised */
+
+    /* The point's last reference is the server's: it goes, and the shutdown object with it. */
+    CHECK(cp->lpVtbl->Release(cp) == 0);
+    CHECK(s.destroyed);
+    CHECK(sink.refs == 1 && sink.add_refs == sink.releases);
+    CHECK(OpcObjectCount() == before);
+
+    /* An aggregated shutdown object's container is its outer object: naming another is refused. */
+    aggregating_server_init(&outer, &IID_IConnectionPointContainer);
+    memset(&o, 0, sizeof o);
+    o.struct_size = sizeof o;
+    o.container = mock_unk(&sink);
+    CHECK_HR(OpcShutdownCreateEx(&o, &outer.unk, &IID_Unknown_, (void **)&inner), E_INVALIDARG);
+    CHECK(inner == NULL);
+    CHECK(outer.refs == 1 && sink.refs == 1);
+    /* The sizes of the struct's versions: 4, 8 (no container) and sizeof; none between. */
+    CHECK(sizeof o == offsetof(OpcShutdownOptions, container) + sizeof(void *));
+    o.struct_size = (uint32_t)offsetof(OpcShutdownOptions, container) + 4;
+    if (sizeof(void *) == 8) {
+        CHECK_HR(OpcShutdownCreateEx(&o, NULL, &IID_Unknown_, (void **)&inner), E_INVALIDARG);
+        CHECK(inner == NULL);
+    }
+    o.struct_size = (uint32_t)offsetof(OpcShutdownOptions, container);
+    CHECK_HR(OpcShutdownCreateEx(&o, NULL, &IID_Unknown_, (void **)&inner), S_OK);
+    if (inner) inner->lpVtbl->Release(inner);
+    CHECK(sink.refs == 1);
+    CHECK(OpcObjectCount() == before);
+}
+
 /* ---- The client side. ---- */
 typedef struct Received {
     int calls;
@@ -862,6 +1031,7 @@ int main(void) {
     test_enumerate_connections();
     test_lifetimes();
     test_aggregation();
+    test_forwarding_server();
     test_client_sink();
     test_client_and_server();
 #ifdef _WIN32

@@ -32,14 +32,16 @@
 
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <cwchar>
+#include <cwctype>
 #include <string>
 #include <vector>
 
-#ifndef OPCCOMN_CHECK_VERSION
-#define OPCCOMN_CHECK_VERSION "0.0.0"
-#endif
+// The checker is the library's version ("0.3.0-dev" while that version is in development), from the
+// header, which takes it from Cargo.toml.
+#define OPCCOMN_CHECK_VERSION OPCCOMN_VERSION
 
 namespace {
 
@@ -513,26 +515,109 @@ const char *KindName() {
     }
 }
 
-// Sets an English locale when the server has one, so texts can be compared with the published ones.
-bool SetEnglish(Ctx &x) {
-    if (!ReadLocales(x)) return false;
-    for (LCID l : x.s.locales)
-        if (PRIMARYLANGID(LANGIDFROMLCID(l)) == LANG_ENGLISH) {
-            Call c("IOPCCommon::SetLocaleID");
-            return x.s.common->SetLocaleID(l) == S_OK;
-        }
-    return false;
+// ---- What an error text must say (5.1.4: "the server's textual representation" of the code) ----
+
+bool AsciiAlnum(wchar_t c) { return (c >= L'0' && c <= L'9') || (c >= L'a' && c <= L'z') || (c >= L'A' && c <= L'Z'); }
+
+// The words of a text: runs of characters between blanks and punctuation ('_' joins them, as in
+// OPC_E_INVALIDHANDLE), ASCII letters in lower case. A character beyond ASCII is part of a word
+// unless the runtime calls it a blank or punctuation, so a text in any script has words.
+std::vector<std::wstring> Words(const std::wstring &text) {
+    std::vector<std::wstring> words(1);
+    for (wchar_t c : text) {
+        bool part = c == L'_' || (c < 0x80 ? AsciiAlnum(c) : !iswspace(c) && !iswpunct(c));
+        if (part) words.back() += c < 0x80 ? static_cast<wchar_t>(towlower(c)) : c;
+        else if (!words.back().empty()) words.emplace_back();
+    }
+    if (words.back().empty()) words.pop_back();
+    return words;
 }
 
+bool AllIn(const std::wstring &s, const wchar_t *set) { return !s.empty() && s.find_first_not_of(set) == std::wstring::npos; }
+
+// Whether a word is a number: decimal, hexadecimal with 0x, or the code itself in hexadecimal (bare,
+// after VB's &H, whose '&' is punctuation, or with the assembler's h after it).
+bool NumberWord(const std::wstring &w, HRESULT code) {
+    static const wchar_t hex_digits[] = L"0123456789abcdef";
+    if (AllIn(w, L"0123456789")) return true;
+    if (w.size() > 2 && w.compare(0, 2, L"0x") == 0 && AllIn(w.substr(2), hex_digits)) return true;
+    std::wstring hex = w;
+    if (hex.size() > 1 && hex.front() == L'h') hex.erase(0, 1);
+    else if (hex.size() > 1 && hex.back() == L'h') hex.pop_back();
+    return AllIn(hex, hex_digits) && hex.size() <= 16 &&
+           wcstoull(hex.c_str(), nullptr, 16) == static_cast<unsigned long long>(static_cast<uint32_t>(code));
+}
+
+// Whether `text` says nothing beyond the code: it has no word, or each word is a number (the code
+// in hexadecimal or decimal, signed or not, or any other), the code's symbol, or a word that only
+// announces a code ("error", "code", "HRESULT", "unknown", ...; English and a few other languages).
+bool SaysNothing(const std::wstring &text, HRESULT code, const std::wstring &symbol) {
+    static const wchar_t *const announce[] = {
+        L"error", L"errors", L"err", L"hresult", L"hr", L"scode", L"code", L"codes", L"errorcode", L"result",
+        L"status", L"unknown", L"undefined", L"unspecified", L"opc", L"no", L"nr", L"num", L"number", L"value",
+        L"id", L"message", L"text", L"string", L"description", L"the", L"a", L"an", L"of", L"for", L"is",
+        L"with", L"returned", L"fehler", L"fehlercode", L"unbekannter", L"unbekannt", L"erreur", L"inconnue",
+        L"errore", L"erro", L"codigo"};
+    std::wstring lower_symbol;
+    for (wchar_t c : symbol) lower_symbol += c < 0x80 ? static_cast<wchar_t>(towlower(c)) : c;
+    for (const std::wstring &w : Words(text)) {
+        bool filler = NumberWord(w, code) || (!lower_symbol.empty() && w == lower_symbol);
+        for (const wchar_t *a : announce) filler = filler || w == a;
+        if (!filler) return false;
+    }
+    return true;
+}
+
+// The locale GetErrorString is asked in: an English one when the server lists one (its texts can then
+// be compared with the published ones), otherwise the first it lists. *english tells which.
+void SetTextLocale(Ctx &x, bool *english) {
+    *english = false;
+    if (!ReadLocales(x)) return;
+    LCID chosen = x.s.locales.front();
+    for (LCID l : x.s.locales)
+        if (PRIMARYLANGID(LANGIDFROMLCID(l)) == LANG_ENGLISH) {
+            chosen = l;
+            *english = true;
+            break;
+        }
+    Call c("IOPCCommon::SetLocaleID");
+    if (x.s.common->SetLocaleID(chosen) != S_OK) *english = false;
+}
+
+std::string LocaleList(const std::vector<LCID> &locales) {
+    std::string list;
+    for (LCID l : locales) list += Format("%s0x%04lX", list.empty() ? "" : ", ", static_cast<unsigned long>(l));
+    return list.empty() ? "none" : list;
+}
+
+// Every published code of the kind needs S_OK and a text of its own: not empty, not the code restated
+// (SaysNothing), not the text of another code whose published text differs. Texts read in an English
+// locale are compared with the published ones (a warning where they differ, as vendors may word them
+// otherwise); without one, texts that are exactly the published English ones pass, and others are a
+// warning saying they could not be compared, never a pass.
 void CheckPublishedCodes(Ctx &x) {
     IOPCCommon *common = Common(x);
     if (!common) return;
-    bool english = SetEnglish(x);
+    bool english = false;
+    SetTextLocale(x, &english);
+    LCID locale = 0xFFFFFFFF;
+    {
+        Call c("IOPCCommon::GetLocaleID");
+        if (common->GetLocaleID(&locale) != S_OK) locale = 0xFFFFFFFF;
+    }
     DWORD count = 0;
     HRESULT *codes = nullptr;
     if (FAILED(OpcErrorCodesOfKind(g_kind, &count, &codes))) return x.NotApplicable("no published codes for this kind");
-    std::string failed, differs;
-    DWORD answered = 0, different = 0;
+    struct Answer {
+        HRESULT code;
+        std::wstring text, published;
+    };
+    std::vector<Answer> answers;
+    std::string failed, restated, shared, differs;
+    DWORD n_failed = 0, n_restated = 0, n_shared = 0, different = 0;
+    auto add = [](std::string &list, const std::string &item) {
+        if (list.size() < 600) list += (list.empty() ? "" : "; ") + item;
+    };
     for (DWORD i = 0; i < count; i++) {
         LPWSTR text = reinterpret_cast<LPWSTR>(static_cast<uintptr_t>(0xDEADBEEF));
         HRESULT hr;
@@ -540,28 +625,59 @@ void CheckPublishedCodes(Ctx &x) {
             Call c("IOPCCommon::GetErrorString");
             hr = common->GetErrorString(codes[i], &text);
         }
-        if (hr != S_OK || !text || !text[0]) {
-            if (failed.size() < 600) failed += (failed.empty() ? "" : "; ") + Hr(codes[i]) + ": " + Hr(hr) + (hr == S_OK ? " with an empty text" : "");
-            if (hr == S_OK && text) CoTaskMemFree(text);
+        if (hr != S_OK || !text) {
+            n_failed++;
+            add(failed, Hr(codes[i]) + ": " + Hr(hr) + (hr == S_OK ? " with NULL" : ""));
             continue;
         }
-        answered++;
-        LPWSTR standard = nullptr;
-        if (english && SUCCEEDED(OpcGetErrorStringEx(codes[i], 0x0409, g_kind, &standard)) && wcscmp(standard, text) != 0) {
-            different++;
-            if (differs.size() < 600)
-                differs += (differs.empty() ? "" : "; ") + Hr(codes[i]) + ": \"" + Utf8(text) + "\" (published: \"" + Utf8(standard) + "\")";
-        }
-        OpcTaskMemFree(standard);
+        Answer a = {codes[i], text, L""};
         CoTaskMemFree(text);
+        LPWSTR published = nullptr, symbol = nullptr;
+        if (SUCCEEDED(OpcGetErrorStringEx(codes[i], 0x0409, g_kind, &published)) && published) a.published = published;
+        OpcTaskMemFree(published);
+        std::wstring symbol_text;
+        if (SUCCEEDED(OpcErrorSymbol(codes[i], g_kind, &symbol)) && symbol) symbol_text = symbol;
+        OpcTaskMemFree(symbol);
+        if (SaysNothing(a.text, a.code, symbol_text)) {
+            n_restated++;
+            add(restated, Hr(a.code) + ": \"" + Utf8(a.text.c_str()) + "\"");
+        } else {
+            for (const Answer &before : answers)
+                if (before.text == a.text && before.published != a.published) {
+                    n_shared++;
+                    add(shared, Hr(before.code) + " and " + Hr(a.code) + ": \"" + Utf8(a.text.c_str()) + "\"");
+                    break;
+                }
+        }
+        if (a.text != a.published) {
+            different++;
+            add(differs, Hr(a.code) + ": \"" + Utf8(a.text.c_str()) + "\" (published: \"" + Utf8(a.published.c_str()) + "\")");
+        }
+        answers.push_back(a);
     }
     OpcTaskMemFree(codes);
-    std::string summary = Format("%lu of %lu published %s codes answered", static_cast<unsigned long>(answered),
+    std::string summary = Format("%lu of %lu published %s codes answered", static_cast<unsigned long>(answers.size()),
                                  static_cast<unsigned long>(count), KindName());
-    if (answered != count) return x.Fail("S_OK and a non-empty text for every published code", failed, summary);
-    if (different)
+    std::string read_in = locale == 0xFFFFFFFF ? "the session's locale" : Format("locale 0x%04lX", static_cast<unsigned long>(locale));
+    if (n_failed || n_restated || n_shared) {
+        std::string got;
+        if (n_failed) got += Format("%lu without S_OK and a text: ", static_cast<unsigned long>(n_failed)) + failed;
+        if (n_restated)
+            got += (got.empty() ? "" : "; ") + Format("%lu are empty or only restate the code: ", static_cast<unsigned long>(n_restated)) + restated;
+        if (n_shared)
+            got += (got.empty() ? "" : "; ") + Format("%lu give the text of another code: ", static_cast<unsigned long>(n_shared)) + shared;
+        return x.Fail("S_OK and, for every published code, a text of its own that says more than the code", got,
+                      summary + ", read in " + read_in);
+    }
+    if (!different)
+        return x.Pass(summary + ", every text as published" +
+                      (english ? "" : " (read in " + read_in + "; the server lists no English locale)"));
+    if (english)
         return x.Warn("the texts the OPC Foundation publishes", Format("%lu differ: ", static_cast<unsigned long>(different)) + differs, summary);
-    x.Pass(summary + (english ? ", every text as published" : " (no English locale: texts not compared)"));
+    x.Warn("an English locale, to compare the texts with those the OPC Foundation publishes",
+           "no English locale among those listed (" + LocaleList(x.s.locales) + ")",
+           summary + ", read in " + read_in + Format(": %lu differ from the published English texts, ", static_cast<unsigned long>(different)) +
+               "so they were not compared");
 }
 
 void CheckUnknownCode(Ctx &x) {
@@ -636,6 +752,46 @@ void CheckFind(Ctx &x) {
     if (hr != S_OK || !IsEqualIID(iid, IID_IOPCShutdown))
         return x.Fail("GetConnectionInterface = S_OK, IID_IOPCShutdown", Hr(hr) + ", " + GuidText(iid));
     x.Pass("FindConnectionPoint(IID_IOPCShutdown) gave the point; GetConnectionInterface says IID_IOPCShutdown");
+}
+
+// IConnectionPoint::GetConnectionPointContainer gives back the container the point belongs to, which
+// for IOPCShutdown is the server object: a client holding only the point (from EnumConnectionPoints,
+// or kept after the server object was released) finds its server this way. COM identity decides:
+// the container's IUnknown must be the server object's. A server that forwards to a connection point
+// object it does not aggregate gets that object's own container back, another object.
+void CheckPointContainer(Ctx &x) {
+    IConnectionPoint *point = Point(x);
+    if (!point) return;
+    IConnectionPointContainer *const garbage = reinterpret_cast<IConnectionPointContainer *>(static_cast<uintptr_t>(0xDEADBEEF));
+    IConnectionPointContainer *back = garbage;
+    HRESULT hr;
+    {
+        Call c("IConnectionPoint::GetConnectionPointContainer");
+        hr = point->GetConnectionPointContainer(&back);
+    }
+    const std::string want = "S_OK and the server object's IConnectionPointContainer";
+    if (back == garbage) return x.Fail(want, Hr(hr) + ", the out-pointer not written");
+    if (hr != S_OK || !back) {
+        // On failure a non-NULL pointer may be anything: it is left alone, not released.
+        return x.Fail(want, Hr(hr) + (back ? ", the out-pointer not set to NULL" : ", NULL"),
+                      "the connection point cannot name its container");
+    }
+    void *server = nullptr, *container = nullptr;
+    {
+        Call c("IUnknown::QueryInterface(IID_IUnknown)");
+        x.s.server->QueryInterface(IID_IUnknown, &server);
+        back->QueryInterface(IID_IUnknown, &container);
+    }
+    bool same = server && server == container;
+    if (server) static_cast<IUnknown *>(server)->Release();
+    if (container) static_cast<IUnknown *>(container)->Release();
+    back->Release();
+    if (!container) return x.Fail(want, "an object whose QueryInterface(IID_IUnknown) fails");
+    if (!same)
+        return x.Fail(want + " (the same IUnknown as the server object)", "another object (another IUnknown)",
+                      "the container is not the server object: a connection point object forwarded to without "
+                      "aggregating it names its own container");
+    x.Pass("GetConnectionPointContainer gave the server object back (the same IUnknown)");
 }
 
 void CheckEnumPoints(Ctx &x) {
@@ -1588,11 +1744,12 @@ const CheckDef kChecks[] = {
     {"common.locales.array", "5.1.3, 3.1.3", "QueryAvailableLocaleIDs returns a task-memory array", CheckLocaleArray, kDefault},
     {"common.locales.set", "5.1.1, 5.1.2", "every available locale can be set and read back", CheckSetEveryLocale, kDefault},
     {"common.locales.unsupported", "5.1.1", "an unlisted LCID gives E_INVALIDARG and leaves the locale", CheckUnsupportedLocale, kDefault},
-    {"common.errorstring.published", "5.1.4", "GetErrorString answers every published code of the kind", CheckPublishedCodes, kDefault},
+    {"common.errorstring.published", "5.1.4", "GetErrorString answers every published code of the kind with a text of its own", CheckPublishedCodes, kDefault},
     {"common.errorstring.unknown", "5.1.4", "GetErrorString of an unknown code gives E_INVALIDARG and NULL", CheckUnknownCode, kDefault},
     {"common.clientname", "5.1.5", "SetClientName accepts a name", CheckClientName, kDefault},
     {"shutdown.container", "4.1", "the server object has IConnectionPointContainer", CheckContainer, kDefault},
     {"shutdown.find", "4.1.2", "FindConnectionPoint(IID_IOPCShutdown) gives the connection point", CheckFind, kDefault},
+    {"shutdown.point-container", "4.1", "the connection point's GetConnectionPointContainer gives the server object", CheckPointContainer, kDefault},
     {"shutdown.enum-points", "4.1.1", "EnumConnectionPoints includes IOPCShutdown", CheckEnumPoints, kDefault},
     {"shutdown.advise-wrong-sink", "4.2", "Advise of an object without IOPCShutdown gives CONNECT_E_CANNOTCONNECT", CheckWrongSink, kDefault},
     {"shutdown.advise", "4.2", "Advise of a shutdown sink gives S_OK and a non-zero cookie", CheckAdvise, kDefault},

@@ -15,8 +15,10 @@
 #   --wine32 the 32-bit Windows DLL (i686, mingw-w64) under 32-bit Wine; fails (exit 2) when 32-bit
 #            Wine cannot run a 32-bit program (without wine32:i386 `wine prog32.exe` exits 0 silently)
 # Every benchmark must print its closing line ("bench_NAME: N goals, ..."): one that printed nothing
-# did not run, and fails the run.
-# Environment: BENCH_ROUNDS (default 31), BENCH_ROUND_MS (default 2) for every benchmark.
+# did not run, and fails the run. Each benchmark is stopped after BENCH_TIMEOUT_S seconds (1800 by
+# default): the figures of the cases it finished are above the line that says so, and the run fails.
+# Environment: BENCH_ROUNDS (default 31), BENCH_ROUND_MS (default 2) for every benchmark;
+# BENCH_TIMEOUT_S. The cross-process benchmark has its own script: scripts/bench-cross-process.sh.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -76,12 +78,13 @@ if [ "$wine" = 1 ]; then
             exit 2
         fi
     fi
-    run() { wine "$build/bin/$1.exe" "${words[@]}"; }
+    run() { timeout -k 30 "$limit" wine "$build/bin/$1.exe" "${words[@]}"; }
 else
     build="$root/build/bench"
     cmake -S . -B "$build" -DOPCCOMN_SANITIZE=OFF >/dev/null
-    run() { "$build/bin/$1" "${words[@]}"; }
+    run() { timeout -k 30 "$limit" "$build/bin/$1" "${words[@]}"; }
 fi
+limit=${BENCH_TIMEOUT_S:-1800}
 targets=()
 for name in "${names[@]}"; do
     targets+=("bench_${name//-/_}")
@@ -90,17 +93,22 @@ cmake --build "$build" -j2 --target "${targets[@]}" >/dev/null
 
 measure() {
     echo "machine: $(nproc) cores, $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
-    local status=0 log target
+    local status=0 log target rc
     log=$(mktemp)
     for target in "${targets[@]}"; do
         printf '\n==== %s%s\n' "$target" "$([ "$wine" = 1 ] && echo " (Windows $arch DLL under Wine)")"
-        run "$target" | tee "$log" || status=1
+        { rc=0; run "$target" || rc=$?; echo "$rc" >"$log.rc"; } | tee "$log"
+        rc=$(cat "$log.rc")
+        [ "$rc" = 0 ] || status=1
+        if [ "$rc" = 124 ] || [ "$rc" = 137 ]; then
+            echo "scripts/bench.sh: $target did not end within $limit s (BENCH_TIMEOUT_S) and was stopped: the figures above are those of the cases it finished" >&2
+        fi
         if ! tr -d '\r' <"$log" | grep -qE "^$target: [0-9]+ goals"; then
             echo "scripts/bench.sh: $target printed no closing line: it did not run to its end" >&2
             status=1
         fi
     done
-    rm -f "$log"
+    rm -f "$log" "$log.rc"
     echo "end: $(uptime | sed 's/.*load average/load average/'), $(date -u '+%Y-%m-%d %H:%M UTC')"
     return "$status"
 }

@@ -42,7 +42,8 @@ build_variant() {
 copy_variant() {
     local rust_out="$1/cargo/$2/release" dest=$3 objcopy=$4-objcopy
     mkdir -p "$dest"
-    cp "$rust_out/libopccomn.dll.a" "$1/opccomn/libopccomn.a" \
+    # opccomn-static-libs.txt: what rustc reported the static library needs besides itself.
+    cp "$rust_out/libopccomn.dll.a" "$1/opccomn/libopccomn.a" "$1/opccomn-static-libs.txt" \
         "$rust_out/msvc/opccomn.lib" "$rust_out/msvc/opccomn.def" "$dest/"
     "$objcopy" --only-keep-debug "$rust_out/opccomn.dll" "$dest/opccomn.dll.debug"
     "$objcopy" --strip-debug --add-gnu-debuglink="$dest/opccomn.dll.debug" "$rust_out/opccomn.dll" "$dest/opccomn.dll"
@@ -82,7 +83,7 @@ rm -rf "$stage/docs/dev"
 # The C API reference, built from the header (scripts/docs.sh fails on any undocumented item).
 scripts/docs.sh >/dev/null
 cp -r "$build/docs/html" "$stage/docs/reference/"
-cp -r examples/cpp-server "$stage/examples/"
+cp -r examples/cpp-server examples/server-plumbing "$stage/examples/"
 printf '%s\n' "$version" >"$stage/VERSION"
 (cd "$stage" && find . -type f ! -name SHA256SUMS | sort | sed 's|^\./||' | xargs sha256sum >SHA256SUMS)
 (cd "$out" && cmake -E tar cf "$name.zip" --format=zip "$name")

@@ -6,18 +6,24 @@
 # output that a program sees: no __CRT_UUID_DECL, `EXTERN_C const IID`, the categories as empty
 # interfaces with `#define CATID_... IID_...` (opc_ae.h: IID_OPCEventServerCATID), OPCHANDLE typedef'd
 # by each of opcda.h / opc_ae.h / opchda.h, an unconditional `#pragma warning`, MIDL's _i.c form.
-# docs/header-coexistence.md lists them.
+# docs/header-coexistence.md lists them. The same headers and *_i.c as widl writes them (foundation/widl:
+# what mingw users who compile the Foundation's IDL include; __CRT_UUID_DECL for every interface) are
+# the second kind of Foundation headers every stage below runs against.
 #
-# 0. The stand-ins' traits, each shown to bite (so the stages below cannot pass for want of them).
-# 1. Compile matrix (-Wall -Wextra -pedantic-errors -Werror): ours first / theirs first x C, C COBJMACROS,
-#    C++, C++ CINTERFACE x x86_64 and i686 mingw gcc/g++ (and clang/clang++ for mingw where it works),
-#    with the Foundation's directory as a system directory (-isystem, C99) and as a plain one (-I, with
-#    -Wno-unknown-pragmas for their #pragma warning and C11 for their repeated OPCHANDLE typedef: a macro
-#    both headers define differently is then an error in either order).
+# 0. The stand-ins' traits, each shown to bite (so the stages below cannot pass for want of them), and
+#    widl's: its __uuidof declarations, which a second declaration redefines.
+# 1. Compile matrix (-Wall -Wextra -pedantic-errors -Werror): MIDL's / widl's headers x ours first /
+#    theirs first x C, C COBJMACROS, C++, C++ CINTERFACE, C++17 (__uuidof in constant expressions) x
+#    x86_64 and i686 mingw gcc/g++ (and clang/clang++ for mingw where it works), with the Foundation's
+#    directory as a system directory (-isystem, C99) and as a plain one (-I, with -Wno-unknown-pragmas
+#    for their #pragma warning and C11 for their repeated OPCHANDLE typedef: a macro both headers define
+#    differently is then an error in either order); widl's headers with the x86_64 compilers, as a
+#    system directory. Two compilations at a time (OPCCOMN_JOBS).
 # 2. The i686 calling-convention checks (c-tests/abi_i686.c), with a negative control that must fail.
 # 3. Link matrix, x64 and x86: static library or DLL import library x with or without the *_i.c files x
 #    both include orders x C (COBJMACROS) / C++ (__uuidof of every OPC Common interface), each program
-#    run under Wine (x86 under 32-bit Wine, or linked only when it is missing).
+#    run under Wine (x86 under 32-bit Wine, or linked only when it is missing); with widl's headers the
+#    C and C++ programs, both orders, against either library (widl's *_i.c beside the import library).
 # 4. A server DLL with its own .def naming DllRegisterServer etc. undecorated, x64 and x86, linked
 #    against libopccomn.dll.a and against opccomn.lib: exports its own functions (none imported from
 #    opccomn.dll) and regsvr32 registers its own class under Wine; neither import library offers the
@@ -49,19 +55,25 @@ python3 "$root/tests/coexistence/midl_standins.py" "$root" "$out/foundation" "$w
     fail "the MIDL-faithful stand-ins could not be made"
 
 strict=(-Wall -Wextra -pedantic-errors -Werror)
-modes=("c:" "c:-DCOBJMACROS" "c++:" "c++:-DCINTERFACE")
+modes=("c:" "c:-DCOBJMACROS" "c++:" "c++:-DCINTERFACE" "c++:-std=c++17")
 
 foundation_as=system # how compile() passes the Foundation's directory: system (-isystem) or plain (-I)
+foundation_kind=midl # whose headers: midl (the stand-ins) or widl (widl's own, foundation/widl first)
 compile() { # "compiler [args]" lang options...
     local -a cc
     read -r -a cc <<<"$1"
     local lang=$2
     shift 2
     local std=-std=c99
-    local -a how=(-isystem "$out/foundation")
+    local -a dirs=("$out/foundation") how=()
+    [ "$foundation_kind" = widl ] && dirs=("$out/foundation/widl" "$out/foundation")
     [ "$lang" = c++ ] && std=-std=c++11
+    local dir
+    for dir in "${dirs[@]}"; do
+        if [ "$foundation_as" = plain ]; then how+=(-I"$dir"); else how+=(-isystem "$dir"); fi
+    done
     if [ "$foundation_as" = plain ]; then
-        how=(-I"$out/foundation" -Wno-unknown-pragmas)
+        how+=(-Wno-unknown-pragmas)
         [ "$lang" = c ] && std=-std=c11
     fi
     "${cc[@]}" -x "$lang" $std "${strict[@]}" -I"$root/include" "${how[@]}" "$@"
@@ -108,7 +120,17 @@ if $gcc64 -isystem "$out/foundation" -o "$out/trait_ae.exe" "$out/trait_ae.c" 2>
 fi
 grep -q 'IID_OPCEventServerCATID' "$out/trait_ae.err" || fail "opc_ae.h's category failed otherwise: $(cat "$out/trait_ae.err")"
 ok
-echo "coexistence: the stand-ins' traits (#pragma warning, repeated OPCHANDLE, no __uuidof, category redirect) each shown"
+# widl's opccomn.h declares __uuidof(IOPCShutdown) itself: a second declaration is a redefinition, in
+# C++11 and C++17 (mingw's two forms of __CRT_UUID_DECL).
+printf '#include <opccomn.h>\n__CRT_UUID_DECL(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)\nint main() { return 0; }\n' >"$out/trait_widl.cpp"
+for std in c++11 c++17; do
+    if x86_64-w64-mingw32-g++ -std=$std -isystem "$out/foundation/widl" -fsyntax-only "$out/trait_widl.cpp" 2>"$out/trait_widl.err"; then
+        fail "widl's opccomn.h declares no __uuidof(IOPCShutdown) ($std)"
+    fi
+    grep -q 'redefinition' "$out/trait_widl.err" || fail "a second __uuidof after widl's failed otherwise ($std): $(cat "$out/trait_widl.err")"
+done
+ok
+echo "coexistence: the stand-ins' traits (#pragma warning, repeated OPCHANDLE, no __uuidof, category redirect) and widl's (its own __uuidof) each shown"
 
 # ---- 1. compile matrix ----
 compilers=(x86_64-w64-mingw32-gcc:c x86_64-w64-mingw32-g++:c++ i686-w64-mingw32-gcc:c i686-w64-mingw32-g++:c++)
@@ -117,6 +139,17 @@ if command -v clang >/dev/null && echo 'int main(void){return 0;}' | clang --tar
 else
     echo "coexistence: clang for x86_64-w64-mingw32 not usable here; the mingw matrix runs with gcc/g++ only"
 fi
+# The compilations run two at a time (OPCCOMN_JOBS): each parses <windows.h>, most of the stage's time.
+jobs_max=${OPCCOMN_JOBS:-2}
+matrix_failures="$out/compile-matrix-failures.txt"
+: >"$matrix_failures"
+matrix_count=0
+compile_job() { # what, then compile()'s arguments; a failure is recorded with the compiler's messages
+    local what=$1 err="$out/compile-matrix-$BASHPID.err"
+    shift
+    compile "$@" 2>"$err" || { echo "$what"; cat "$err"; } >>"$matrix_failures"
+    rm -f "$err"
+}
 for entry in "${compilers[@]}"; do
     cc=${entry%%:*}
     kind=${entry##*:}
@@ -130,25 +163,38 @@ for entry in "${compilers[@]}"; do
         lang=${mode%%:*}
         define=${mode#*:}
         [ "$lang" = "$kind" ] || continue
-        for foundation_as in system plain; do
-            for first in 1 0; do
-                compile "${cc_cmd[*]}" "$lang" ${define:+"$define"} -DOURS_FIRST=$first -fsyntax-only \
-                    "$root/tests/coexistence/program.c" || fail "$cc $lang $define ours-first=$first Foundation headers $foundation_as"
-                ok
+        for foundation_kind in midl widl; do
+            for foundation_as in system plain; do
+                # widl's headers: x86_64 compilers, as a system directory (what differs from MIDL's, the
+                # __uuidof declarations and DEFINE_GUID, does not depend on the architecture or on
+                # whether their own warnings are shown).
+                if [ "$foundation_kind" = widl ] && { [ "$foundation_as" = plain ] || [[ "$cc" = i686-* ]]; }; then
+                    continue
+                fi
+                for first in 1 0; do
+                    compile_job "$cc $lang $define ours-first=$first, the Foundation's headers by $foundation_kind, $foundation_as" \
+                        "${cc_cmd[*]}" "$lang" ${define:+"$define"} -DOURS_FIRST=$first -fsyntax-only \
+                        "$root/tests/coexistence/program.c" &
+                    matrix_count=$((matrix_count + 1))
+                    while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+                done
             done
         done
     done
 done
+wait
+if [ -s "$matrix_failures" ]; then
+    cat "$matrix_failures" >&2
+    fail "compile matrix: $(grep -c 'ours-first=' "$matrix_failures") of $matrix_count combinations failed (above)"
+fi
+passed=$((passed + matrix_count))
 foundation_as=system
-echo "coexistence: compile matrix, $passed combinations"
-# An opccomn.h generated by widl (kept by the generator in foundation/widl) declares __uuidof itself:
-# a program including it first defines OPCCOMN_FOREIGN_UUIDOF, and opccomn's header leaves __uuidof to it.
+foundation_kind=midl
+echo "coexistence: compile matrix (MIDL's and widl's headers), $matrix_count combinations"
+# OPCCOMN_FOREIGN_UUIDOF (no longer needed) still leaves __uuidof to the header that came first.
 printf '#include <opccomn.h>\n#include <opccomn/opccomn.h>\nint main() { return __uuidof(IOPCCommon).Data1 == 0; }\n' >"$out/widl_first.cpp"
 x86_64-w64-mingw32-g++ -std=c++11 "${strict[@]}" -DOPCCOMN_FOREIGN_UUIDOF -I"$root/include" -isystem "$out/foundation/widl" \
     -fsyntax-only "$out/widl_first.cpp" || fail "a widl-generated opccomn.h first, with OPCCOMN_FOREIGN_UUIDOF"
-if x86_64-w64-mingw32-g++ -std=c++11 -I"$root/include" -isystem "$out/foundation/widl" -fsyntax-only "$out/widl_first.cpp" 2>/dev/null; then
-    fail "a widl-generated opccomn.h first compiles without OPCCOMN_FOREIGN_UUIDOF: the header no longer declares __uuidof after a foreign declaration"
-fi
 ok
 
 # ---- 2. i686 calling conventions ----
@@ -208,8 +254,39 @@ link_matrix() { # arch build_dir run(1/0)
             done
         done
     done
+    # widl's headers (what mingw users who compile the Foundation's IDL include): C (COBJMACROS) and
+    # C++ (__uuidof of every interface), whichever header came first, against either library (widl's
+    # *_i.c beside the import library, as a project that compiles the IDL links them).
+    local widl_objs=()
+    for stem in opccomn opcda opc_ae opchda; do
+        $triple-gcc -w -c -o "$dir/widl_${stem}_i.o" "$out/foundation/widl/${stem}_i.c"
+        widl_objs+=("$dir/widl_${stem}_i.o")
+    done
+    foundation_kind=widl
+    for lib in static dll; do
+        for first in 1 0; do
+            for lang in c c++; do
+                name="$dir/link-widl-$lib-first$first-$lang.exe"
+                libarg=$([ "$lib" = static ] && echo "$static" || echo "$implib")
+                local iobjs=() extra=() macros=()
+                [ "$lib" = dll ] && iobjs=("${widl_objs[@]}")
+                cc=$triple-gcc
+                if [ "$lang" = c++ ]; then cc=$triple-g++; extra=(-static-libstdc++); else macros=(-DCOBJMACROS); fi
+                compile "$cc" "$lang" "${macros[@]}" -DOURS_FIRST=$first -c -o "$name.o" "$root/tests/coexistence/program.c"
+                "$cc" -o "$name" "$name.o" "${iobjs[@]}" "$libarg" "${deps[@]}" "${extra[@]}" ||
+                    fail "link ($arch): widl's headers, $lib library, ours-first=$first, $lang"
+                if [ "$run" = 1 ]; then
+                    result=$(cd "$dir" && wine "$name" 2>/dev/null | tr -d '\r')
+                    [ "$result" = "coexistence program: 0 failure(s)" ] ||
+                        fail "run ($arch): widl's headers, $lib library, ours-first=$first, $lang: '$result'"
+                fi
+                ok
+            done
+        done
+    done
+    foundation_kind=midl
     if [ "$run" = 1 ]; then
-        echo "coexistence: link matrix ($arch: static and import library x with/without the *_i.c files x both orders x C with COBJMACROS/C++ with __uuidof) ran under Wine"
+        echo "coexistence: link matrix ($arch: static and import library x with/without the *_i.c files x both orders x C with COBJMACROS/C++ with __uuidof; widl's headers in C and C++, both orders, either library) ran under Wine"
     else
         echo "coexistence: link matrix ($arch) linked; NOT RUN (no 32-bit Wine)" >&2
     fi

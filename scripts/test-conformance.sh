@@ -131,8 +131,26 @@ run_checker example-inproc json OpcComn.ExampleServerInProc.1 --hostile
 $report json "$out/example-inproc.json" "$rc"
 run_checker example-inproc junit OpcComn.ExampleServerInProc.1 --hostile
 $report junit "$out/example-inproc.junit" "$rc"
+# The sample output of docs/opccomn-check.md: the same command (without --hostile), compared below,
+# once the prefix is as it was.
+run_checker example-sample text OpcComn.ExampleServerInProc.1
+sample_rc=$rc
 (cd "$example" && wine regsvr32 /u /s opccomn_example_inproc.dll)
 (cd "$bin" && wine regsvr32 /u /s opccomn.dll)
+$report text "$out/example-sample.text" "$sample_rc"
+# What the checker printed for the example is the sample, but for the version on the first line and
+# the module's path.
+sample_lines() { sed -E -e '1s/^opccomn-check [^:]*:/opccomn-check VERSION:/' -e 's/(InprocServer32 = ).*(opccomn_example_inproc\.dll)/\1...\2/'; }
+documented=$(awk '/^<!-- opccomn-check output: compared by scripts\/test-conformance.sh -->$/ { after = 1; next }
+    after && /^```$/ { if (inside) exit; inside = 1; next }
+    inside { print }' "$root/docs/opccomn-check.md")
+if [ -z "$documented" ] || [ "$(sample_lines <<<"$documented")" != "$(sample_lines <"$out/example-sample.text")" ]; then
+    diff <(sample_lines <<<"$documented") <(sample_lines <"$out/example-sample.text") >&2 || true
+    echo "docs/opccomn-check.md: its sample output is not what opccomn-check prints for the example (above): copy it again" >&2
+    exit 1
+fi
+echo "docs/opccomn-check.md: the sample output is what opccomn-check prints for the example"
+passed=$((passed + 1))
 grep -q '"listed by the registered OPCServerList' "$out/example-inproc.json" ||
     { echo "the example's browse.listed did not use the registered OPCServerList" >&2; exit 1; }
 passed=$((passed + 1))

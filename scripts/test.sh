@@ -33,7 +33,7 @@ rust-linux|linux|Rust tests (Linux)
 c-asan|linux|C tests (Linux, AddressSanitizer + UBSan) and the exported symbols
 c-valgrind|linux|C tests (Linux, valgrind --leak-check=full, no sanitizer)
 tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
-package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config
+package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config; the static library linked with the README'"'"'s and pkg-config'"'"'s lists
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
 docs|linux|C API reference (Doxygen): 0 undocumented items, every function listed, rendered in headless Chromium
 cmake-msvc|linux|CMake'"'"'s Visual Studio paths (stand-in MSVC toolchain, x64 and Win32): the project and add_subdirectory configure
@@ -46,7 +46,7 @@ example-x64|wine|C++ example server and client (x64, under Wine, against the ins
 third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64 and x86 clients, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
-coexistence|wine|header and library beside the OPC Foundation'"'"'s MIDL headers and *_i.c; a server DLL with its own .def (x64, x86, Linux)
+coexistence|wine|header and library beside the OPC Foundation'"'"'s headers (MIDL'"'"'s and widl'"'"'s) and *_i.c; a server DLL with its own .def; the static library linked with the documented and pkg-config'"'"'s lists (x64, x86, Linux)
 rust-x86|wine32|Rust tests (Windows x86, under 32-bit Wine)
 c-x86|wine32|C tests and cross-process tests (Windows x86 DLL, under 32-bit Wine)
 conformance-x86|wine32|conformance checker (x86) against the x86 seeded-defect servers, under 32-bit Wine
@@ -178,7 +178,7 @@ run_x86_c_tests() {
             { echo "$t (x86, $dir) printed no result line" >&2; return 1; }
     done
     # The cross-process tests (tests/oop) of the same build: one result line per ctest entry.
-    lines=$(grep -cE '^test_(oop|browser|ps_registration|reconnect): [0-9]+ passed, 0 failed' \
+    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration|reconnect): [0-9]+ passed, 0 failed' \
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
         { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }
@@ -279,6 +279,11 @@ stage_package_linux() {
         $(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --cflags --libs opccomn) \
         -Wl,-rpath,"$build/install/lib"
     "$build/consumer/pkgconfig_demo" >/dev/null
+    # The version as the installed package states it (Cargo.toml's, "0.3.0-dev" while in development).
+    [ "$(PKG_CONFIG_PATH="$build/install/lib/pkgconfig" pkg-config --modversion opccomn)" = "$version" ]
+    grep -qx "set(opccomn_VERSION_FULL \"$version\")" "$build/install/lib/cmake/opccomn/opccomnConfig.cmake"
+    # The static library linked with the README's list and with pkg-config's, and run.
+    scripts/test-static-link.sh linux "$build/linux" "$build/install"
 }
 
 stage_no_dll_exports() {
@@ -343,6 +348,9 @@ stage_coexistence() {
     [ "$wine32_ok" = 1 ] && x86_mode=run
     [ "$x86_mode" = run ] || skip_part "coexistence: the x86 programs (linked)" "32-bit Wine is not available: $wine32_missing"
     scripts/test-coexistence.sh "$build/windows" "$build/linux" "$build/windows-x86" "$x86_mode"
+    # The static library linked with docs/windows.md's list and with pkg-config's (x64, x86), and run.
+    scripts/test-static-link.sh windows x64 "$build/windows" run
+    scripts/test-static-link.sh windows x86 "$build/windows-x86" "$x86_mode"
 }
 
 stage_example_x64() {
@@ -446,7 +454,7 @@ stage_package_windows() {
         [ -f "$pkg/$file" ] || { echo "package: no $file" >&2; return 1; }
     done
     for folder in x64 x86 win7/x64 win7/x86; do
-        for file in opccomn.dll opccomn.dll.debug opccomn.lib opccomn.def libopccomn.dll.a libopccomn.a opccomn_browser.exe; do
+        for file in opccomn.dll opccomn.dll.debug opccomn.lib opccomn.def libopccomn.dll.a libopccomn.a opccomn-static-libs.txt opccomn_browser.exe; do
             [ -f "$pkg/$folder/$file" ] || { echo "package: no $folder/$file" >&2; return 1; }
         done
         if objdump -h "$pkg/$folder/opccomn.dll" | grep -q '\.debug_info'; then
@@ -467,6 +475,18 @@ stage_package_windows() {
     (cd "$pkg/x64" && wine opccomn_browser.exe /Status >/dev/null) || status_rc=$?
     [ "$status_rc" = 0 ] || [ "$status_rc" = 2 ] || { echo "package: x64/opccomn_browser.exe /Status exited $status_rc" >&2; return 1; }
     echo "package: every file its README names is there, the DLLs are stripped with their debug files beside them, the browser runs"
+    # The static library's libraries as docs/windows.md lists them, per folder (scripts/test-static-link.sh
+    # links with the x64 and x86 lists in the coexistence stage).
+    local listed listed_win7
+    listed=$(sed -nE 's|.*Static: link `libopccomn\.a` and `([^`]*)`.*|\1|p' docs/windows.md)
+    listed_win7=$(sed -nE 's|.*the `win7/` builds: `([^`]*)`.*|\1|p' docs/windows.md)
+    for folder in x64 x86 win7/x64 win7/x86; do
+        want=$listed
+        [[ "$folder" = win7/* ]] && want=$listed_win7
+        [ -n "$want" ] && [ "$(cat "$pkg/$folder/opccomn-static-libs.txt")" = "$want" ] ||
+            { echo "package: $folder/opccomn-static-libs.txt says '$(cat "$pkg/$folder/opccomn-static-libs.txt")', docs/windows.md '$want'" >&2; return 1; }
+    done
+    echo "package: each folder's opccomn-static-libs.txt is the list docs/windows.md gives"
     for variant in x64:x86_64:OFF x86:i686:OFF x64:x86_64:ON; do
         IFS=: read -r arch toolchain win7 <<<"$variant"
         dir="$build/package-test/consumer-$arch-win7-$win7"

@@ -32,6 +32,8 @@ pub mod shutdown;
 
 #[cfg(test)]
 mod stress_tests;
+#[cfg(test)]
+mod struct_size_table;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.

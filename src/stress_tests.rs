@@ -92,6 +92,7 @@ fn eight_threads_share_a_session_a_shutdown_object_and_a_pattern() {
         let options = OpcShutdownOptions {
             struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
             advise_limit: 1000,
+            container: ptr::null_mut(),
         };
         let mut p: *mut c_void = ptr::null_mut();
         assert_eq!(

@@ -5,7 +5,9 @@
 //   objects, the destructor releases them.
 // - IExampleAddressSpace, the server's own interface, browses a few items with a compiled filter
 //   (OpcPatternCompileW / OpcPatternMatchW) and reads their values.
-// - Registration (OpcRegisterServer / OpcUnregisterServer) is described once, in ExampleRegistration.
+// - Registration is described once, in ExampleRegistration, and written and removed by the library's
+//   EXE host (OpcExeServerRun: /RegServer, /UnregServer) and DLL entry points (OpcModuleRegister,
+//   OpcModuleUnregister).
 //
 // The same class is served by an EXE (LocalServer32, exe_main.cpp) and by a DLL (InprocServer32,
 // dll_main.cpp) under two class identifiers.
@@ -68,7 +70,7 @@ EXTERN_C const CATID CATID_ExampleServers;
 // below 0x8000 in the low word).
 #define EXAMPLE_E_DEVICEOFFLINE ((HRESULT)0xC0048001L)
 
-// The registration of either server, for OpcRegisterServer / OpcUnregisterServer. `module_path`
+// The registration of either server, for its class (OpcServerClass::registration). `module_path`
 // NULL means this EXE; a DLL passes its own path.
 OpcServerRegistration ExampleRegistration(bool inproc, LPCWSTR module_path);
 

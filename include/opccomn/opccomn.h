@@ -20,11 +20,15 @@
 /** The library's major version (from Cargo.toml). */
 #define OPCCOMN_VERSION_MAJOR 0
 /** The library's minor version. */
-#define OPCCOMN_VERSION_MINOR 2
+#define OPCCOMN_VERSION_MINOR 3
 /** The library's patch version. */
 #define OPCCOMN_VERSION_PATCH 0
-/** The library's version as text, "MAJOR.MINOR.PATCH". */
-#define OPCCOMN_VERSION "0.2.0"
+/** The library's version as text: "MAJOR.MINOR.PATCH", with "-PRERELEASE" after it for a version in
+    development (OPCCOMN_VERSION_PRERELEASE). */
+#define OPCCOMN_VERSION "0.3.0-dev"
+/** Defined only in the header of a version in development (a build of the main branch, not a
+    release): the pre-release part of OPCCOMN_VERSION, which then names the version to come. */
+#define OPCCOMN_VERSION_PRERELEASE "dev"
 
 /* On Windows the COM base types (GUID, HRESULT, IUnknown, ...) come from the system headers; elsewhere
    this header defines them, with UTF-16 WCHAR as COM requires. */
@@ -183,6 +187,12 @@ typedef struct IOPCServerList2 IOPCServerList2;
  * `OpcServerClass::flags`: instances may be aggregated (CreateInstance with an outer object).
  */
 #define OPC_CLASS_AGGREGATABLE 1
+
+/**
+ * The most threads the library runs at the same time, in the whole process, to call sinks for
+ * `OpcShutdownNotifyBounded` (every notification of every shutdown object together).
+ */
+#define OPC_SHUTDOWN_MAX_NOTIFY_THREADS 64
 
 /**
  * A timeout that never ends: the notification waits for the answer however long it takes.
@@ -656,7 +666,9 @@ typedef struct OpcServerRegistration {
    */
   LPCWSTR da10_vendor;
   /**
-   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+   * The AppID (a GUID) of a local server's DCOM settings, or NULL for none. Classes that name one
+   * AppID share it (COM applies it to their process): it holds what the latest registration wrote,
+   * and stays until the last of them is unregistered; give them the same settings.
    */
   const CLSID *app_id;
   /**
@@ -889,6 +901,24 @@ typedef struct OpcShutdownOptions {
    * specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
    */
   uint32_t advise_limit;
+  /**
+   * For a server object that forwards to the shutdown object instead of aggregating it (it
+   * implements IConnectionPointContainer itself and passes FindConnectionPoint and
+   * EnumConnectionPoints on): the server object (any of its interfaces), so that the connection
+   * point names it as its container. NULL: the container is the shutdown object itself, or the
+   * outer object when it is aggregated (then this must be NULL).
+   *
+   * The connection point then counts its references on this object, as an interface of an
+   * aggregated object counts on its outer object: whoever holds the connection point (or an
+   * enumerator of it) keeps the server object alive, and through it the shutdown object;
+   * IConnectionPoint::GetConnectionPointContainer returns the server object's
+   * IConnectionPointContainer (QueryInterface on it), so the container has the server's COM
+   * identity. The shutdown object holds no reference to the server object (no cycle). So the
+   * server object keeps its own reference to the shutdown object (which may be any of its
+   * interfaces) until it is destroyed, and hands none of the shutdown object's own interfaces to
+   * its clients: they count only on the shutdown object, which could outlive the server.
+   */
+  IUnknown *container;
 } OpcShutdownOptions;
 
 #if !defined(_WIN32)
@@ -914,8 +944,8 @@ typedef struct OpcShutdownNotifyOptions {
    */
   uint32_t timeout_ms;
   /**
-   * The longest one sink is waited for, in milliseconds from the moment its call starts (all
-   * start together), within the whole deadline. 0 or OPC_SHUTDOWN_NO_TIMEOUT: only the whole.
+   * The longest one sink is waited for, in milliseconds from the moment its call starts (usually
+   * all start together), within the whole deadline. 0 or OPC_SHUTDOWN_NO_TIMEOUT: only the whole.
    */
   uint32_t sink_timeout_ms;
 } OpcShutdownNotifyOptions;
@@ -1150,6 +1180,47 @@ typedef const WCHAR *LPCOLESTR;
    MIDL-generated header (the OPC Foundation's opccomn.h) and this one skip each other's
    declarations whichever comes first. ---- */
 
+/* C++ with mingw-w64 (g++, clang++): __uuidof of the interfaces another header declared first.
+   MIDL's output (the OPC Foundation's headers) declares no __uuidof for them, and __uuidof(IOPCCommon)
+   would compile and fail to link; widl's output declares it with __CRT_UUID_DECL, and a second
+   declaration would be a redefinition. No preprocessor test tells the two apart, so for such an
+   interface this header declares the identifier in a table of its own, opccomn_uuidof_s<T>, and at its
+   end __uuidof reads that table, which hands every other type to mingw's __mingw_uuidof<T>(). An
+   interface this header declares itself gets mingw's declaration (__CRT_UUID_DECL) with it, and
+   __uuidof stays mingw's. Defining OPCCOMN_FOREIGN_UUIDOF leaves __uuidof to the other header. */
+#if defined(__cplusplus) && !defined(CINTERFACE) && defined(__uuidof) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF)
+#define OPCCOMN_UUIDOF_TABLE_ 1
+extern "C++" {
+#if __cpp_constexpr >= 200704L && __cpp_inline_variables >= 201606L
+template<typename T> struct opccomn_uuidof_s {
+    static constexpr const GUID &get() { return __mingw_uuidof<T>(); }
+};
+#define OPCCOMN_UUIDOF_DECL_(type, l, w1, w2, b1, b2, b3, b4, b5, b6, b7, b8) \
+    extern "C++" { \
+    template<> struct opccomn_uuidof_s<type> { \
+        static constexpr IID value = {l, w1, w2, {b1, b2, b3, b4, b5, b6, b7, b8}}; \
+        static constexpr const GUID &get() { return value; } \
+    }; \
+    template<> struct opccomn_uuidof_s<type *> : opccomn_uuidof_s<type> {}; \
+    }
+#else
+template<typename T> struct opccomn_uuidof_s {
+    static const GUID &get() { return __mingw_uuidof<T>(); }
+};
+#define OPCCOMN_UUIDOF_DECL_(type, l, w1, w2, b1, b2, b3, b4, b5, b6, b7, b8) \
+    extern "C++" { \
+    template<> struct opccomn_uuidof_s<type> { \
+        static const GUID &get() { \
+            static const IID value = {l, w1, w2, {b1, b2, b3, b4, b5, b6, b7, b8}}; \
+            return value; \
+        } \
+    }; \
+    template<> struct opccomn_uuidof_s<type *> : opccomn_uuidof_s<type> {}; \
+    }
+#endif
+}
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -1248,9 +1319,10 @@ struct IUnknown
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IUnknown)
-/* IUnknown was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IUnknown)
+/* IUnknown was declared by another header: __uuidof(IUnknown) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IUnknown_INTERFACE_DEFINED__ */
 
 /* IEnumGUID (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1389,9 +1461,10 @@ struct IEnumGUID
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumGUID)
-/* IEnumGUID was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IEnumGUID)
+/* IEnumGUID was declared by another header: __uuidof(IEnumGUID) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IEnumGUID_INTERFACE_DEFINED__ */
 
 /* IEnumConnections (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1530,9 +1603,10 @@ struct IEnumConnections
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumConnections)
-/* IEnumConnections was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IEnumConnections)
+/* IEnumConnections was declared by another header: __uuidof(IEnumConnections) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IEnumConnections_INTERFACE_DEFINED__ */
 
 /* IConnectionPoint (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1686,9 +1760,10 @@ struct IConnectionPoint
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IConnectionPoint)
-/* IConnectionPoint was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IConnectionPoint)
+/* IConnectionPoint was declared by another header: __uuidof(IConnectionPoint) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IConnectionPoint_INTERFACE_DEFINED__ */
 
 /* IEnumConnectionPoints (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1827,9 +1902,10 @@ struct IEnumConnectionPoints
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IEnumConnectionPoints)
-/* IEnumConnectionPoints was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IEnumConnectionPoints)
+/* IEnumConnectionPoints was declared by another header: __uuidof(IEnumConnectionPoints) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IEnumConnectionPoints_INTERFACE_DEFINED__ */
 
 /* IConnectionPointContainer (the standard COM interface; <windows.h> declares it on Windows) */
@@ -1938,9 +2014,10 @@ struct IConnectionPointContainer
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IConnectionPointContainer)
-/* IConnectionPointContainer was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IConnectionPointContainer)
+/* IConnectionPointContainer was declared by another header: __uuidof(IConnectionPointContainer) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xaa,0x00,0x34,0x1d,0x07)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IConnectionPointContainer_INTERFACE_DEFINED__ */
 
 /* IClassFactory (the standard COM interface; <windows.h> declares it on Windows) */
@@ -2053,9 +2130,10 @@ struct IClassFactory
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IClassFactory)
-/* IClassFactory was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IClassFactory)
+/* IClassFactory was declared by another header: __uuidof(IClassFactory) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0x00,0x00,0x46)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IClassFactory_INTERFACE_DEFINED__ */
 
 #endif /* !defined(_WIN32) */
@@ -2159,9 +2237,10 @@ struct IOPCShutdown
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCShutdown)
-/* IOPCShutdown was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCShutdown)
+/* IOPCShutdown was declared by another header: __uuidof(IOPCShutdown) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCShutdown_INTERFACE_DEFINED__ */
 
 /* IOPCCommon (OPC Common, idl/opccomn.idl) */
@@ -2333,9 +2412,10 @@ struct IOPCCommon
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCCommon)
-/* IOPCCommon was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCCommon)
+/* IOPCCommon was declared by another header: __uuidof(IOPCCommon) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCCommon_INTERFACE_DEFINED__ */
 
 /* IOPCServerList (OPC Common, idl/opccomn.idl) */
@@ -2483,9 +2563,10 @@ struct IOPCServerList
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCServerList)
-/* IOPCServerList was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,0x06,0xc1,0x00,0x00)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCServerList)
+/* IOPCServerList was declared by another header: __uuidof(IOPCServerList) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,0x06,0xc1,0x00,0x00)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCServerList_INTERFACE_DEFINED__ */
 
 /* IOPCEnumGUID (OPC Common, idl/opccomn.idl) */
@@ -2630,9 +2711,10 @@ struct IOPCEnumGUID
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCEnumGUID)
-/* IOPCEnumGUID was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0xb1,0xe3,0xf4,0x83)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCEnumGUID)
+/* IOPCEnumGUID was declared by another header: __uuidof(IOPCEnumGUID) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0xb1,0xe3,0xf4,0x83)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCEnumGUID_INTERFACE_DEFINED__ */
 
 /* IOPCServerList2 (OPC Common, idl/opccomn.idl) */
@@ -2774,9 +2856,10 @@ struct IOPCServerList2
 
 #endif /* C style interface */
 
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(IOPCServerList2)
-/* IOPCServerList2 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f,0x31,0x88,0xbf,0x7a)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(IOPCServerList2)
+/* IOPCServerList2 was declared by another header: __uuidof(IOPCServerList2) from this header's table */
+OPCCOMN_UUIDOF_DECL_(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f,0x31,0x88,0xbf,0x7a)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __IOPCServerList2_INTERFACE_DEFINED__ */
 
 /* ---- The component categories and classes (idl/opcguids.txt). ---- */
@@ -2820,9 +2903,10 @@ struct CATID_OPCDAServer10
     CONST_VTBL struct CATID_OPCDAServer10Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer10)
-/* CATID_OPCDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCDAServer10)
+/* CATID_OPCDAServer10 was declared by another header: __uuidof(CATID_OPCDAServer10) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer10
 /** The category OPC Data Access Servers Version 1.0: `IID_CATID_OPCDAServer10` under the name code uses. */
@@ -2868,9 +2952,10 @@ struct CATID_OPCDAServer20
     CONST_VTBL struct CATID_OPCDAServer20Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer20)
-/* CATID_OPCDAServer20 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCDAServer20)
+/* CATID_OPCDAServer20 was declared by another header: __uuidof(CATID_OPCDAServer20) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer20_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer20
 /** The category OPC Data Access Servers Version 2.0: `IID_CATID_OPCDAServer20` under the name code uses. */
@@ -2916,9 +3001,10 @@ struct CATID_OPCDAServer30
     CONST_VTBL struct CATID_OPCDAServer30Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCDAServer30)
-/* CATID_OPCDAServer30 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCDAServer30)
+/* CATID_OPCDAServer30 was declared by another header: __uuidof(CATID_OPCDAServer30) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer30_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer30
 /** The category OPC Data Access Servers Version 3.0: `IID_CATID_OPCDAServer30` under the name code uses. */
@@ -2964,9 +3050,10 @@ struct CATID_XMLDAServer10
     CONST_VTBL struct CATID_XMLDAServer10Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_XMLDAServer10)
-/* CATID_XMLDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_XMLDAServer10)
+/* CATID_XMLDAServer10 was declared by another header: __uuidof(CATID_XMLDAServer10) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_XMLDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_XMLDAServer10
 /** The category OPC XML Data Access Servers Version 1.0: `IID_CATID_XMLDAServer10` under the name code uses. */
@@ -3012,9 +3099,10 @@ struct OPCEventServerCATID
     CONST_VTBL struct OPCEventServerCATIDVtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(OPCEventServerCATID)
-/* OPCEventServerCATID was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(OPCEventServerCATID)
+/* OPCEventServerCATID was declared by another header: __uuidof(OPCEventServerCATID) from this header's table */
+OPCCOMN_UUIDOF_DECL_(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __OPCEventServerCATID_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCAEServer10
 /** The category OPC Alarm & Event Server Version 1.0: `IID_OPCEventServerCATID` under the name code uses. */
@@ -3060,9 +3148,10 @@ struct CATID_OPCHDAServer10
     CONST_VTBL struct CATID_OPCHDAServer10Vtbl *lpVtbl;
 };
 #endif
-#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined(CATID_OPCHDAServer10)
-/* CATID_OPCHDAServer10 was declared by another header (MIDL's output declares no __uuidof) */
-__CRT_UUID_DECL(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
+#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined(CATID_OPCHDAServer10)
+/* CATID_OPCHDAServer10 was declared by another header: __uuidof(CATID_OPCHDAServer10) from this header's table */
+OPCCOMN_UUIDOF_DECL_(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
+#define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCHDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCHDAServer10
 /** The category OPC History Data Access Servers Version 1.0: `IID_CATID_OPCHDAServer10` under the name code uses. */
@@ -3107,6 +3196,13 @@ EXTERN_C const CLSID CLSID_OpcComnProxyStub;
 
 #ifdef __cplusplus
 }  /* extern "C" */
+#endif
+
+/* An interface above was declared by another header first: __uuidof reads this header's table,
+   which answers for every other type as mingw-w64's __uuidof does. */
+#if defined(OPCCOMN_UUIDOF_REDIRECT_)
+#undef __uuidof
+#define __uuidof(type) opccomn_uuidof_s<__typeof(type)>::get()
 #endif
 
 #ifdef __cplusplus
@@ -3193,8 +3289,12 @@ HRESULT OPCCOMN_CDECL OpcCommonGetClientName(IUnknown *common, LPWSTR *ppName);
  *
  * `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
  * pointer itself is the cheap form: the library recognises its own object and reads the locale
- * without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
- * interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
+ * without a QueryInterface. For any other interface the library asks for IOPCCommon first (one
+ * QueryInterface and Release). A server that aggregates the session keeps the inner IUnknown from
+ * `OpcCommonCreate` and passes that, not an IOPCCommon pointer: every interface of an aggregated
+ * object but its inner IUnknown counts its references on the outer object, so a kept IOPCCommon
+ * pointer would keep the server object alive for ever. `locale_changed` tells a server of every change
+ * without a call. `*lcid` receives the locale, or 0 on failure.
  * Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
  *
  * @par Safety
@@ -3447,7 +3547,9 @@ HRESULT OPCCOMN_CDECL OpcRegistryGetString(const struct OpcRegistry *reg, LPCWST
  * Creates the component category `catid` with `description` in English (0x409), as the
  * specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
  * `description` uses the standard text of an OPC category. On Windows this goes through the Component
- * Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
+ * Categories Manager (ICatRegister::RegisterCategories) when COM can create it on the calling thread;
+ * where COM is not initialised (a server registering before CoInitializeEx) the library writes the
+ * same value itself.
  *
  * Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
  * is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
@@ -3459,8 +3561,9 @@ HRESULT OPCCOMN_CDECL OpcCreateComponentCategory(const struct OpcRegistry *reg, 
 
 /**
  * Registers `clsid` as implementing the category `catid` (the specification's
- * RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
- * Categories Manager on Windows.
+ * RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the
+ * Component Categories Manager when COM can create it on the calling thread, else (COM not
+ * initialised there) by creating the key itself.
  *
  * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
  *
@@ -3471,7 +3574,8 @@ HRESULT OPCCOMN_CDECL OpcRegisterClassInCategory(const struct OpcRegistry *reg, 
 
 /**
  * Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
- * `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
+ * `CLSID\{clsid}\Implemented Categories\{catid}`, through the Component Categories Manager or
+ * directly as `OpcRegisterClassInCategory` does. Succeeds when it was not registered.
  *
  * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
  *
@@ -3537,10 +3641,11 @@ HRESULT OPCCOMN_CDECL OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR te
 /**
  * Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
  * registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
- * (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the categories (created with their standard
- * descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
- * on the calling thread, else by writing the same keys) and, for Data Access
- * 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+ * (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the
+ * categories (created with their standard descriptions when missing; on Windows through the Component
+ * Categories Manager when COM can create it on the calling thread, else, COM not being initialised
+ * there, as EXE servers registering before CoInitializeEx do, by writing the same keys) and, for Data
+ * Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
  * that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
  * reports OPC_SERVER_COMMAND_REGISTER.
  *
@@ -3561,7 +3666,11 @@ HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *serv
  * wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
  * re-registered after a take-over) is left as it is, never set back to older data, and while the
  * class serves another server what it shares with it stays. A category's description stays while
- * another class implements the category.
+ * another class implements the category. An AppID another registered class names stays whole (the
+ * AppID key with every value, and `AppID\<exe>` while that class runs in the same program) until
+ * the last of them is unregistered, which removes what the registrations wrote and restores what was
+ * there before the first. Like registration it works with or without COM initialised on the calling
+ * thread.
  *
  * Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
  * `OpcRegisterServer` for a bad description or a failing registry write.
@@ -3925,7 +4034,9 @@ HRESULT OPCCOMN_CDECL OpcDllUnregisterServer(void);
  * With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
  * object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
  * as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
- * it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+ * it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to. A server object
+ * that cannot aggregate (windows-rs objects, for one) and forwards instead names itself as the
+ * container with `OpcShutdownCreateEx` (`OpcShutdownOptions::container`).
  *
  * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
  * `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
@@ -3940,11 +4051,13 @@ HRESULT OPCCOMN_CDECL OpcShutdownCreate(IUnknown *outer, REFIID riid, void **ppv
  * As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
  *
  * Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
- * `OpcShutdownOptions` (4, or 8 as of this version).
+ * `OpcShutdownOptions` (4, 8, or `sizeof` as of this version: 16 on 64-bit, 12 on 32-bit), and for
+ * a `container` together with an `outer` object.
  *
  * @par Safety
- * `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
- * `OpcShutdownCreate`.
+ * `options` must be NULL or point at `options->struct_size` readable bytes, and its `container`
+ * NULL or a valid IUnknown that outlives every reference to the connection point (they count on
+ * it); otherwise as for `OpcShutdownCreate`.
  */
 HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv);
 
@@ -3953,7 +4066,8 @@ HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *optio
  * each advised sink with `reason` (a NUL string when `reason` is NULL).
  *
  * `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
- * IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+ * IUnknown from `OpcShutdownCreate`, or the server object that aggregates it or forwards to it (the
+ * server's IConnectionPointContainer hands out the shutdown object's connection point). The sinks are taken
  * from a snapshot made under the object's lock and called without holding it, one after the other
  * on the calling thread, so a sink may Unadvise, release the server or call back in from inside
  * ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
@@ -3987,25 +4101,36 @@ HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, UL
 
 /**
  * Asks every client advised on `shutdown` to disconnect, as `OpcShutdownNotify`, but waits for them
- * only until a deadline: every advised sink is called at the same time, each on a worker thread of
- * its own, so a slow or hung client delays nobody else, and the call returns when every sink has
- * answered or passed its deadline (`options`: the whole notification's deadline, by default
- * OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS, and one per sink; NULL gives the defaults).
+ * only until a deadline: the advised sinks are called at the same time on worker threads, so a slow
+ * or hung client delays nobody else, and the call returns when every sink has answered or passed its
+ * deadline (`options`: the whole notification's deadline, by default OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS,
+ * and one per sink; NULL gives the defaults).
  *
  * The counts (each pointer may be NULL; all are set, to 0 on failure, before anything else happens)
  * say what became of every sink advised when the call started: `*pNotified` accepted the request,
  * `*pFailed` refused it or could not be reached (a client process that died), `*pTimedOut` had not
- * answered at its deadline. A timed-out call may still return later on its worker thread; the worker
- * holds its own reference to the sink and its own copy of `reason`, so the caller may release the
- * server and free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow`
- * says S_FALSE.
+ * answered at its deadline, or was not called because its call from an earlier notification has not
+ * returned yet. A timed-out call may still return later on its worker thread; the worker holds its
+ * own reference to the sink and its own copy of `reason`, so the caller may release the server and
+ * free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow` says
+ * S_FALSE.
  *
- * A sink unadvised before its call starts is not called (a sink unadvised by another sink during
- * the notification may already have been called: they run at the same time). On Windows each
- * worker calls from the multithreaded apartment, fetching the sink from the Global Interface Table;
- * a sink advised from a single-threaded apartment that the GIT could not take (no IOPCShutdown
- * proxy/stub registered) cannot be called from there and counts as failed. Call it from a thread
- * that has initialised COM.
+ * Threads: the workers are one pool for the whole process, shared by every notification of every
+ * shutdown object, of at most OPC_SHUTDOWN_MAX_NOTIFY_THREADS threads, whatever the clients do; a
+ * worker ends when no call is waiting. A sink is never called again while its earlier call has not
+ * returned, so a hung client holds one thread however often the server notifies. Every other sink
+ * is called, also when hung clients hold every worker: a call waiting while every worker is inside a
+ * call, when all those calls are past their deadlines (OPC_SHUTDOWN_MAX_NOTIFY_THREADS clients hung
+ * at once) or its own deadline has passed, or when no worker thread can be created, is made by the
+ * calling thread itself, one after the other. Only then can this call last longer than its
+ * deadline: it waits for each call it makes itself, so a client that hangs there holds it.
+ *
+ * A sink unadvised before its call starts is not called and not counted (a sink unadvised by another
+ * sink during the notification may already have been called: they run at the same time). On Windows
+ * each worker calls from the multithreaded apartment (the calling thread from its own), fetching the
+ * sink from the Global Interface Table; a sink advised from a single-threaded apartment that the GIT
+ * could not take (no IOPCShutdown proxy/stub registered) cannot be called from there and counts as
+ * failed. Call it from a thread that has initialised COM.
  *
  * Returns S_OK when every sink accepted the request (also when none is advised), S_FALSE when at
  * least one failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of

@@ -21,14 +21,14 @@
 //! trait for its enumerator with [`enum_impl!`](crate::enum_impl) and builds its static vtable with the
 //! generated `IEnumXXXVtbl::new`; elements implement [`Element`].
 
-use core::ptr::{self, NonNull};
+use core::ptr;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::ffi::{self, Fail, FfiResult};
 use super::hresult::{S_FALSE, S_OK};
 use super::object::{ComClass, ComObject, Slot, Vtable};
 use super::types::{GUID, HRESULT, ULONG};
-use super::unknown::{add_ref, release, IUnknown};
+use super::unknown::Counted;
 
 /// One element of a snapshot.
 pub(crate) trait Element: Send + Sync + 'static {
@@ -45,44 +45,33 @@ impl Element for GUID {
     }
 }
 
-/// A COM interface pointer owning one reference, released on drop; handed out AddRef'd.
-pub(crate) struct Counted<I>(NonNull<I>);
+/// A counted interface pointer as an element of a snapshot; handed out AddRef'd, released (as the
+/// [`Counted`] it holds) when the last enumerator sharing the list dies.
+pub(crate) struct Listed<I>(Counted<I>);
 
 // SAFETY: a snapshot only holds pointers that may be used from the threads its enumerator is called on:
 // the library's own free-threaded objects, or (connections) sinks fetched for the apartment that made
-// the enumerator, which COM confines the enumerator to.
-unsafe impl<I> Send for Counted<I> {}
+// the enumerator, which COM confines the enumerator to. `Listed::new` makes its caller vouch for it.
+unsafe impl<I> Send for Listed<I> {}
 // SAFETY: as above; the pointer itself is never changed after construction.
-unsafe impl<I> Sync for Counted<I> {}
+unsafe impl<I> Sync for Listed<I> {}
 
-impl<I> Counted<I> {
-    /// Takes over one reference the caller owns; `None` for NULL.
+impl<I> Listed<I> {
+    /// The element owning `p`'s reference.
     ///
     /// # Safety
-    /// `p` is NULL or a valid COM interface pointer carrying a reference that now belongs to the result.
-    pub(crate) unsafe fn adopt(p: *mut I) -> Option<Counted<I>> {
-        NonNull::new(p).map(Counted)
-    }
-
-    /// The pointer (not AddRef'd).
-    pub(crate) fn as_ptr(&self) -> *mut I {
-        self.0.as_ptr()
+    /// `p` must be usable and releasable on every thread the enumerator may be called on (see the
+    /// `Send` implementation).
+    pub(crate) unsafe fn new(p: Counted<I>) -> Listed<I> {
+        Listed(p)
     }
 }
 
-impl<I: 'static> Element for Counted<I> {
+impl<I: 'static> Element for Listed<I> {
     type Out = *mut I;
     fn hand_out(&self) -> *mut I {
-        // SAFETY: the pointer is alive while this element holds its reference.
-        unsafe { add_ref(self.as_ptr().cast::<IUnknown>()) };
-        self.as_ptr()
-    }
-}
-
-impl<I> Drop for Counted<I> {
-    fn drop(&mut self) {
-        // SAFETY: this element owns one reference (taken over in `adopt`) and gives it up once.
-        unsafe { release(self.as_ptr().cast::<IUnknown>()) };
+        // The caller's copy carries its own reference.
+        self.0.clone().into_raw().as_ptr()
     }
 }
 
@@ -251,7 +240,7 @@ mod tests {
         IEnumGUIDImpl, IEnumGUIDVtbl,
     };
     use crate::com::object::Delegating;
-    use crate::com::unknown::query_interface;
+    use crate::com::unknown::{add_ref, query_interface, release, IUnknown};
 
     const IID_TEST: GUID = GUID::from_u128(0x1234);
     const IID_TEST_ALIAS: GUID = GUID::from_u128(0x5678);
@@ -277,7 +266,7 @@ mod tests {
         IEnumConnectionPointsVtbl::new::<Delegating, Enumerator<Pointers>>();
     crate::enum_impl!(IEnumConnectionPointsImpl, Pointers);
     impl EnumInterface for Pointers {
-        type Item = Counted<IConnectionPoint>;
+        type Item = Listed<IConnectionPoint>;
         type Iface = IEnumConnectionPoints;
         type Vtbl = IEnumConnectionPointsVtbl;
         const IIDS: &'static [GUID] = &[IID_TEST];
@@ -396,10 +385,11 @@ mod tests {
     fn counted_elements_are_handed_out_addrefd_and_released_with_the_last_enumerator() {
         let (a, b) = (thing(), thing());
         // SAFETY: the snapshot takes over one reference to each (AddRef'd for it here).
-        let items: Arc<[Counted<IConnectionPoint>]> = unsafe {
+        // Library objects are free-threaded: fit for a snapshot.
+        let items: Arc<[Listed<IConnectionPoint>]> = unsafe {
             add_ref(a);
             add_ref(b);
-            vec![Counted::adopt(a.cast()).unwrap(), Counted::adopt(b.cast()).unwrap()].into()
+            [a, b].map(|p| Listed::new(Counted::adopt(p.cast()).unwrap())).into()
         };
         assert_eq!((refs(a), refs(b)), (2, 2));
         let p = Enumerator::<Pointers>::create(items, 0);

@@ -11,7 +11,7 @@ use core::ffi::c_void;
 use std::sync::Mutex;
 
 use super::ffi::{self, Hr};
-use super::options::read_sized;
+use super::options::{read_sized, SizedStruct};
 use super::S_OK;
 
 /// One function of a module lock: called with the lock's `context`. May be called from any thread,
@@ -32,6 +32,12 @@ pub struct OpcModuleLock {
     pub unlock: OpcModuleLockFn,
     /// Passed to `lock` and `unlock`.
     pub context: *mut c_void,
+}
+
+// SAFETY: repr(C), struct_size first; optional function pointers and a raw pointer.
+unsafe impl SizedStruct for OpcModuleLock {
+    /// One version so far.
+    const SIZES: &'static [usize] = &[core::mem::size_of::<OpcModuleLock>()];
 }
 
 /// A module lock in force: both functions and their context.
@@ -112,7 +118,7 @@ pub unsafe extern "C" fn OpcSetModuleLock(lock: *const OpcModuleLock) -> Hr {
             };
             // SAFETY: OpcModuleLock is repr(C), starts with struct_size and holds only optional
             // function pointers and a raw pointer; the caller vouches for `lock`.
-            let given = unsafe { read_sized(lock, &[core::mem::size_of::<OpcModuleLock>()], defaults) }?;
+            let given = unsafe { read_sized(lock, defaults) }?;
             match (given.lock, given.unlock) {
                 (Some(lock), Some(unlock)) => Some(ModuleLock {
                     lock,

@@ -35,16 +35,23 @@ pub unsafe fn release(unknown: *mut IUnknown) -> ULONG {
     unsafe { IUnknown::Release(unknown) }
 }
 
-/// One counted reference to an interface of an object; released when dropped.
+/// One counted reference to an interface of an object, released when dropped: the one owner of a COM
+/// reference in the library (the system objects it creates, the sinks and objects callers hand it,
+/// its own objects it keeps). It never holds NULL: a raw pointer becomes a `Counted` only through
+/// [`Counted::adopt`], which answers `None` for NULL, so no owner can release through NULL (as one
+/// built from a failed CoCreateInstance would).
+///
+/// Neither `Send` nor `Sync`: a COM interface pointer belongs to its apartment. An owner that may be
+/// used from other threads says why in its own `unsafe impl`.
 pub struct Counted<I>(NonNull<I>);
 
 impl<I> Counted<I> {
-    /// Takes over a counted reference.
+    /// Takes over a counted reference; `None` for NULL.
     ///
     /// # Safety
-    /// `p` must be a valid COM interface pointer carrying one reference the caller gives up.
-    pub unsafe fn adopt(p: NonNull<I>) -> Self {
-        Counted(p)
+    /// `p` must be NULL or a valid COM interface pointer carrying one reference the caller gives up.
+    pub unsafe fn adopt(p: *mut I) -> Option<Self> {
+        NonNull::new(p).map(Counted)
     }
 
     /// The interface pointer (still owned by `self`).
@@ -57,6 +64,20 @@ impl<I> Counted<I> {
         let p = self.0;
         core::mem::forget(self);
         p
+    }
+
+    /// The same reference, as the IUnknown every interface begins with.
+    pub fn into_unknown(self) -> Counted<IUnknown> {
+        Counted(self.into_raw().cast())
+    }
+}
+
+/// Another counted reference to the same interface (AddRef).
+impl<I> Clone for Counted<I> {
+    fn clone(&self) -> Self {
+        // SAFETY: `self` keeps the interface alive; the reference added belongs to the result.
+        unsafe { add_ref(self.0.as_ptr().cast()) };
+        Counted(self.0)
     }
 }
 
@@ -85,11 +106,8 @@ pub unsafe fn query<I>(unknown: *mut IUnknown, iid: &GUID) -> Result<Counted<I>,
     if hr < 0 {
         return Err(hr);
     }
-    match NonNull::new(p.cast::<I>()) {
-        // SAFETY: a successful QueryInterface hands over one reference.
-        Some(p) => Ok(unsafe { Counted::adopt(p) }),
-        None => Err(E_POINTER),
-    }
+    // SAFETY: a successful QueryInterface hands over one reference (NULL gives None).
+    unsafe { Counted::adopt(p.cast::<I>()) }.ok_or(E_POINTER)
 }
 
 /// Objects that answer QueryInterface as a broken or hostile caller's might, for tests.
@@ -208,5 +226,26 @@ mod tests {
         let got = unsafe { query::<IUnknown>(h2.unk(), &IID_IUNKNOWN) };
         assert_eq!(got.err(), Some(E_NOINTERFACE));
         assert_eq!((h.refs(), h2.refs()), (1, 1));
+    }
+
+    #[test]
+    fn an_owner_is_never_null_and_releases_exactly_what_it_owns() {
+        // SAFETY: NULL is what a failed CoCreateInstance leaves behind: no owner comes of it.
+        assert!(unsafe { Counted::<IUnknown>::adopt(core::ptr::null_mut()) }.is_none());
+        let h = Hostile::new(Answer::OkWithNull);
+        // SAFETY: a valid COM object; the reference added is the one the owner takes over.
+        let owner = unsafe {
+            add_ref(h.unk());
+            Counted::adopt(h.unk())
+        }
+        .unwrap();
+        assert_eq!(h.refs(), 2);
+        let second = owner.clone();
+        assert_eq!((h.refs(), second.as_ptr()), (3, h.unk()));
+        drop(owner);
+        let unknown = second.into_unknown();
+        assert_eq!(h.refs(), 2);
+        drop(unknown);
+        assert_eq!(h.refs(), 1, "the test's own reference is left");
     }
 }

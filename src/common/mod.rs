@@ -14,7 +14,7 @@ use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::IID_IOPCCommon;
 use crate::com::interfaces::IOPCCommonImpl;
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{IUnknown, DWORD, E_INVALIDARG, GUID, HRESULT, LCID, LPCWSTR, LPWSTR, REFIID, S_OK, WCHAR};
 use crate::errors::{
     error_string, OpcServerKind, OpcVendorErrorStringFn, OpcVendorErrorTextFn, VendorCallback, VendorTexts,
@@ -83,28 +83,31 @@ pub struct OpcCommonOptions {
 /// The most locales a server may declare.
 const MAX_LOCALES: u32 = 4096;
 
-/// Every size `sizeof(OpcCommonOptions)` is or was in some version: the struct ends after a whole
-/// field (with or without the padding C adds).
-fn options_sizes() -> [usize; 14] {
-    use core::mem::{offset_of, size_of};
-    type O = OpcCommonOptions;
-    let ptr = size_of::<*const c_void>();
-    [
-        offset_of!(O, server_kind),
-        offset_of!(O, locales),
-        offset_of!(O, locales) + ptr,
-        offset_of!(O, locale_count) + size_of::<u32>(),
-        offset_of!(O, vendor_error_string),
-        offset_of!(O, vendor_error_context),
-        offset_of!(O, client_name_changed),
-        offset_of!(O, client_name_context),
-        offset_of!(O, accept_locale),
-        offset_of!(O, accept_locale_context),
-        offset_of!(O, locale_changed),
-        offset_of!(O, locale_changed_context),
-        offset_of!(O, vendor_error_text),
-        size_of::<O>(),
-    ]
+// SAFETY: repr(C), struct_size first; integers, raw pointers and optional function pointers.
+unsafe impl SizedStruct for OpcCommonOptions {
+    /// Every size the struct ends at in some version: after a whole field (with or without the
+    /// padding C adds).
+    const SIZES: &'static [usize] = {
+        use core::mem::{offset_of, size_of};
+        type O = OpcCommonOptions;
+        const PTR: usize = size_of::<*const c_void>();
+        &[
+            offset_of!(O, server_kind),
+            offset_of!(O, locales),
+            offset_of!(O, locales) + PTR,
+            offset_of!(O, locale_count) + size_of::<u32>(),
+            offset_of!(O, vendor_error_string),
+            offset_of!(O, vendor_error_context),
+            offset_of!(O, client_name_changed),
+            offset_of!(O, client_name_context),
+            offset_of!(O, accept_locale),
+            offset_of!(O, accept_locale_context),
+            offset_of!(O, locale_changed),
+            offset_of!(O, locale_changed_context),
+            offset_of!(O, vendor_error_text),
+            size_of::<O>(),
+        ]
+    };
 }
 
 /// The options as the object keeps them.
@@ -173,7 +176,7 @@ impl Settings {
         };
         // SAFETY: OpcCommonOptions is repr(C), starts with struct_size and holds integers, raw
         // pointers and optional function pointers; the caller vouches for `options`.
-        let o = unsafe { read_sized(options, &options_sizes(), defaults) }?;
+        let o = unsafe { read_sized(options, defaults) }?;
         let kind = OpcServerKind::from_raw(o.server_kind).ok_or(E_INVALIDARG)?;
         if o.locale_count > MAX_LOCALES || (o.locale_count > 0 && o.locales.is_null()) {
             return Err(E_INVALIDARG);
@@ -404,8 +407,12 @@ pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *
 ///
 /// `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
 /// pointer itself is the cheap form: the library recognises its own object and reads the locale
-/// without a QueryInterface (a server can keep that pointer for the session's lifetime). For any other
-/// interface the library asks for IOPCCommon first. `*lcid` receives the locale, or 0 on failure.
+/// without a QueryInterface. For any other interface the library asks for IOPCCommon first (one
+/// QueryInterface and Release). A server that aggregates the session keeps the inner IUnknown from
+/// `OpcCommonCreate` and passes that, not an IOPCCommon pointer: every interface of an aggregated
+/// object but its inner IUnknown counts its references on the outer object, so a kept IOPCCommon
+/// pointer would keep the server object alive for ever. `locale_changed` tells a server of every change
+/// without a call. `*lcid` receives the locale, or 0 on failure.
 /// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
 ///
 /// # Safety

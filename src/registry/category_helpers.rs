@@ -20,7 +20,9 @@ unsafe fn guid_arg(p: *const GUID) -> FfiResult<GUID> {
 /// Creates the component category `catid` with `description` in English (0x409), as the
 /// specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
 /// `description` uses the standard text of an OPC category. On Windows this goes through the Component
-/// Categories Manager (ICatRegister::RegisterCategories) when COM is initialised.
+/// Categories Manager (ICatRegister::RegisterCategories) when COM can create it on the calling thread;
+/// where COM is not initialised (a server registering before CoInitializeEx) the library writes the
+/// same value itself.
 ///
 /// Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
 /// is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
@@ -53,8 +55,9 @@ pub unsafe extern "C" fn OpcCreateComponentCategory(
 }
 
 /// Registers `clsid` as implementing the category `catid` (the specification's
-/// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`; through the Component
-/// Categories Manager on Windows.
+/// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the
+/// Component Categories Manager when COM can create it on the calling thread, else (COM not
+/// initialised there) by creating the key itself.
 ///
 /// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
 ///
@@ -78,7 +81,8 @@ pub unsafe extern "C" fn OpcRegisterClassInCategory(
 }
 
 /// Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
-/// `CLSID\{clsid}\Implemented Categories\{catid}`. Succeeds when it was not registered.
+/// `CLSID\{clsid}\Implemented Categories\{catid}`, through the Component Categories Manager or
+/// directly as `OpcRegisterClassInCategory` does. Succeeds when it was not registered.
 ///
 /// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
 ///

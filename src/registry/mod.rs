@@ -122,6 +122,19 @@ pub trait Registry: Send + Sync {
             .collect()
     }
 
+    /// For each subkey of `parent` that has the value `name`: the subkey's name and the value. What
+    /// unregistration reads to find the classes that name an AppID (`CLSID`, `AppID`);
+    /// implementations may do it faster than one lookup at a time.
+    fn subkey_values(&self, parent: &str, name: &str) -> Vec<(String, RegValue)> {
+        self.subkeys(parent)
+            .into_iter()
+            .filter_map(|sub| {
+                let value = self.value(&format!("{parent}\\{sub}"), name)?;
+                Some((sub, value))
+            })
+            .collect()
+    }
+
     /// The default values of `CLSID\{clsid}` and of its `ProgID` and (when `version_independent`)
     /// `VersionIndependentProgID` subkeys; `None` when the class key does not exist. What
     /// GetClassDetails reads; implementations may read it with fewer lookups.

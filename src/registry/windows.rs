@@ -30,7 +30,7 @@ use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
 
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::interfaces::ICatRegister;
-use crate::com::unknown::{release, IUnknown};
+use crate::com::unknown::Counted;
 use crate::com::{CATEGORYINFO, E_FAIL, GUID, HRESULT};
 
 /// `HRESULT_FROM_WIN32`.
@@ -279,8 +279,9 @@ impl WindowsRegistry {
         }
     }
 
-    /// The Component Categories Manager, when this is the process's own view and COM is initialised.
-    fn cat_register(&self) -> Option<CatRegister> {
+    /// The Component Categories Manager, when this is the process's own view and COM is initialised
+    /// on the calling thread (else `None`: the caller writes the same keys itself).
+    fn cat_register(&self) -> Option<Counted<ICatRegister>> {
         if self.view != 0 {
             return None;
         }
@@ -295,7 +296,12 @@ impl WindowsRegistry {
                 &mut p,
             )
         };
-        (hr >= 0 && !p.is_null()).then_some(CatRegister(p.cast()))
+        if hr < 0 {
+            // CO_E_NOTINITIALIZED without COM; a pointer left behind with a failure is not trusted.
+            return None;
+        }
+        // SAFETY: a successful CoCreateInstance hands over one reference (NULL gives None).
+        unsafe { Counted::adopt(p.cast::<ICatRegister>()) }
     }
 }
 
@@ -385,6 +391,21 @@ impl Registry for WindowsRegistry {
             .collect()
     }
 
+    /// One open of `parent`, then one relative open per subkey, as `scan`.
+    fn subkey_values(&self, parent: &str, name: &str) -> Vec<(String, RegValue)> {
+        let Some(parent_key) = self.open(parent, KEY_READ) else {
+            return Vec::new();
+        };
+        parent_key
+            .subkeys()
+            .into_iter()
+            .filter_map(|sub| {
+                let value = parent_key.open(&sub, KEY_QUERY_VALUE | self.view)?.value(name)?;
+                Some((sub, value))
+            })
+            .collect()
+    }
+
     /// One open of the class key from the root, then relative opens: the fewest registry calls.
     fn class_strings(&self, clsid: &GUID, version_independent: bool) -> Option<ClassStrings> {
         let class = self.open(&class_key(clsid), KEY_READ)?;
@@ -414,7 +435,7 @@ impl Registry for WindowsRegistry {
             *slot = unit;
         }
         // SAFETY: live ICatRegister; one CATEGORYINFO.
-        let hr = unsafe { ICatRegister::RegisterCategories(cats.0, 1, &mut info) };
+        let hr = unsafe { ICatRegister::RegisterCategories(cats.as_ptr(), 1, &mut info) };
         ok(hr)
     }
 
@@ -426,9 +447,9 @@ impl Registry for WindowsRegistry {
         // SAFETY: live ICatRegister; one CATID.
         let hr = unsafe {
             if required {
-                ICatRegister::RegisterClassReqCategories(cats.0, clsid, 1, &mut id)
+                ICatRegister::RegisterClassReqCategories(cats.as_ptr(), clsid, 1, &mut id)
             } else {
-                ICatRegister::RegisterClassImplCategories(cats.0, clsid, 1, &mut id)
+                ICatRegister::RegisterClassImplCategories(cats.as_ptr(), clsid, 1, &mut id)
             }
         };
         ok(hr)
@@ -442,9 +463,9 @@ impl Registry for WindowsRegistry {
         // SAFETY: live ICatRegister; one CATID.
         let hr = unsafe {
             if required {
-                ICatRegister::UnRegisterClassReqCategories(cats.0, clsid, 1, &mut id)
+                ICatRegister::UnRegisterClassReqCategories(cats.as_ptr(), clsid, 1, &mut id)
             } else {
-                ICatRegister::UnRegisterClassImplCategories(cats.0, clsid, 1, &mut id)
+                ICatRegister::UnRegisterClassImplCategories(cats.as_ptr(), clsid, 1, &mut id)
             }
         };
         ok(hr)
@@ -518,16 +539,6 @@ pub(crate) fn module_file_name(module: HMODULE) -> Result<String, HRESULT> {
 
 /// `CLSID_StdComponentCategoriesMgr` {0002E005-0000-0000-C000-000000000046}.
 const CLSID_STD_COMPONENT_CATEGORIES_MGR: GUID = GUID::from_u128(0x0002E005_0000_0000_C000_000000000046);
-
-/// An owned ICatRegister reference.
-struct CatRegister(*mut ICatRegister);
-
-impl Drop for CatRegister {
-    fn drop(&mut self) {
-        // SAFETY: we own one reference.
-        unsafe { release(self.0 as *mut IUnknown) };
-    }
-}
 
 #[cfg(test)]
 mod tests {

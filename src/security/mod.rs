@@ -18,7 +18,7 @@ use std::sync::Mutex;
 
 use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::IID_IUNKNOWN;
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::unknown::query;
 use crate::com::{IUnknown, CLSID, E_INVALIDARG, GUID, HRESULT, LPCWSTR, S_OK};
 
@@ -60,6 +60,12 @@ pub struct OpcSecurityOptions {
     /// remote callers). NULL with a NULL `appid`: COM checks no access list, so everyone who
     /// authenticates at the level may call. Not with `appid`; NULL for `OpcSetProxyBlanket`.
     pub access_sddl: LPCWSTR,
+}
+
+// SAFETY: repr(C), struct_size first; integers and raw pointers.
+unsafe impl SizedStruct for OpcSecurityOptions {
+    /// One version so far.
+    const SIZES: &'static [usize] = &[core::mem::size_of::<OpcSecurityOptions>()];
 }
 
 /// `OpcSecurityOptions::flags`: accept an authentication level below RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
@@ -134,11 +140,9 @@ pub(crate) unsafe fn plan(role: Role, options: *const OpcSecurityOptions) -> Ffi
         appid: ptr::null(),
         access_sddl: ptr::null(),
     };
-    // One version so far.
-    let sizes = [core::mem::size_of::<OpcSecurityOptions>()];
     // SAFETY: repr(C), starts with struct_size, only integers and raw pointers; the caller vouches
     // for `options`.
-    let o = unsafe { read_sized(options, &sizes, defaults) }?;
+    let o = unsafe { read_sized(options, defaults) }?;
     if o.flags & !KNOWN_FLAGS != 0 {
         return Err(E_INVALIDARG.into());
     }

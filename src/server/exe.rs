@@ -33,7 +33,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use super::{registrations, OpcServerClass, ServerClass, MAX_CLASSES};
 use crate::com::ffi::{self, Fail, Hr};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 #[cfg(not(windows))]
 use crate::com::E_NOTIMPL;
 #[cfg(not(windows))]
@@ -159,6 +159,12 @@ pub struct OpcExeServerOptions {
     pub idle_linger_ms: u32,
 }
 
+// SAFETY: repr(C), struct_size first; integers, raw pointers and an optional function pointer.
+unsafe impl SizedStruct for OpcExeServerOptions {
+    /// One version so far.
+    const SIZES: &'static [usize] = &[core::mem::size_of::<OpcExeServerOptions>()];
+}
+
 /// Runs an EXE server (LocalServer32) as its `main`: everything but the server's own objects.
 ///
 /// - `/RegServer` (or `-RegServer`): registers every class with a `registration` (NULL `module_path`:
@@ -249,7 +255,7 @@ unsafe fn read_options(options: *const OpcExeServerOptions) -> Result<OpcExeServ
     };
     // SAFETY: repr(C), starting with struct_size, integers, raw pointers and an optional function
     // pointer; the caller vouches for `options`.
-    let o = unsafe { read_sized(options, &[core::mem::size_of::<OpcExeServerOptions>()], defaults) }?;
+    let o = unsafe { read_sized(options, defaults) }?;
     if o.class_count == 0 || o.class_count > MAX_CLASSES {
         return Err(Fail::Code(E_INVALIDARG));
     }

@@ -27,7 +27,7 @@ use crate::com::ffi::{self, Fail, FfiResult, Hr};
 use crate::com::iids::{IID_ICLASSFACTORY, IID_IUNKNOWN};
 use crate::com::interfaces::{IClassFactoryImpl, IClassFactoryVtbl};
 use crate::com::object::{live_objects, ComClass, ComObject, Delegating, Slot};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{
     IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, CLASS_E_NOAGGREGATION, CLSID, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT,
     REFCLSID, REFIID, S_FALSE, S_OK,
@@ -69,6 +69,12 @@ pub struct OpcServerClass {
     pub registration: *const OpcServerRegistration,
 }
 
+// SAFETY: repr(C), struct_size first; integers, raw pointers and an optional function pointer.
+unsafe impl SizedStruct for OpcServerClass {
+    /// The first version: one size. Fields added later make more.
+    const SIZES: &'static [usize] = &[core::mem::size_of::<OpcServerClass>()];
+}
+
 /// The most classes one table may hold.
 pub(crate) const MAX_CLASSES: u32 = 256;
 
@@ -94,8 +100,6 @@ impl ServerClass {
     /// # Safety
     /// `class` must be non-NULL and valid as documented on OpcServerClass.
     pub(crate) unsafe fn read(class: *const OpcServerClass) -> Result<ServerClass, HRESULT> {
-        // The first version: one size. Fields added later make more.
-        let sizes = [core::mem::size_of::<OpcServerClass>()];
         let defaults = OpcServerClass {
             struct_size: 0,
             clsid: ptr::null(),
@@ -106,7 +110,7 @@ impl ServerClass {
         };
         // SAFETY: OpcServerClass is repr(C), starts with struct_size and holds integers, raw pointers
         // and an optional function pointer; the caller vouches for `class`.
-        let c = unsafe { read_sized(class, &sizes, defaults) }?;
+        let c = unsafe { read_sized(class, defaults) }?;
         // SAFETY: the caller vouches a non-NULL `clsid` is readable.
         let clsid = unsafe { c.clsid.as_ref() }.copied().ok_or(E_INVALIDARG)?;
         let create = c.create.ok_or(E_INVALIDARG)?;

@@ -12,14 +12,14 @@
 //! asks it for IMarshal per call (releasing right after), so the sink never holds a reference to itself.
 
 use core::ffi::c_void;
-use core::ptr::{self, NonNull};
+use core::ptr;
 use std::sync::OnceLock;
 
 use crate::com::ffi::FfiResult;
 use crate::com::interfaces::IMarshalImpl;
 use crate::com::object::{ComClass, ComObject};
 use crate::com::ole32::CoCreateFreeThreadedMarshaler;
-use crate::com::unknown::{query, release};
+use crate::com::unknown::{query, Counted};
 use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, REFIID, S_OK};
 
 pub(crate) use crate::com::interfaces::IMarshal;
@@ -31,19 +31,12 @@ pub(crate) const IID_IMARSHAL: GUID = IMarshal::IID;
 #[derive(Default)]
 pub(crate) struct Ftm(OnceLock<Result<FtmInner, HRESULT>>);
 
-struct FtmInner(NonNull<IUnknown>);
+struct FtmInner(Counted<IUnknown>);
 
-// SAFETY: the free-threaded marshaler is, by definition, callable from any thread.
+// SAFETY: the free-threaded marshaler is, by definition, callable (and released) from any thread.
 unsafe impl Send for FtmInner {}
 // SAFETY: as above.
 unsafe impl Sync for FtmInner {}
-
-impl Drop for FtmInner {
-    fn drop(&mut self) {
-        // SAFETY: the reference CoCreateFreeThreadedMarshaler gave us; the outer releases its inner.
-        unsafe { release(self.0.as_ptr()) };
-    }
-}
 
 /// Objects whose IMarshal slot is backed by an aggregated FTM.
 pub(crate) trait HasFtm: ComClass {
@@ -60,10 +53,15 @@ fn with_ftm<T: HasFtm>(obj: &ComObject<T>, f: impl FnOnce(*mut IMarshal) -> HRES
             let outer = obj.header().controlling_unknown();
             // SAFETY: a valid outer unknown and out-pointer.
             let hr = unsafe { CoCreateFreeThreadedMarshaler(outer.cast(), &mut unk) };
-            match NonNull::new(unk.cast::<IUnknown>()) {
-                Some(p) if hr == S_OK => Ok(FtmInner(p)),
-                _ => Err(if hr == S_OK { E_POINTER } else { hr }),
+            if hr != S_OK {
+                // A pointer left behind with a failure is not trusted, not released.
+                return Err(hr);
             }
+            // SAFETY: the reference CoCreateFreeThreadedMarshaler gave us (the outer releases its
+            // inner as the owner drops).
+            unsafe { Counted::adopt(unk.cast::<IUnknown>()) }
+                .map(FtmInner)
+                .ok_or(E_POINTER)
         });
         let inner = match inner {
             Ok(inner) => inner,

@@ -17,10 +17,8 @@
 //!
 //! Off Windows there are no apartments: the pointer is always held directly.
 
-use core::ptr::NonNull;
-
 use super::interfaces::IOPCShutdown;
-use crate::com::unknown::{add_ref, release};
+use crate::com::unknown::Counted;
 use crate::com::HRESULT;
 
 /// A counted reference to an advised sink's IOPCShutdown, released (or revoked from the GIT) on drop.
@@ -30,7 +28,7 @@ pub(crate) struct SinkRef {
 
 enum Held {
     /// A counted IOPCShutdown pointer used as is, on the threads `home` allows.
-    Direct(NonNull<IOPCShutdown>, Home),
+    Direct(Counted<IOPCShutdown>, Home),
     /// A Global Interface Table cookie; the GIT holds the reference.
     #[cfg(windows)]
     Global(u32),
@@ -85,41 +83,20 @@ impl Home {
 pub(crate) const RPC_E_WRONG_THREAD: HRESULT = 0x8001010E_u32 as HRESULT;
 
 /// A counted IOPCShutdown pointer usable on the current thread, released on drop.
-pub(crate) struct SinkCall(NonNull<IOPCShutdown>);
-
-impl SinkCall {
-    pub(crate) fn as_ptr(&self) -> *mut IOPCShutdown {
-        self.0.as_ptr()
-    }
-
-    /// Gives up the reference to the caller.
-    pub(crate) fn into_raw(self) -> *mut IOPCShutdown {
-        let p = self.0.as_ptr();
-        core::mem::forget(self);
-        p
-    }
-}
-
-impl Drop for SinkCall {
-    fn drop(&mut self) {
-        // SAFETY: this reference was counted for us.
-        unsafe { release(self.0.as_ptr().cast()) };
-    }
-}
+pub(crate) type SinkCall = Counted<IOPCShutdown>;
 
 impl SinkRef {
     /// Takes over `sink`'s reference (the result of the sink's QueryInterface for IOPCShutdown).
     ///
     /// # Safety
     /// `sink` must be a counted IOPCShutdown pointer valid in the calling thread's apartment.
-    pub(crate) unsafe fn adopt(sink: NonNull<IOPCShutdown>) -> SinkRef {
+    pub(crate) unsafe fn adopt(sink: Counted<IOPCShutdown>) -> SinkRef {
         #[cfg(windows)]
         {
             // SAFETY: forwarded from the caller.
             if let Some(cookie) = unsafe { git::register(sink.as_ptr()) } {
-                // The GIT holds its own reference now.
-                // SAFETY: we owned this reference.
-                unsafe { release(sink.as_ptr().cast()) };
+                // The GIT holds its own reference now; ours goes.
+                drop(sink);
                 return SinkRef {
                     held: Held::Global(cookie),
                 };
@@ -132,15 +109,11 @@ impl SinkRef {
 
     /// A counted pointer to the sink that is valid on the calling thread.
     pub(crate) fn get(&self) -> Result<SinkCall, HRESULT> {
-        match self.held {
+        match &self.held {
             Held::Direct(_, home) if !home.allows_here() => Err(RPC_E_WRONG_THREAD),
-            Held::Direct(p, _) => {
-                // SAFETY: `p` is counted by this SinkRef, so it is alive.
-                unsafe { add_ref(p.as_ptr().cast()) };
-                Ok(SinkCall(p))
-            }
+            Held::Direct(p, _) => Ok(p.clone()),
             #[cfg(windows)]
-            Held::Global(cookie) => git::fetch(cookie).map(SinkCall),
+            Held::Global(cookie) => git::fetch(*cookie),
         }
     }
 }
@@ -153,15 +126,12 @@ impl SinkRef {
     }
 }
 
+/// A GIT registration is revoked; a directly held sink is released as its `Counted` drops.
+#[cfg(windows)]
 impl Drop for SinkRef {
     fn drop(&mut self) {
-        match self.held {
-            // SAFETY: the reference adopted in `adopt`.
-            Held::Direct(p, _) => unsafe {
-                release(p.as_ptr().cast());
-            },
-            #[cfg(windows)]
-            Held::Global(cookie) => git::revoke(cookie),
+        if let Held::Global(cookie) = self.held {
+            git::revoke(cookie);
         }
     }
 }
@@ -171,14 +141,14 @@ mod git {
     //! The Global Interface Table (`CLSID_StdGlobalInterfaceTable`), called through its vtable.
 
     use core::ffi::c_void;
-    use core::ptr::{self, NonNull};
+    use core::ptr;
 
     use windows_sys::Win32::System::Com::{CoCreateInstance, CLSCTX_INPROC_SERVER};
 
-    use super::IOPCShutdown;
+    use super::{IOPCShutdown, SinkCall};
     use crate::com::iids::IID_IOPCShutdown;
     use crate::com::interfaces::IGlobalInterfaceTable as Git;
-    use crate::com::unknown::release;
+    use crate::com::unknown::Counted;
     use crate::com::{DWORD, GUID, HRESULT, S_OK};
 
     /// `CLSID_StdGlobalInterfaceTable` {00000323-0000-0000-C000-000000000046}.
@@ -197,14 +167,12 @@ mod git {
                 &mut git,
             )
         };
-        if hr != S_OK || git.is_null() {
-            return Err(if hr == S_OK { crate::com::E_POINTER } else { hr });
+        if hr != S_OK {
+            return Err(hr);
         }
-        let git = git.cast::<Git>();
-        let result = f(git);
-        // SAFETY: CoCreateInstance gave us this reference.
-        unsafe { release(git.cast()) };
-        result
+        // SAFETY: CoCreateInstance gave us this reference (released when `git` drops).
+        let git = unsafe { Counted::adopt(git.cast::<Git>()) }.ok_or(crate::com::E_POINTER)?;
+        f(git.as_ptr())
     }
 
     /// Registers `sink` and returns its cookie, or `None` when the GIT cannot take it.
@@ -226,15 +194,17 @@ mod git {
     }
 
     /// The sink registered under `cookie`, as a counted pointer valid in the calling apartment.
-    pub(super) fn fetch(cookie: u32) -> Result<NonNull<IOPCShutdown>, HRESULT> {
+    pub(super) fn fetch(cookie: u32) -> Result<SinkCall, HRESULT> {
         with_git(|git| {
             let mut p: *mut c_void = ptr::null_mut();
             // SAFETY: `git` is a live GIT; the out-pointer is valid.
             let hr = unsafe { Git::GetInterfaceFromGlobal(git, cookie, &IID_IOPCShutdown, &mut p) };
-            match NonNull::new(p.cast::<IOPCShutdown>()) {
-                Some(p) if hr == S_OK => Ok(p),
-                _ => Err(if hr == S_OK { crate::com::E_POINTER } else { hr }),
+            if hr != S_OK {
+                // A pointer left behind with a failure is not trusted, not released.
+                return Err(hr);
             }
+            // SAFETY: a successful GetInterfaceFromGlobal hands over one reference.
+            unsafe { Counted::adopt(p.cast::<IOPCShutdown>()) }.ok_or(crate::com::E_POINTER)
         })
     }
 

@@ -9,7 +9,7 @@ use crate::com::ffi::{self, Fail, FfiResult, Hr};
 use crate::com::iids::{IID_IOPCShutdown, IID_ICONNECTIONPOINTCONTAINER};
 use crate::com::interfaces::IOPCShutdownImpl;
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
-use crate::com::unknown::{query, release};
+use crate::com::unknown::{query, Counted};
 use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
 
 /// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
@@ -117,7 +117,7 @@ pub unsafe extern "C" fn OpcShutdownSinkCreate(
 ///
 /// # Safety
 /// `server` must be a valid COM interface pointer.
-unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint, HRESULT> {
+unsafe fn shutdown_point(server: *mut IUnknown) -> Result<Counted<IConnectionPoint>, HRESULT> {
     // SAFETY: valid per the caller.
     let container = unsafe { query::<IConnectionPointContainer>(server, &IID_ICONNECTIONPOINTCONTAINER) }?;
     let mut point: *mut IConnectionPoint = ptr::null_mut();
@@ -127,11 +127,12 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<*mut IConnectionPoint,
         ((*(*c).lpVtbl).FindConnectionPoint)(c, &IID_IOPCShutdown, &mut point).get()
     };
     drop(container);
-    if hr < 0 || point.is_null() {
+    if hr < 0 {
         // As with QueryInterface: a pointer left behind with a failure is not trusted, not released.
-        return Err(if hr < 0 { hr } else { E_POINTER });
+        return Err(hr);
     }
-    Ok(point)
+    // SAFETY: a successful FindConnectionPoint hands over one reference (NULL gives None).
+    unsafe { Counted::adopt(point) }.ok_or(E_POINTER)
 }
 
 /// Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
@@ -162,11 +163,10 @@ pub unsafe extern "C" fn OpcShutdownAdvise(server: *mut IUnknown, sink: *mut IUn
         // SAFETY: valid per the caller.
         let point = unsafe { shutdown_point(server.as_ptr()) }?;
         let mut cookie: DWORD = 0;
-        // SAFETY: a counted IConnectionPoint pointer, released right after.
+        // SAFETY: a counted IConnectionPoint pointer, released as `point` drops.
         let hr = unsafe {
-            let hr = ((*(*point).lpVtbl).Advise)(point, sink.as_ptr(), &mut cookie).get();
-            release(point.cast());
-            hr
+            let p = point.as_ptr();
+            ((*(*p).lpVtbl).Advise)(p, sink.as_ptr(), &mut cookie).get()
         };
         if hr >= 0 {
             out.write(cookie);
@@ -188,11 +188,10 @@ pub unsafe extern "C" fn OpcShutdownUnadvise(server: *mut IUnknown, cookie: DWOR
         let server = ffi::in_ptr(server)?;
         // SAFETY: valid per the caller.
         let point = unsafe { shutdown_point(server.as_ptr()) }?;
-        // SAFETY: a counted IConnectionPoint pointer, released right after.
+        // SAFETY: a counted IConnectionPoint pointer, released as `point` drops.
         Ok(unsafe {
-            let hr = ((*(*point).lpVtbl).Unadvise)(point, cookie).get();
-            release(point.cast());
-            hr
+            let p = point.as_ptr();
+            ((*(*p).lpVtbl).Unadvise)(p, cookie).get()
         })
     })
 }

@@ -27,7 +27,7 @@ use core::ptr;
 
 use crate::com::ffi::{self, Hr};
 use crate::com::object::ComObject;
-use crate::com::{IUnknown, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
+use crate::com::{IUnknown, E_INVALIDARG, LPCWSTR, REFIID, S_FALSE, S_OK, ULONG};
 use bounded::{read_notify_options, OpcShutdownNotifyOptions};
 use client::NUL_STRING;
 use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
@@ -38,7 +38,9 @@ use server::{read_options, with_object, OpcShutdown, OpcShutdownOptions};
 /// With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
 /// object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
 /// as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
-/// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to.
+/// it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to. A server object
+/// that cannot aggregate (windows-rs objects, for one) and forwards instead names itself as the
+/// container with `OpcShutdownCreateEx` (`OpcShutdownOptions::container`).
 ///
 /// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
 /// `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
@@ -57,11 +59,13 @@ pub unsafe extern "C" fn OpcShutdownCreate(outer: *mut IUnknown, riid: REFIID, p
 /// As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
 ///
 /// Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
-/// `OpcShutdownOptions` (4, or 8 as of this version).
+/// `OpcShutdownOptions` (4, 8, or `sizeof` as of this version: 16 on 64-bit, 12 on 32-bit), and for
+/// a `container` together with an `outer` object.
 ///
 /// # Safety
-/// `options` must be NULL or point at `options->struct_size` readable bytes; otherwise as for
-/// `OpcShutdownCreate`.
+/// `options` must be NULL or point at `options->struct_size` readable bytes, and its `container`
+/// NULL or a valid IUnknown that outlives every reference to the connection point (they count on
+/// it); otherwise as for `OpcShutdownCreate`.
 #[no_mangle]
 pub unsafe extern "C" fn OpcShutdownCreateEx(
     options: *const OpcShutdownOptions,
@@ -73,8 +77,12 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
         // SAFETY: forwarded from the caller's contract.
         Ok(unsafe {
             ComObject::<OpcShutdown>::create(outer, riid, ppv, |binder| {
-                let limit = read_options(options)?;
-                Ok(OpcShutdown::build(binder, limit))
+                let settings = read_options(options)?;
+                if !outer.is_null() && !settings.container.is_null() {
+                    // An aggregated object's container is its outer object.
+                    return Err(E_INVALIDARG);
+                }
+                Ok(OpcShutdown::build(binder, settings))
             })
         })
     })
@@ -84,7 +92,8 @@ pub unsafe extern "C" fn OpcShutdownCreateEx(
 /// each advised sink with `reason` (a NUL string when `reason` is NULL).
 ///
 /// `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
-/// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it. The sinks are taken
+/// IUnknown from `OpcShutdownCreate`, or the server object that aggregates it or forwards to it (the
+/// server's IConnectionPointContainer hands out the shutdown object's connection point). The sinks are taken
 /// from a snapshot made under the object's lock and called without holding it, one after the other
 /// on the calling thread, so a sink may Unadvise, release the server or call back in from inside
 /// ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
@@ -141,25 +150,36 @@ pub unsafe extern "C" fn OpcShutdownNotifyEx(
 }
 
 /// Asks every client advised on `shutdown` to disconnect, as `OpcShutdownNotify`, but waits for them
-/// only until a deadline: every advised sink is called at the same time, each on a worker thread of
-/// its own, so a slow or hung client delays nobody else, and the call returns when every sink has
-/// answered or passed its deadline (`options`: the whole notification's deadline, by default
-/// OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS, and one per sink; NULL gives the defaults).
+/// only until a deadline: the advised sinks are called at the same time on worker threads, so a slow
+/// or hung client delays nobody else, and the call returns when every sink has answered or passed its
+/// deadline (`options`: the whole notification's deadline, by default OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS,
+/// and one per sink; NULL gives the defaults).
 ///
 /// The counts (each pointer may be NULL; all are set, to 0 on failure, before anything else happens)
 /// say what became of every sink advised when the call started: `*pNotified` accepted the request,
 /// `*pFailed` refused it or could not be reached (a client process that died), `*pTimedOut` had not
-/// answered at its deadline. A timed-out call may still return later on its worker thread; the worker
-/// holds its own reference to the sink and its own copy of `reason`, so the caller may release the
-/// server and free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow`
-/// says S_FALSE.
+/// answered at its deadline, or was not called because its call from an earlier notification has not
+/// returned yet. A timed-out call may still return later on its worker thread; the worker holds its
+/// own reference to the sink and its own copy of `reason`, so the caller may release the server and
+/// free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow` says
+/// S_FALSE.
 ///
-/// A sink unadvised before its call starts is not called (a sink unadvised by another sink during
-/// the notification may already have been called: they run at the same time). On Windows each
-/// worker calls from the multithreaded apartment, fetching the sink from the Global Interface Table;
-/// a sink advised from a single-threaded apartment that the GIT could not take (no IOPCShutdown
-/// proxy/stub registered) cannot be called from there and counts as failed. Call it from a thread
-/// that has initialised COM.
+/// Threads: the workers are one pool for the whole process, shared by every notification of every
+/// shutdown object, of at most OPC_SHUTDOWN_MAX_NOTIFY_THREADS threads, whatever the clients do; a
+/// worker ends when no call is waiting. A sink is never called again while its earlier call has not
+/// returned, so a hung client holds one thread however often the server notifies. Every other sink
+/// is called, also when hung clients hold every worker: a call waiting while every worker is inside a
+/// call, when all those calls are past their deadlines (OPC_SHUTDOWN_MAX_NOTIFY_THREADS clients hung
+/// at once) or its own deadline has passed, or when no worker thread can be created, is made by the
+/// calling thread itself, one after the other. Only then can this call last longer than its
+/// deadline: it waits for each call it makes itself, so a client that hangs there holds it.
+///
+/// A sink unadvised before its call starts is not called and not counted (a sink unadvised by another
+/// sink during the notification may already have been called: they run at the same time). On Windows
+/// each worker calls from the multithreaded apartment (the calling thread from its own), fetching the
+/// sink from the Global Interface Table; a sink advised from a single-threaded apartment that the GIT
+/// could not take (no IOPCShutdown proxy/stub registered) cannot be called from there and counts as
+/// failed. Call it from a thread that has initialised COM.
 ///
 /// Returns S_OK when every sink accepted the request (also when none is advised), S_FALSE when at
 /// least one failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of

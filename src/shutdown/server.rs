@@ -8,8 +8,15 @@
 //! reference to its point. Enumerators of connection points hold counted references (and so keep
 //! the server alive while they exist); nothing the server holds refers back to them. Sinks are held
 //! by the connections; a sink that holds the server is the client's business (it must Unadvise).
+//!
+//! A server object that forwards to this object instead of aggregating it names itself as the
+//! container (`OpcShutdownOptions::container`): the point's AddRef/Release then count on that server
+//! object, which holds this object, so holding the point keeps both alive; this object holds no
+//! reference to the server (the pointer is not counted), so again there is no cycle.
 
 use core::ffi::c_void;
+use core::ptr::NonNull;
+use core::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::apartment::SinkRef;
@@ -18,7 +25,7 @@ use super::interfaces::{
     IEnumConnectionPoints, IEnumConnectionPointsVtbl, IEnumConnections, IEnumConnectionsVtbl, IOPCShutdown,
     CONNECTDATA,
 };
-use crate::com::enumerator::{Counted, Element, EnumInterface, Enumerator};
+use crate::com::enumerator::{Element, EnumInterface, Enumerator, Listed};
 use crate::com::ffi::{self, FfiResult};
 use crate::com::iids::{
     IID_IOPCShutdown, IID_ICONNECTIONPOINT, IID_ICONNECTIONPOINTCONTAINER, IID_IENUMCONNECTIONPOINTS,
@@ -28,11 +35,11 @@ use crate::com::interfaces::{
     IConnectionPointContainerImpl, IConnectionPointImpl, IEnumConnectionPointsImpl, IEnumConnectionsImpl, IUnknownImpl,
 };
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
-use crate::com::options::read_sized;
-use crate::com::unknown::{add_ref, query};
+use crate::com::options::{read_sized, SizedStruct};
+use crate::com::unknown::{add_ref, query, release, Counted};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
-    E_NOINTERFACE, E_UNEXPECTED, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
+    E_NOINTERFACE, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
 };
 
 /// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
@@ -46,15 +53,95 @@ pub struct OpcShutdownOptions {
     /// The most sinks that may be advised at the same time; 0 means the default, 1 (the
     /// specification requires no more). Advise beyond it fails with CONNECT_E_ADVISELIMIT.
     pub advise_limit: u32,
+    /// For a server object that forwards to the shutdown object instead of aggregating it (it
+    /// implements IConnectionPointContainer itself and passes FindConnectionPoint and
+    /// EnumConnectionPoints on): the server object (any of its interfaces), so that the connection
+    /// point names it as its container. NULL: the container is the shutdown object itself, or the
+    /// outer object when it is aggregated (then this must be NULL).
+    ///
+    /// The connection point then counts its references on this object, as an interface of an
+    /// aggregated object counts on its outer object: whoever holds the connection point (or an
+    /// enumerator of it) keeps the server object alive, and through it the shutdown object;
+    /// IConnectionPoint::GetConnectionPointContainer returns the server object's
+    /// IConnectionPointContainer (QueryInterface on it), so the container has the server's COM
+    /// identity. The shutdown object holds no reference to the server object (no cycle). So the
+    /// server object keeps its own reference to the shutdown object (which may be any of its
+    /// interfaces) until it is destroyed, and hands none of the shutdown object's own interfaces to
+    /// its clients: they count only on the shutdown object, which could outlive the server.
+    pub container: *mut IUnknown,
+}
+
+/// What a server set in its `OpcShutdownOptions`.
+pub(crate) struct ShutdownSettings {
+    pub(crate) advise_limit: u32,
+    pub(crate) container: *mut IUnknown,
+}
+
+// SAFETY: repr(C), struct_size first, integers and a raw pointer.
+unsafe impl SizedStruct for OpcShutdownOptions {
+    /// `struct_size` alone, with `advise_limit`, and with `container`.
+    const SIZES: &'static [usize] = &[
+        core::mem::offset_of!(OpcShutdownOptions, advise_limit),
+        core::mem::offset_of!(OpcShutdownOptions, container),
+        core::mem::size_of::<OpcShutdownOptions>(),
+    ];
 }
 
 /// The advise limit when the server sets none.
 pub(crate) const DEFAULT_ADVISE_LIMIT: u32 = 1;
 
+/// One advised sink, as the connection and the notifications under way share it.
+pub(crate) struct Advised {
+    sink: SinkRef,
+    /// Cleared when the connection ends (Unadvise, or the object's end): a call that has not
+    /// started by then is not made.
+    connected: AtomicBool,
+    /// Set while a bounded notification's call to the sink is waiting for a thread or under way, so
+    /// that no other bounded notification calls it again meanwhile (see `bounded`).
+    calling: AtomicBool,
+}
+
+impl Advised {
+    /// The sink, to be fetched for the calling thread.
+    pub(crate) fn sink(&self) -> &SinkRef {
+        &self.sink
+    }
+
+    /// Whether the sink is still advised.
+    pub(crate) fn is_connected(&self) -> bool {
+        self.connected.load(Ordering::Acquire)
+    }
+
+    /// Claims the sink for one call; false when a call to it is already waiting or under way.
+    pub(crate) fn claim_call(&self) -> bool {
+        self.calling
+            .compare_exchange(false, true, Ordering::AcqRel, Ordering::Acquire)
+            .is_ok()
+    }
+
+    /// Gives back the claim of `claim_call` once the call has returned (or was not made).
+    pub(crate) fn end_call(&self) {
+        self.calling.store(false, Ordering::Release);
+    }
+
+    /// Whether a call claimed by `claim_call` has not ended yet.
+    #[cfg(test)]
+    pub(crate) fn is_calling(&self) -> bool {
+        self.calling.load(Ordering::Acquire)
+    }
+}
+
 /// One advised sink.
 struct Connection {
     cookie: DWORD,
-    sink: Arc<SinkRef>,
+    sink: Arc<Advised>,
+}
+
+impl Drop for Connection {
+    fn drop(&mut self) {
+        // A notification may still hold the sink: from now on it does not start a call to it.
+        self.sink.connected.store(false, Ordering::Release);
+    }
 }
 
 /// The connections of the point and the cookie the next Advise gets.
@@ -69,9 +156,22 @@ struct Connections {
 pub struct OpcShutdown {
     container: Slot,
     point: Slot,
+    /// The server object a forwarding server named as the point's container (not counted: see
+    /// `OpcShutdownOptions::container`).
+    named_container: Option<NamedContainer>,
     advise_limit: u32,
     connections: Mutex<Connections>,
 }
+
+/// The server object named as the container, which the connection point's references count on.
+struct NamedContainer(NonNull<IUnknown>);
+
+// SAFETY: the server object is a COM object of the server's, which the connection point only AddRefs,
+// Releases and asks for IConnectionPointContainer, as any client thread may (a server object shared
+// with the library's free-threaded objects is called from any thread).
+unsafe impl Send for NamedContainer {}
+// SAFETY: as above; the pointer is never changed.
+unsafe impl Sync for NamedContainer {}
 
 impl ComClass for OpcShutdown {
     fn interface(&self, iid: &GUID) -> Option<&Slot> {
@@ -91,14 +191,15 @@ pub(crate) struct Notified {
 }
 
 impl OpcShutdown {
-    pub(crate) fn build(binder: &crate::com::object::Binder, advise_limit: u32) -> OpcShutdown {
+    pub(crate) fn build(binder: &crate::com::object::Binder, settings: ShutdownSettings) -> OpcShutdown {
         OpcShutdown {
             container: binder.slot(&CONTAINER_VTBL),
             point: binder.slot(&POINT_VTBL),
-            advise_limit: if advise_limit == 0 {
+            named_container: NonNull::new(settings.container).map(NamedContainer),
+            advise_limit: if settings.advise_limit == 0 {
                 DEFAULT_ADVISE_LIMIT
             } else {
-                advise_limit
+                settings.advise_limit
             },
             connections: Mutex::new(Connections {
                 next_cookie: 1,
@@ -131,7 +232,11 @@ impl OpcShutdown {
     /// For each connection, whether its sink went through the Global Interface Table.
     #[cfg(all(test, windows))]
     pub(crate) fn held_globally(&self) -> Vec<bool> {
-        self.connections().list.iter().map(|c| c.sink.is_global()).collect()
+        self.connections()
+            .list
+            .iter()
+            .map(|c| c.sink.sink.is_global())
+            .collect()
     }
 
     /// IConnectionPoint::Advise after the argument checks.
@@ -140,12 +245,16 @@ impl OpcShutdown {
     /// `sink` must be a valid COM interface pointer.
     unsafe fn advise(&self, sink: *mut IUnknown) -> Result<DWORD, HRESULT> {
         // SAFETY: `sink` is valid per the caller.
-        let shutdown = unsafe { query::<IOPCShutdown>(sink, &IID_IOPCShutdown) }
-            .map_err(|_| CONNECT_E_CANNOTCONNECT)?
-            .into_raw();
+        let shutdown =
+            unsafe { query::<IOPCShutdown>(sink, &IID_IOPCShutdown) }.map_err(|_| CONNECT_E_CANNOTCONNECT)?;
         // Registering in the GIT may call into the sink, so it happens before the lock is taken.
         // SAFETY: a counted IOPCShutdown pointer of the calling apartment.
-        let sink = Arc::new(unsafe { SinkRef::adopt(shutdown) });
+        let held = unsafe { SinkRef::adopt(shutdown) };
+        let sink = Arc::new(Advised {
+            sink: held,
+            connected: AtomicBool::new(true),
+            calling: AtomicBool::new(false),
+        });
         let mut connections = self.connections();
         if connections.list.len() >= self.advise_limit as usize || connections.next_cookie == 0 {
             drop(connections);
@@ -174,16 +283,12 @@ impl OpcShutdown {
     }
 
     /// The advised sinks, as counted references taken under the lock.
-    pub(super) fn snapshot(&self) -> Vec<(DWORD, Arc<SinkRef>)> {
+    pub(super) fn snapshot(&self) -> Vec<(DWORD, Arc<Advised>)> {
         self.connections()
             .list
             .iter()
             .map(|c| (c.cookie, c.sink.clone()))
             .collect()
-    }
-
-    pub(super) fn is_connected(&self, cookie: DWORD) -> bool {
-        self.connections().list.iter().any(|c| c.cookie == cookie)
     }
 
     /// Calls ShutdownRequest on every advised sink, never holding the lock during a call. Just before
@@ -195,11 +300,11 @@ impl OpcShutdown {
     /// `reason` must point at a NUL-terminated UTF-16 string.
     pub(crate) unsafe fn notify(&self, reason: LPCWSTR) -> Notified {
         let mut result = Notified::default();
-        for (cookie, sink) in self.snapshot() {
-            if !self.is_connected(cookie) {
+        for (_, advised) in self.snapshot() {
+            if !advised.is_connected() {
                 continue;
             }
-            let ok = match sink.get() {
+            let ok = match advised.sink().get() {
                 Ok(call) => {
                     let p = call.as_ptr();
                     // SAFETY: `p` is a counted IOPCShutdown pointer valid on this thread; no lock is held.
@@ -213,7 +318,7 @@ impl OpcShutdown {
             } else {
                 result.failed += 1;
             }
-            // `sink` (and `call`) drop here, outside any lock.
+            // `advised` (and `call`) drop here, outside any lock.
         }
         result
     }
@@ -223,11 +328,11 @@ impl OpcShutdown {
     /// sink held directly, asked for from another thread, gives RPC_E_WRONG_THREAD).
     fn enum_connections(&self) -> Result<*mut IEnumConnections, HRESULT> {
         let mut data = Vec::new();
-        for (cookie, sink) in self.snapshot() {
+        for (cookie, advised) in self.snapshot() {
             // On failure `data` drops, releasing the sinks fetched so far.
-            let call = sink.get()?;
-            // SAFETY: `into_raw` gives up a counted, non-NULL pointer that the element now owns.
-            let sink = unsafe { Counted::adopt(call.into_raw().cast::<IUnknown>()) }.ok_or(E_UNEXPECTED)?;
+            let call = advised.sink().get()?;
+            // SAFETY: fetched for this thread's apartment, to which COM confines the enumerator.
+            let sink = unsafe { Listed::new(call.into_unknown()) };
             data.push(EnumeratedConnection { sink, cookie });
         }
         Ok(Enumerator::<ConnectionsEnum>::create(data.into(), 0))
@@ -236,7 +341,7 @@ impl OpcShutdown {
 
 /// One connection of an IEnumConnections snapshot: the sink (one counted reference) and its cookie.
 pub(crate) struct EnumeratedConnection {
-    sink: Counted<IUnknown>,
+    sink: Listed<IUnknown>,
     cookie: DWORD,
 }
 
@@ -275,7 +380,7 @@ static ENUM_POINTS_VTBL: IEnumConnectionPointsVtbl =
 crate::enum_impl!(IEnumConnectionPointsImpl, ConnectionPointsEnum);
 
 impl EnumInterface for ConnectionPointsEnum {
-    type Item = Counted<IConnectionPoint>;
+    type Item = Listed<IConnectionPoint>;
     type Iface = IEnumConnectionPoints;
     type Vtbl = IEnumConnectionPointsVtbl;
     const IIDS: &'static [GUID] = &[IID_IENUMCONNECTIONPOINTS];
@@ -303,12 +408,12 @@ impl IConnectionPointContainerImpl for OpcShutdown {
         let out = unsafe { ffi::out(ppEnum) }?;
         let point = this.point_ptr();
         // The snapshot's reference to the point counts on the server, which it keeps alive.
-        // SAFETY: `point` is a slot of the live object; the element takes over the reference added.
+        // SAFETY: `point` is a slot of the live, free-threaded object; the element takes over the
+        // reference added.
         let item = unsafe {
             add_ref(point.cast());
-            Counted::adopt(point)
-        }
-        .expect("slot pointers are never NULL");
+            Listed::new(Counted::adopt(point).expect("slot pointers are never NULL"))
+        };
         out.write(Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0));
         Ok(S_OK)
     }
@@ -328,9 +433,22 @@ impl IConnectionPointContainerImpl for OpcShutdown {
 }
 
 /// The IUnknown of the connection point: its own identity, answering IUnknown and IConnectionPoint
-/// only (a connection point is not its container); AddRef and Release count on the controlling
-/// unknown, as for every other slot.
+/// only (a connection point is not its container); AddRef and Release count on the server object a
+/// forwarding server named as the container, otherwise on the controlling unknown, as for every other
+/// slot.
 struct PointUnknown;
+
+impl PointUnknown {
+    /// The named container of the object whose point `this` is, if any.
+    ///
+    /// # Safety
+    /// `this` must be the point slot of a live shutdown object.
+    unsafe fn named_container(this: *mut IUnknown) -> Option<*mut IUnknown> {
+        // SAFETY: per the caller; the reference is not used after this returns.
+        let obj = unsafe { ComObject::<OpcShutdown>::from_interface(this) };
+        obj.named_container.as_ref().map(|c| c.0.as_ptr())
+    }
+}
 
 impl IUnknownImpl for PointUnknown {
     unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> FfiResult {
@@ -346,13 +464,25 @@ impl IUnknownImpl for PointUnknown {
     }
 
     unsafe fn AddRef(this: *mut IUnknown) -> u32 {
-        // SAFETY: forwarded: `this` is a slot of a live object.
-        unsafe { Delegating::AddRef(this) }
+        // SAFETY: `this` is the point slot of a live object; a named container outlives every
+        // reference to the point (they count on it).
+        unsafe {
+            match Self::named_container(this) {
+                Some(container) => add_ref(container),
+                None => Delegating::AddRef(this),
+            }
+        }
     }
 
     unsafe fn Release(this: *mut IUnknown) -> u32 {
-        // SAFETY: forwarded; the caller gives up its reference.
-        unsafe { Delegating::Release(this) }
+        // SAFETY: as for AddRef; the caller gives up its reference. The container is read before
+        // the Release, which may end the server object and with it this one.
+        unsafe {
+            match Self::named_container(this) {
+                Some(container) => release(container),
+                None => Delegating::Release(this),
+            }
+        }
     }
 }
 
@@ -369,6 +499,16 @@ impl IConnectionPointImpl for OpcShutdown {
     ) -> FfiResult {
         // SAFETY: the caller vouches a non-NULL `ppCPC` is writable.
         let out = unsafe { ffi::out(ppCPC) }?;
+        if let Some(server) = &this.named_container {
+            // The server object that forwards to this one: its own IConnectionPointContainer. Never
+            // this object's container, which counts on this object only (see OpcShutdownOptions).
+            // SAFETY: the named container is alive while the point is referenced (the reference
+            // this call is made through counts on it).
+            let found =
+                unsafe { query::<IConnectionPointContainer>(server.0.as_ptr(), &IID_ICONNECTIONPOINTCONTAINER) }?;
+            out.write(found.into_raw().as_ptr());
+            return Ok(S_OK);
+        }
         let header = this.header();
         if header.is_aggregated() {
             // The container is whatever the server object (the controlling unknown) answers for
@@ -411,25 +551,27 @@ impl IConnectionPointImpl for OpcShutdown {
     }
 }
 
-/// Reads the caller's options, honouring `struct_size`; returns the advise limit.
+/// Reads the caller's options, honouring `struct_size`.
 ///
 /// # Safety
 /// `options` must be NULL or point at `struct_size` readable bytes laid out as OpcShutdownOptions.
-pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<u32, HRESULT> {
-    let sizes = [
-        core::mem::offset_of!(OpcShutdownOptions, advise_limit),
-        core::mem::size_of::<OpcShutdownOptions>(),
-    ];
+pub(crate) unsafe fn read_options(options: *const OpcShutdownOptions) -> Result<ShutdownSettings, HRESULT> {
     let defaults = OpcShutdownOptions {
         struct_size: 0,
         advise_limit: 0,
+        container: core::ptr::null_mut(),
     };
-    // SAFETY: OpcShutdownOptions is repr(C), starts with struct_size and holds only integers; the
-    // caller vouches for `options`.
-    Ok(unsafe { read_sized(options, &sizes, defaults) }?.advise_limit)
+    // SAFETY: OpcShutdownOptions is repr(C), starts with struct_size and holds integers and a raw
+    // pointer; the caller vouches for `options`.
+    let o = unsafe { read_sized(options, defaults) }?;
+    Ok(ShutdownSettings {
+        advise_limit: o.advise_limit,
+        container: o.container,
+    })
 }
 
-/// Finds the shutdown object behind any interface of it (or of a server aggregating it) and runs
+/// Finds the shutdown object behind any interface of it, of a server aggregating it, or of a server
+/// forwarding to it (whose own IConnectionPointContainer hands out its connection point), and runs
 /// `f` on it while holding a reference, so a sink releasing the server cannot pull it away.
 ///
 /// # Safety
@@ -445,10 +587,29 @@ pub(crate) unsafe fn with_object<R>(
     let container = unsafe { query::<IConnectionPointContainer>(shutdown, &IID_ICONNECTIONPOINTCONTAINER) }
         .map_err(|_| E_INVALIDARG)?;
     // SAFETY: a valid IConnectionPointContainer pointer, ours or not, counted while `f` runs.
-    let result = match unsafe { from_container(container.as_ptr()) } {
+    if let Some(obj) = unsafe { from_container(container.as_ptr()) } {
+        let result = f(obj);
+        drop(container);
+        return Ok(result);
+    }
+    // A server's own container: is its IOPCShutdown connection point ours?
+    let mut point: *mut IConnectionPoint = core::ptr::null_mut();
+    // SAFETY: a valid container; the out-pointer is writable.
+    let hr =
+        unsafe { IConnectionPointContainer::FindConnectionPoint(container.as_ptr(), &IID_IOPCShutdown, &mut point) };
+    drop(container);
+    if hr < 0 {
+        // A pointer left behind with a failure is neither used nor released.
+        return Err(E_INVALIDARG);
+    }
+    // SAFETY: a successful FindConnectionPoint hands over one reference (none when NULL).
+    let point = unsafe { Counted::adopt(point) }.ok_or(E_INVALIDARG)?;
+    // SAFETY: a valid IConnectionPoint pointer, ours or not; the reference keeps the object alive
+    // while `f` runs (it counts on the server, which holds the shutdown object, or on the object).
+    let result = match unsafe { ComObject::<OpcShutdown>::from_foreign(point.as_ptr(), &POINT_VTBL) } {
         Some(obj) => Ok(f(obj)),
         None => Err(E_INVALIDARG),
     };
-    drop(container);
+    drop(point);
     result
 }

@@ -149,6 +149,7 @@ impl Server {
         let options = limit.map(|advise_limit| OpcShutdownOptions {
             struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
             advise_limit,
+            container: ptr::null_mut(),
         });
         let mut p: *mut c_void = ptr::null_mut();
         let opts = options.as_ref().map_or(ptr::null(), |o| o as *const OpcShutdownOptions);
@@ -240,6 +241,7 @@ fn creation_follows_the_standard_protocol() {
         let bad = OpcShutdownOptions {
             struct_size: 2,
             advise_limit: 1,
+            container: ptr::null_mut(),
         };
         assert_eq!(
             OpcShutdownCreateEx(&bad, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
@@ -248,6 +250,7 @@ fn creation_follows_the_standard_protocol() {
         let bad = OpcShutdownOptions {
             struct_size: 64,
             advise_limit: 1,
+            container: ptr::null_mut(),
         };
         assert_eq!(
             OpcShutdownCreateEx(&bad, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
@@ -1105,4 +1108,532 @@ fn a_sink_that_never_returns_does_not_hold_the_notification() {
     // deadline too, never be miscounted).
     assert!(timed_out >= 1 && notified + timed_out == 2);
     assert_eq!((good.calls(), stuck.calls()), (1, 1));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The bounded notification's threads: one call per sink at a time, a pool of bounded size, and every
+// healthy sink called however many sinks hang.
+
+use super::bounded::Pool;
+use std::sync::{Arc, Condvar};
+
+/// Holds the sinks that call `wait` inside ShutdownRequest until the test opens it.
+#[derive(Clone, Default)]
+struct Gate(Arc<(Mutex<bool>, Condvar)>);
+
+impl Gate {
+    fn wait(&self) {
+        let (open, changed) = &*self.0;
+        let mut open = open.lock().unwrap();
+        while !*open {
+            open = changed.wait(open).unwrap();
+        }
+    }
+    fn open(&self) {
+        *self.0 .0.lock().unwrap() = true;
+        self.0 .1.notify_all();
+    }
+}
+
+/// A sink that hangs in ShutdownRequest until `gate` opens.
+fn hung_sink(gate: &Gate) -> Box<MockSink> {
+    let sink = MockSink::new(true, S_OK);
+    let gate = gate.clone();
+    sink.set_hook(move || gate.wait());
+    sink
+}
+
+/// A sink that answers at once and records the thread each call came on.
+fn healthy_sink() -> (Box<MockSink>, Arc<Mutex<Vec<std::thread::ThreadId>>>) {
+    let sink = MockSink::new(true, S_OK);
+    let threads = Arc::new(Mutex::new(Vec::new()));
+    let record = threads.clone();
+    sink.set_hook(move || record.lock().unwrap().push(std::thread::current().id()));
+    (sink, threads)
+}
+
+impl Server {
+    /// `OpcShutdownNotifyBounded` through `pool`: the result and the counts notified, failed, timed out.
+    fn notify_in(&self, pool: &'static Pool, options: &OpcShutdownNotifyOptions) -> (HRESULT, u32, u32, u32) {
+        // SAFETY: a live container of ours.
+        let obj = unsafe { from_container(self.0) }.unwrap();
+        // SAFETY: the options are valid; the reason is a NUL string.
+        let bounds = unsafe { super::bounded::read_notify_options(options) }.unwrap();
+        // SAFETY: a NUL-terminated reason.
+        let c = unsafe { obj.notify_bounded_in(pool, w("").as_ptr(), bounds) };
+        let hr = if c.failed == 0 && c.timed_out == 0 {
+            S_OK
+        } else {
+            S_FALSE
+        };
+        (hr, c.notified, c.failed, c.timed_out)
+    }
+    /// For each advised sink, whether a bounded notification's call to it has not ended yet.
+    fn calling(&self) -> Vec<bool> {
+        // SAFETY: a live container of ours.
+        let obj = unsafe { from_container(self.0) }.unwrap();
+        obj.snapshot().iter().map(|(_, advised)| advised.is_calling()).collect()
+    }
+}
+
+/// A client hung in ShutdownRequest is called once, however often the server notifies: while that
+/// call has not returned, each notification counts it as timed out without calling it (and so
+/// without another thread), and still calls the healthy sink. Once the call returns, the next
+/// notification calls it again.
+#[test]
+fn a_sink_whose_call_has_not_returned_is_not_called_again() {
+    let server = Server::with_limit(Some(2));
+    let point = server.point();
+    let gate = Gate::default();
+    let hung = hung_sink(&gate);
+    let (healthy, _) = healthy_sink();
+    for s in [&hung, &healthy] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    let options = bounds(20, 0);
+    let rounds = if cfg!(miri) { 3 } else { 10 };
+    for round in 0..rounds {
+        // The healthy sink's last call has ended (answered in time it has; on a loaded machine, or
+        // under Miri's clock, it may have missed the deadline and still be ending).
+        wait_until(|| !server.calling()[1]);
+        let (hr, notified, failed, timed_out) = server.notify_bounded(ptr::null(), &options);
+        // The healthy sink answers at once; on a loaded machine it may still miss the 20 ms.
+        assert_eq!((hr, failed), (S_FALSE, 0), "round {round}");
+        assert!(timed_out >= 1 && notified + timed_out == 2, "round {round}");
+        assert_eq!((hung.calls(), healthy.calls()), (1, round + 1), "round {round}");
+    }
+    gate.open();
+    wait_until(|| server.calling() == [false, false]);
+    assert_eq!(
+        server.notify_bounded(ptr::null(), &bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0)),
+        (S_OK, 2, 0, 0)
+    );
+    assert_eq!((hung.calls(), healthy.calls()), (2, rounds + 1));
+    drop(point);
+    drop(server);
+    wait_until(|| hung.refs() == 1 && healthy.refs() == 1);
+}
+
+/// With every worker of a pool held by a hung client, a pool of two threads still calls every other
+/// sink: the notifying thread makes the call itself. The pool never has more than its two workers.
+#[test]
+fn hung_sinks_that_hold_every_worker_do_not_keep_a_healthy_sink_from_its_call() {
+    static TWO: Pool = Pool::new(2);
+    let gate = Gate::default();
+    let (hung1, hung2) = (hung_sink(&gate), hung_sink(&gate));
+    let (healthy, threads) = healthy_sink();
+    let (first, second) = (Server::with_limit(Some(3)), Server::new());
+    let (p1, p2) = (first.point(), second.point());
+    for s in [&hung1, &hung2, &healthy] {
+        assert_eq!(p1.advise(s.unk()).0, S_OK);
+    }
+    let (other, other_threads) = healthy_sink();
+    assert_eq!(p2.advise(other.unk()).0, S_OK);
+    let options = bounds(20, 0);
+    // The two workers take the hung sinks; the healthy one is made by this thread once they are
+    // past their deadline (so after it, and it may count as timed out).
+    let (_, notified, failed, timed_out) = first.notify_in(&TWO, &options);
+    assert!(failed == 0 && notified <= 1 && notified + timed_out == 3);
+    assert_eq!((hung1.calls(), hung2.calls(), healthy.calls()), (1, 1, 1));
+    // Again, and on another object: the hung sinks are not called again, the workers are still held
+    // by them, the healthy sinks are made here at once.
+    for _ in 0..3 {
+        let (_, _, failed, timed_out) = first.notify_in(&TWO, &options);
+        assert!(failed == 0 && timed_out >= 2);
+        let (_, _, failed, _) = second.notify_in(&TWO, &options);
+        assert_eq!(failed, 0);
+    }
+    assert_eq!(
+        (hung1.calls(), hung2.calls(), healthy.calls(), other.calls()),
+        (1, 1, 4, 3)
+    );
+    let me = std::thread::current().id();
+    assert!(threads
+        .lock()
+        .unwrap()
+        .iter()
+        .chain(other_threads.lock().unwrap().iter())
+        .all(|t| *t == me));
+    assert_eq!(TWO.workers(), (2, 2));
+    gate.open();
+    wait_until(|| TWO.workers().1 == 0);
+    drop((p1, p2, first, second));
+    for s in [&hung1, &hung2, &healthy, &other] {
+        assert_eq!(s.refs(), 1);
+    }
+}
+
+/// When no worker thread can be had at all (here a pool of none, as when the system refuses to
+/// create threads), every sink is still called, on the notifying thread, one after the other.
+#[test]
+fn without_worker_threads_the_notifying_thread_calls_every_sink() {
+    static NONE: Pool = Pool::new(0);
+    let server = Server::with_limit(Some(3));
+    let point = server.point();
+    let (good, threads) = healthy_sink();
+    let bad = MockSink::new(true, E_FAIL);
+    let (good2, threads2) = healthy_sink();
+    for s in [&good, &bad, &good2] {
+        assert_eq!(point.advise(s.unk()).0, S_OK);
+    }
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0);
+    assert_eq!(server.notify_in(&NONE, &options), (S_FALSE, 2, 1, 0));
+    assert_eq!((good.calls(), bad.calls(), good2.calls()), (1, 1, 1));
+    let me = std::thread::current().id();
+    assert_eq!((threads.lock().unwrap()[0], threads2.lock().unwrap()[0]), (me, me));
+    assert_eq!(NONE.workers(), (0, 0));
+    drop(point);
+    drop(server);
+    for s in [&good, &bad, &good2] {
+        assert_eq!(s.refs(), 1);
+    }
+}
+
+/// A call waiting for a worker is not made when its sink is unadvised meanwhile (here by the sink
+/// whose call holds the only worker), and is then in no count.
+#[test]
+fn a_sink_unadvised_while_its_call_waits_for_a_worker_is_not_called() {
+    static ONE: Pool = Pool::new(1);
+    let server = Arc::new(Server::with_limit(Some(2)));
+    let point = server.point();
+    let first = MockSink::new(true, S_OK);
+    let second = MockSink::new(true, S_OK);
+    assert_eq!(point.advise(first.unk()).0, S_OK);
+    let (hr, cookie) = point.advise(second.unk());
+    assert_eq!(hr, S_OK);
+    let target = Arc::clone(&server);
+    first.set_hook(move || {
+        let p = target.point();
+        assert_eq!(p.unadvise(cookie), S_OK);
+    });
+    let options = bounds(OPC_SHUTDOWN_NO_TIMEOUT, 0);
+    assert_eq!(server.notify_in(&ONE, &options), (S_OK, 1, 0, 0));
+    assert_eq!((first.calls(), second.calls()), (1, 0));
+    first.set_hook(|| {});
+    wait_until(|| ONE.workers().1 == 0);
+    drop(point);
+    drop(server);
+    assert_eq!((first.refs(), second.refs()), (1, 1));
+}
+
+// ---------------------------------------------------------------------------------------------
+// A server object that forwards to the shutdown object instead of aggregating it, naming itself as
+// the connection point's container (`OpcShutdownOptions::container`).
+
+use crate::com::interfaces::{IConnectionPointContainerVtbl, IUnknownVtbl};
+use core::sync::atomic::{AtomicBool, AtomicPtr};
+
+/// A server object written by hand, as a windows-rs or C++ server is: its own IUnknown (the identity)
+/// and IConnectionPointContainer, whose FindConnectionPoint and EnumConnectionPoints pass the call on
+/// to the shutdown object it keeps. Counts its references; releases the shutdown object when the last
+/// one goes (its memory stays, owned by the test, so the test can look at it afterwards).
+#[repr(C)]
+struct Forwarding {
+    unk: &'static IUnknownVtbl,
+    cpc: &'static IConnectionPointContainerVtbl,
+    refs: AtomicU32,
+    destroyed: AtomicBool,
+    /// The shutdown object's own IConnectionPointContainer (counted on the shutdown object).
+    shutdown: AtomicPtr<IConnectionPointContainer>,
+}
+
+static FORWARDING_UNK: IUnknownVtbl = IUnknownVtbl {
+    QueryInterface: fwd_qi,
+    AddRef: fwd_add_ref,
+    Release: fwd_release,
+};
+
+static FORWARDING_CPC: IConnectionPointContainerVtbl = IConnectionPointContainerVtbl {
+    QueryInterface: fwd_cpc_qi,
+    AddRef: fwd_cpc_add_ref,
+    Release: fwd_cpc_release,
+    EnumConnectionPoints: fwd_enum_points,
+    FindConnectionPoint: fwd_find_point,
+};
+
+/// The server behind its IUnknown (the first field).
+unsafe fn fwd(this: *mut IUnknown) -> &'static Forwarding {
+    // SAFETY: only Forwarding objects present these vtables; the test keeps them alive.
+    unsafe { &*(this as *const Forwarding) }
+}
+
+/// The server behind its IConnectionPointContainer (the second field).
+unsafe fn fwd_of_cpc(this: *mut IConnectionPointContainer) -> &'static Forwarding {
+    // SAFETY: as above; `cpc` sits one pointer after the start.
+    unsafe { &*(this.cast::<u8>().sub(core::mem::offset_of!(Forwarding, cpc)) as *const Forwarding) }
+}
+
+unsafe extern "system" fn fwd_qi(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: the caller passes valid pointers.
+        unsafe {
+            let s = fwd(this);
+            *ppv = ptr::null_mut();
+            let found: *mut c_void = if *riid == IID_IUNKNOWN {
+                this.cast()
+            } else if *riid == IID_ICONNECTIONPOINTCONTAINER {
+                // From `this`, whose provenance is the whole object's.
+                this.cast::<u8>().add(core::mem::offset_of!(Forwarding, cpc)).cast()
+            } else {
+                return E_NOINTERFACE;
+            };
+            s.refs.fetch_add(1, Ordering::SeqCst);
+            *ppv = found;
+            S_OK
+        }
+    })
+}
+
+unsafe extern "system" fn fwd_add_ref(this: *mut IUnknown) -> Crossed<ULONG> {
+    // SAFETY: as above.
+    Crossed::from_c(|| unsafe { fwd(this) }.refs.fetch_add(1, Ordering::SeqCst) + 1)
+}
+
+unsafe extern "system" fn fwd_release(this: *mut IUnknown) -> Crossed<ULONG> {
+    Crossed::from_c(|| {
+        // SAFETY: as above.
+        let s = unsafe { fwd(this) };
+        let before = s.refs.fetch_sub(1, Ordering::SeqCst);
+        assert!(before > 0, "Release without a reference");
+        if before == 1 {
+            // The server object's end: it lets go of the shutdown object.
+            s.destroyed.store(true, Ordering::SeqCst);
+            let shutdown = s.shutdown.swap(ptr::null_mut(), Ordering::SeqCst);
+            if !shutdown.is_null() {
+                // SAFETY: the reference the server kept.
+                unsafe { release(shutdown.cast()) };
+            }
+        }
+        before - 1
+    })
+}
+
+unsafe extern "system" fn fwd_cpc_qi(this: *mut IConnectionPointContainer, riid: REFIID, ppv: *mut *mut c_void) -> Hr {
+    // SAFETY: the IUnknown methods of every interface are the object's.
+    unsafe { fwd_qi((fwd_of_cpc(this) as *const Forwarding).cast_mut().cast(), riid, ppv) }
+}
+
+unsafe extern "system" fn fwd_cpc_add_ref(this: *mut IConnectionPointContainer) -> Crossed<ULONG> {
+    // SAFETY: as above.
+    unsafe { fwd_add_ref((fwd_of_cpc(this) as *const Forwarding).cast_mut().cast()) }
+}
+
+unsafe extern "system" fn fwd_cpc_release(this: *mut IConnectionPointContainer) -> Crossed<ULONG> {
+    // SAFETY: as above.
+    unsafe { fwd_release((fwd_of_cpc(this) as *const Forwarding).cast_mut().cast()) }
+}
+
+unsafe extern "system" fn fwd_enum_points(
+    this: *mut IConnectionPointContainer,
+    pp: *mut *mut IEnumConnectionPoints,
+) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: the shutdown object is alive while the server is; the caller's pointer is passed on.
+        unsafe {
+            let shutdown = fwd_of_cpc(this).shutdown.load(Ordering::SeqCst);
+            IConnectionPointContainer::EnumConnectionPoints(shutdown, pp)
+        }
+    })
+}
+
+unsafe extern "system" fn fwd_find_point(
+    this: *mut IConnectionPointContainer,
+    riid: REFIID,
+    pp: *mut *mut IConnectionPoint,
+) -> Hr {
+    Crossed::from_c(|| {
+        // SAFETY: as above.
+        unsafe {
+            let shutdown = fwd_of_cpc(this).shutdown.load(Ordering::SeqCst);
+            IConnectionPointContainer::FindConnectionPoint(shutdown, riid, pp)
+        }
+    })
+}
+
+impl Forwarding {
+    /// A server object with one reference (the test's); `create_shutdown` gives it its shutdown
+    /// object (once the box has its place: the pointers handed out come from it).
+    fn new() -> Box<Forwarding> {
+        Box::new(Forwarding {
+            unk: &FORWARDING_UNK,
+            cpc: &FORWARDING_CPC,
+            refs: AtomicU32::new(1),
+            destroyed: AtomicBool::new(false),
+            shutdown: AtomicPtr::new(ptr::null_mut()),
+        })
+    }
+    /// Creates the shutdown object, which names this server as its container.
+    fn create_shutdown(&self) {
+        let options = OpcShutdownOptions {
+            struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
+            advise_limit: 0,
+            container: self.unk(),
+        };
+        let mut p: *mut c_void = ptr::null_mut();
+        // SAFETY: valid arguments; the server outlives every reference to the connection point.
+        let hr = unsafe { OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_ICONNECTIONPOINTCONTAINER, &mut p) };
+        assert_eq!(hr, S_OK);
+        self.shutdown.store(p.cast(), Ordering::SeqCst);
+    }
+    fn unk(&self) -> *mut IUnknown {
+        self as *const Forwarding as *mut IUnknown
+    }
+    fn refs(&self) -> u32 {
+        self.refs.load(Ordering::SeqCst)
+    }
+}
+
+/// QueryInterface(IID_IUnknown) on `p`, released at once: the object's identity.
+fn identity(p: *mut IUnknown) -> *mut c_void {
+    let mut id: *mut c_void = ptr::null_mut();
+    // SAFETY: a live object.
+    unsafe {
+        assert_eq!(query_interface(p, &IID_IUNKNOWN, &mut id), S_OK);
+        release(id.cast());
+    }
+    id
+}
+
+/// The connection point of a forwarding server names the server as its container (COM identity),
+/// counts on it, and keeps it alive: a client holding only the point still gets the server back, and
+/// the server (with the shutdown object) goes when the point is released.
+#[test]
+fn a_forwarding_server_is_the_container_of_its_connection_point() {
+    let objects = crate::com::object::live_objects();
+    let server = Forwarding::new();
+    server.create_shutdown();
+    assert_eq!(server.refs(), 1, "the shutdown object holds no reference to the server");
+    // SAFETY: live objects; every reference obtained is released.
+    unsafe {
+        let mut p: *mut c_void = ptr::null_mut();
+        assert_eq!(
+            query_interface(server.unk(), &IID_ICONNECTIONPOINTCONTAINER, &mut p),
+            S_OK
+        );
+        let cpc = p.cast::<IConnectionPointContainer>();
+        let mut cp: *mut IConnectionPoint = ptr::null_mut();
+        assert_eq!(
+            IConnectionPointContainer::FindConnectionPoint(cpc, &IID_IOPCShutdown, &mut cp),
+            S_OK
+        );
+        assert_eq!(server.refs(), 3, "the connection point counts on the server");
+
+        let mut back: *mut IConnectionPointContainer = ptr::null_mut();
+        assert_eq!(((*(*cp).lpVtbl).GetConnectionPointContainer)(cp, &mut back), S_OK);
+        assert_eq!(back, cpc, "the server's own container");
+        assert_eq!(identity(back.cast()), server.unk().cast());
+        release(back.cast());
+
+        // Enumerated connection points count on the server too.
+        let mut points: *mut IEnumConnectionPoints = ptr::null_mut();
+        assert_eq!(IConnectionPointContainer::EnumConnectionPoints(cpc, &mut points), S_OK);
+        let (mut got, mut fetched): (*mut IConnectionPoint, ULONG) = (ptr::null_mut(), 0);
+        assert_eq!(IEnumConnectionPoints::Next(points, 1, &mut got, &mut fetched), S_OK);
+        assert_eq!((got, fetched), (cp, 1));
+        release(got.cast());
+        release(points.cast());
+        assert_eq!(server.refs(), 3);
+
+        // The helpers and the notifications take the server object.
+        let sink = MockSink::new(true, S_OK);
+        let mut cookie = 0;
+        assert_eq!(OpcShutdownAdvise(server.unk(), sink.unk(), &mut cookie).get(), S_OK);
+        let (mut n, mut f) = (99, 99);
+        assert_eq!(
+            OpcShutdownNotifyEx(server.unk(), w("Bye").as_ptr(), &mut n, &mut f).get(),
+            S_OK
+        );
+        assert_eq!((n, f, sink.calls()), (1, 0, 1));
+
+        // The client lets go of everything but the connection point: the server stays.
+        release(cpc.cast());
+        release(server.unk());
+        assert_eq!(server.refs(), 1);
+        assert!(!server.destroyed.load(Ordering::SeqCst));
+        assert_eq!(((*(*cp).lpVtbl).GetConnectionPointContainer)(cp, &mut back), S_OK);
+        assert_eq!(identity(back.cast()), server.unk().cast());
+        release(back.cast());
+        assert_eq!(sink.refs(), 2, "still advised");
+
+        // The last reference to the point is the server's last: it goes, and the shutdown object
+        // with it.
+        release(cp.cast());
+        assert!(server.destroyed.load(Ordering::SeqCst));
+        assert_eq!(sink.refs(), 1);
+        assert_eq!(crate::com::object::live_objects(), objects);
+    }
+}
+
+/// The container's options: only without an outer object, every size of the struct, and a named
+/// container that is no IConnectionPointContainer gets its failure passed on.
+#[test]
+fn a_named_container_is_checked() {
+    let sink = MockSink::new(true, S_OK);
+    let mut options = OpcShutdownOptions {
+        struct_size: core::mem::size_of::<OpcShutdownOptions>() as u32,
+        advise_limit: 0,
+        container: sink.unk(),
+    };
+    let mut p: *mut c_void = core::ptr::null_mut::<c_void>().wrapping_byte_add(1);
+    // SAFETY: valid arguments throughout; every object made is released.
+    unsafe {
+        // With an outer object the container is the outer object: naming another is refused.
+        let outer = MockSink::new(false, S_OK);
+        assert_eq!(
+            OpcShutdownCreateEx(&options, outer.unk(), &IID_IUNKNOWN, &mut p),
+            E_INVALIDARG
+        );
+        assert!(p.is_null());
+        assert_eq!(outer.refs(), 1);
+
+        // Each version's size; nothing between.
+        let ptr_size = core::mem::size_of::<*mut c_void>();
+        assert_eq!(
+            <super::server::OpcShutdownOptions as crate::com::options::SizedStruct>::SIZES,
+            [4, 8, 8 + ptr_size]
+        );
+        for (size, want) in [
+            (4, S_OK),
+            (8, S_OK),
+            (8 + ptr_size as u32, S_OK),
+            (12 + ptr_size as u32, E_INVALIDARG),
+        ] {
+            options.struct_size = size;
+            assert_eq!(
+                OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
+                want,
+                "{size}"
+            );
+            if want == S_OK {
+                release(p.cast());
+            }
+        }
+        // 64-bit: 12 cuts the pointer in half.
+        if ptr_size == 8 {
+            options.struct_size = 12;
+            assert_eq!(
+                OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_IUNKNOWN, &mut p),
+                E_INVALIDARG
+            );
+        }
+
+        // The sink as "container": it has no IConnectionPointContainer.
+        options.struct_size = core::mem::size_of::<OpcShutdownOptions>() as u32;
+        assert_eq!(
+            OpcShutdownCreateEx(&options, ptr::null_mut(), &IID_ICONNECTIONPOINTCONTAINER, &mut p),
+            S_OK
+        );
+        let server = Server(p.cast());
+        let point = server.point();
+        assert_eq!(sink.refs(), 2, "the point counts on the named container");
+        let mut back = core::ptr::null_mut::<IConnectionPointContainer>().wrapping_byte_add(1);
+        assert_eq!(
+            ((*(*point.0).lpVtbl).GetConnectionPointContainer)(point.0, &mut back).get(),
+            E_NOINTERFACE
+        );
+        assert!(back.is_null());
+        drop(point);
+        drop(server);
+    }
+    assert_eq!(sink.refs(), 1);
 }

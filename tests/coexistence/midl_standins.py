@@ -8,7 +8,9 @@ declare the categories as the Foundation's IDL does; each header is then given t
 output that a program including it beside opccomn/opccomn.h can see, and widl's own additions are
 taken out. docs/header-coexistence.md lists the traits; check() asserts each one, so a stand-in that
 lost a trait fails the coexistence stage instead of passing it for the wrong reason. widl's own
-headers are left in OUT_DIR/widl (the stage includes its opccomn.h first to test OPCCOMN_FOREIGN_UUIDOF).
+output, the headers and *_i.c as widl writes them, is left in OUT_DIR/widl: what mingw users who
+compile the Foundation's IDL with widl include, which the stage tests as well (check() asserts its
+trait: a __CRT_UUID_DECL for every interface).
 
 Usage: midl_standins.py ROOT OUT_DIR WIDL_INCLUDE_DIR   (runs x86_64-w64-mingw32-widl)
 """
@@ -217,6 +219,15 @@ def check(out):
     for iface in ["IOPCShutdown", "IOPCCommon", "IOPCServerList", "IOPCEnumGUID", "IOPCServerList2"]:
         if f"EXTERN_C const IID IID_{iface};" not in h or f"#ifndef __{iface}_INTERFACE_DEFINED__" not in h:
             problems.append(f"opccomn.h lacks {iface}")
+    # widl's own output declares __uuidof for every interface (what makes it differ from MIDL's).
+    for stem, names in [("opccomn", ["IOPCShutdown", "IOPCCommon", "IOPCServerList", "IOPCEnumGUID", "IOPCServerList2"]),
+                        ("opcda", ["CATID_OPCDAServer20"]), ("opc_ae", ["OPCEventServerCATID"])]:
+        h = (out / "widl" / f"{stem}.h").read_text()
+        for name in names:
+            if f"__CRT_UUID_DECL({name}," not in h:
+                problems.append(f"widl/{stem}.h lacks __CRT_UUID_DECL({name})")
+        if "MIDL_DEFINE_GUID(IID," not in (out / "widl" / f"{stem}_i.c").read_text():
+            problems.append(f"widl/{stem}_i.c defines no IID")
     if problems:
         sys.exit("midl_standins: " + "; ".join(problems))
 
@@ -230,6 +241,8 @@ def main():
         (out / "widl").mkdir(exist_ok=True)
         subprocess.run(["x86_64-w64-mingw32-widl", f"-I{widl_inc}", f"-I{out}", "-h", "-o",
                         str(out / "widl" / f"{stem}.h"), str(out / f"{stem}.idl")], check=True)
+        subprocess.run(["x86_64-w64-mingw32-widl", f"-I{widl_inc}", f"-I{out}", "-u", "-o",
+                        str(out / "widl" / f"{stem}_i.c"), str(out / f"{stem}.idl")], check=True)
         return (out / "widl" / f"{stem}.h").read_text()
 
     opccomn_idl = (root / "idl/opccomn.idl").read_text()

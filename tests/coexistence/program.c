@@ -4,7 +4,8 @@
    the IIDs, every category, error codes and, in C++, __uuidof of the OPC Common interfaces. Built as C
    and C++, with and without CINTERFACE / COBJMACROS, with -Wall -Wextra -pedantic-errors -Werror;
    linked against the static library or the DLL's import library, with and without the Foundation's
-   *_i.c files; run under Wine it checks the values the linker bound. */
+   *_i.c files; run under Wine it checks the values the linker bound. The same with the headers as
+   widl writes them (scripts/test-coexistence.sh passes their directory first). */
 #if OURS_FIRST
 #include <opccomn/opccomn.h>
 #include <opccomn.h>
@@ -40,6 +41,18 @@
 #define CALL0(p, iface, m) (p)->lpVtbl->m(p)
 #define CALL(p, iface, m, ...) (p)->lpVtbl->m(p, __VA_ARGS__)
 #define RIID(x) OPCCOMN_RIID(x)
+#endif
+
+#if defined(__cplusplus) && !defined(CINTERFACE) && __cplusplus >= 201703L && defined(__MINGW32__)
+/* C++17: mingw's __uuidof is a constant expression, whichever header declared the interface (MIDL's,
+   widl's or this library's), and for every other type (IUnknown) after opccomn's header too. */
+static_assert(__uuidof(IOPCCommon).Data1 == 0xF31DFDE2u && __uuidof(IOPCCommon).Data4[7] == 0xFB, "IOPCCommon");
+static_assert(__uuidof(IOPCShutdown).Data1 == 0xF31DFDE1u, "IOPCShutdown");
+static_assert(__uuidof(IOPCServerList).Data1 == 0x13486D50u, "IOPCServerList");
+static_assert(__uuidof(IOPCEnumGUID).Data1 == 0x55C382C8u, "IOPCEnumGUID");
+static_assert(__uuidof(IOPCServerList2).Data1 == 0x9DD0B56Cu, "IOPCServerList2");
+static_assert(__uuidof(IOPCCommon *).Data1 == 0xF31DFDE2u, "IOPCCommon *");
+static_assert(__uuidof(IUnknown).Data4[0] == 0xC0 && __uuidof(IUnknown).Data4[7] == 0x46, "IUnknown");
 #endif
 
 static int same(const GUID *a, unsigned int d1, unsigned short d2, unsigned short d3) {
@@ -82,7 +95,7 @@ int main(void) {
     failures += OPC_S_NODATA != (HRESULT)0x40041002L;
 #if defined(__cplusplus) && !defined(CINTERFACE)
     /* mingw g++ and clang know the interfaces' IIDs through __uuidof, whichever header declared them
-       first (MIDL's output declares none; opccomn/opccomn.h does). */
+       first (MIDL's output declares none; widl's and opccomn/opccomn.h do). */
     failures += !same(&__uuidof(IOPCCommon), 0xF31DFDE2, 0x07B6, 0x11D2);
     failures += !same(&__uuidof(IOPCShutdown), 0xF31DFDE1, 0x07B6, 0x11D2);
     failures += !same(&__uuidof(IOPCServerList), 0x13486D50, 0x4821, 0x11D2);

@@ -5,11 +5,13 @@ Usage: check_report.py FORMAT REPORT EXIT_CODE [EXPECTED_FAILED_CHECK [EXPECTED_
 
 FORMAT is json, junit or text. The report must parse (JSON: json.load; JUnit: an XML parser, with
 the structure JUnit consumers read), list every check once with a section of the specification, and
-its failed checks must be exactly EXPECTED_FAILED_CHECK (none when it is absent or "-"), and its
+name the checker's version as Cargo.toml has it (JSON and text: "0.3.0-dev" for a version in
+development, never only its numbers), its failed checks must be exactly EXPECTED_FAILED_CHECK (none when it is absent or "-"), and its
 warnings exactly EXPECTED_WARNING (likewise). EXIT_CODE is the checker's: 1 when a check failed, 0
 otherwise (warnings do not fail). Prints one line saying what was seen.
 """
 import json
+import pathlib
 import re
 import sys
 import xml.etree.ElementTree as ET
@@ -25,8 +27,20 @@ def fail(msg):
     sys.exit(1)
 
 
+def package_version():
+    """The version of Cargo.toml's [package] table."""
+    manifest = (pathlib.Path(__file__).resolve().parents[2] / "Cargo.toml").read_text()
+    package = manifest.split("[package]", 1)[1].split("\n[", 1)[0]
+    return re.search(r'^version = "([^"]+)"', package, re.M).group(1)
+
+
+version = package_version()
+
+
 if fmt == "json":
     report = json.loads(text)
+    if report.get("version") != version:
+        fail(f"version {report.get('version')!r}, expected {version!r} (Cargo.toml)")
     checks = report["checks"]
     ids = [c["id"] for c in checks]
     failed = [c["id"] for c in checks if c["status"] == "failed"]
@@ -60,6 +74,8 @@ elif fmt == "junit":
             fail(f"testcase {c.get('name')!r} names no section")
 else:
     lines = text.splitlines()
+    if not lines or not lines[0].startswith(f"opccomn-check {version}: "):
+        fail(f"first line {lines[0] if lines else ''!r}, expected 'opccomn-check {version}: ...' (Cargo.toml)")
     rows = [re.match(r"^(PASS|FAIL|WARN|N/A |SKIP)  ([0-9][0-9., ]*?) +([a-z][a-z0-9.-]*) ", l) for l in lines[1:-1]]
     if not all(rows):
         fail("a check line without a status, a section and a check name")

@@ -12,7 +12,12 @@
 // without its OPC key, a call that never returns, a NULL out-pointer written through, and an Alarms &
 // Events server answering with Data Access texts (a warning, not a failure); number 16 is an Alarms &
 // Events server without a defect; 17 and 18 register their AppID with AuthenticationLevel 1 (NONE) and
-// 2 (CONNECT), set explicitly, as installers wrote it before Windows' DCOM hardening (KB5004442).
+// 2 (CONNECT), set explicitly, as installers wrote it before Windows' DCOM hardening (KB5004442); 19
+// and 20 a connection point that cannot name its container (E_POINTER and NULL) or names another
+// object (the library's own container, as a server that forwards without aggregating gets it); 21 and
+// 22 error texts that only restate the code ("HRESULT 0xC0040001") or are one text for every code; 23
+// a server that lists no English locale (German only), whose texts cannot be compared with the
+// published ones (a warning, not a failure).
 #include <windows.h>
 #include <objbase.h>
 #include <ocidl.h>
@@ -48,6 +53,11 @@ enum Defect {
     kAlarmsEvents = 16,         // an Alarms & Events server without a defect
     kAppIdLevelNone = 17,       // AppID AuthenticationLevel 1 (RPC_C_AUTHN_LEVEL_NONE), given explicitly
     kAppIdLevelConnect = 18,    // AppID AuthenticationLevel 2 (RPC_C_AUTHN_LEVEL_CONNECT), given explicitly
+    kPointContainerFails = 19,  // GetConnectionPointContainer: E_POINTER and NULL
+    kPointContainerOther = 20,  // GetConnectionPointContainer: the library's container, not the server
+    kErrorTextCode = 21,        // every text "HRESULT 0x<code>"
+    kErrorTextSame = 22,        // one text for every code
+    kNoEnglishLocale = 23,      // only de-DE listed: German texts
 };
 const int kDefect = OPCCOMN_DEFECT;
 
@@ -122,6 +132,15 @@ public:
             memcpy(*ppString, unknown, sizeof unknown);
             return S_OK;
         }
+        if ((kDefect == kErrorTextCode || kDefect == kErrorTextSame) && hr == S_OK && ppString && *ppString) {
+            WCHAR text[64] = L"The server could not complete the operation.";  // whatever the code
+            if (kDefect == kErrorTextCode) swprintf(text, 64, L"HRESULT 0x%08lX", static_cast<unsigned long>(dwError));
+            size_t size = (wcslen(text) + 1) * sizeof(WCHAR);
+            CoTaskMemFree(*ppString);
+            *ppString = static_cast<LPWSTR>(CoTaskMemAlloc(size));
+            if (!*ppString) return E_OUTOFMEMORY;
+            memcpy(*ppString, text, size);
+        }
         return hr;
     }
     HRESULT STDMETHODCALLTYPE SetClientName(LPCWSTR szName) override {
@@ -149,9 +168,7 @@ public:
     ULONG STDMETHODCALLTYPE AddRef() override;
     ULONG STDMETHODCALLTYPE Release() override;
     HRESULT STDMETHODCALLTYPE GetConnectionInterface(IID *piid) override { return inner->GetConnectionInterface(piid); }
-    HRESULT STDMETHODCALLTYPE GetConnectionPointContainer(IConnectionPointContainer **pp) override {
-        return inner->GetConnectionPointContainer(pp);
-    }
+    HRESULT STDMETHODCALLTYPE GetConnectionPointContainer(IConnectionPointContainer **pp) override;
     HRESULT STDMETHODCALLTYPE Advise(IUnknown *sink, DWORD *pdwCookie) override {
         if (kDefect == kAdviseRawQi && sink && pdwCookie) {
             void *p = nullptr;
@@ -252,6 +269,7 @@ private:
         static const LCID locales[] = {0x0409, 0x0407};
         options.locales = locales;
         options.locale_count = 2;
+        if (kDefect == kNoEnglishLocale) options.locales = locales + 1, options.locale_count = 1;
         HRESULT hr = OpcCommonCreate(&options, nullptr, IID_IOPCCommon, reinterpret_cast<void **>(&m_common.inner));
         if (SUCCEEDED(hr))
             hr = OpcShutdownCreate(nullptr, IID_IConnectionPointContainer, reinterpret_cast<void **>(&m_container.inner));
@@ -270,6 +288,20 @@ ULONG ContainerWrap::Release() { return outer->Release(); }
 // The connection point keeps the server object alive, as COM's rules want.
 ULONG PointWrap::AddRef() { return outer->AddRef(); }
 ULONG PointWrap::Release() { return outer->Release(); }
+
+// The container is the server object; the library's connection point would name its own container
+// object, which this server only forwards to.
+HRESULT PointWrap::GetConnectionPointContainer(IConnectionPointContainer **pp) {
+    if (kDefect == kPointContainerFails) {
+        if (pp) *pp = nullptr;
+        return E_POINTER;  // as if the point kept no way back to its container
+    }
+    if (kDefect == kPointContainerOther) return inner->GetConnectionPointContainer(pp);
+    if (!pp) return E_POINTER;
+    *pp = &outer->m_container;
+    outer->AddRef();
+    return S_OK;
+}
 
 HRESULT ContainerWrap::FindConnectionPoint(REFIID riid, IConnectionPoint **ppCP) {
     if (!ppCP) return E_POINTER;

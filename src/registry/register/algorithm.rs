@@ -1,8 +1,9 @@
 //! The register / unregister algorithm: write the key list while recording it, and take back exactly
 //! what the record says (see the module documentation).
 
+use super::app_id;
 use super::description::ServerDescription;
-use super::ledger::{read_ledger, Entry, Recorder, LEDGER};
+use super::ledger::{read_ledger, write_ledger, Entry, Recorder, LEDGER};
 use crate::com::{GUID, HRESULT};
 use crate::registry::categories::standard_description;
 use crate::registry::path::RegPath;
@@ -22,6 +23,8 @@ pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), H
     let ledger = read_ledger(reg, &module_key).unwrap_or_default();
     let first = ledger.is_empty();
     let mut rec = Recorder::new(reg, ledger);
+    // Values of an AppID other classes name: recorded back to before the first of them.
+    rec.origins = app_id::inherited_origins(reg, d)?;
     if first && reg.key_exists(&d.other_module_key()) {
         rec.ledger.push(Entry::OtherServer);
     }
@@ -48,8 +51,7 @@ pub(crate) fn register(regs: &Registries, d: &ServerDescription) -> Result<(), H
         rec.note_missing_keys(&format!("{}\\{catid}", class_categories_key(&d.clsid, true)));
         reg.register_class_category(&d.clsid, catid, true)?;
     }
-    let text: Vec<String> = rec.ledger.iter().map(Entry::encode).collect();
-    reg.set_value(&module_key, LEDGER, &RegValue::Sz(text.join(";")))
+    write_ledger(reg, &module_key, &rec.ledger)
 }
 
 /// True when a class other than `except` implements `catid` in `reg`.
@@ -122,6 +124,8 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
         };
         ledger.retain(|e| matches!(e, Entry::Replaced(..)) || e.key().is_some_and(|k| !shared(k)));
     }
+    // An AppID another class still names stays whole; its record goes to that class.
+    let ledger = app_id::hand_over_shared(reg, d, ledger, expected)?;
     for entry in ledger.iter().rev() {
         if !entry.still_written(reg, expected) {
             continue;

@@ -2,7 +2,7 @@
 //! the [`ServerDescription`] the rest of the registration code works with.
 
 use crate::com::ffi::{self, Fail, FfiResult};
-use crate::com::options::read_sized;
+use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{CATID, CLSID, E_INVALIDARG, GUID, HRESULT, LPCWSTR};
 use crate::registry::sddl::SecurityDescriptor;
 use crate::registry::MAX_NAME_UNITS;
@@ -78,7 +78,9 @@ pub struct OpcServerRegistration {
     /// For Data Access 1.0 servers only: the vendor name written to `<ProgID>\OPC\Vendor`, by which
     /// OpcEnum and DA 1.0 clients find servers registered the old way.
     pub da10_vendor: LPCWSTR,
-    /// The AppID (a GUID) of a local server's DCOM settings, or NULL for none.
+    /// The AppID (a GUID) of a local server's DCOM settings, or NULL for none. Classes that name one
+    /// AppID share it (COM applies it to their process): it holds what the latest registration wrote,
+    /// and stays until the last of them is unregistered; give them the same settings.
     pub app_id: *const CLSID,
     /// `RunAs` of the AppID ("Interactive User", an account), or NULL.
     pub app_id_run_as: LPCWSTR,
@@ -109,19 +111,22 @@ pub struct OpcServerRegistration {
     pub app_id_authentication_level: u32,
 }
 
-/// The `struct_size` values accepted: every size at which a version of OpcServerRegistration ends,
-/// after its last field, with or without C's trailing padding.
-fn registration_sizes() -> [usize; 4] {
-    use core::mem::{offset_of, size_of};
-    type R = OpcServerRegistration;
-    [
-        // Version 1: up to `flags`.
-        offset_of!(R, flags) + size_of::<u32>(),
-        offset_of!(R, app_id_access_permission),
-        // Version 2: the AppID's security.
-        offset_of!(R, app_id_authentication_level) + size_of::<u32>(),
-        size_of::<R>(),
-    ]
+// SAFETY: repr(C), struct_size first; integers, a GUID and raw pointers.
+unsafe impl SizedStruct for OpcServerRegistration {
+    /// Every size at which a version of OpcServerRegistration ends, after its last field, with or
+    /// without C's trailing padding.
+    const SIZES: &'static [usize] = {
+        use core::mem::{offset_of, size_of};
+        type R = OpcServerRegistration;
+        &[
+            // Version 1: up to `flags`.
+            offset_of!(R, flags) + size_of::<u32>(),
+            offset_of!(R, app_id_access_permission),
+            // Version 2: the AppID's security.
+            offset_of!(R, app_id_authentication_level) + size_of::<u32>(),
+            size_of::<R>(),
+        ]
+    };
 }
 
 /// A registration as the library works with it.
@@ -179,7 +184,7 @@ impl ServerDescription {
         let defaults: OpcServerRegistration = unsafe { core::mem::zeroed() };
         // SAFETY: the caller vouches for `struct_size` readable bytes; read_sized copies no more, and
         // only sizes at which a version of the structure ends.
-        let r = unsafe { read_sized(r, &registration_sizes(), defaults) }?;
+        let r = unsafe { read_sized(r, defaults) }?;
         let r = &r;
         let local = match r.server_type {
             0 => false,

@@ -114,16 +114,21 @@ impl ServerDescription {
                     v.push((app.clone(), name.into(), data.clone(), false));
                 }
             }
-            if self.local {
-                let command = self.module_path()?;
-                let path = program_path(&command);
-                let exe = path.rsplit(['\\', '/']).next().unwrap_or(path).to_string();
-                if !exe.is_empty() && exe.encode_utf16().count() <= MAX_NAME_UNITS {
-                    v.push((format!("AppID\\{exe}"), "AppID".into(), app_id.to_string(), false));
-                }
+            if let Some(exe) = self.app_id_program()? {
+                v.push((format!("AppID\\{exe}"), "AppID".into(), app_id.to_string(), false));
             }
         }
         Ok(v)
+    }
+
+    /// The file name of an EXE server's program, for its `AppID\<exe>` key (none for an in-process
+    /// server, or a name the registry cannot hold).
+    pub(super) fn app_id_program(&self) -> Result<Option<String>, HRESULT> {
+        if !self.local {
+            return Ok(None);
+        }
+        let exe = program_file_name(&self.module_path()?).to_string();
+        Ok((!exe.is_empty() && exe.encode_utf16().count() <= MAX_NAME_UNITS).then_some(exe))
     }
 
     /// The keys that belong to this server alone (deleted when empty even without a ledger).
@@ -155,4 +160,10 @@ impl ServerDescription {
         }
         keys
     }
+}
+
+/// The file name of the program a command line (a `LocalServer32` value) starts.
+pub(super) fn program_file_name(command_line: &str) -> &str {
+    let path = program_path(command_line);
+    path.rsplit(['\\', '/']).next().unwrap_or(path)
 }

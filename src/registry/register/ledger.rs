@@ -4,7 +4,7 @@
 //! previous data restored) only while it still holds the data this registration wrote
 //! ([`Entry::still_written`]); a value someone else wrote or rewrote since is theirs.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 use crate::com::HRESULT;
 use crate::registry::cmdline::program_path;
@@ -142,7 +142,7 @@ impl Entry {
     }
 
     /// The value this entry is about, for "already recorded" checks.
-    fn value(&self) -> Option<(RegPath, RegPath)> {
+    pub(super) fn value(&self) -> Option<(RegPath, RegPath)> {
         match self {
             Entry::Key(_) | Entry::OtherServer => None,
             Entry::Added(k, n, _) | Entry::Replaced(k, n, _, _) => Some((RegPath::new(k), RegPath::new(n))),
@@ -212,12 +212,22 @@ pub(crate) fn read_ledger(reg: &dyn Registry, module_key: &str) -> Option<Vec<En
     )
 }
 
+/// Writes `ledger` as the record of the registration whose module key is `module_key`.
+pub(crate) fn write_ledger(reg: &dyn Registry, module_key: &str, ledger: &[Entry]) -> Result<(), HRESULT> {
+    let text: Vec<String> = ledger.iter().map(Entry::encode).collect();
+    reg.set_value(module_key, LEDGER, &RegValue::Sz(text.join(";")))
+}
+
 /// Writes keys and values while recording what it adds.
 pub(crate) struct Recorder<'a> {
     reg: &'a dyn Registry,
     pub(crate) ledger: Vec<Entry>,
     keys: HashSet<RegPath>,
     pub(super) values: HashSet<(RegPath, RegPath)>,
+    /// For values another registration wrote and still holds (an AppID several classes name): what
+    /// was there before that one, recorded in its place as the previous data (`None`: the value did
+    /// not exist).
+    pub(super) origins: HashMap<(RegPath, RegPath), Option<RegValue>>,
 }
 
 impl<'a> Recorder<'a> {
@@ -235,6 +245,7 @@ impl<'a> Recorder<'a> {
             ledger,
             keys,
             values,
+            origins: HashMap::new(),
         }
     }
 
@@ -282,12 +293,13 @@ impl<'a> Recorder<'a> {
                     // Ours already (registering again, say at a new path): the record follows.
                     self.note_written(&id, data);
                 } else {
-                    self.ledger.push(Entry::Replaced(
-                        path.to_string(),
-                        name.to_string(),
-                        old,
-                        Some(data.clone()),
-                    ));
+                    let (path, name, written) = (path.to_string(), name.to_string(), Some(data.clone()));
+                    self.ledger.push(match self.origins.get(&id) {
+                        // What it replaces another registration wrote: what was there before that.
+                        Some(None) => Entry::Added(path, name, written),
+                        Some(Some(before)) => Entry::Replaced(path, name, before.clone(), written),
+                        None => Entry::Replaced(path, name, old, written),
+                    });
                     self.values.insert(id);
                 }
             }

@@ -45,14 +45,18 @@
 //! under the same rules. `LocalServer32` is written as a command line with the path in quotes
 //! (CWE-428), `InprocServer32` as the plain DLL path COM loads. The ledger records the AppID's DWORD
 //! and binary values with their type, and they follow the same rule: a level or permission another
-//! installer or an administrator changed since stays. See docs/registration-safety.md and
-//! docs/guide/dcom-appid.md.
+//! installer or an administrator changed since stays. An AppID several classes name is shared: it
+//! stays whole while another registered class names it (the leaving class hands its record of it to
+//! theirs) and goes with the last, back to what was there before the first (`app_id`). See
+//! docs/registration-safety.md and docs/guide/dcom-appid.md.
 //!
 //! Files, one concern each: `description` (the C struct and its validation), `keys` (the key list),
-//! `ledger` (the record format of what was written), `algorithm` (register and unregister); the
-//! category helpers of the specification are in `registry::category_helpers`.
+//! `ledger` (the record format of what was written), `algorithm` (register and unregister), `app_id`
+//! (the AppID several classes share); the category helpers of the specification are in
+//! `registry::category_helpers`.
 
 mod algorithm;
+mod app_id;
 mod description;
 mod keys;
 mod ledger;
@@ -72,10 +76,11 @@ use crate::registry::{registries, OpcRegistry, Registries};
 
 /// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
 /// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
-/// (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the categories (created with their standard
-/// descriptions when missing; on Windows through the Component Categories Manager when COM is initialised
-/// on the calling thread, else by writing the same keys) and, for Data Access
-/// 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
+/// (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the
+/// categories (created with their standard descriptions when missing; on Windows through the Component
+/// Categories Manager when COM can create it on the calling thread, else, COM not being initialised
+/// there, as EXE servers registering before CoInitializeEx do, by writing the same keys) and, for Data
+/// Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
 /// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
 /// reports OPC_SERVER_COMMAND_REGISTER.
 ///
@@ -102,7 +107,11 @@ pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration,
 /// wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
 /// re-registered after a take-over) is left as it is, never set back to older data, and while the
 /// class serves another server what it shares with it stays. A category's description stays while
-/// another class implements the category.
+/// another class implements the category. An AppID another registered class names stays whole (the
+/// AppID key with every value, and `AppID\<exe>` while that class runs in the same program) until
+/// the last of them is unregistered, which removes what the registrations wrote and restores what was
+/// there before the first. Like registration it works with or without COM initialised on the calling
+/// thread.
 ///
 /// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
 /// `OpcRegisterServer` for a bad description or a failing registry write.

@@ -27,7 +27,7 @@ pub(crate) fn server(n: u128) -> ServerDescription {
 
 /// Every key (as written) with its values, in the registry's order: what two states are compared by.
 /// (The same as comparing `.reg` exports, without formatting the text, which Miri takes long for.)
-fn dump(regs: &Registries) -> Vec<(String, Vec<(String, RegValue)>)> {
+pub(crate) fn dump(regs: &Registries) -> Vec<(String, Vec<(String, RegValue)>)> {
     fn walk(reg: &dyn crate::registry::Registry, path: String, out: &mut Vec<(String, Vec<(String, RegValue)>)>) {
         let subkeys = reg.subkeys(&path);
         out.push((path.clone(), reg.values(&path)));

@@ -6,7 +6,7 @@ use super::tests::{memory, server};
 use super::*;
 use crate::com::{E_INVALIDARG, GUID};
 use crate::registry::sddl::{bytes_to_sddl, sddl_to_bytes};
-use crate::registry::{regfile, RegValue};
+use crate::registry::{class_key, regfile, RegValue};
 use core::ptr;
 
 const ACCESS: &str = "O:BAG:BAD:(A;;0x7;;;AU)(A;;0x7;;;SY)";
@@ -334,5 +334,263 @@ fn the_c_structure_versions() {
         assert!(regs.write.subkeys("").is_empty());
         drop(regs);
         OpcRegistryRelease(reg);
+    }
+}
+
+// ---- One AppID named by several classes (one product, several classes: the usual layout) ----------
+
+const SHARED_APP_ID: GUID = GUID::from_u128(0x5A00);
+const OTHER_ACCESS: &str = "O:BAG:BAD:(A;;0x7;;;SY)";
+
+/// Class `n` of a product whose classes share one AppID and its security; `exe` is its program.
+fn sharing(n: u128, exe: &str) -> ServerDescription {
+    let mut d = local_server(n);
+    d.implemented.clear();
+    d.module_path = Some(format!("C:\\Vendor\\{exe}"));
+    d.app_id = Some(SHARED_APP_ID);
+    d.access_permission = Some(ACCESS.into());
+    d.launch_permission = Some(LAUNCH.into());
+    d
+}
+
+/// A registry held in memory with the root keys every Windows registry has (`CLSID`, `AppID`), which
+/// no registration created and none removes.
+fn machine() -> Registries {
+    let regs = memory();
+    for root in ["CLSID", "AppID"] {
+        regs.write.create_key(root).unwrap();
+    }
+    regs
+}
+
+/// The AppID key's values, by name (empty when the key is missing).
+fn app_values(regs: &Registries) -> Vec<(String, RegValue)> {
+    let mut v = regs.write.values(&format!("AppID\\{SHARED_APP_ID}"));
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
+fn binary(sddl: &str) -> RegValue {
+    RegValue::Other {
+        kind: 3,
+        bytes: sddl_to_bytes(sddl).unwrap(),
+    }
+}
+
+/// The orders to unregister two classes in: both natively, one under Miri (where each registration
+/// takes seconds; the code has no `unsafe` of its own, the native run checks the other order).
+fn orders() -> &'static [[usize; 2]] {
+    if cfg!(miri) {
+        &[[1, 0]]
+    } else {
+        &[[0, 1], [1, 0]]
+    }
+}
+
+/// Registers every class in order, then unregisters them in `order`: while any is left the AppID is
+/// what it was with all of them, and the last one's unregistration leaves the registry as it was.
+fn register_all_then_unregister_in(regs: &Registries, classes: &[ServerDescription], order: &[usize]) {
+    let before = super::tests::dump(regs);
+    for d in classes {
+        register(regs, d).unwrap();
+    }
+    let whole = app_values(regs);
+    assert!(whole.iter().any(|(n, _)| n == "AuthenticationLevel"));
+    for (i, &k) in order.iter().enumerate() {
+        unregister(regs, &classes[k]).unwrap();
+        if i + 1 < order.len() {
+            assert_eq!(
+                app_values(regs),
+                whole,
+                "unregistered {:?}: the others still name the AppID",
+                &order[..=i]
+            );
+        }
+    }
+    assert_eq!(super::tests::dump(regs), before, "order {order:?}");
+}
+
+#[test]
+fn a_shared_app_id_stays_whole_while_a_class_names_it_and_goes_with_the_last() {
+    let classes = [sharing(0x10, "a.exe"), sharing(0x11, "b.exe"), sharing(0x12, "c.exe")];
+    // Two classes, either order; then three, in every order (under Miri one order of three: the
+    // other tests have two).
+    if !cfg!(miri) {
+        for order in orders() {
+            register_all_then_unregister_in(&machine(), &classes[..2], order);
+        }
+    }
+    let three: &[[usize; 3]] = if cfg!(miri) {
+        &[[1, 0, 2]]
+    } else {
+        &[[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]]
+    };
+    for order in three {
+        register_all_then_unregister_in(&machine(), &classes, order);
+    }
+    if cfg!(miri) {
+        return;
+    }
+    // The AppID's values stay as a class that still names it registered them.
+    let regs = machine();
+    register(&regs, &classes[0]).unwrap();
+    register(&regs, &classes[1]).unwrap();
+    unregister(&regs, &classes[0]).unwrap();
+    let app = format!("AppID\\{SHARED_APP_ID}");
+    assert_eq!(regs.write.value(&app, "AuthenticationLevel"), Some(RegValue::Dword(5)));
+    assert_eq!(regs.write.value(&app, "AccessPermission"), Some(binary(ACCESS)));
+    assert_eq!(regs.write.value(&app, "LaunchPermission"), Some(binary(LAUNCH)));
+    // The class that went takes its own program's key with it; the other's stays.
+    assert!(!regs.write.key_exists("AppID\\a.exe"));
+    assert!(regs.write.key_exists("AppID\\b.exe"));
+    // Registered again beside the one that stayed, it leaves nothing once both are gone, in either
+    // order.
+    for order in orders() {
+        let regs = machine();
+        let before = super::tests::dump(&regs);
+        register(&regs, &classes[0]).unwrap();
+        register(&regs, &classes[1]).unwrap();
+        unregister(&regs, &classes[0]).unwrap();
+        register(&regs, &classes[0]).unwrap();
+        unregister(&regs, &classes[order[0]]).unwrap();
+        unregister(&regs, &classes[order[1]]).unwrap();
+        assert_eq!(super::tests::dump(&regs), before, "order {order:?}");
+    }
+}
+
+#[test]
+fn classes_asking_for_different_security_share_what_the_latest_registration_wrote() {
+    let a = sharing(0x20, "a.exe");
+    let mut b = sharing(0x21, "b.exe");
+    b.access_permission = Some(OTHER_ACCESS.into());
+    b.authentication_level = Some(6);
+    let app = format!("AppID\\{SHARED_APP_ID}");
+    for order in orders() {
+        let regs = machine();
+        register(&regs, &a).unwrap();
+        register(&regs, &b).unwrap();
+        // One AppID, one security: the latest registration's.
+        assert_eq!(regs.write.value(&app, "AccessPermission"), Some(binary(OTHER_ACCESS)));
+        assert_eq!(regs.write.value(&app, "AuthenticationLevel"), Some(RegValue::Dword(6)));
+        unregister(&regs, [&a, &b][order[0]]).unwrap();
+        // It stays so while either class is registered.
+        assert_eq!(regs.write.value(&app, "AccessPermission"), Some(binary(OTHER_ACCESS)));
+        assert_eq!(regs.write.value(&app, "AuthenticationLevel"), Some(RegValue::Dword(6)));
+        unregister(&regs, [&a, &b][order[1]]).unwrap();
+        assert!(regs.write.subkeys("AppID").is_empty(), "order {order:?}");
+    }
+    if cfg!(miri) {
+        return;
+    }
+    // Registering again with other settings follows the latest, and the last unregistration still
+    // leaves nothing.
+    let regs = machine();
+    register(&regs, &a).unwrap();
+    register(&regs, &b).unwrap();
+    register(&regs, &a).unwrap();
+    assert_eq!(regs.write.value(&app, "AccessPermission"), Some(binary(ACCESS)));
+    unregister(&regs, &b).unwrap();
+    assert_eq!(regs.write.value(&app, "AccessPermission"), Some(binary(ACCESS)));
+    unregister(&regs, &a).unwrap();
+    assert_eq!(super::tests::dump(&regs), super::tests::dump(&machine()));
+}
+
+#[test]
+fn values_found_before_the_first_registration_come_back_after_the_last() {
+    let classes = [sharing(0x30, "server.exe"), sharing(0x31, "server.exe")];
+    let app = format!("AppID\\{SHARED_APP_ID}");
+    for order in orders() {
+        let regs = machine();
+        // An older installation left level 2 and its own description; an administrator set RunAs;
+        // another product keeps a value of its own there.
+        let w = &regs.write;
+        w.set_value(&app, "", &"Old Vendor Server".into()).unwrap();
+        w.set_value(&app, "AuthenticationLevel", &RegValue::Dword(2)).unwrap();
+        w.set_value(&app, "RunAs", &"Interactive User".into()).unwrap();
+        w.set_value(&app, "TheirValue", &RegValue::Dword(7)).unwrap();
+        register_all_then_unregister_in(&regs, &classes, order);
+        assert_eq!(w.value(&app, "AuthenticationLevel"), Some(RegValue::Dword(2)));
+        assert_eq!(w.value(&app, "TheirValue"), Some(RegValue::Dword(7)));
+    }
+    if cfg!(miri) {
+        return;
+    }
+    // A value rewritten by someone else while the classes were registered stays theirs.
+    let regs = machine();
+    register(&regs, &classes[0]).unwrap();
+    register(&regs, &classes[1]).unwrap();
+    regs.write
+        .set_value(&app, "AuthenticationLevel", &RegValue::Dword(6))
+        .unwrap();
+    unregister(&regs, &classes[0]).unwrap();
+    unregister(&regs, &classes[1]).unwrap();
+    assert_eq!(
+        app_values(&regs),
+        vec![("AuthenticationLevel".to_string(), RegValue::Dword(6))]
+    );
+}
+
+#[test]
+fn classes_of_one_program_keep_its_key_until_the_last() {
+    let classes = [sharing(0x40, "server.exe"), sharing(0x41, "server.exe")];
+    for order in orders() {
+        let regs = machine();
+        register(&regs, &classes[0]).unwrap();
+        register(&regs, &classes[1]).unwrap();
+        unregister(&regs, &classes[order[0]]).unwrap();
+        assert_eq!(
+            regs.write.value("AppID\\server.exe", "AppID"),
+            Some(RegValue::Sz(SHARED_APP_ID.to_string())),
+            "the other class's program still maps to the AppID"
+        );
+        unregister(&regs, &classes[order[1]]).unwrap();
+        assert_eq!(super::tests::dump(&regs), super::tests::dump(&machine()));
+    }
+}
+
+#[test]
+fn an_app_id_another_product_also_names_is_left_to_it() {
+    let regs = machine();
+    let ours = sharing(0x50, "server.exe");
+    register(&regs, &ours).unwrap();
+    // A class registered by other means (no record of ours) names the same AppID.
+    let theirs = format!("CLSID\\{}", GUID::from_u128(0x5EED_5EED));
+    regs.write
+        .set_value(&theirs, "AppID", &SHARED_APP_ID.to_string().as_str().into())
+        .unwrap();
+    let whole = app_values(&regs);
+    unregister(&regs, &ours).unwrap();
+    assert_eq!(app_values(&regs), whole);
+    assert!(!regs.write.key_exists(&class_key(&ours.clsid)));
+}
+
+#[test]
+fn records_of_earlier_versions_join_by_their_data() {
+    // Registered by a version that recorded a shared value back only to the previous registration:
+    // the second class's record of the user type says it replaced the first one's.
+    let classes = [sharing(0x60, "server.exe"), sharing(0x61, "server.exe")];
+    let first = class_key(&classes[0].clsid);
+    for order in orders() {
+        let regs = machine();
+        let before = super::tests::dump(&regs);
+        register(&regs, &classes[0]).unwrap();
+        // (The second registration does not see the first class name the AppID.)
+        let named = regs.write.value(&first, "AppID").unwrap();
+        regs.write.delete_value(&first, "AppID").unwrap();
+        register(&regs, &classes[1]).unwrap();
+        regs.write.set_value(&first, "AppID", &named).unwrap();
+        let ledger = read_ledger(&*regs.write, &classes[1].module_key()).unwrap();
+        let app = format!("AppID\\{SHARED_APP_ID}");
+        assert!(ledger.contains(&super::Entry::Replaced(
+            app.clone(),
+            String::new(),
+            "Vendor Server 96".into(),
+            Some("Vendor Server 97".into())
+        )));
+        let whole = app_values(&regs);
+        unregister(&regs, &classes[order[0]]).unwrap();
+        assert_eq!(app_values(&regs), whole);
+        unregister(&regs, &classes[order[1]]).unwrap();
+        assert_eq!(super::tests::dump(&regs), before, "order {order:?}");
     }
 }

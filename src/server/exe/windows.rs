@@ -30,7 +30,7 @@ use super::OpcExeServerOptions;
 use crate::com::ffi::{self, Fail};
 use crate::com::iids::IID_IUNKNOWN;
 use crate::com::module_lock::{set_module_lock, ModuleLock};
-use crate::com::unknown::release;
+use crate::com::unknown::Counted;
 use crate::com::wstr::wstr_units;
 use crate::com::{IUnknown, E_UNEXPECTED, HRESULT, LPCWSTR, S_FALSE, S_OK};
 use crate::registry::cmdline::OpcServerCommand;
@@ -364,7 +364,7 @@ fn last_error() -> HRESULT {
 }
 
 /// The class objects registered with COM, revoked and released when dropped.
-struct Registered(Vec<(u32, *mut IUnknown)>);
+struct Registered(Vec<(u32, Counted<IUnknown>)>);
 
 impl Registered {
     /// Registers the class object of each class with COM, suspended; `CoResumeClassObjects` hands
@@ -378,23 +378,23 @@ impl Registered {
             if hr < 0 {
                 return Err(hr.into());
             }
+            // SAFETY: the reference class_object gave us (released when `unknown` drops).
+            let unknown = unsafe { Counted::adopt(unknown.cast::<IUnknown>()) }.ok_or(E_UNEXPECTED)?;
             let mut cookie = 0;
             // SAFETY: a valid CLSID and class object; COM keeps its own reference while registered.
             let hr = unsafe {
                 CoRegisterClassObject(
                     (&class.clsid as *const crate::com::GUID).cast(),
-                    unknown,
+                    unknown.as_ptr().cast(),
                     CLSCTX_LOCAL_SERVER,
                     (REGCLS_MULTIPLEUSE | REGCLS_SUSPENDED) as u32,
                     &mut cookie,
                 )
             };
             if hr < 0 {
-                // SAFETY: the reference class_object gave us.
-                unsafe { release(unknown.cast()) };
                 return Err(hr.into());
             }
-            registered.0.push((cookie, unknown.cast()));
+            registered.0.push((cookie, unknown));
         }
         // SAFETY: no arguments: every class object is registered, hand them out from now on.
         let hr = unsafe { CoResumeClassObjects() };
@@ -407,11 +407,9 @@ impl Registered {
     /// Revokes every registration: COM hands out none of them from now on.
     fn revoke(&mut self) {
         for (cookie, unknown) in self.0.drain(..) {
-            // SAFETY: a registration of ours and the reference we kept for it.
-            unsafe {
-                CoRevokeClassObject(cookie);
-                release(unknown);
-            }
+            // SAFETY: a registration of ours; the reference we kept for it goes after.
+            unsafe { CoRevokeClassObject(cookie) };
+            drop(unknown);
         }
     }
 }

@@ -203,19 +203,79 @@ pub fn interface(catalog: &Catalog, i: &Interface, note: &str) -> String {
 }
 
 /// The `#elif` branch of an interface's `__{n}_INTERFACE_DEFINED__` guard, taken when another header
-/// declared the interface first: the C++ `__uuidof` declaration (mingw's `__CRT_UUID_DECL`), which
-/// MIDL's output (the OPC Foundation's headers) does not have. Without it `__uuidof(IOPCCommon)`
-/// compiles and fails to link. widl's output has it: a program that includes such a header first
-/// defines OPCCOMN_FOREIGN_UUIDOF (a second declaration would be a redefinition). Skipped when the
-/// name is a macro: opcda.h `#define`s CATID_OPCDAServer20, its category interface, to the IID.
+/// declared the interface first: its C++ `__uuidof` (mingw's emulation) in this header's own table,
+/// `opccomn_uuidof_s` (see [`UUIDOF_PROLOGUE`]), never as a second `__CRT_UUID_DECL`. MIDL's output (the
+/// OPC Foundation's headers) declares no `__uuidof`, widl's does, and nothing the preprocessor sees
+/// tells them apart: a `__CRT_UUID_DECL` here was a redefinition after widl's, and its absence left
+/// `__uuidof(IOPCCommon)` unlinkable after MIDL's. Skipped when the name is a macro: opcda.h
+/// `#define`s CATID_OPCDAServer20, its category interface, to the IID.
 fn foreign_uuidof(n: &str, uuid: &str) -> String {
     format!(
-        "#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF) && !defined({n})\n\
-         /* {n} was declared by another header (MIDL's output declares no __uuidof) */\n\
-         __CRT_UUID_DECL({n}, {})\n",
+        "#elif defined(__cplusplus) && !defined(CINTERFACE) && defined(OPCCOMN_UUIDOF_TABLE_) && !defined({n})\n\
+         /* {n} was declared by another header: __uuidof({n}) from this header's table */\n\
+         OPCCOMN_UUIDOF_DECL_({n}, {})\n\
+         #define OPCCOMN_UUIDOF_REDIRECT_ 1\n",
         crt_uuid_args(uuid)
     )
 }
+
+/// Before the interfaces: the table `opccomn_uuidof_s<T>` that [`foreign_uuidof`] fills for the
+/// interfaces another header declared first. Its primary template answers with mingw's
+/// `__mingw_uuidof<T>()`, so that [`UUIDOF_EPILOGUE`] can point `__uuidof` at it for every type.
+/// Constant expressions where mingw's are (C++17), as its `__CRT_UUID_DECL` has them.
+pub const UUIDOF_PROLOGUE: &str = r#"/* C++ with mingw-w64 (g++, clang++): __uuidof of the interfaces another header declared first.
+   MIDL's output (the OPC Foundation's headers) declares no __uuidof for them, and __uuidof(IOPCCommon)
+   would compile and fail to link; widl's output declares it with __CRT_UUID_DECL, and a second
+   declaration would be a redefinition. No preprocessor test tells the two apart, so for such an
+   interface this header declares the identifier in a table of its own, opccomn_uuidof_s<T>, and at its
+   end __uuidof reads that table, which hands every other type to mingw's __mingw_uuidof<T>(). An
+   interface this header declares itself gets mingw's declaration (__CRT_UUID_DECL) with it, and
+   __uuidof stays mingw's. Defining OPCCOMN_FOREIGN_UUIDOF leaves __uuidof to the other header. */
+#if defined(__cplusplus) && !defined(CINTERFACE) && defined(__uuidof) && defined(__CRT_UUID_DECL) && !defined(OPCCOMN_FOREIGN_UUIDOF)
+#define OPCCOMN_UUIDOF_TABLE_ 1
+extern "C++" {
+#if __cpp_constexpr >= 200704L && __cpp_inline_variables >= 201606L
+template<typename T> struct opccomn_uuidof_s {
+    static constexpr const GUID &get() { return __mingw_uuidof<T>(); }
+};
+#define OPCCOMN_UUIDOF_DECL_(type, l, w1, w2, b1, b2, b3, b4, b5, b6, b7, b8) \
+    extern "C++" { \
+    template<> struct opccomn_uuidof_s<type> { \
+        static constexpr IID value = {l, w1, w2, {b1, b2, b3, b4, b5, b6, b7, b8}}; \
+        static constexpr const GUID &get() { return value; } \
+    }; \
+    template<> struct opccomn_uuidof_s<type *> : opccomn_uuidof_s<type> {}; \
+    }
+#else
+template<typename T> struct opccomn_uuidof_s {
+    static const GUID &get() { return __mingw_uuidof<T>(); }
+};
+#define OPCCOMN_UUIDOF_DECL_(type, l, w1, w2, b1, b2, b3, b4, b5, b6, b7, b8) \
+    extern "C++" { \
+    template<> struct opccomn_uuidof_s<type> { \
+        static const GUID &get() { \
+            static const IID value = {l, w1, w2, {b1, b2, b3, b4, b5, b6, b7, b8}}; \
+            return value; \
+        } \
+    }; \
+    template<> struct opccomn_uuidof_s<type *> : opccomn_uuidof_s<type> {}; \
+    }
+#endif
+}
+#endif
+
+"#;
+
+/// After the interfaces: when one of them was declared by another header, `__uuidof` reads
+/// [`UUIDOF_PROLOGUE`]'s table (which answers for every other type as mingw's `__uuidof` did).
+pub const UUIDOF_EPILOGUE: &str = r#"/* An interface above was declared by another header first: __uuidof reads this header's table,
+   which answers for every other type as mingw-w64's __uuidof does. */
+#if defined(OPCCOMN_UUIDOF_REDIRECT_)
+#undef __uuidof
+#define __uuidof(type) opccomn_uuidof_s<__typeof(type)>::get()
+#endif
+
+"#;
 
 /// A category of the interface form: an interface without methods (opcda.h's declaration).
 fn category_interface(e: &Entry) -> String {

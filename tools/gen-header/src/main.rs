@@ -124,9 +124,19 @@ fn generate_header(
     let mut config = cbindgen::Config::from_file(root.join("cbindgen.toml")).expect("cbindgen.toml");
     // The version macros come from Cargo.toml, never from a hand-kept copy.
     let version = package_version(root);
-    let mut parts = version.split(['.', '-', '+']);
+    let (numbers, prerelease) = split_version(&version);
+    let mut parts = numbers.split('.');
     let mut next = || parts.next().unwrap_or("0").to_string();
     let (major, minor, patch) = (next(), next(), next());
+    // A version in development (Cargo.toml's `0.3.0-dev`) says so; a released header has no such macro.
+    let prerelease = match prerelease {
+        Some(pre) => format!(
+            "/** Defined only in the header of a version in development (a build of the main branch, not a\n    \
+             release): the pre-release part of OPCCOMN_VERSION, which then names the version to come. */\n\
+             #define OPCCOMN_VERSION_PRERELEASE \"{pre}\"\n"
+        ),
+        None => String::new(),
+    };
     let opc_refs: Vec<&idl::Interface> = opc.iter().collect();
     let base_refs: Vec<&idl::Interface> = base.iter().collect();
     let forwards = format!(
@@ -139,6 +149,7 @@ fn generate_header(
             .replace("@MINOR@", &minor)
             .replace("@PATCH@", &patch)
             .replace("@VERSION@", &version)
+            .replace("@PRERELEASE@", &prerelease)
             .replace("@FORWARDS@\n", &forwards)
     });
     // The interfaces (and their vtables) are declared from the IDL, not from the Rust structs.
@@ -179,9 +190,10 @@ fn generate_header(
     let mut section = String::from(
         "/* ---- The interfaces, from idl/combase.idl (off Windows) and idl/opccomn.idl, in MIDL's shape: a\n\
          \x20  MIDL-generated header (the OPC Foundation's opccomn.h) and this one skip each other's\n\
-         \x20  declarations whichever comes first. ---- */\n\n\
-         #ifdef __cplusplus\nextern \"C\" {\n#endif\n\n#if !defined(_WIN32)\n\n",
+         \x20  declarations whichever comes first. ---- */\n\n",
     );
+    section += emit::UUIDOF_PROLOGUE;
+    section += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n#if !defined(_WIN32)\n\n";
     for i in base {
         section += &emit::interface(
             catalog,
@@ -196,6 +208,7 @@ fn generate_header(
     section += "/* ---- The component categories and classes (idl/opcguids.txt). ---- */\n\n";
     section += &emit::table_declarations(table);
     section += "#ifdef __cplusplus\n}  /* extern \"C\" */\n#endif\n\n";
+    section += emit::UUIDOF_EPILOGUE;
 
     let marker = "#ifdef __cplusplus\nextern \"C\" {\n#endif // __cplusplus\n";
     let at = text.find(marker).ok_or("no extern \"C\" block in cbindgen's output")?;
@@ -376,6 +389,16 @@ fn package_version(root: &Path) -> String {
     panic!("no [package] version in Cargo.toml");
 }
 
+/// A SemVer version split into its numbers and its pre-release part: `0.3.0-dev` is ("0.3.0",
+/// Some("dev")), `0.2.0` ("0.2.0", None). Build metadata (`+...`) is not part of either.
+fn split_version(version: &str) -> (&str, Option<&str>) {
+    let version = version.split('+').next().unwrap_or(version);
+    match version.split_once('-') {
+        Some((numbers, pre)) => (numbers, Some(pre)),
+        None => (version, None),
+    }
+}
+
 /// `text` as `cargo fmt` formats it (the repository's rustfmt.toml), so the generated module passes
 /// `cargo fmt --check` as it is written.
 fn rustfmt(root: &Path, text: &str) -> String {
@@ -396,4 +419,17 @@ fn rustfmt(root: &Path, text: &str) -> String {
     let output = child.wait_with_output().expect("rustfmt");
     assert!(output.status.success(), "rustfmt could not format the generated module");
     String::from_utf8(output.stdout).expect("UTF-8 from rustfmt")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_version;
+
+    #[test]
+    fn a_version_splits_into_its_numbers_and_its_prerelease() {
+        assert_eq!(split_version("0.2.0"), ("0.2.0", None));
+        assert_eq!(split_version("0.3.0-dev"), ("0.3.0", Some("dev")));
+        assert_eq!(split_version("1.0.0-rc.1+build.5"), ("1.0.0", Some("rc.1")));
+        assert_eq!(split_version("1.0.0+build.5"), ("1.0.0", None));
+    }
 }
