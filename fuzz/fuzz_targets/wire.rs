@@ -13,11 +13,13 @@
 use libfuzzer_sys::fuzz_target;
 use opccomn::com::guids::{IID_IEnumGUID, IID_IOPCEnumGUID};
 use opccomn::com::GUID;
-use opccomn::proxy::wire::{
-    check_reply, check_request, reply_context, Interface, IpLayout, BAD_STUB_DATA, INVALID_BOUND, PROCNUM_OUT_OF_RANGE,
-};
+use opccomn::proxy::wire::{check_reply, check_request, reply_context, Interface, IpLayout};
 
 const LOCAL: u32 = 0x10;
+/// HRESULT_FROM_WIN32 of RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND and RPC_S_PROCNUM_OUT_OF_RANGE.
+const BAD_STUB_DATA: i32 = 0x800706F7_u32 as i32;
+const INVALID_BOUND: i32 = 0x800706C6_u32 as i32;
+const PROCNUM_OUT_OF_RANGE: i32 = 0x800706D1_u32 as i32;
 const MEOW: u32 = 0x574F_454D;
 
 fn u32_at(b: &[u8], at: usize) -> u32 {

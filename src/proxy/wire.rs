@@ -35,14 +35,14 @@ use crate::com::{GUID, HRESULT};
 /// The most elements any array of the five interfaces may carry: GUIDs asked of
 /// `IOPCEnumGUID::Next` (1 MiB of GUIDs), categories given to `EnumClassesOfCategories`, locales
 /// returned by `QueryAvailableLocaleIDs`. A request beyond it is refused before anything is allocated.
-pub const MAX_ELEMENTS: u32 = 65_536;
+pub(crate) const MAX_ELEMENTS: u32 = 65_536;
 
 /// `HRESULT_FROM_WIN32(RPC_X_BAD_STUB_DATA)`: the bytes do not match the method's layout.
-pub const BAD_STUB_DATA: HRESULT = 0x800706F7_u32 as HRESULT;
+pub(crate) const BAD_STUB_DATA: HRESULT = 0x800706F7_u32 as HRESULT;
 /// `HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND)`: a count beyond [`MAX_ELEMENTS`].
-pub const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
+pub(crate) const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
 /// `HRESULT_FROM_WIN32(RPC_S_PROCNUM_OUT_OF_RANGE)`: the interface has no such method.
-pub const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
+pub(crate) const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
 
 /// `NDR_LOCAL_DATA_REPRESENTATION`: little-endian integers, ASCII, IEEE floating point.
 const LOCAL_DATA_REPRESENTATION: u32 = 0x10;

@@ -194,6 +194,14 @@ static void put_bytes(ndr_msg *m, const void *bytes, size_t n) {
 /* The referent ID Windows gives the first pointer of a message (any value but 0 is a pointer). */
 #define NDR_REFERENT_ID 0x00020000u
 
+/* Whether this process's rpcrt4 is Wine's, which writes and reads interface pointers in its own layout
+ * (a byte count, then the OBJREF) rather than NDR's (as Windows' does): Wine's ntdll exports
+ * wine_get_version. */
+static int runtime_reads_wine_layout(void) {
+    HMODULE ntdll = GetModuleHandleW(L"ntdll.dll");
+    return ntdll && GetProcAddress(ntdll, "wine_get_version");
+}
+
 /* What the runtime writes for `unk` as `iid` (CoMarshalInterface: MSHCTX_LOCAL, MSHLFLAGS_NORMAL, so
  * the references it holds go to whoever unmarshals it, or back with release_objref): its length, 0
  * when it cannot. */

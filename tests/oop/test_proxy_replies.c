@@ -519,7 +519,7 @@ static const struct {
                    {PS_SERVER_LIST2, 3, &IID_IOPCEnumGUID},
                    {PS_ENUM_GUID, 6, &IID_IOPCEnumGUID}};
 
-/* A reply to an interface-pointer method: the pointer in Wine's layout (`wine`) or NDR's, the HRESULT. */
+/* A reply to an interface-pointer method: the pointer in Wine's layout (`wine`) or NDR's, then the HRESULT. */
 static ndr_msg ip_reply(int wine, const unsigned char *objref, ULONG len, HRESULT hr) {
     ndr_msg m = msg_empty();
     if (wine) put_wine_interface_pointer(&m, objref, len);
@@ -542,34 +542,37 @@ static ndr_msg ip_reply(int wine, const unsigned char *objref, ULONG len, HRESUL
     } while (0)
 
 /* Replies carrying an OBJREF the runtime itself wrote for an object of this apartment, in the layout
- * Wine's rpcrt4 writes and reads and in the layout Windows' does ([MS-DCOM] 2.2.14: referent ID,
- * conformance, ulCntData, OBJREF): the first comes through as the object itself; the second is refused
- * here, as Wine's rpcrt4 would read its referent ID as a byte count; an OBJREF for another interface
- * than the method declares is refused in either (Wine's rpcrt4 unmarshals with IID_NULL and would hand
- * the caller an object of whatever interface the OBJREF names); and each malformed framing or OBJREF,
- * and every truncation, is refused with nothing written and nothing unmarshalled. */
+ * this runtime writes and reads (Wine's: a byte count, then the OBJREF) and in the other (NDR's, as
+ * Windows' rpcrt4 writes it, [MS-DCOM] 2.2.14: referent ID, conformance, ulCntData, OBJREF): the first
+ * comes through as the object itself; the second is refused, as this runtime would misread it (Wine's
+ * rpcrt4 takes a referent ID for a byte count); an OBJREF for another interface than the method
+ * declares is refused in either (Wine's rpcrt4 unmarshals with IID_NULL and would hand the caller an
+ * object of whatever interface the OBJREF names); and each malformed framing or OBJREF, and every
+ * truncation, is refused with nothing written and nothing unmarshalled. */
 static void interface_pointers_in_both_layouts(void) {
     unsigned char objref[OBJREF_MAX], bad[OBJREF_MAX];
     unsigned k, j;
+    int native = runtime_reads_wine_layout(), foreign = !native;
     LONG refs_before = enum_refs;
+    printf("proxy: this runtime reads interface pointers in %s layout\n", native ? "Wine's" : "NDR's");
     for (k = 0; k < 3; k++) {
         ULONG len;
         ndr_msg m;
         result r;
-        /* Wine's layout, the runtime's own OBJREF: the object itself comes back. */
+        /* This runtime's layout, its own OBJREF: the object itself comes back. */
         len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
         CHECK(len >= 68 && get_u32(objref) == OBJREF_SIGNATURE && get_u32(objref + 4) == OBJREF_STANDARD);
         if (len < 68) return;
-        m = ip_reply(1, objref, len, S_OK);
+        m = ip_reply(native, objref, len, S_OK);
         r = call_with(&m, NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);
         if (r.hr != S_OK || r.object != &local_enum)
-            fprintf(stderr, "%s method %u, Wine's layout: hr 0x%08lX, object %p (expected %p)\n",
+            fprintf(stderr, "%s method %u, this runtime's layout: hr 0x%08lX, object %p (expected %p)\n",
                     PS_NAMES[ip_methods[k].iface], ip_methods[k].method, (unsigned long)r.hr, r.object,
                     (void *)&local_enum);
         CHECK(r.hr == S_OK && r.object == &local_enum && r.damage == 0 && r.access_violations == 0);
         /* ... and refused at every length short of the whole. */
         len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
-        m = ip_reply(1, objref, len, S_OK);
+        m = ip_reply(native, objref, len, S_OK);
         {
             ndr_msg cut = m;
             for (cut.n = 0; cut.n < m.n; cut.n++) {
@@ -578,10 +581,10 @@ static void interface_pointers_in_both_layouts(void) {
             }
         }
         release_objref(objref, len);
-        /* NDR's layout, as Windows writes it: not what this runtime reads. */
+        /* The other runtime's layout. */
         len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
-        m = ip_reply(0, objref, len, S_OK);
-        CHECK_IP_REFUSED(m, k, objref, len, "NDR's layout where Wine's is read");
+        m = ip_reply(foreign, objref, len, S_OK);
+        CHECK_IP_REFUSED(m, k, objref, len, "the layout this runtime does not read");
         /* An OBJREF for IUnknown, in either layout. */
         for (j = 0; j < 2; j++) {
             len = marshal_objref((IUnknown *)&local_enum, &IID_IUnknown, objref);
@@ -590,7 +593,7 @@ static void interface_pointers_in_both_layouts(void) {
         }
         /* The enumerator of the other list's method. */
         len = marshal_objref((IUnknown *)&local_enum, k ? &IID_IEnumGUID : &IID_IOPCEnumGUID, objref);
-        m = ip_reply(1, objref, len, S_OK);
+        m = ip_reply(native, objref, len, S_OK);
         CHECK_IP_REFUSED(m, k, objref, len, "an OBJREF of the other enumerator");
         /* Malformed: the framing, then the OBJREF (a copy changed; the original's references given back). */
         len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
@@ -641,9 +644,11 @@ static void mutated_interface_pointers_are_answered_safely(unsigned rounds) {
     unsigned i, accepted = 0, rejected = 0, damaged = 0;
     LONG avs = access_violations, refs_before = enum_refs;
     for (i = 0; i < rounds; i++) {
-        unsigned k = ps_random() % 3, wine = ps_random() % 4 != 0, header = wine ? 1 : 3;
+        /* Mostly this runtime's layout (the other's is refused whatever its framing). */
+        int wine = ps_random() % 4 != 0 ? runtime_reads_wine_layout() : !runtime_reads_wine_layout();
+        unsigned k = ps_random() % 3, header = wine ? 1 : 3;
         ULONG len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
-        ndr_msg m = ip_reply((int)wine, objref, len, S_OK);
+        ndr_msg m = ip_reply(wine, objref, len, S_OK);
         unsigned v = values[ps_random() % (sizeof(values) / sizeof(values[0]))];
         result r;
         switch (ps_random() % 4) {

@@ -542,8 +542,7 @@ static void interface_pointers_the_stubs_write(void) {
         const IID *iid;
     } methods[3] = {{PS_SERVER_LIST, 3, &IID_IEnumGUID}, {PS_SERVER_LIST2, 3, &IID_IOPCEnumGUID},
                     {PS_ENUM_GUID, 6, &IID_IOPCEnumGUID}};
-    HMODULE ntdll = GetModuleHandleW(L"ntdll.dll");
-    int wine = ntdll && GetProcAddress(ntdll, "wine_get_version");
+    int wine = runtime_reads_wine_layout();
     unsigned k, i;
     for (k = 0; k < 3; k++) {
         const request *r = NULL;
