@@ -550,7 +550,7 @@ static ndr_msg ip_reply(int wine, const unsigned char *objref, ULONG len, HRESUL
  * object of whatever interface the OBJREF names); and each malformed framing or OBJREF, and every
  * truncation, is refused with nothing written and nothing unmarshalled. */
 static void interface_pointers_in_both_layouts(void) {
-    unsigned char objref[OBJREF_MAX], bad[OBJREF_MAX];
+    unsigned char objref[OBJREF_MAX];
     unsigned k, j;
     int native = runtime_reads_wine_layout(), foreign = !native;
     LONG refs_before = enum_refs;
@@ -595,7 +595,8 @@ static void interface_pointers_in_both_layouts(void) {
         len = marshal_objref((IUnknown *)&local_enum, k ? &IID_IEnumGUID : &IID_IOPCEnumGUID, objref);
         m = ip_reply(native, objref, len, S_OK);
         CHECK_IP_REFUSED(m, k, objref, len, "an OBJREF of the other enumerator");
-        /* Malformed: the framing, then the OBJREF (a copy changed; the original's references given back). */
+        /* Malformed: the framing, then the OBJREF (each changed in the reply's copy; the OBJREF's
+         * references given back once at the end). */
         len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
         for (j = 0; j < 9; j++) {
             static const char *const what[9] = {
@@ -604,8 +605,7 @@ static void interface_pointers_in_both_layouts(void) {
                 "no OBJREF signature", "no OBJREF flavour", "an unknown OBJREF flavour",
                 "string bindings beyond the OBJREF", "no HRESULT after the pointer"};
             unsigned v;
-            memcpy(bad, objref, len);
-            m = ip_reply(j != 0 && j != 1, bad, len, S_OK);
+            m = ip_reply(j != 0 && j != 1, objref, len, S_OK);
             switch (j) {
             case 0: v = len + 4; memcpy(m.b + 8, &v, 4); break;
             case 1: v = 0x10000; memcpy(m.b + 4, &v, 4); memcpy(m.b + 8, &v, 4); break;
@@ -617,7 +617,7 @@ static void interface_pointers_in_both_layouts(void) {
             case 7: m.b[4 + 64] = 0xFF; m.b[4 + 65] = 0x7F; break;
             default: m.n -= 4;
             }
-            /* (The stand-in's runtime would read the 64 KiB past the reply.) */
+            /* (The stand-in's runtime would read by these counts, past the reply.) */
             if (testing_widl && (j == 1 || j == 2)) continue;
             {
                 result c = call_with(&m, NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);
