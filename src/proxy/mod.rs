@@ -46,7 +46,10 @@ fn interfaces() -> [(&'static IID, &'static str, u32); 5] {
     INTERFACES.each_ref().map(|(iid, name, methods)| (iid, *name, *methods))
 }
 
-// Used by the proxy/stub (Windows, mingw); everywhere else only its tests run it.
+// Used by the proxy/stub (Windows, mingw); everywhere else only its tests and the fuzz target run it.
+#[cfg(feature = "fuzzing")]
+pub mod wire;
+#[cfg(not(feature = "fuzzing"))]
 #[cfg_attr(not(opccomn_proxy_stub), allow(dead_code))]
 pub(crate) mod wire;
 
@@ -130,7 +133,9 @@ unsafe extern "C" fn reply_context(iface: u32, method: u32, buf: *const u8, len:
     })
 }
 
-/// [`wire::check_reply`] for the checked channel.
+/// [`wire::check_reply`] for the checked channel. `wine_reader`: nonzero when this process's rpcrt4
+/// is Wine's, which reads interface pointers in [`wire::IpLayout::Wine`]; otherwise they are read as
+/// NDR lays them out ([`wire::IpLayout::Ndr`]).
 ///
 /// # Safety
 /// `buf` NULL or readable for `len` bytes.
@@ -142,13 +147,13 @@ unsafe extern "C" fn check_reply(
     buf: *const u8,
     len: u32,
     drep: u32,
-    wine: u32,
+    wine_reader: u32,
 ) -> Hr {
     ffi::guard!(wire::BAD_STUB_DATA, {
-        let layout = if wine != 0 {
+        let layout = if wine_reader != 0 {
             wire::IpLayout::Wine
         } else {
-            wire::IpLayout::Runtime
+            wire::IpLayout::Ndr
         };
         // SAFETY: forwarded from the caller.
         match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {

@@ -37,12 +37,13 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 
 /* The checks, written in Rust (src/proxy/wire.rs, through src/proxy/mod.rs). Interfaces are numbered
  * 0 IOPCShutdown, 1 IOPCCommon, 2 IOPCServerList, 3 IOPCEnumGUID, 4 IOPCServerList2; methods by their
- * vtable index. Failures are HRESULTs (RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND, ...). */
+ * vtable index. Failures are HRESULTs (RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND, ...). `wine_reader`:
+ * nonzero when this process's runtime reads interface pointers in Wine's layout. */
 typedef struct OpcProxyStubChecks {
     HRESULT (*request)(ULONG iface, ULONG method, const unsigned char *buf, ULONG len, ULONG drep);
     ULONG (*reply_context)(ULONG iface, ULONG method, const unsigned char *buf, ULONG len);
     HRESULT (*reply)(ULONG iface, ULONG method, ULONG context, const unsigned char *buf, ULONG len, ULONG drep,
-                     ULONG wine);
+                     ULONG wine_reader);
 } OpcProxyStubChecks;
 
 static const OpcProxyStubChecks *volatile checks;
@@ -84,8 +85,12 @@ static int interface_index(REFIID riid)
     return -1;
 }
 
-/* Wine's rpcrt4 lays out interface pointers its own way (a size, then the OBJREF). */
-static ULONG running_on_wine(void)
+/* Whether this process's rpcrt4 reads interface pointers in Wine's layout (a byte count, then the
+ * OBJREF) rather than NDR's (MInterfacePointer, as Windows' rpcrt4 reads it). A reply says which layout
+ * it is in (src/proxy/wire.rs tells them apart), not which runtime will read it: that is asked of the
+ * process, once: Wine's ntdll exports wine_get_version. A reply in the layout this runtime does not
+ * read is refused. */
+static ULONG reads_wine_layout(void)
 {
     static LONG known = -1;
     if (known < 0) {
@@ -183,7 +188,7 @@ static HRESULT STDMETHODCALLTYPE channel_SendReceive(IRpcChannelBuffer *iface, R
         return hr;
     else
         check = c->reply(This->index, method, context, msg->Buffer, msg->cbBuffer, msg->dataRepresentation,
-                         running_on_wine());
+                         reads_wine_layout());
     if (FAILED(check)) {
         IRpcChannelBuffer_FreeBuffer(This->inner, msg);
         msg->Buffer = (void *)refused_reply;

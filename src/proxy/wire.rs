@@ -13,13 +13,24 @@
 //! as MIDL's `[range]` reports it) or `RPC_S_PROCNUM_OUT_OF_RANGE` (no such method), as HRESULTs.
 //!
 //! The layouts are NDR 2.0 as MIDL and widl marshal the five interfaces of `idl/opccomn.idl`; a
-//! message may carry bytes after what is read (the runtime sizes buffers generously). Interface
-//! pointers (`EnumClassesOfCategories`, `Clone`) are laid out by the runtime: Wine writes a 32-bit
-//! size and the OBJREF ([`IpLayout::Wine`]), which is checked; elsewhere the runtime's own bounded
-//! reading of `MInterfacePointer` is relied on ([`IpLayout::Runtime`]), and only the HRESULT after
-//! it is required. No count sizes an interface pointer.
+//! message may carry bytes after what is read (the runtime sizes buffers generously).
+//!
+//! Interface pointers (`EnumClassesOfCategories`, `Clone`: the only ones, all in replies) come in
+//! one of two layouts ([`IpLayout`]): NDR's, as MS-DCOM 2.2.14 defines `PMInterfacePointer` and
+//! Windows' rpcrt4 writes and reads it (a unique pointer's referent ID, then `MInterfacePointer`: its
+//! conformance, `ulCntData` equal to it, and that many bytes of OBJREF), or Wine's (a byte count,
+//! then the OBJREF). The message says which it is in: a NULL pointer is a zero in both; otherwise the
+//! OBJREF's signature `MEOW` (MS-DCOM 2.2.18) follows the first 32 bits in Wine's layout and the
+//! first 96 in NDR's, and no message is well-formed in both (see `Reader::interface_pointer`). Either
+//! way the count must lie inside the message and the OBJREF inside the count, with the signature, one
+//! of the four flavours, the IID the method declares (what MS-DCOM 3.2.4.1.2 has a client refuse)
+//! and its flavour's fixed part and string bindings inside the count. What a message cannot say is
+//! which runtime will read it: that is the process's, and a reply in the other runtime's layout is
+//! refused, as that runtime would misread it (Wine's rpcrt4 would take a referent ID for a byte count,
+//! Windows' the signature for a conformance).
 
-use crate::com::HRESULT;
+use crate::com::guids::{IID_IEnumGUID, IID_IOPCEnumGUID};
+use crate::com::{GUID, HRESULT};
 
 /// The most elements any array of the five interfaces may carry: GUIDs asked of
 /// `IOPCEnumGUID::Next` (1 MiB of GUIDs), categories given to `EnumClassesOfCategories`, locales
@@ -71,13 +82,38 @@ impl Interface {
     }
 }
 
-/// How the runtime lays out a marshalled interface pointer.
+/// How a runtime lays out a marshalled interface pointer (`[out] I **`) in NDR.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IpLayout {
-    /// Wine's rpcrt4: a 32-bit byte count, then that many bytes of OBJREF (0: NULL).
+    /// NDR's, as MS-DCOM 2.2.14 defines `PMInterfacePointer` (C706 chapter 14) and Windows' rpcrt4
+    /// writes and reads it: a unique pointer's referent ID (0: NULL), then `MInterfacePointer`, a
+    /// conformant structure: its conformance, `ulCntData` (equal to it) and `ulCntData` bytes of OBJREF.
+    Ndr,
+    /// Wine's rpcrt4 (`dlls/rpcrt4/ndr_ole.c`): a 32-bit byte count (0: NULL), then that many bytes of
+    /// OBJREF; no referent ID, no conformance.
     Wine,
-    /// Another runtime (Windows): its own reading is bounded; not checked here.
-    Runtime,
+}
+
+/// `OBJREF.signature`, "MEOW" (MS-DCOM 2.2.18).
+const OBJREF_SIGNATURE: u32 = 0x574F_454D;
+/// `OBJREF_EXTENDED.Signature1` (MS-DCOM 2.2.18.7).
+const OBJREF_EXTENDED_SIGNATURE: u32 = 0x4E53_5956;
+/// `OBJREF.flags`: the four flavours (MS-DCOM 2.2.18).
+const OBJREF_STANDARD: u32 = 1;
+const OBJREF_HANDLER: u32 = 2;
+const OBJREF_CUSTOM: u32 = 4;
+const OBJREF_EXTENDED: u32 = 8;
+/// `STDOBJREF`: flags, cPublicRefs, OXID, OID, IPID (MS-DCOM 2.2.18.1).
+const STDOBJREF_SIZE: usize = 40;
+
+/// A GUID as NDR and an OBJREF carry it: `Data1` to `Data3` little-endian, then `Data4`.
+fn guid_bytes(g: &GUID) -> [u8; 16] {
+    let mut b = [0; 16];
+    b[..4].copy_from_slice(&g.Data1.to_le_bytes());
+    b[4..6].copy_from_slice(&g.Data2.to_le_bytes());
+    b[6..8].copy_from_slice(&g.Data3.to_le_bytes());
+    b[8..].copy_from_slice(&g.Data4);
+    b
 }
 
 /// Reads NDR 2.0 little-endian data, never past the end.
@@ -166,25 +202,113 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
-    /// `[out] I **`: the marshalled interface pointer as the runtime lays it out.
-    fn interface_pointer(&mut self, layout: IpLayout) -> Check {
-        match layout {
-            IpLayout::Wine => {
-                let size = self.u32()?;
-                self.skip(size as usize)
-            }
-            // The runtime bounds its reading of MInterfacePointer; only the HRESULT after it is
-            // required, which `hresult_at_end` checks.
-            IpLayout::Runtime => {
-                self.pos = self.buf.len().saturating_sub(4) & !3;
-                Ok(())
-            }
+    /// The next 32 bits, not consumed; None at the end.
+    fn peek_u32(&self) -> Option<u32> {
+        let mut ahead = Reader {
+            buf: self.buf,
+            pos: self.pos,
+        };
+        ahead.u32().ok()
+    }
+
+    /// `n` bytes.
+    fn take(&mut self, n: usize) -> Result<&'a [u8], HRESULT> {
+        let at = self.pos;
+        self.skip(n)?;
+        Ok(&self.buf[at..at + n])
+    }
+
+    /// A little-endian 16-bit value, unaligned (inside an OBJREF, which is bytes to NDR).
+    fn u16_unaligned(&mut self) -> Result<u16, HRESULT> {
+        let b = self.take(2)?;
+        Ok(u16::from_le_bytes([b[0], b[1]]))
+    }
+
+    /// A little-endian 32-bit value, unaligned.
+    fn u32_unaligned(&mut self) -> Result<u32, HRESULT> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// `[out] I **` whose OBJREF must carry `iid`, in the layout of the message, which must be `reader`'s.
+    ///
+    /// NULL is a zero in both layouts. Otherwise the layout is the message's: Wine's when the OBJREF
+    /// signature follows the first 32 bits, NDR's when not. No message is well-formed in both: NDR's
+    /// would need a conformance equal to the signature (0x574F454D), so `ulCntData` equal to it too,
+    /// which read as Wine's OBJREF is its flavour, none of the four.
+    fn interface_pointer(&mut self, reader: IpLayout, iid: &GUID) -> Check {
+        let first = self.u32()?;
+        if first == 0 {
+            return Ok(());
         }
+        let (layout, count) = if self.peek_u32() == Some(OBJREF_SIGNATURE) {
+            (IpLayout::Wine, first)
+        } else {
+            // The referent ID (any value but 0), then MInterfacePointer: conformance, ulCntData.
+            let max = self.u32()?;
+            if self.u32()? != max {
+                return Err(BAD_STUB_DATA);
+            }
+            (IpLayout::Ndr, max)
+        };
+        objref(self.take(count as usize)?, iid)?;
+        if layout != reader {
+            return Err(BAD_STUB_DATA);
+        }
+        Ok(())
+    }
+
+    /// A DUALSTRINGARRAY (MS-DCOM 2.2.19.1): `wNumEntries` 16-bit units after the header, the security
+    /// bindings' offset among them. (Wine writes an empty one: 0 and 0.)
+    fn dual_string_array(&mut self) -> Check {
+        let entries = self.u16_unaligned()?;
+        let security_offset = self.u16_unaligned()?;
+        if security_offset > entries {
+            return Err(BAD_STUB_DATA);
+        }
+        self.skip(usize::from(entries) * 2)
     }
 
     /// The HRESULT every reply ends with.
     fn hresult(&mut self) -> Check {
         self.u32().map(|_| ())
+    }
+}
+
+/// The OBJREF of an interface pointer, exactly `bytes` (MS-DCOM 2.2.18): the signature, one of the
+/// four flavours, the IID the method declares (what MS-DCOM 3.2.4.1.2 has a client refuse; Wine's
+/// rpcrt4 unmarshals with IID_NULL, so would hand the caller an object of whatever interface the
+/// OBJREF names), and the flavour's fixed part and string bindings inside `bytes`. The rest (OXID,
+/// IPID, bindings, a custom marshaller's data) is COM's to read, within `bytes`.
+fn objref(bytes: &[u8], iid: &GUID) -> Check {
+    let mut r = Reader::new(bytes);
+    if r.u32_unaligned()? != OBJREF_SIGNATURE {
+        return Err(BAD_STUB_DATA);
+    }
+    let flags = r.u32_unaligned()?;
+    if r.take(16)? != guid_bytes(iid) {
+        return Err(BAD_STUB_DATA);
+    }
+    match flags {
+        OBJREF_STANDARD => {
+            r.skip(STDOBJREF_SIZE)?;
+            r.dual_string_array()
+        }
+        // The handler's CLSID between them.
+        OBJREF_HANDLER => {
+            r.skip(STDOBJREF_SIZE + 16)?;
+            r.dual_string_array()
+        }
+        // The marshaller's CLSID, cbExtension, reserved; its data is the rest.
+        OBJREF_CUSTOM => r.skip(16 + 4 + 4),
+        OBJREF_EXTENDED => {
+            r.skip(STDOBJREF_SIZE)?;
+            if r.u32_unaligned()? != OBJREF_EXTENDED_SIGNATURE {
+                return Err(BAD_STUB_DATA);
+            }
+            r.dual_string_array()
+        }
+        _ => Err(BAD_STUB_DATA),
     }
 }
 
@@ -243,8 +367,9 @@ pub fn reply_context(interface: Interface, method: u32, request: &[u8]) -> u32 {
 }
 
 /// Checks a reply to `method` of `interface` before the proxy unmarshals it into the caller's memory.
-/// `context` is [`reply_context`] of the request.
-pub fn check_reply(interface: Interface, method: u32, context: u32, buf: &[u8], drep: u32, ip: IpLayout) -> Check {
+/// `context` is [`reply_context`] of the request; `reader` the layout of interface pointers the
+/// process's runtime reads (the one thing a message cannot say).
+pub fn check_reply(interface: Interface, method: u32, context: u32, buf: &[u8], drep: u32, reader: IpLayout) -> Check {
     method_exists(interface, method)?;
     local_data_representation(drep)?;
     let mut r = Reader::new(buf);
@@ -271,8 +396,11 @@ pub fn check_reply(interface: Interface, method: u32, context: u32, buf: &[u8], 
         }
         // GetErrorString(*ppString)
         (Interface::Common, 6) => r.unique_string()?,
-        // EnumClassesOfCategories(*ppenumClsid), Clone(*ppenum)
-        (Interface::ServerList | Interface::ServerList2, 3) | (Interface::EnumGuid, 6) => r.interface_pointer(ip)?,
+        // EnumClassesOfCategories(*ppenumClsid): IEnumGUID in IOPCServerList, IOPCEnumGUID in IOPCServerList2.
+        (Interface::ServerList, 3) => r.interface_pointer(reader, &IID_IEnumGUID)?,
+        (Interface::ServerList2, 3) => r.interface_pointer(reader, &IID_IOPCEnumGUID)?,
+        // Clone(*ppenum)
+        (Interface::EnumGuid, 6) => r.interface_pointer(reader, &IID_IOPCEnumGUID)?,
         // GetClassDetails: ProgID, user type (and, in IOPCServerList2, the version-independent ProgID).
         (Interface::ServerList, 4) => {
             r.unique_string()?;

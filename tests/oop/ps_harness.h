@@ -179,6 +179,85 @@ static void put_string(ndr_msg *m, const char *ascii) {
     }
 }
 
+/* Bytes as they are, from a 4-byte boundary (an OBJREF is bytes to NDR). */
+static void put_bytes(ndr_msg *m, const void *bytes, size_t n) {
+    while (m->n % 4) m->b[m->n++] = 0;
+    memcpy(m->b + m->n, bytes, n);
+    m->n += n;
+}
+
+/* ---- Interface pointers ([MS-DCOM] 2.2.14 MInterfacePointer, 2.2.18 OBJREF) ---- */
+
+#define OBJREF_SIGNATURE 0x574F454Du /* "MEOW" */
+#define OBJREF_STANDARD 1u
+#define OBJREF_MAX 1024u
+/* The referent ID Windows gives the first pointer of a message (any value but 0 is a pointer). */
+#define NDR_REFERENT_ID 0x00020000u
+
+/* Whether this process's rpcrt4 is Wine's, which writes and reads interface pointers in its own layout
+ * (a byte count, then the OBJREF) rather than NDR's (as Windows' does): Wine's ntdll exports
+ * wine_get_version. */
+static int runtime_reads_wine_layout(void) {
+    HMODULE ntdll = GetModuleHandleW(L"ntdll.dll");
+    return ntdll && GetProcAddress(ntdll, "wine_get_version");
+}
+
+/* What the runtime writes for `unk` as `iid` (CoMarshalInterface: MSHCTX_LOCAL, MSHLFLAGS_NORMAL, so
+ * the references it holds go to whoever unmarshals it, or back with release_objref): its length, 0
+ * when it cannot. */
+static ULONG marshal_objref(IUnknown *unk, REFIID iid, unsigned char out[OBJREF_MAX]) {
+    IStream *stream = NULL;
+    HGLOBAL global = NULL;
+    ULARGE_INTEGER end;
+    LARGE_INTEGER zero;
+    ULONG len = 0;
+    void *bytes;
+    zero.QuadPart = 0;
+    if (FAILED(CreateStreamOnHGlobal(NULL, TRUE, &stream))) return 0;
+    if (SUCCEEDED(CoMarshalInterface(stream, iid, unk, MSHCTX_LOCAL, NULL, MSHLFLAGS_NORMAL)) &&
+        SUCCEEDED(stream->lpVtbl->Seek(stream, zero, STREAM_SEEK_CUR, &end)) && end.QuadPart <= OBJREF_MAX &&
+        SUCCEEDED(GetHGlobalFromStream(stream, &global)) && (bytes = GlobalLock(global)) != NULL) {
+        len = (ULONG)end.QuadPart;
+        memcpy(out, bytes, len);
+        GlobalUnlock(global);
+    }
+    stream->lpVtbl->Release(stream);
+    return len;
+}
+
+/* Gives back the references of an OBJREF nobody unmarshalled (CoReleaseMarshalData). */
+static void release_objref(const unsigned char *objref, ULONG len) {
+    IStream *stream = NULL;
+    LARGE_INTEGER zero;
+    zero.QuadPart = 0;
+    if (FAILED(CreateStreamOnHGlobal(NULL, TRUE, &stream))) return;
+    if (SUCCEEDED(stream->lpVtbl->Write(stream, objref, len, NULL)) &&
+        SUCCEEDED(stream->lpVtbl->Seek(stream, zero, STREAM_SEEK_SET, NULL)))
+        CoReleaseMarshalData(stream);
+    stream->lpVtbl->Release(stream);
+}
+
+/* `[out] I **` in NDR's layout, [MS-DCOM] 2.2.14 PMInterfacePointer as Windows writes it: a referent
+ * ID, then MInterfacePointer (a conformant structure: its conformance, ulCntData, the OBJREF). */
+static void put_ndr_interface_pointer(ndr_msg *m, const unsigned char *objref, ULONG len) {
+    put_u32(m, NDR_REFERENT_ID);
+    put_u32(m, len);
+    put_u32(m, len);
+    put_bytes(m, objref, len);
+}
+
+/* The same in Wine's layout: the byte count, the OBJREF. */
+static void put_wine_interface_pointer(ndr_msg *m, const unsigned char *objref, ULONG len) {
+    put_u32(m, len);
+    put_bytes(m, objref, len);
+}
+
+static unsigned get_u32(const unsigned char *b) {
+    unsigned v;
+    memcpy(&v, b, 4);
+    return v;
+}
+
 static ndr_msg msg_empty(void) {
     ndr_msg m;
     m.n = 0;

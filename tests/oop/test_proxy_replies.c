@@ -118,6 +118,7 @@ typedef struct result {
     unsigned damage;
     int outs_cleared; /* every out-pointer NULL and every count 0 */
     LONG access_violations;
+    void *object; /* the interface pointer an EnumClassesOfCategories or Clone returned (released) */
 } result;
 
 static const GUID reply_guid = {0x40414243, 0x4445, 0x4647, {0x48, 0x49, 0x4a, 0x4b, 0x4c, 0x4d, 0x4e, 0x4f}};
@@ -202,8 +203,13 @@ static result call(unsigned iface, unsigned method, ULONG celt) {
         r.hr = E_NOTIMPL;
     }
     r.damage = zone_damage();
+    r.object = a && (method == 3 ? iface == PS_SERVER_LIST || iface == PS_SERVER_LIST2 : method == 6 && iface == PS_ENUM_GUID)
+                   ? *a
+                   : NULL;
     if (FAILED(r.hr)) {
         r.outs_cleared = (!a || !*a) && (!b || !*b) && (!c || !*c) && (!count || !*count || iface == PS_ENUM_GUID);
+        /* An object a failing peer returned all the same is the caller's to release. */
+        if (r.object) ((IUnknown *)r.object)->lpVtbl->Release((IUnknown *)r.object);
     } else {
         /* What a caller frees after success. */
         if (iface == PS_COMMON || iface == PS_SERVER_LIST || iface == PS_SERVER_LIST2) {
@@ -461,6 +467,219 @@ static void next_beyond_the_bound_is_not_sent(void) {
     free(room);
 }
 
+/* ---- Interface pointers in both layouts ---- */
+
+/* The object whose OBJREFs the replies carry: an IOPCEnumGUID (and IEnumGUID, the same vtable) of this
+ * apartment, so that COM unmarshals it as the object itself. */
+static LONG enum_refs;
+static HRESULT STDMETHODCALLTYPE local_qi(IOPCEnumGUID *This, REFIID riid, void **ppv) {
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCEnumGUID) || IsEqualIID(riid, &IID_IEnumGUID)) {
+        *ppv = This;
+        InterlockedIncrement(&enum_refs);
+        return S_OK;
+    }
+    *ppv = NULL;
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE local_addref(IOPCEnumGUID *This) {
+    (void)This;
+    return (ULONG)InterlockedIncrement(&enum_refs);
+}
+static ULONG STDMETHODCALLTYPE local_release(IOPCEnumGUID *This) {
+    (void)This;
+    return (ULONG)InterlockedDecrement(&enum_refs);
+}
+static HRESULT STDMETHODCALLTYPE local_next(IOPCEnumGUID *This, ULONG celt, GUID *rgelt, ULONG *fetched) {
+    (void)This, (void)celt, (void)rgelt;
+    if (fetched) *fetched = 0;
+    return S_FALSE;
+}
+static HRESULT STDMETHODCALLTYPE local_skip(IOPCEnumGUID *This, ULONG celt) {
+    (void)This, (void)celt;
+    return S_FALSE;
+}
+static HRESULT STDMETHODCALLTYPE local_reset(IOPCEnumGUID *This) {
+    (void)This;
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE local_clone(IOPCEnumGUID *This, IOPCEnumGUID **out) {
+    (void)This;
+    *out = NULL;
+    return E_NOTIMPL;
+}
+static IOPCEnumGUIDVtbl local_enum_vtbl = {local_qi, local_addref, local_release, local_next,
+                                          local_skip, local_reset, local_clone};
+static IOPCEnumGUID local_enum = {&local_enum_vtbl};
+
+/* The three methods that return an interface pointer, with the IID each declares. */
+static const struct {
+    unsigned iface, method;
+    const IID *iid;
+} ip_methods[3] = {{PS_SERVER_LIST, 3, &IID_IEnumGUID},
+                   {PS_SERVER_LIST2, 3, &IID_IOPCEnumGUID},
+                   {PS_ENUM_GUID, 6, &IID_IOPCEnumGUID}};
+
+/* A reply to an interface-pointer method: the pointer in Wine's layout (`wine`) or NDR's, then the HRESULT. */
+static ndr_msg ip_reply(int wine, const unsigned char *objref, ULONG len, HRESULT hr) {
+    ndr_msg m = msg_empty();
+    if (wine) put_wine_interface_pointer(&m, objref, len);
+    else put_ndr_interface_pointer(&m, objref, len);
+    end_reply(&m, hr);
+    return m;
+}
+
+/* The reply refused by opccomn's checks (RPC_X_BAD_STUB_DATA; the unchecked stand-in's runtime fails
+ * otherwise), nothing written, and the OBJREF's references given back. */
+#define CHECK_IP_REFUSED(m, k, objref, len, what)                                                            \
+    do {                                                                                                     \
+        result ip_r_ = call_with(&(m), NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);              \
+        CHECK_REJECTED(ip_r_, what);                                                                         \
+        if (!testing_widl && ip_r_.hr != BAD_STUB_DATA)                                                      \
+            fprintf(stderr, "%s:%d: %s: 0x%08lX, not RPC_X_BAD_STUB_DATA\n", __FILE__, __LINE__, what,        \
+                    (unsigned long)ip_r_.hr);                                                                \
+        CHECK(testing_widl || ip_r_.hr == BAD_STUB_DATA);                                                    \
+        release_objref((objref), (len));                                                                     \
+    } while (0)
+
+/* Replies carrying an OBJREF the runtime itself wrote for an object of this apartment, in the layout
+ * this runtime writes and reads (Wine's: a byte count, then the OBJREF) and in the other (NDR's, as
+ * Windows' rpcrt4 writes it, [MS-DCOM] 2.2.14: referent ID, conformance, ulCntData, OBJREF): the first
+ * comes through as the object itself; the second is refused, as this runtime would misread it (Wine's
+ * rpcrt4 takes a referent ID for a byte count); an OBJREF for another interface than the method
+ * declares is refused in either (Wine's rpcrt4 unmarshals with IID_NULL and would hand the caller an
+ * object of whatever interface the OBJREF names); and each malformed framing or OBJREF, and every
+ * truncation, is refused with nothing written and nothing unmarshalled. */
+static void interface_pointers_in_both_layouts(void) {
+    unsigned char objref[OBJREF_MAX];
+    unsigned k, j;
+    int native = runtime_reads_wine_layout(), foreign = !native;
+    LONG refs_before = enum_refs;
+    printf("proxy: this runtime reads interface pointers in %s layout\n", native ? "Wine's" : "NDR's");
+    for (k = 0; k < 3; k++) {
+        ULONG len;
+        ndr_msg m;
+        result r;
+        /* This runtime's layout, its own OBJREF: the object itself comes back. */
+        len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
+        CHECK(len >= 68 && get_u32(objref) == OBJREF_SIGNATURE && get_u32(objref + 4) == OBJREF_STANDARD);
+        if (len < 68) return;
+        m = ip_reply(native, objref, len, S_OK);
+        r = call_with(&m, NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);
+        if (r.hr != S_OK || r.object != &local_enum)
+            fprintf(stderr, "%s method %u, this runtime's layout: hr 0x%08lX, object %p (expected %p)\n",
+                    PS_NAMES[ip_methods[k].iface], ip_methods[k].method, (unsigned long)r.hr, r.object,
+                    (void *)&local_enum);
+        CHECK(r.hr == S_OK && r.object == &local_enum && r.damage == 0 && r.access_violations == 0);
+        /* ... and refused at every length short of the whole. */
+        len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
+        m = ip_reply(native, objref, len, S_OK);
+        {
+            ndr_msg cut = m;
+            for (cut.n = 0; cut.n < m.n; cut.n++) {
+                result c = call_with(&cut, NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);
+                CHECK_REJECTED(c, "interface pointer cut short");
+            }
+        }
+        release_objref(objref, len);
+        /* The other runtime's layout. */
+        len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
+        m = ip_reply(foreign, objref, len, S_OK);
+        CHECK_IP_REFUSED(m, k, objref, len, "the layout this runtime does not read");
+        /* An OBJREF for IUnknown, in either layout. */
+        for (j = 0; j < 2; j++) {
+            len = marshal_objref((IUnknown *)&local_enum, &IID_IUnknown, objref);
+            m = ip_reply((int)j, objref, len, S_OK);
+            CHECK_IP_REFUSED(m, k, objref, len, "an OBJREF of another interface");
+        }
+        /* The enumerator of the other list's method. */
+        len = marshal_objref((IUnknown *)&local_enum, k ? &IID_IEnumGUID : &IID_IOPCEnumGUID, objref);
+        m = ip_reply(native, objref, len, S_OK);
+        CHECK_IP_REFUSED(m, k, objref, len, "an OBJREF of the other enumerator");
+        /* Malformed: the framing, then the OBJREF (each changed in the reply's copy; the OBJREF's
+         * references given back once at the end). */
+        len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
+        for (j = 0; j < 9; j++) {
+            static const char *const what[9] = {
+                "NDR: ulCntData unlike the conformance", "NDR: a conformance beyond the reply",
+                "Wine: a byte count beyond the reply", "Wine: a byte count short of the OBJREF",
+                "no OBJREF signature", "no OBJREF flavour", "an unknown OBJREF flavour",
+                "string bindings beyond the OBJREF", "no HRESULT after the pointer"};
+            unsigned v;
+            m = ip_reply(j != 0 && j != 1, objref, len, S_OK);
+            switch (j) {
+            case 0: v = len + 4; memcpy(m.b + 8, &v, 4); break;
+            case 1: v = 0x10000; memcpy(m.b + 4, &v, 4); memcpy(m.b + 8, &v, 4); break;
+            case 2: v = 0x10000; memcpy(m.b, &v, 4); break;
+            case 3: v = 40; memcpy(m.b, &v, 4); break;
+            case 4: memcpy(m.b + 4, "WOEM", 4); break;
+            case 5: v = 0; memcpy(m.b + 8, &v, 4); break;
+            case 6: v = 16; memcpy(m.b + 8, &v, 4); break;
+            case 7: m.b[4 + 64] = 0xFF; m.b[4 + 65] = 0x7F; break;
+            default: m.n -= 4;
+            }
+            /* (The stand-in's runtime would read by these counts, past the reply.) */
+            if (testing_widl && (j == 1 || j == 2)) continue;
+            {
+                result c = call_with(&m, NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);
+                CHECK_REJECTED(c, what[j]);
+                CHECK(testing_widl || c.hr == BAD_STUB_DATA);
+            }
+        }
+        release_objref(objref, len);
+    }
+    /* Every reference the OBJREFs held came back. */
+    if (enum_refs != refs_before) fprintf(stderr, "local enumerator: %ld references left\n", (long)(enum_refs - refs_before));
+    CHECK(enum_refs == refs_before);
+}
+
+/* Random mutations of interface-pointer replies carrying the runtime's own OBJREF, in either layout:
+ * a framing word or the HRESULT replaced, the reply cut or extended. (The OBJREF itself is left as
+ * the runtime wrote it: a made-up OXID or IPID would have COM look for a made-up server; its fields
+ * are fuzzed against the checks themselves, fuzz/fuzz_targets/wire.rs.) Whatever passes the checks
+ * is unmarshalled as the object itself; the rest is refused with nothing written. */
+static void mutated_interface_pointers_are_answered_safely(unsigned rounds) {
+    static const unsigned values[] = {0, 1, 4, 24, 64, 67, 68, 69, 72, 0x10000, 0x7FFFFFFFu, 0xFFFFFFFFu,
+                                      OBJREF_SIGNATURE, NDR_REFERENT_ID};
+    unsigned char objref[OBJREF_MAX];
+    unsigned i, accepted = 0, rejected = 0, damaged = 0;
+    LONG avs = access_violations, refs_before = enum_refs;
+    for (i = 0; i < rounds; i++) {
+        /* Mostly this runtime's layout (the other's is refused whatever its framing). */
+        int wine = ps_random() % 4 != 0 ? runtime_reads_wine_layout() : !runtime_reads_wine_layout();
+        unsigned k = ps_random() % 3, header = wine ? 1 : 3;
+        ULONG len = marshal_objref((IUnknown *)&local_enum, ip_methods[k].iid, objref);
+        ndr_msg m = ip_reply(wine, objref, len, S_OK);
+        unsigned v = values[ps_random() % (sizeof(values) / sizeof(values[0]))];
+        result r;
+        switch (ps_random() % 4) {
+        case 0: memcpy(m.b + 4 * (ps_random() % header), &v, 4); break;
+        case 1: memcpy(m.b + m.n - 4, &v, 4); break;
+        case 2: m.n = ps_random() % m.n; break;
+        default: {
+            unsigned extra = 1 + ps_random() % 64;
+            while (extra-- && m.n < sizeof(m.b)) m.b[m.n++] = (unsigned char)ps_random();
+        }
+        }
+        r = call_with(&m, NDR_LOCAL, ip_methods[k].iface, ip_methods[k].method, 0);
+        if (r.object) accepted++;
+        else {
+            rejected++;
+            release_objref(objref, len);
+        }
+        if (r.damage || (r.object && r.object != &local_enum) || ((r.hr == BAD_STUB_DATA) && !r.outs_cleared)) {
+            damaged++;
+            fprintf(stderr, "mutated interface pointer reply to %s method %u: hr 0x%08lX, %u bytes changed, object %p\n",
+                    PS_NAMES[ip_methods[k].iface], ip_methods[k].method, (unsigned long)r.hr, r.damage, r.object);
+        }
+    }
+    CHECK(damaged == 0);
+    CHECK(access_violations == avs);
+    CHECK(enum_refs == refs_before);
+    printf("interface pointer fuzz: %u mutated replies, %u unmarshalled, %u not, %u with caller memory changed, "
+           "%ld access violations, %ld references left\n",
+           rounds, accepted, rejected, damaged, (long)(access_violations - avs), (long)(enum_refs - refs_before));
+}
+
 /* Random mutations of the well-formed replies (interface pointers excepted: an OBJREF's contents are
  * COM's to check, and a made-up one would have COM look for a made-up server). */
 static void mutated_replies_are_answered_safely(unsigned rounds) {
@@ -527,9 +746,16 @@ int main(int argc, char **argv) {
     well_formed_replies_come_through();
     truncated_and_foreign_replies_are_rejected();
     counts_must_fit_the_callers_buffers();
+    if (FAILED(testing_widl ? use_widl_proxy_stub() : use_opccomn_proxy_stub_directly())) {
+        fprintf(stderr, "the proxy/stub could not be registered in this process\n");
+        test_failed++;
+    } else {
+        interface_pointers_in_both_layouts();
+    }
     if (!testing_widl) {
         next_beyond_the_bound_is_not_sent();
         mutated_replies_are_answered_safely(20000);
+        mutated_interface_pointers_are_answered_safely(2000);
     }
     printf("proxy: %ld access violations in all, %ld channel buffers not freed\n", (long)access_violations,
            (long)buffers_out);

@@ -17,6 +17,8 @@
 
 static LONG server_calls;
 static volatile unsigned char sink;
+/* Set: EnumClassesOfCategories and Clone return the server's own enumerator instead of NULL. */
+static int return_objects;
 
 typedef struct server {
     IOPCShutdown IOPCShutdown_iface;
@@ -33,7 +35,7 @@ static HRESULT server_qi(REFIID riid, void **ppv) {
     if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCShutdown)) *ppv = &the_server.IOPCShutdown_iface;
     else if (IsEqualIID(riid, &IID_IOPCCommon)) *ppv = &the_server.IOPCCommon_iface;
     else if (IsEqualIID(riid, &IID_IOPCServerList)) *ppv = &the_server.IOPCServerList_iface;
-    else if (IsEqualIID(riid, &IID_IOPCEnumGUID)) *ppv = &the_server.IOPCEnumGUID_iface;
+    else if (IsEqualIID(riid, &IID_IOPCEnumGUID) || IsEqualIID(riid, &IID_IEnumGUID)) *ppv = &the_server.IOPCEnumGUID_iface;
     else if (IsEqualIID(riid, &IID_IOPCServerList2)) *ppv = &the_server.IOPCServerList2_iface;
     else {
         *ppv = NULL;
@@ -131,6 +133,7 @@ static HRESULT STDMETHODCALLTYPE enum_classes(IOPCServerList *This, ULONG ci, CA
     InterlockedIncrement(&server_calls);
     read_guids(impl, ci);
     read_guids(req, cr);
+    if (return_objects) return server_qi(&IID_IEnumGUID, (void **)out);
     *out = NULL;
     return S_FALSE;
 }
@@ -158,6 +161,7 @@ static HRESULT STDMETHODCALLTYPE enum_classes2(IOPCServerList2 *This, ULONG ci, 
     InterlockedIncrement(&server_calls);
     read_guids(impl, ci);
     read_guids(req, cr);
+    if (return_objects) return server_qi(&IID_IOPCEnumGUID, (void **)out);
     *out = NULL;
     return S_FALSE;
 }
@@ -205,6 +209,7 @@ static HRESULT STDMETHODCALLTYPE enum_reset(IOPCEnumGUID *This) {
 static HRESULT STDMETHODCALLTYPE enum_clone(IOPCEnumGUID *This, IOPCEnumGUID **out) {
     (void)This;
     InterlockedIncrement(&server_calls);
+    if (return_objects) return server_qi(&IID_IOPCEnumGUID, (void **)out);
     *out = NULL;
     return E_NOTIMPL;
 }
@@ -245,6 +250,8 @@ static IRpcChannelBuffer server_channel = {&chan_vtbl};
 /* ---- Invoking a stub ---- */
 
 static IRpcStubBuffer *stubs[PS_INTERFACES];
+/* The reply of the last request the server answered (what the stub marshalled). */
+static ndr_msg last_reply;
 
 typedef struct outcome {
     HRESULT hr;
@@ -268,6 +275,11 @@ static outcome invoke_at(unsigned iface, unsigned method, const void *bytes, siz
     o.hr = stubs[iface]->lpVtbl->Invoke(stubs[iface], &msg, &server_channel);
     o.server_calls = server_calls - calls;
     o.access_violations = access_violations - avs;
+    last_reply.n = 0;
+    if (reply_buffer && msg.Buffer == reply_buffer && msg.cbBuffer <= sizeof(last_reply.b)) {
+        memcpy(last_reply.b, reply_buffer, msg.cbBuffer);
+        last_reply.n = msg.cbBuffer;
+    }
     if (reply_buffer) {
         HeapFree(GetProcessHeap(), 0, reply_buffer);
         reply_buffer = NULL;
@@ -518,6 +530,63 @@ static void mutated_requests_are_answered_safely(unsigned rounds) {
            rounds, accepted, refused, (long)(access_violations - avs), (unsigned long)largest_allocation);
 }
 
+/* The interface pointers the stubs write (EnumClassesOfCategories of both lists, Clone) when the server
+ * returns an object: in the layout this process's runtime reads, which is what opccomn's reply check
+ * (src/proxy/wire.rs) takes for it: under Wine a byte count then the OBJREF, under Windows NDR's
+ * MInterfacePointer ([MS-DCOM] 2.2.14: referent ID, conformance = ulCntData, the OBJREF). Either way
+ * a standard OBJREF ([MS-DCOM] 2.2.18) for the IID the method declares, then the server's HRESULT. The
+ * OBJREF's references are given back (nothing unmarshals it here) and the server's count returns. */
+static void interface_pointers_the_stubs_write(void) {
+    static const struct {
+        unsigned iface, method;
+        const IID *iid;
+    } methods[3] = {{PS_SERVER_LIST, 3, &IID_IEnumGUID}, {PS_SERVER_LIST2, 3, &IID_IOPCEnumGUID},
+                    {PS_ENUM_GUID, 6, &IID_IOPCEnumGUID}};
+    int wine = runtime_reads_wine_layout();
+    unsigned k, i;
+    for (k = 0; k < 3; k++) {
+        const request *r = NULL;
+        LONG refs = the_server.refs;
+        outcome o;
+        size_t at, len = 0, end;
+        for (i = 0; i < request_count; i++)
+            if (requests[i].iface == methods[k].iface && requests[i].method == methods[k].method) r = &requests[i];
+        if (!r) continue;
+        return_objects = 1;
+        o = invoke(r->iface, r->method, &r->m, NDR_LOCAL);
+        return_objects = 0;
+        CHECK(o.hr == S_OK && o.server_calls == 1 && o.access_violations == 0);
+        if (last_reply.n < 8 || get_u32(last_reply.b) == 0) {
+            fprintf(stderr, "%s method %u: no interface pointer in the reply (%u bytes)\n", PS_NAMES[methods[k].iface],
+                    methods[k].method, (unsigned)last_reply.n);
+            test_failed++;
+            continue;
+        }
+        if (wine) {
+            at = 4;
+            len = get_u32(last_reply.b);
+        } else {
+            at = 12;
+            len = last_reply.n >= 12 && get_u32(last_reply.b + 4) == get_u32(last_reply.b + 8) ? get_u32(last_reply.b + 8) : 0;
+        }
+        end = (at + len + 3) & ~(size_t)3;
+        CHECK(len >= 68 && end + 4 <= last_reply.n);
+        if (len < 68 || end + 4 > last_reply.n) continue;
+        CHECK(get_u32(last_reply.b + at) == OBJREF_SIGNATURE);
+        CHECK(get_u32(last_reply.b + at + 4) == OBJREF_STANDARD);
+        CHECK(memcmp(last_reply.b + at + 8, methods[k].iid, sizeof(IID)) == 0);
+        CHECK(get_u32(last_reply.b + end) == S_OK);
+        printf("stub: %s method %u wrote its interface pointer in %s layout: %s%u bytes of OBJREF, then the HRESULT\n",
+               PS_NAMES[methods[k].iface], methods[k].method, wine ? "Wine's" : "NDR's",
+               wine ? "a byte count, " : "a referent ID, conformance = ulCntData, ", (unsigned)len);
+        release_objref(last_reply.b + at, (ULONG)len);
+        if (the_server.refs != refs)
+            fprintf(stderr, "%s method %u: %ld server references left\n", PS_NAMES[methods[k].iface], methods[k].method,
+                    (long)(the_server.refs - refs));
+        CHECK(the_server.refs == refs);
+    }
+}
+
 int main(int argc, char **argv) {
     IPSFactoryBuffer *factory;
     unsigned i;
@@ -542,6 +611,12 @@ int main(int argc, char **argv) {
     category_counts_must_match_the_wire();
     next_counts_are_bounded();
     strings_must_be_whole();
+    if (FAILED(testing_widl ? use_widl_proxy_stub() : use_opccomn_proxy_stub_directly())) {
+        fprintf(stderr, "the proxy/stub could not be registered in this process\n");
+        test_failed++;
+    } else {
+        interface_pointers_the_stubs_write();
+    }
     if (!testing_widl) mutated_requests_are_answered_safely(20000);
     printf("stub: %ld access violations in all\n", (long)access_violations);
     CHECK(access_violations == 0);

@@ -28,6 +28,14 @@ impl Msg {
         }
         m
     }
+    /// Bytes as they are (an OBJREF is bytes to NDR), starting at a 4-byte boundary.
+    fn raw(mut self, bytes: &[u8]) -> Self {
+        while self.0.len() % 4 != 0 {
+            self.0.push(0);
+        }
+        self.0.extend_from_slice(bytes);
+        self
+    }
     fn bytes(&self) -> &[u8] {
         &self.0
     }
@@ -216,22 +224,277 @@ fn string_and_guid_replies() {
     });
 }
 
+// ---- Interface pointers: OBJREFs (MS-DCOM 2.2.18) in both layouts ----
+
+/// An OBJREF built field by field from MS-DCOM 2.2.18: signature, flags, IID, then the flavour.
+#[derive(Clone)]
+struct Objref(Vec<u8>);
+
+impl Objref {
+    fn header(flags: u32, iid: &GUID) -> Self {
+        let mut b = OBJREF_SIGNATURE.to_le_bytes().to_vec();
+        b.extend_from_slice(&flags.to_le_bytes());
+        b.extend_from_slice(&guid_bytes(iid));
+        Objref(b)
+    }
+    /// STDOBJREF (MS-DCOM 2.2.18.1): flags, cPublicRefs, OXID, OID, IPID.
+    fn std(mut self) -> Self {
+        self.0.extend_from_slice(&0u32.to_le_bytes());
+        self.0.extend_from_slice(&5u32.to_le_bytes());
+        self.0.extend_from_slice(&0x1122_3344_5566_7788u64.to_le_bytes());
+        self.0.extend_from_slice(&0x99AA_BBCC_DDEE_FF00u64.to_le_bytes());
+        self.0.extend((0..16).map(|i| 0xC0 + i as u8));
+        self
+    }
+    fn u16s(mut self, units: &[u16]) -> Self {
+        for u in units {
+            self.0.extend_from_slice(&u.to_le_bytes());
+        }
+        self
+    }
+    fn bytes(mut self, b: &[u8]) -> Self {
+        self.0.extend_from_slice(b);
+        self
+    }
+    /// A DUALSTRINGARRAY (MS-DCOM 2.2.19.1) as Windows fills it: one string binding (ncacn_ip_tcp,
+    /// "127.0.0.1[49670]") and one security binding (NTLM, default authorization, no principal).
+    fn windows_bindings(self) -> Self {
+        let mut units: Vec<u16> = vec![0x07];
+        units.extend("127.0.0.1[49670]".encode_utf16());
+        units.push(0);
+        units.push(0); // end of the string bindings
+        let security = units.len() as u16;
+        units.extend([0x0A, 0xFFFF, 0, 0]); // a binding with an empty principal, then the end
+        self.u16s(&[units.len() as u16, security]).u16s(&units)
+    }
+    /// A standard OBJREF as Windows writes it.
+    fn windows(iid: &GUID) -> Self {
+        Objref::header(OBJREF_STANDARD, iid).std().windows_bindings()
+    }
+    /// A standard OBJREF as Wine's combase writes it: an empty DUALSTRINGARRAY (68 bytes in all).
+    fn wine(iid: &GUID) -> Self {
+        Objref::header(OBJREF_STANDARD, iid).std().u16s(&[0, 0])
+    }
+    fn len(&self) -> u32 {
+        self.0.len() as u32
+    }
+}
+
+/// `[out] I **` then the HRESULT in NDR's layout (MS-DCOM 2.2.14 `PMInterfacePointer`): the referent
+/// ID Windows uses first, conformance, ulCntData, the OBJREF.
+fn ndr_reply(o: &Objref) -> Msg {
+    Msg::default()
+        .u32(0x0002_0000)
+        .u32(o.len())
+        .u32(o.len())
+        .raw(&o.0)
+        .u32(0)
+}
+
+/// The same in Wine's layout: the byte count, the OBJREF.
+fn wine_reply(o: &Objref) -> Msg {
+    Msg::default().u32(o.len()).raw(&o.0).u32(0)
+}
+
+/// The three methods that return an interface pointer, with the IID each declares.
+const IP_METHODS: [(Interface, u32, GUID); 3] = [
+    (Interface::ServerList, 3, IID_IEnumGUID),
+    (Interface::ServerList2, 3, IID_IOPCEnumGUID),
+    (Interface::EnumGuid, 6, IID_IOPCEnumGUID),
+];
+
+fn ip_reply(iface: Interface, method: u32, m: &Msg, reader: IpLayout) -> Check {
+    check_reply(iface, method, 0, m.bytes(), LOCAL, reader)
+}
+
 #[test]
-fn interface_pointer_replies_stay_inside_the_message() {
+fn a_null_interface_pointer_is_one_zero_in_either_layout() {
     let null = Msg::default().u32(0).u32(0x80004005);
-    assert_eq!(reply(Interface::EnumGuid, 6, 0, &null), Ok(()));
-    let objref = Msg::default().u32(8).u32(0x574f454d).u32(1).u32(0);
-    truncations_refused(&objref, |b| {
-        check_reply(Interface::ServerList, 3, 0, b, LOCAL, IpLayout::Wine)
-    });
-    let beyond = Msg::default().u32(0x1000).u32(0x574f454d).u32(0);
-    assert_eq!(reply(Interface::ServerList2, 3, 0, &beyond), Err(BAD_STUB_DATA));
-    // Another runtime reads its own layout; an HRESULT must still be there.
-    assert_eq!(
-        check_reply(Interface::EnumGuid, 6, 0, objref.bytes(), LOCAL, IpLayout::Runtime),
-        Ok(())
-    );
-    assert!(check_reply(Interface::EnumGuid, 6, 0, &[0, 0], LOCAL, IpLayout::Runtime).is_err());
+    for (iface, method, _) in IP_METHODS {
+        truncations_refused(&null, |b| check_reply(iface, method, 0, b, LOCAL, IpLayout::Ndr));
+        truncations_refused(&null, |b| check_reply(iface, method, 0, b, LOCAL, IpLayout::Wine));
+    }
+}
+
+#[test]
+fn interface_pointers_as_windows_writes_them_pass_where_ndr_is_read() {
+    for (iface, method, iid) in IP_METHODS {
+        let m = ndr_reply(&Objref::windows(&iid));
+        truncations_refused(&m, |b| check_reply(iface, method, 0, b, LOCAL, IpLayout::Ndr));
+        // Wine's rpcrt4 would take the referent ID for a byte count.
+        assert_eq!(ip_reply(iface, method, &m, IpLayout::Wine), Err(BAD_STUB_DATA));
+        // Any referent ID but 0 is a pointer; the bytes after the OBJREF are padded to the HRESULT.
+        let odd = Objref::windows(&iid).bytes(&[0xEE]);
+        let m = Msg::default().u32(1).u32(odd.len()).u32(odd.len()).raw(&odd.0).u32(0);
+        assert_eq!(m.0.len() % 4, 0);
+        truncations_refused(&m, |b| check_reply(iface, method, 0, b, LOCAL, IpLayout::Ndr));
+    }
+}
+
+#[test]
+fn interface_pointers_as_wine_writes_them_pass_where_wines_layout_is_read() {
+    for (iface, method, iid) in IP_METHODS {
+        let m = wine_reply(&Objref::wine(&iid));
+        assert_eq!(m.0.len(), 4 + 68 + 4);
+        truncations_refused(&m, |b| check_reply(iface, method, 0, b, LOCAL, IpLayout::Wine));
+        // Windows' rpcrt4 would take the signature for a conformance.
+        assert_eq!(ip_reply(iface, method, &m, IpLayout::Ndr), Err(BAD_STUB_DATA));
+        // Windows' OBJREF in Wine's framing is Wine's layout too.
+        let m = wine_reply(&Objref::windows(&iid));
+        assert_eq!(ip_reply(iface, method, &m, IpLayout::Wine), Ok(()));
+    }
+}
+
+#[test]
+fn every_objref_flavour_passes_within_its_count() {
+    let iid = IID_IOPCEnumGUID;
+    let flavours = [
+        Objref::header(OBJREF_HANDLER, &iid)
+            .std()
+            .bytes(&[0x11; 16])
+            .windows_bindings(),
+        // A custom marshaller's CLSID, cbExtension, reserved and its data.
+        Objref::header(OBJREF_CUSTOM, &iid)
+            .bytes(&[0x22; 16])
+            .bytes(&[0; 8])
+            .bytes(b"marshalled by value"),
+        Objref::header(OBJREF_CUSTOM, &iid).bytes(&[0x22; 16]).bytes(&[0; 8]),
+        Objref::header(OBJREF_EXTENDED, &iid)
+            .std()
+            .bytes(&OBJREF_EXTENDED_SIGNATURE.to_le_bytes())
+            .windows_bindings()
+            .bytes(&1u32.to_le_bytes())
+            .bytes(&OBJREF_EXTENDED_SIGNATURE.to_le_bytes())
+            .bytes(&[0x33; 24]),
+    ];
+    for o in &flavours {
+        truncations_refused(&ndr_reply(o), |b| {
+            check_reply(Interface::EnumGuid, 6, 0, b, LOCAL, IpLayout::Ndr)
+        });
+        truncations_refused(&wine_reply(o), |b| {
+            check_reply(Interface::EnumGuid, 6, 0, b, LOCAL, IpLayout::Wine)
+        });
+    }
+}
+
+/// Each way an interface pointer can be malformed, in both layouts: refused whichever runtime reads.
+#[test]
+fn malformed_interface_pointers_are_refused_in_either_layout() {
+    let iid = IID_IOPCEnumGUID;
+    let good = Objref::windows(&iid);
+    let with = |at: usize, bytes: &[u8]| {
+        let mut o = good.clone();
+        o.0[at..at + bytes.len()].copy_from_slice(bytes);
+        o
+    };
+    let objrefs = [
+        ("no signature", with(0, b"WOEM")),
+        ("no flavour", with(4, &0u32.to_le_bytes())),
+        ("two flavours", with(4, &3u32.to_le_bytes())),
+        ("an unknown flavour", with(4, &16u32.to_le_bytes())),
+        (
+            "another interface",
+            with(8, &guid_bytes(&crate::com::guids::IID_IUnknown)),
+        ),
+        ("the other enumerator", with(8, &guid_bytes(&IID_IEnumGUID))),
+        ("bindings beyond the OBJREF", with(64, &200u16.to_le_bytes())),
+        ("a security offset beyond the bindings", with(66, &200u16.to_le_bytes())),
+        ("cut in the STDOBJREF", Objref(good.0[..40].to_vec())),
+        ("cut in the bindings", Objref(good.0[..good.0.len() - 2].to_vec())),
+        ("the header only", Objref(good.0[..24].to_vec())),
+        (
+            "an extended OBJREF without its signature",
+            Objref::header(OBJREF_EXTENDED, &iid).std().bytes(&[0; 4]).u16s(&[0, 0]),
+        ),
+        (
+            "a custom OBJREF cut in its header",
+            Objref::header(OBJREF_CUSTOM, &iid).bytes(&[0; 20]),
+        ),
+    ];
+    for (what, o) in &objrefs {
+        for reader in [IpLayout::Ndr, IpLayout::Wine] {
+            assert_eq!(
+                ip_reply(Interface::EnumGuid, 6, &ndr_reply(o), reader),
+                Err(BAD_STUB_DATA),
+                "{what}, NDR's layout, {reader:?} reading"
+            );
+            assert_eq!(
+                ip_reply(Interface::EnumGuid, 6, &wine_reply(o), reader),
+                Err(BAD_STUB_DATA),
+                "{what}, Wine's layout, {reader:?} reading"
+            );
+        }
+    }
+    let n = good.len();
+    let framings = [
+        // NDR: ulCntData unequal to the conformance, either way; a count beyond the message.
+        (
+            "ulCntData below the conformance",
+            Msg::default().u32(1).u32(n).u32(n - 4).raw(&good.0).u32(0),
+        ),
+        (
+            "ulCntData above the conformance",
+            Msg::default().u32(1).u32(n).u32(n + 4).raw(&good.0).u32(0),
+        ),
+        (
+            "a conformance beyond the reply",
+            Msg::default().u32(1).u32(0x1000).u32(0x1000).raw(&good.0).u32(0),
+        ),
+        (
+            "a count the OBJREF does not fill",
+            Msg::default().u32(1).u32(n + 8).u32(n + 8).raw(&good.0).u32(0),
+        ),
+        (
+            "a count short of the OBJREF",
+            Msg::default().u32(1).u32(n - 8).u32(n - 8).raw(&good.0).u32(0),
+        ),
+        ("no HRESULT after it", Msg::default().u32(1).u32(n).u32(n).raw(&good.0)),
+        // Wine: a byte count beyond the reply, short of the OBJREF, or covering the HRESULT.
+        (
+            "a size beyond the reply",
+            Msg::default().u32(0x1000).raw(&good.0).u32(0),
+        ),
+        ("a size short of the OBJREF", Msg::default().u32(24).raw(&good.0).u32(0)),
+        ("a size over the HRESULT", Msg::default().u32(n + 4).raw(&good.0).u32(0)),
+        // The ambiguity: an NDR conformance equal to the signature reads as Wine's layout with ulCntData
+        // for a flavour, which none is.
+        (
+            "a conformance equal to the signature",
+            Msg::default()
+                .u32(1)
+                .u32(OBJREF_SIGNATURE)
+                .u32(OBJREF_SIGNATURE)
+                .raw(&good.0)
+                .u32(0),
+        ),
+    ];
+    for (what, m) in &framings {
+        for (iface, method, _) in IP_METHODS {
+            for reader in [IpLayout::Ndr, IpLayout::Wine] {
+                assert_eq!(
+                    ip_reply(iface, method, m, reader),
+                    Err(BAD_STUB_DATA),
+                    "{what}, {reader:?} reading"
+                );
+            }
+        }
+    }
+}
+
+/// The checks made before both layouts were told apart took Windows' layout on trust: any reply of
+/// four bytes or more passed. Each of these did.
+#[test]
+fn ndr_layout_is_checked_not_skipped() {
+    let objref = Objref::windows(&IID_IOPCEnumGUID);
+    let n = objref.len();
+    for m in [
+        Msg::default().u32(1).u32(n).u32(n + 4).raw(&objref.0).u32(0),
+        Msg::default().u32(1).u32(0x7FFF_FFFF).u32(0x7FFF_FFFF).u32(0),
+        ndr_reply(&Objref::windows(&IID_IEnumGUID)),
+        Msg::default().u32(1).u32(8).u32(8).u32(0).u32(0).u32(0),
+    ] {
+        assert_eq!(ip_reply(Interface::EnumGuid, 6, &m, IpLayout::Ndr), Err(BAD_STUB_DATA));
+    }
 }
 
 /// Arbitrary bytes never make the checks panic or read out of bounds (Miri runs this too).
@@ -257,8 +520,13 @@ fn arbitrary_bytes_are_answered() {
         let iface = Interface::from_index((next() % 5) as u32).unwrap();
         let method = (next() % 9) as u32;
         let _ = check_request(iface, method, &bytes, LOCAL);
-        let _ = check_reply(iface, method, (next() % 70) as u32, &bytes, LOCAL, IpLayout::Wine);
-        let _ = check_reply(iface, method, 1, &bytes, LOCAL, IpLayout::Runtime);
+        let context = (next() % 70) as u32;
+        let wine = check_reply(iface, method, context, &bytes, LOCAL, IpLayout::Wine);
+        let ndr = check_reply(iface, method, context, &bytes, LOCAL, IpLayout::Ndr);
+        // Only a NULL interface pointer reads the same in both layouts.
+        if wine.is_ok() && ndr.is_ok() && IP_METHODS.iter().any(|&(i, m, _)| (i, m) == (iface, method)) {
+            assert_eq!(bytes[..4], [0; 4]);
+        }
         let _ = reply_context(iface, method, &bytes);
     }
 }
