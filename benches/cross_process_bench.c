@@ -40,8 +40,10 @@
  * scripts/bench-cross-process.sh [N]: N GetErrorString and N/5 Enum+Next per contender in all
  * (default 10200).
  *
- *   cross_process_bench [--rounds R] [--budget-s S] [--stall-s S] [--simulate-stall ROUND] [N]
- *   cross_process_bench --unregister      removes the classes a run killed from outside left
+ *   cross_process_bench [--rounds R] [--budget-s S] [--stall-s S] [--simulate-stall ROUND] [--sets F] [N]
+ *   cross_process_bench [--sets F] --unregister   removes the classes a run killed from outside left
+ *
+ * --sets F gives the contenders the test server's classes of sets F, F+1 and F+2 (oop.h; default 1).
  *
  * --simulate-stall ROUND makes the first batch of that round hang as a round trip that never returns
  * does (tests/oop/test_bench_registration.c uses it). */
@@ -398,7 +400,7 @@ static DWORD WINAPI watchdog(void *unused) {
 }
 
 static int usage(void) {
-    fprintf(stderr, "usage: cross_process_bench [--rounds R] [--budget-s S] [--stall-s S] [--simulate-stall ROUND] [N]\n"
+    fprintf(stderr, "usage: cross_process_bench [--rounds R] [--budget-s S] [--stall-s S] [--simulate-stall ROUND] [--sets F] [N]\n"
                     "       cross_process_bench --unregister\n");
     return 2;
 }
@@ -415,7 +417,10 @@ int main(int argc, char **argv) {
     wcscpy(slash ? slash + 1 : server_path, L"opccomn_test_server.exe");
     for (a = 1; a < argc; a++) {
         const char *value = a + 1 < argc ? argv[a + 1] : NULL;
-        if (!strcmp(argv[a], "--unregister")) {
+        if (!strcmp(argv[a], "--sets") && value && atoi(value) >= 1 && atoi(value) + CONTENDERS - 1 <= 9) {
+            for (i = 0; i < CONTENDERS; i++) contenders[i].set = (unsigned)(atoi(value) + i);
+            a++;
+        } else if (!strcmp(argv[a], "--unregister")) {
             unregister_all();
             printf("cross_process_bench: the benchmark's classes removed\n");
             return 0;

@@ -32,11 +32,14 @@ static int key_exists(const WCHAR *key) {
 }
 
 /* How many of the benchmark's classes (sets 1-3, server and server list) and ProgIDs are registered. */
-static int bench_keys_left(void) {
+/* The stalled run's sets (see main): x64 4-6, x86 7-9; the other runs use 1-3, the reconnect test 3. */
+#define STALL_SETS (sizeof(void *) == 8 ? 4u : 7u)
+
+static int bench_keys_left(unsigned first) {
     WCHAR key[80], guid[40];
     unsigned set;
     int list, left = 0;
-    for (set = 1; set <= 3; set++)
+    for (set = first; set < first + 3; set++)
         for (list = 0; list < 2; list++) {
             CLSID clsid = oop_class(set, list);
             StringFromGUID2(&clsid, guid, 40);
@@ -109,6 +112,7 @@ static int as_before(OpcRegistry *sys, const WCHAR *before) {
 
 int main(void) {
     static char out[65536];
+    WCHAR args[80];
     OpcRegistry *sys = NULL;
     LPWSTR before;
     WCHAR *slash;
@@ -128,15 +132,19 @@ int main(void) {
     CHECK(strstr(out, "GOAL GetErrorString") != NULL && strstr(out, "GOAL Enum+Next(100)") != NULL);
     CHECK(strstr(out, "STALLED") == NULL && strstr(out, "no figures") == NULL);
     CHECK(as_before(sys, before));
-    CHECK(bench_keys_left() == 0);
+    CHECK(bench_keys_left(1) == 0);
 
-    /* A run that stalls in its second round. */
-    CHECK(run_bench(L"--rounds 3 --stall-s 3 --simulate-stall 2 15", out, sizeof out) == 3);
+    /* A run that stalls in its second round. Its servers are ended, and Wine's COM keeps the class
+     * registration of an ended server until the Wine session ends (later activations of those
+     * CLSIDs fail with RPC_S_SERVER_UNAVAILABLE): this run uses classes of its own, other ones for each
+     * architecture, which nothing else in the session activates. */
+    swprintf(args, 80, L"--rounds 3 --stall-s 3 --simulate-stall 2 --sets %u 15", STALL_SETS);
+    CHECK(run_bench(args, out, sizeof out) == 3);
     CHECK(strstr(out, "STALLED: round 2: the GetErrorString batch") != NULL);
     CHECK(strstr(out, "PARTIAL: the figures of 1 of the 3 rounds") != NULL);
     CHECK(strstr(out, "GOAL GetErrorString") != NULL);
     CHECK(as_before(sys, before));
-    CHECK(bench_keys_left() == 0);
+    CHECK(bench_keys_left(STALL_SETS) == 0);
     /* Its three servers were ended (the first run's end by themselves once released). */
     for (waited = 0; waited < 150 && process_running(L"opccomn_test_server.exe") == 1; waited++) Sleep(100);
     CHECK(process_running(L"opccomn_test_server.exe") == 0);
