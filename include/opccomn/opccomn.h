@@ -1328,7 +1328,7 @@ typedef const WCHAR *LPCOLESTR;
 /**
  * The filter string was not valid (MatchPattern's compiled filter).
  *
- * @ingroup com
+ * @ingroup pattern
  */
 #define OPC_E_INVALIDFILTER ((HRESULT)0xC0040009L)
 

@@ -41,8 +41,10 @@ pub const CLASSES: &[(&str, &str)] = &[
     ("CLSID_OpcComnProxyStub", "proxystub"),
 ];
 
-/// The declarations written by hand in cbindgen.toml (and the generator), by name.
+/// Declarations by name: those written by hand in cbindgen.toml (and the generator), and the few whose
+/// area is not their source's (an OPC code defined among COM's).
 pub const NAMED: &[(&str, &str)] = &[
+    ("OPC_E_INVALIDFILTER", "pattern"),
     ("OPCCOMN_VERSION_MAJOR", "header"),
     ("OPCCOMN_VERSION_MINOR", "header"),
     ("OPCCOMN_VERSION_PATCH", "header"),
@@ -101,11 +103,11 @@ pub fn of(
         }
         return by_table(i);
     }
-    if let Some(file) = origins.get(name) {
-        return of_source(file);
-    }
     if let Some((_, g)) = NAMED.iter().find(|(n, _)| *n == name) {
         return Some(g);
+    }
+    if let Some(file) = origins.get(name) {
+        return of_source(file);
     }
     by_table(name)
 }
