@@ -74,6 +74,9 @@ fn main() -> ExitCode {
         Ok(h) => h,
         Err(e) => {
             eprintln!("{e}");
+            for p in &sources.problems {
+                eprintln!("rules: {p}");
+            }
             return ExitCode::FAILURE;
         }
     };
@@ -101,13 +104,13 @@ fn main() -> ExitCode {
             println!("wrote {path}");
         }
     }
-    // What the compiler cannot check about the boundary.
+    // What the compiler cannot check about the boundary, and the names.
     for p in &sources.problems {
-        eprintln!("boundary: {p}");
+        eprintln!("rules: {p}");
     }
     if !sources.problems.is_empty() {
         eprintln!(
-            "{} breach(es) of the boundary's rules (tools/gen-header/src/rustcheck.rs)",
+            "{} breach(es) of the boundary's rules or the naming rule (tools/gen-header/src/rustcheck.rs)",
             sources.problems.len()
         );
         return ExitCode::FAILURE;
