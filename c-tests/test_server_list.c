@@ -372,7 +372,7 @@ static void test_class_factory(void) {
     CHECK_HR(OpcDllGetClassObject(&CLSID_OPCServerList, &IID_ClassFactory_, &p), S_OK);
     f = (IClassFactoryLike *)p;
     CHECK_HR(f->lpVtbl->LockServer(f, FALSE), S_OK);
-    CHECK_HR(f->lpVtbl->LockServer(f, FALSE), S_OK); /* an unlock too many is ignored */
+    CHECK_HR(f->lpVtbl->LockServer(f, FALSE), S_FALSE); /* an unlock too many gives back nothing */
     f->lpVtbl->Release(f);
     CHECK_HR(OpcDllCanUnloadNow(), S_OK);
 }

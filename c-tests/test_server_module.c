@@ -86,6 +86,23 @@ int main(void) {
     OpcServerUnlock();
     OpcServerUnlock(); /* one too many: ignored */
     CHECK_HR(OpcModuleCanUnloadNow(), S_OK);
+    /* Each gives back only what it took: a LockServer(FALSE) without a TRUE (any client may send one)
+     * does not take the server's own object's count, nor an OpcServerUnlock too many a LockServer's. */
+    CHECK_HR(OpcModuleGetClassObject(table, 2, OPCCOMN_RIID(CLSID_One), OPCCOMN_RIID(IID_IClassFactory), &p), S_OK);
+    factory = (IClassFactory *)p;
+    OpcServerLock();
+    CHECK_HR(factory->lpVtbl->LockServer(factory, FALSE), S_FALSE);
+    CHECK_HR(factory->lpVtbl->LockServer(factory, TRUE), S_OK);
+    OpcServerUnlock();
+    OpcServerUnlock(); /* one too many: the LockServer lock stays */
+    factory->lpVtbl->Release(factory);
+    CHECK_HR(OpcModuleCanUnloadNow(), S_FALSE);
+    CHECK_HR(OpcModuleGetClassObject(table, 2, OPCCOMN_RIID(CLSID_One), OPCCOMN_RIID(IID_IClassFactory), &p), S_OK);
+    factory = (IClassFactory *)p;
+    CHECK_HR(factory->lpVtbl->LockServer(factory, FALSE), S_OK);
+    CHECK_HR(factory->lpVtbl->LockServer(factory, FALSE), S_FALSE);
+    factory->lpVtbl->Release(factory);
+    CHECK_HR(OpcModuleCanUnloadNow(), S_OK);
 
     /* An aggregatable class: the inner IUnknown for an outer object that asks for IUnknown only. */
     CHECK_HR(OpcClassFactoryCreate(&table[1], OPCCOMN_RIID(IID_IClassFactory), &p), S_OK);

@@ -165,20 +165,21 @@ skip_part() {
 
 # Runs the C tests of a 32-bit Windows build directory under 32-bit Wine and proves they ran: a 32-bit
 # program that did not start prints nothing, so every test must have printed its closing line.
+# Usage: run_x86_c_tests DIR [CTEST_EXCLUDE_REGEX]
 run_x86_c_tests() {
-    local dir=$1 tests t oop_tests ps_tests lines
+    local dir=$1 exclude=${2:-^$} tests t oop_tests ps_tests lines
     # (ctest -N rewrites Testing/Temporary/LastTest.log: list the tests before running them.)
-    tests=$(ctest --test-dir "$dir" -N | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
-    oop_tests=$(ctest --test-dir "$dir" -N | grep -cE '^ *Test +#[0-9]+: oop\.') || true
-    ps_tests=$(ctest --test-dir "$dir" -N | grep -cE '^ *Test +#[0-9]+: ps\.test_[a-z_]+$') || true
+    tests=$(ctest --test-dir "$dir" -N -E "$exclude" | sed -nE 's/^ *Test +#[0-9]+: c\.(test_[A-Za-z0-9_]+)$/\1/p')
+    oop_tests=$(ctest --test-dir "$dir" -N -E "$exclude" | grep -cE '^ *Test +#[0-9]+: oop\.') || true
+    ps_tests=$(ctest --test-dir "$dir" -N -E "$exclude" | grep -cE '^ *Test +#[0-9]+: ps\.test_[a-z_]+$') || true
     [ -n "$tests" ] || { echo "no C tests found in $dir" >&2; return 1; }
-    ctest --test-dir "$dir" --output-on-failure --timeout 300
+    ctest --test-dir "$dir" --output-on-failure --timeout 300 -E "$exclude"
     for t in $tests; do
         grep -qE "^$t: [0-9]+ passed, 0 failed" "$dir/Testing/Temporary/LastTest.log" ||
             { echo "$t (x86, $dir) printed no result line" >&2; return 1; }
     done
     # The cross-process tests (tests/oop) of the same build: one result line per ctest entry.
-    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration): [0-9]+ passed, 0 failed' \
+    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration|reconnect): [0-9]+ passed, 0 failed' \
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
         { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }
@@ -353,9 +354,21 @@ stage_coexistence() {
     scripts/test-static-link.sh windows x86 "$build/windows-x86" "$x86_mode"
 }
 
+# Reconnects to the example's EXE server at the host's defaults (tests/oop/test_reconnect.c): 8
+# processes x 25 reconnects at gaps spread over 0 to 3 s, each to succeed. Usage: example_reconnects
+# EXAMPLE_DIR TEST_RECONNECT_EXE
+example_reconnects() {
+    local server="$1/opccomn_example_server.exe" rc=0
+    wine "$server" /RegServer
+    sh tests/oop/run-isolated.sh wine "$2" example || rc=$?
+    wine "$server" /UnregServer
+    return "$rc"
+}
+
 stage_example_x64() {
     build_windows
     example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
+    example_reconnects "$build/example-x64" "$build/windows/bin/test_reconnect.exe"
 }
 
 stage_third_party_client() {
@@ -432,14 +445,16 @@ stage_win7_build() {
     fi
 }
 
+# The Windows 7 builds differ from the others in the system functions they import, not in the host's
+# lifetime: the reconnect test (a minute of gaps) runs in c-windows and c-x86 only.
 stage_c_win7_x64() {
     build_win7 x64
-    ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300
+    ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300 -E '^oop\.reconnect$'
 }
 
 stage_c_win7_x86() {
     build_win7 x86
-    run_x86_c_tests "$build/windows7-x86"
+    run_x86_c_tests "$build/windows7-x86" '^oop\.reconnect$'
 }
 
 stage_package_windows() {
@@ -520,6 +535,12 @@ stage_package_cpp_example() {
             continue
         fi
         ctest --test-dir "$dir" --output-on-failure --timeout 300
+        if [ "$arch" = x86 ]; then
+            # The x86 example at the host's defaults, reconnected to by x86 clients (the x64 example
+            # in stage example-x64).
+            build_windows_x86
+            example_reconnects "$dir" "$build/windows-x86/bin/test_reconnect.exe"
+        fi
         # The package's opccomn-check of the same architecture against this example DLL: all passed.
         cp "$pkg/$arch/opccomn-check.exe" "$dir/"
         (cd "$dir" && wine regsvr32 /s opccomn_example_inproc.dll)

@@ -936,17 +936,11 @@ typedef struct OpcSecurityOptions {
 } OpcSecurityOptions;
 
 /**
- * Makes an instance of a server's class for IClassFactory::CreateInstance. The library has already
- * checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
- *
- * @param context OpcServerClass::context.
- * @param outer the controlling IUnknown to aggregate the object into, or NULL (only for a class with
- *   OPC_CLASS_AGGREGATABLE; `riid` is then IID_IUnknown and the result the inner, non-delegating
- *   IUnknown).
- * @param riid the interface the client asks for.
- * @param[out] ppv where to store the object's interface `riid`; left NULL on failure.
- *
- * @return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...).
+ * Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
+ * into `outer` when `outer` is not NULL (only for a class with OPC_CLASS_AGGREGATABLE; `riid` is then
+ * IID_IUnknown and the result the inner, non-delegating IUnknown), its interface `riid` in `*ppv`.
+ * Return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...). The library has
+ * already checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
  *
  * @ingroup plumbing
  */
@@ -982,7 +976,7 @@ typedef struct OpcServerClass {
    */
   uint32_t flags;
   /**
-   * What `/RegServer` (OpcExeServerMain) and OpcModuleRegister() write for the class, NULL for a
+   * What `/RegServer` (OpcExeServerRun()) and OpcModuleRegister() write for the class, NULL for a
    * class that is not registered by them. Its `clsid` must be this class's.
    */
   const struct OpcServerRegistration *registration;
@@ -993,8 +987,6 @@ typedef struct OpcServerClass {
  * multithreaded apartment) while clients may still be connected: ask them to disconnect here
  * (IOPCShutdown, OpcShutdownNotifyBounded() with a timeout, so that a hung client cannot hold the
  * stop). Not called when the server ends because its last client left.
- *
- * @param context OpcExeServerOptions::context.
  *
  * @ingroup plumbing
  */
@@ -1022,7 +1014,11 @@ typedef struct OpcExeServerOptions {
   uint32_t class_count;
   /**
    * The name of an event the operator's tools set to stop the server (for example
-   * `L"Local\\VendorServerStop"`), NULL for none.
+   * `L"Local\\VendorServerStop"`), NULL for none. The host creates it (manual reset, not set) with
+   * access for SYSTEM, the administrators and the account the server runs as, and nobody else:
+   * they may set it (OpenEventW with EVENT_MODIFY_STATE, then SetEvent). If an object of that name
+   * already exists, OpcExeServerRun() refuses to serve (0x800700B7): it never adopts an event someone
+   * else created.
    */
   LPCWSTR stop_event_name;
   /**
@@ -1044,10 +1040,13 @@ typedef struct OpcExeServerOptions {
    */
   uint32_t release_timeout_ms;
   /**
-   * After the last client left, how long the host keeps serving before it ends, in milliseconds; 0
-   * means 250. A client that connects again within it is served by this process (under Wine, whose
-   * COM does not suspend the class objects, an activation that meets the end can fail); every exit
-   * of the server waits for it.
+   * After the last client left, how long the host keeps serving before it ends, in milliseconds,
+   * counted from the last release; 0 means 5000 (as ATL's EXE module). A client that connects again
+   * within it is served by this process. After it the host revokes its class objects, serves one
+   * second more for a client already on its way, then ends. Shorter values end the process sooner
+   * after its last client, at a price under Wine, whose COM does not suspend the class objects: a
+   * client whose activation meets the end can fail there (docs/guide/server-plumbing.md). Every
+   * exit of the server that is not a stop waits for it.
    */
   uint32_t idle_linger_ms;
 } OpcExeServerOptions;
@@ -5227,13 +5226,9 @@ HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecuri
  * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun(), or a
  * DllGetClassObject of its own.
  *
- * @param cls the class (OpcServerClass).
- * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown.
- * @param[out] ppv receives the class object, or NULL on failure.
- *
- * @return S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`, a NULL
- * `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is IID_IClassFactory or
- * IID_IUnknown.
+ * Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
+ * a NULL `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is
+ * IID_IClassFactory or IID_IUnknown. `*ppv` is NULL on failure.
  *
  * @par Safety
  * `cls` NULL or valid as documented on OpcServerClass (and kept so while the class object lives);
@@ -5256,27 +5251,23 @@ HRESULT OPCCOMN_CDECL OpcClassFactoryCreate(const struct OpcServerClass *cls, RE
 void OPCCOMN_CDECL OpcServerLock(void);
 
 /**
- * Takes back one OpcServerLock(). Under OpcExeServerRun() the last one ends the server once it has had
- * a client (COM stops handing out its class objects at once). An unlock without a lock is ignored.
- * Any thread.
+ * Takes back one OpcServerLock(). Under OpcExeServerRun() the last count on the server ends it once it
+ * has had a client (COM stops handing out its class objects at once). An unlock without an
+ * OpcServerLock() still held is ignored: it never takes the count of a LockServer lock or of an object
+ * of the library. Any thread.
  *
  * @ingroup plumbing
  */
 void OPCCOMN_CDECL OpcServerUnlock(void);
 
 /**
- * DllGetClassObject for a DLL server: the class object of one class of a table, as
- * OpcClassFactoryCreate() makes it.
+ * DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)
+ * whose CLSID is `rclsid`, as OpcClassFactoryCreate() makes it.
  *
- * @param classes the server's classes (OpcServerClass).
- * @param count how many `classes` holds (1 to 256).
- * @param rclsid the class COM asks for.
- * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown.
- * @param[out] ppv receives the class object, or NULL on failure.
- *
- * @return S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count of 0 or
- * over 256, or a class OpcClassFactoryCreate() refuses; CLASS_E_CLASSNOTAVAILABLE for a CLSID not in
- * the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
+ * Returns S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count
+ * of 0 or over 256, or a class OpcClassFactoryCreate() refuses; CLASS_E_CLASSNOTAVAILABLE for a
+ * CLSID not in the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown. `*ppv` is
+ * NULL on failure.
  *
  * @par Safety
  * `classes` NULL or `count` classes valid as documented on OpcServerClass (kept so while the DLL is
@@ -5287,29 +5278,23 @@ void OPCCOMN_CDECL OpcServerUnlock(void);
 HRESULT OPCCOMN_CDECL OpcModuleGetClassObject(const struct OpcServerClass *classes, uint32_t count, REFCLSID rclsid, REFIID riid, void **ppv);
 
 /**
- * DllCanUnloadNow for a DLL server: whether COM may unload it.
- *
- * @return S_OK when nothing counts on the server (no OpcServerLock() or LockServer lock is held), no object of
- * the library is alive (the server's sessions, connection points and enumerators among them; with
- * opccomn.dll shared between modules, every module's), and no proxy, stub or bounded shutdown
- * notification of the library is at work; else S_FALSE.
+ * DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock() or
+ * LockServer lock is held), no object of the library is alive (the server's sessions, connection
+ * points and enumerators among them; with opccomn.dll shared between modules, every module's), and
+ * no proxy, stub or bounded shutdown notification of the library is at work, else S_FALSE.
  *
  * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
 
 /**
- * Registers every class of a table that has a `registration` (OpcRegisterServer() for each, in order):
- * for DllRegisterServer, or `/RegServer`. A DLL that uses opccomn.dll must set `module_path` in its
- * registrations (NULL would be opccomn.dll's path). When one fails, the classes registered before it
- * are unregistered again.
+ * Registers every class of the table that has a `registration` (OpcRegisterServer() for each, in
+ * order), in `reg` (NULL: the system registry): for DllRegisterServer, or `/RegServer`. A DLL that
+ * uses opccomn.dll must set `module_path` in its registrations (NULL would be opccomn.dll's path).
+ * When one fails, the classes registered before it are unregistered again.
  *
- * @param classes the server's classes (OpcServerClass).
- * @param count how many `classes` holds (1 to 256).
- * @param reg the registry, or NULL for the system registry.
- *
- * @return S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a registration
- * whose CLSID is not its class's; the errors of OpcRegisterServer().
+ * Returns S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a
+ * registration whose CLSID is not its class's; the errors of OpcRegisterServer().
  *
  * @par Safety
  * `classes` NULL or `count` classes valid as documented on OpcServerClass; `reg` NULL or a live handle.
@@ -5319,15 +5304,12 @@ HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
 HRESULT OPCCOMN_CDECL OpcModuleRegister(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg);
 
 /**
- * Unregisters every class of a table that has a `registration` (OpcUnregisterServer() for each, in
- * reverse order): for DllUnregisterServer, or `/UnregServer`. Goes on after a class that fails and
- * returns the first failure; a class that is not registered (REGDB_E_KEYMISSING) is no failure.
+ * Unregisters every class of the table that has a `registration` (OpcUnregisterServer() for each, in
+ * reverse order), from `reg` (NULL: the system registry): for DllUnregisterServer, or `/UnregServer`.
+ * Goes on after a class that fails and returns the first failure; a class that is not registered
+ * (REGDB_E_KEYMISSING) is no failure.
  *
- * @param classes the server's classes, as given to OpcModuleRegister().
- * @param count how many `classes` holds (1 to 256).
- * @param reg the registry, or NULL for the system registry.
- *
- * @return S_OK; the errors of OpcModuleRegister() for a bad table; the errors of OpcUnregisterServer().
+ * Returns S_OK; the errors of OpcModuleRegister() for a bad table; the errors of OpcUnregisterServer().
  *
  * @par Safety
  * As for OpcModuleRegister().
@@ -5349,27 +5331,30 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
  *   library makes (through the module lock, which the host sets), LockServer, and the server's own
  *   objects that call OpcServerLock()/OpcServerUnlock() or aggregate an object of the library. When the
- *   last goes it serves `idle_linger_ms` more (a client that connects again at once keeps it
- *   serving), then revokes the class objects and returns, answering any later CreateInstance or
- *   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
+ *   last goes it serves `idle_linger_ms` more after the last release (a client that connects again
+ *   meanwhile keeps it serving), then revokes the class objects, serves one second more for a client
+ *   already on its way, and returns, answering any later CreateInstance or LockServer with
+ *   CO_E_SERVER_STOPPING (COM then starts a new server process). LockServer(FALSE) and
+ *   OpcServerUnlock() give back only what LockServer(TRUE) and OpcServerLock() took. Started by COM
  *   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
  *   serves until stopped. A stop (console control, the named event `stop_event_name`,
  *   OpcExeServerStop()) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
- *   go.
+ *   go. The host creates the named event itself, not set, with access for SYSTEM, the administrators
+ *   and the server's own account only; a name that already exists is refused.
  *
- * The host returns without CoUninitialize: a client's last Release may still be on its way back on an
- * RPC thread, and CoUninitialize would wait for it (under Wine possibly for ever); return from `main`
- * (or call ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time. Off Windows it
- * returns E_NOTIMPL after checking its arguments.
+ * `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
+ * CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
+ * CoUninitialize would wait for it (under Wine possibly for ever); return from `main` (or call
+ * ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time.
  *
- * @param options the server's classes and how it is stopped (OpcExeServerOptions).
- * @param command_line the command line, or NULL for the process's (GetCommandLineW; off Windows, none).
- *
- * @return S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE after a
- * stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for a NULL
- * `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a command
- * line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process; the
- * errors of CoInitializeEx, CoRegisterClassObject and of registration.
+ * Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
+ * after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
+ * a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
+ * command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the
+ * process; HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named
+ * `stop_event_name` already exists (an event or any other kind: another instance of the server, or
+ * a name someone took first), before anything is served; the errors of CoInitializeEx,
+ * CoRegisterClassObject and of registration.
  *
  * @par Safety
  * `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
@@ -5384,7 +5369,7 @@ HRESULT OPCCOMN_CDECL OpcExeServerRun(const struct OpcExeServerOptions *options,
  * calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
  * for example a service's control handler or the server's own user interface.
  *
- * @return S_OK; S_FALSE when no host runs.
+ * Returns S_OK; S_FALSE when no host runs.
  *
  * @ingroup plumbing
  */

@@ -5,13 +5,18 @@
 //! the module lock every object of the library) is COM's server process count: CoAddRefServerProcess
 //! and CoReleaseServerProcess: COM's rule for local servers, kept while **any** object handed out is
 //! referenced. When it falls to zero (Windows then suspends the class objects) the host serves
-//! `idle_linger_ms` (a quarter of a second) more: a client that released its last object and connects
-//! again at once is served, and the host serves on. Otherwise it ends: from that moment, decided
-//! atomically with the count, any new instance or LockServer is refused with CO_E_SERVER_STOPPING
-//! (COM then starts a new process) and the class objects are revoked, so no client is handed an
-//! object of a process about to exit. Started by COM (`-Embedding`), a server no client comes to gives
-//! up after `first_client_timeout_ms`. Started by hand, it holds one count of its own until it is
-//! stopped.
+//! `idle_linger_ms` (five seconds) more after the last release: a client that released its last
+//! object and connects again meanwhile is served, and the host serves on. Then it revokes its class
+//! objects (COM starts a new process for a new client) and pauses a second, in which a client that
+//! got a class object just before is still served. Then it ends: from that moment, decided
+//! atomically with the count, any new instance or LockServer is refused with CO_E_SERVER_STOPPING, so
+//! no client is handed an object of a process about to exit. Started by COM (`-Embedding`), a server
+//! no client comes to gives up after `first_client_timeout_ms`. Started by hand, it holds one count of
+//! its own until it is stopped.
+//!
+//! **Unlocks too many.** LockServer(FALSE) gives back only what LockServer(TRUE) took, and
+//! OpcServerUnlock only what OpcServerLock took: an unmatched one, from any client, never ends the
+//! server under an object another client holds.
 //!
 //! **Stop.** Console control (Ctrl+C, the console closing, log-off, shutdown), the named event
 //! `stop_event_name`, or [`OpcExeServerStop`] from any thread: the host calls `on_stop` (where the
@@ -128,7 +133,11 @@ pub struct OpcExeServerOptions {
     /// Number of entries in `classes`.
     pub class_count: u32,
     /// The name of an event the operator's tools set to stop the server (for example
-    /// `L"Local\\VendorServerStop"`), NULL for none.
+    /// `L"Local\\VendorServerStop"`), NULL for none. The host creates it (manual reset, not set) with
+    /// access for SYSTEM, the administrators and the account the server runs as, and nobody else:
+    /// they may set it (OpenEventW with EVENT_MODIFY_STATE, then SetEvent). If an object of that name
+    /// already exists, OpcExeServerRun refuses to serve (0x800700B7): it never adopts an event someone
+    /// else created.
     pub stop_event_name: LPCWSTR,
     /// Called when the server is stopped (see OpcExeServerStopFn); NULL for nothing.
     pub on_stop: OpcExeServerStopFn,
@@ -140,10 +149,13 @@ pub struct OpcExeServerOptions {
     /// After a stop, how long the host waits for clients to release what they hold, in milliseconds;
     /// 0 means 10000.
     pub release_timeout_ms: u32,
-    /// After the last client left, how long the host keeps serving before it ends, in milliseconds; 0
-    /// means 250. A client that connects again within it is served by this process (under Wine, whose
-    /// COM does not suspend the class objects, an activation that meets the end can fail); every exit
-    /// of the server waits for it.
+    /// After the last client left, how long the host keeps serving before it ends, in milliseconds,
+    /// counted from the last release; 0 means 5000 (as ATL's EXE module). A client that connects again
+    /// within it is served by this process. After it the host revokes its class objects, serves one
+    /// second more for a client already on its way, then ends. Shorter values end the process sooner
+    /// after its last client, at a price under Wine, whose COM does not suspend the class objects: a
+    /// client whose activation meets the end can fail there (docs/guide/server-plumbing.md). Every
+    /// exit of the server that is not a stop waits for it.
     pub idle_linger_ms: u32,
 }
 
@@ -165,13 +177,16 @@ unsafe impl SizedStruct for OpcExeServerOptions {
 ///   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
 ///   library makes (through the module lock, which the host sets), LockServer, and the server's own
 ///   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
-///   last goes it serves `idle_linger_ms` more (a client that connects again at once keeps it
-///   serving), then revokes the class objects and returns, answering any later CreateInstance or
-///   LockServer with CO_E_SERVER_STOPPING (COM then starts a new server process). Started by COM
+///   last goes it serves `idle_linger_ms` more after the last release (a client that connects again
+///   meanwhile keeps it serving), then revokes the class objects, serves one second more for a client
+///   already on its way, and returns, answering any later CreateInstance or LockServer with
+///   CO_E_SERVER_STOPPING (COM then starts a new server process). LockServer(FALSE) and
+///   OpcServerUnlock give back only what LockServer(TRUE) and OpcServerLock took. Started by COM
 ///   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
 ///   serves until stopped. A stop (console control, the named event `stop_event_name`,
 ///   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
-///   go.
+///   go. The host creates the named event itself, not set, with access for SYSTEM, the administrators
+///   and the server's own account only; a name that already exists is refused.
 ///
 /// `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
 /// CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
@@ -181,8 +196,11 @@ unsafe impl SizedStruct for OpcExeServerOptions {
 /// Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
 /// after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
 /// a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
-/// command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process; the errors
-/// of CoInitializeEx, CoRegisterClassObject and of registration.
+/// command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the
+/// process; HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named
+/// `stop_event_name` already exists (an event or any other kind: another instance of the server, or
+/// a name someone took first), before anything is served; the errors of CoInitializeEx,
+/// CoRegisterClassObject and of registration.
 ///
 /// # Safety
 /// `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the

@@ -64,7 +64,7 @@ pub struct OpcServerClass {
     pub context: *mut c_void,
     /// OPC_CLASS_AGGREGATABLE or 0.
     pub flags: u32,
-    /// What `/RegServer` (OpcExeServerMain) and OpcModuleRegister write for the class, NULL for a
+    /// What `/RegServer` (OpcExeServerRun) and OpcModuleRegister write for the class, NULL for a
     /// class that is not registered by them. Its `clsid` must be this class's.
     pub registration: *const OpcServerRegistration,
 }
@@ -151,9 +151,45 @@ impl ServerClass {
     }
 }
 
-/// The server count: LockServer locks and the server's own objects (OpcServerLock). In an EXE host
-/// it is kept by COM instead (see `exe`), and this counts nothing.
+/// The server count outside an EXE host: LockServer locks and the server's own objects
+/// (OpcServerLock). In an EXE host it is kept by COM instead (see `exe`), and this counts nothing.
 static SERVER_LOCKS: AtomicU32 = AtomicU32::new(0);
+
+/// The locks one kind of caller took on the server count, so that it gives back only what it took.
+/// The server count is shared by every kind (objects of the library, LockServer, OpcServerLock); an
+/// unlock without its lock (a LockServer(FALSE) from any client, through the wire form too) must not
+/// take a count that an object holds, or the server would end or unload under that object.
+pub(crate) struct Taken(AtomicU32);
+
+impl Taken {
+    pub(crate) const fn new() -> Taken {
+        Taken(AtomicU32::new(0))
+    }
+
+    /// Records one lock taken; false (nothing recorded) when the count is saturated.
+    fn take(&self) -> bool {
+        self.0
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_add(1))
+            .is_ok()
+    }
+
+    /// Gives back one recorded lock: false when none is left to give back (an unlock too many).
+    fn give_back(&self) -> bool {
+        self.0
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1))
+            .is_ok()
+    }
+
+    /// Forgets every lock (the count they were taken on is gone: a host starts or ends).
+    pub(crate) fn forget(&self) {
+        self.0.store(0, Ordering::Release);
+    }
+}
+
+/// The locks LockServer(TRUE) took and LockServer(FALSE) has not given back.
+pub(crate) static LOCK_SERVER_LOCKS: Taken = Taken::new();
+/// The locks OpcServerLock took and OpcServerUnlock has not given back.
+pub(crate) static OWN_LOCKS: Taken = Taken::new();
 
 /// What the server count calls in an EXE host: COM's server process count (CoAddRefServerProcess),
 /// so that COM stops handing out the class objects at once when it falls to zero.
@@ -170,15 +206,21 @@ pub(crate) struct ProcessCount {
 
 static PROCESS_COUNT: Mutex<Option<ProcessCount>> = Mutex::new(None);
 
+/// Sets (an EXE host starts) or clears (it ends) the count the server count calls. The LockServer
+/// and OpcServerLock locks recorded so far were taken on the other count and are forgotten.
 #[cfg_attr(not(windows), allow(dead_code))]
 pub(crate) fn set_process_count(count: Option<ProcessCount>) {
-    *PROCESS_COUNT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = count;
+    let mut current = PROCESS_COUNT.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    *current = count;
+    LOCK_SERVER_LOCKS.forget();
+    OWN_LOCKS.forget();
 }
 
 fn process_count() -> Option<ProcessCount> {
     *PROCESS_COUNT.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
+/// One count on the server (the module lock of an EXE host: an object of the library was made).
 pub(crate) fn server_lock() {
     match process_count() {
         Some(count) => (count.lock)(),
@@ -203,6 +245,7 @@ pub(crate) fn server_enter() -> bool {
     }
 }
 
+/// Gives back one count of `server_lock` or `server_enter`.
 pub(crate) fn server_unlock() {
     match process_count() {
         Some(count) => (count.unlock)(),
@@ -229,12 +272,23 @@ pub(crate) fn can_unload() -> bool {
 const CO_E_SERVER_STOPPING: HRESULT = 0x80080008_u32 as HRESULT;
 
 /// IClassFactory::LockServer of every class object of the library: TRUE takes a server count (refused
-/// with CO_E_SERVER_STOPPING by an EXE host that is ending), FALSE gives one back.
+/// with CO_E_SERVER_STOPPING by an EXE host that is ending), FALSE gives back one that a TRUE took. A
+/// FALSE without a TRUE still held (from any client) gives back nothing and answers S_FALSE: it never
+/// takes the count of an object a client holds.
 pub(crate) fn lock_server(lock: BOOL) -> FfiResult {
     if lock == 0 {
+        if !LOCK_SERVER_LOCKS.give_back() {
+            return Ok(S_FALSE);
+        }
         server_unlock();
-    } else if !server_enter() {
-        return Err(CO_E_SERVER_STOPPING.into());
+    } else {
+        if !server_enter() {
+            return Err(CO_E_SERVER_STOPPING.into());
+        }
+        if !LOCK_SERVER_LOCKS.take() {
+            // Saturated: the lock could never be given back; keep the count balanced instead.
+            server_unlock();
+        }
     }
     Ok(S_OK)
 }
@@ -326,7 +380,7 @@ pub(crate) unsafe fn class_object(class: ServerClass, riid: REFIID, ppv: *mut *m
 /// unless the class is OPC_CLASS_AGGREGATABLE and `riid` is IID_IUnknown, and making sure `*ppv` is
 /// NULL on every failure: a function that reports success without an object gets E_UNEXPECTED);
 /// LockServer(TRUE/FALSE) is OpcServerLock/OpcServerUnlock. The class object itself does not count
-/// on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerMain, or a
+/// on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun, or a
 /// DllGetClassObject of its own.
 ///
 /// Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
@@ -352,19 +406,28 @@ pub unsafe extern "C" fn OpcClassFactoryCreate(cls: *const OpcServerClass, riid:
 /// OpcServerUnlock when it is freed), so that a DLL server is not unloaded and an EXE server does not
 /// exit while a client holds it. LockServer and the library's objects are counted without it, and so
 /// is an object that aggregates one of the library's objects (IOPCCommon, the shutdown connection
-/// point) for as long as it holds it. Under OpcExeServerMain this is COM's server process count
+/// point) for as long as it holds it. Under OpcExeServerRun this is COM's server process count
 /// (CoAddRefServerProcess); elsewhere a count OpcModuleCanUnloadNow reads. Any thread.
 #[no_mangle]
 pub extern "C" fn OpcServerLock() {
-    ffi::guard!((), { server_lock() })
+    ffi::guard!((), {
+        if OWN_LOCKS.take() {
+            server_lock();
+        }
+    })
 }
 
-/// Takes back one OpcServerLock. Under OpcExeServerMain the last one ends the server once it has had
-/// a client (COM stops handing out its class objects at once). An unlock without a lock is ignored.
-/// Any thread.
+/// Takes back one OpcServerLock. Under OpcExeServerRun the last count on the server ends it once it
+/// has had a client (COM stops handing out its class objects at once). An unlock without an
+/// OpcServerLock still held is ignored: it never takes the count of a LockServer lock or of an object
+/// of the library. Any thread.
 #[no_mangle]
 pub extern "C" fn OpcServerUnlock() {
-    ffi::guard!((), { server_unlock() })
+    ffi::guard!((), {
+        if OWN_LOCKS.give_back() {
+            server_unlock();
+        }
+    })
 }
 
 /// DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)

@@ -277,6 +277,66 @@ fn lock_server_and_server_locks_count() {
     }
 }
 
+/// LockServer(FALSE) gives back only what LockServer(TRUE) took, and OpcServerUnlock only what
+/// OpcServerLock took: an unmatched one (from any client, through the wire form too) never takes the
+/// count that another lock or an object holds, so the server is neither unloaded nor ended under it.
+#[test]
+fn an_unmatched_unlock_takes_no_count_it_did_not_give() {
+    let _serial = serial();
+    let s = server(Behaviour::Make);
+    let c = class(&CLSID_A, &s, 0);
+    let f = factory(&c);
+    let before = SERVER_LOCKS.load(Ordering::SeqCst);
+    // SAFETY: a live class object.
+    unsafe {
+        // A DLL server: the server's own object holds the server; a LockServer(FALSE) without a TRUE
+        // gives back nothing (S_FALSE), and the DLL stays loaded.
+        OpcServerLock();
+        assert_eq!(IClassFactory::LockServer(f, 0), S_FALSE);
+        assert_eq!(IClassFactory::LockServer(f, 0), S_FALSE);
+        assert_eq!(SERVER_LOCKS.load(Ordering::SeqCst), before + 1);
+        assert_eq!(OpcModuleCanUnloadNow(), S_FALSE);
+        // A LockServer lock: one OpcServerUnlock too many does not take it.
+        assert_eq!(IClassFactory::LockServer(f, 1), S_OK);
+        OpcServerUnlock();
+        OpcServerUnlock();
+        assert_eq!(
+            SERVER_LOCKS.load(Ordering::SeqCst),
+            before + 1,
+            "the LockServer lock is held"
+        );
+        assert_eq!(IClassFactory::LockServer(f, 0), S_OK);
+        assert_eq!(SERVER_LOCKS.load(Ordering::SeqCst), before);
+
+        // An EXE host: an object of the library holds the host's count (its module lock); neither
+        // an unmatched LockServer(FALSE) nor an unmatched OpcServerUnlock lets the host end.
+        HOST_COUNT.reset();
+        set_process_count(Some(ProcessCount {
+            enter: host_enter,
+            lock: host_lock,
+            unlock: host_unlock,
+        }));
+        crate::server::server_lock(); // what the module lock does for a new object
+        assert_eq!(IClassFactory::LockServer(f, 0), S_FALSE);
+        OpcServerUnlock();
+        assert_eq!(HOST_COUNT.held(), 1, "the object's count is held");
+        assert!(!HOST_COUNT.close_if_idle(), "the host does not end under the object");
+        // Matched pairs still count and give back.
+        assert_eq!(IClassFactory::LockServer(f, 1), S_OK);
+        OpcServerLock();
+        assert_eq!(HOST_COUNT.held(), 3);
+        assert_eq!(IClassFactory::LockServer(f, 0), S_OK);
+        OpcServerUnlock();
+        assert_eq!(IClassFactory::LockServer(f, 0), S_FALSE);
+        assert_eq!(HOST_COUNT.held(), 1);
+        crate::server::server_unlock(); // the object is freed
+        assert_eq!(HOST_COUNT.held(), 0);
+        assert!(HOST_COUNT.close_if_idle());
+        set_process_count(None);
+        IClassFactory::Release(f);
+    }
+}
+
 fn w(s: &str) -> Vec<u16> {
     s.encode_utf16().chain(Some(0)).collect()
 }

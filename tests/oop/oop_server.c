@@ -3,8 +3,8 @@
  * (IConnectionPointContainer with the IOPCShutdown connection point), as an OPC server does, and a
  * server list over a registry held in memory with OOP_FAKE_SERVERS classes. Runs in the multithreaded
  * apartment and exits when its last object is released (or after two minutes without one, or 20
- * minutes after its first when objects are never released: a client that died); the class
- * objects are revoked the moment the last object goes, so a client activating then gets a new server.
+ * minutes after its first when objects are never released: a client that died), OOP_LINGER_MS after
+ * the last release (with "-linger:default": the host's default linger).
  *
  * With "-ps:widl" on its command line it uses the stand-in for the Foundation's proxy/stub
  * (opccomn_widl_ps.dll) for the five interfaces; otherwise what the registry names (opccomn.dll).
@@ -266,6 +266,7 @@ int main(void) {
     options.first_client_timeout_ms = 120000; /* a server nobody connects to gives up after two minutes */
     options.release_timeout_ms = 30000;       /* after a stop: 30 s for what is left */
     options.idle_linger_ms = OOP_LINGER_MS;   /* the reconnect test's pauses stay far from its end */
+    if (wcsstr(GetCommandLineW(), L" -linger:default")) options.idle_linger_ms = 0; /* the host's default */
     options.on_stop = on_stop;
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);

@@ -47,9 +47,10 @@ static DWORD run(const WCHAR *args) { return run_from(dir, args); }
 
 static int browser_running(void) { return process_running(L"opccomn_browser.exe"); }
 
+/* The browser serves 5 s after its last release and pauses 1 s (the host's defaults): 20 s at most. */
 static int wait_browser_gone(void) {
     int i;
-    for (i = 0; i < 100; i++) {
+    for (i = 0; i < 200; i++) {
         if (browser_running() == 0) return 1;
         Sleep(100);
     }

@@ -4,19 +4,34 @@ use core::ffi::c_void;
 use core::ptr;
 use core::sync::atomic::{AtomicBool, AtomicPtr, Ordering};
 
-use windows_sys::Win32::Foundation::{CloseHandle, HANDLE, WAIT_OBJECT_0, WAIT_TIMEOUT};
+use windows_sys::Win32::Foundation::{
+    CloseHandle, GetLastError, LocalFree, ERROR_ACCESS_DENIED, ERROR_ALREADY_EXISTS, ERROR_INVALID_HANDLE,
+    ERROR_SUCCESS, HANDLE, WAIT_OBJECT_0, WAIT_TIMEOUT,
+};
+use windows_sys::Win32::Security::Authorization::{
+    ConvertSidToStringSidW, ConvertStringSecurityDescriptorToSecurityDescriptorW, GetSecurityInfo, SDDL_REVISION_1,
+    SE_KERNEL_OBJECT,
+};
+use windows_sys::Win32::Security::{
+    EqualSid, GetAce, GetSecurityDescriptorDacl, GetTokenInformation, TokenOwner, TokenUser, ACCESS_ALLOWED_ACE, ACL,
+    DACL_SECURITY_INFORMATION, OWNER_SECURITY_INFORMATION, PSECURITY_DESCRIPTOR, PSID, SECURITY_ATTRIBUTES,
+    TOKEN_INFORMATION_CLASS, TOKEN_QUERY,
+};
 use windows_sys::Win32::System::Com::{
     CoAddRefServerProcess, CoInitializeEx, CoRegisterClassObject, CoReleaseServerProcess, CoResumeClassObjects,
     CoRevokeClassObject, CLSCTX_LOCAL_SERVER, COINIT_MULTITHREADED, REGCLS_MULTIPLEUSE, REGCLS_SUSPENDED,
 };
 use windows_sys::Win32::System::Console::SetConsoleCtrlHandler;
-use windows_sys::Win32::System::Threading::{CreateEventW, ResetEvent, SetEvent, WaitForMultipleObjects};
+use windows_sys::Win32::System::Threading::{
+    CreateEventW, GetCurrentProcess, OpenProcessToken, ResetEvent, SetEvent, WaitForMultipleObjects,
+};
 
 use super::OpcExeServerOptions;
 use crate::com::ffi::{self, Fail};
 use crate::com::iids::IID_IUNKNOWN;
 use crate::com::module_lock::{set_module_lock, ModuleLock};
 use crate::com::unknown::Counted;
+use crate::com::wstr::wstr_units;
 use crate::com::{IUnknown, E_UNEXPECTED, HRESULT, LPCWSTR, S_FALSE, S_OK};
 use crate::registry::cmdline::OpcServerCommand;
 use crate::registry::register::ServerDescription;
@@ -38,12 +53,19 @@ static USED: AtomicBool = AtomicBool::new(false);
 static COUNT: HostCount = HostCount::new();
 
 /// After the last client left, how long the host keeps serving before it ends, unless the server says
-/// (`idle_linger_ms`): a client that released its last object and connects again at once is served by
-/// this process, which then serves on. Under Wine, whose CoReleaseServerProcess does not suspend the
-/// class objects, an activation already on its way to a process whose class objects are revoked fails
-/// (E_FAIL) and one to a process that exits fails too (RPC_S_CALL_FAILED): this quarter of a second
-/// is what spares such a client (reconnecting takes milliseconds), and what every exit costs.
-const LINGER_MS: u32 = 250;
+/// (`idle_linger_ms`): a client that released its last object and connects again within it is served
+/// by this process, which then serves on, and the time starts again at the next last release. Five
+/// seconds, as ATL's EXE module waits. Under Wine, whose CoReleaseServerProcess does not suspend the
+/// class objects, COM hands a new client the class object of this process until the host revokes it;
+/// a client on its way while the host ends can fail (see `END_PAUSE_MS`). The longer the linger, the
+/// rarer a client meets that moment: a client that reconnects within it never does.
+const LINGER_MS: u32 = 5_000;
+
+/// After the linger, the host revokes its class objects (COM hands new clients to a new process from
+/// then on) and serves this long more before it decides to end: a client that got a class object just
+/// before the revocation (its activation was on its way) still makes its instance here, and the host
+/// then serves it. ATL's EXE module pauses one second the same way.
+const END_PAUSE_MS: u32 = 1_000;
 
 fn process_enter() -> bool {
     if !COUNT.enter() {
@@ -105,13 +127,222 @@ unsafe extern "system" fn console_control(_kind: u32) -> ffi::Crossed<i32> {
 struct Event(HANDLE);
 
 impl Event {
-    fn new(name: LPCWSTR) -> Result<Event, HRESULT> {
-        // SAFETY: default security, manual reset, not set; `name` NULL or a NUL-terminated string.
-        let h = unsafe { CreateEventW(ptr::null(), 1, 0, name) };
+    /// An unnamed manual-reset event, not set.
+    fn new() -> Result<Event, HRESULT> {
+        // SAFETY: default security, manual reset, not set, no name.
+        let h = unsafe { CreateEventW(ptr::null(), 1, 0, ptr::null()) };
         if h.is_null() {
             return Err(last_error());
         }
         Ok(Event(h))
+    }
+
+    /// The operator's named stop event: a manual-reset event, not set, that this host creates, with
+    /// an access list that lets only SYSTEM, the administrators and the server's own account use it.
+    /// A name that already exists is shared only when it is what a host of this account made (an
+    /// event with this process's owner and exactly this access list: another instance of the same
+    /// server, which COM starts when a client comes while this one ends); anything else (an event
+    /// made otherwise, even by this account, a mutex...) is refused with
+    /// HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS): an object the host did not create could be set, or
+    /// held, by others, and stop the server or keep it from starting.
+    fn named(name: LPCWSTR) -> Result<Event, HRESULT> {
+        let descriptor = stop_event_descriptor()?;
+        let attributes = SECURITY_ATTRIBUTES {
+            nLength: core::mem::size_of::<SECURITY_ATTRIBUTES>() as u32,
+            lpSecurityDescriptor: descriptor.0,
+            bInheritHandle: 0,
+        };
+        // SAFETY: a valid descriptor and attributes; `name` a NUL-terminated string (the caller's).
+        let h = unsafe { CreateEventW(&attributes, 1, 0, name) };
+        // SAFETY: no arguments; read at once after the call.
+        let error = unsafe { GetLastError() };
+        if h.is_null() {
+            // ERROR_INVALID_HANDLE: another kind of object has the name; ERROR_ACCESS_DENIED: an
+            // event of that name that this account may not open. Both: the name is taken.
+            return Err(match error {
+                ERROR_INVALID_HANDLE | ERROR_ACCESS_DENIED => NAME_TAKEN,
+                _ => last_error(),
+            });
+        }
+        let event = Event(h);
+        if error == ERROR_ALREADY_EXISTS && !made_by_a_host_of_this_account(event.0, &descriptor)? {
+            return Err(NAME_TAKEN);
+        }
+        Ok(event)
+    }
+}
+
+/// HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS): the stop event's name is taken.
+const NAME_TAKEN: HRESULT = 0x8007_00B7_u32 as HRESULT;
+
+/// A self-relative security descriptor from LocalAlloc, freed when dropped.
+struct LocalDescriptor(*mut c_void);
+
+impl Drop for LocalDescriptor {
+    fn drop(&mut self) {
+        // SAFETY: allocated with LocalAlloc by the conversion that made it.
+        unsafe { LocalFree(self.0) };
+    }
+}
+
+/// The stop event's security: full access for SYSTEM, the administrators and the account the server
+/// runs as (its token's user), nothing for anyone else, nothing inherited.
+fn stop_event_descriptor() -> Result<LocalDescriptor, HRESULT> {
+    let user = TokenSid::of(TokenUser)?.text()?;
+    // EVENT_ALL_ACCESS (0x1F0003) rather than GA, so that the entries stored are the entries written
+    // and a second instance can recognise them.
+    let sddl: Vec<u16> = format!("D:P(A;;0x1f0003;;;SY)(A;;0x1f0003;;;BA)(A;;0x1f0003;;;{user})")
+        .encode_utf16()
+        .chain([0])
+        .collect();
+    let mut descriptor: *mut c_void = ptr::null_mut();
+    // SAFETY: NUL-terminated text; `descriptor` writable.
+    let ok = unsafe {
+        ConvertStringSecurityDescriptorToSecurityDescriptorW(
+            sddl.as_ptr(),
+            SDDL_REVISION_1,
+            &mut descriptor,
+            ptr::null_mut(),
+        )
+    };
+    if ok == 0 || descriptor.is_null() {
+        return Err(last_error());
+    }
+    Ok(LocalDescriptor(descriptor))
+}
+
+/// Whether the existing event `h` (opened with READ_CONTROL) is one a host of this account made: owned
+/// by the owner this process's token gives new objects, with exactly the access list of `ours`.
+fn made_by_a_host_of_this_account(h: HANDLE, ours: &LocalDescriptor) -> Result<bool, HRESULT> {
+    let owner_wanted = TokenSid::of(TokenOwner)?;
+    let (mut owner, mut dacl): (PSID, *mut ACL) = (ptr::null_mut(), ptr::null_mut());
+    let mut descriptor: PSECURITY_DESCRIPTOR = ptr::null_mut();
+    // SAFETY: a valid handle; the out-pointers are writable; the others NULL (not asked for).
+    let e = unsafe {
+        GetSecurityInfo(
+            h,
+            SE_KERNEL_OBJECT,
+            OWNER_SECURITY_INFORMATION | DACL_SECURITY_INFORMATION,
+            &mut owner,
+            ptr::null_mut(),
+            &mut dacl,
+            ptr::null_mut(),
+            &mut descriptor,
+        )
+    };
+    if e != ERROR_SUCCESS || descriptor.is_null() {
+        return Ok(false); // a descriptor that cannot be read is not known to be ours
+    }
+    let _descriptor = LocalDescriptor(descriptor);
+    let (mut wanted, mut present, mut defaulted): (*mut ACL, i32, i32) = (ptr::null_mut(), 0, 0);
+    // SAFETY: `ours` is a valid descriptor; the out-pointers are writable.
+    if unsafe { GetSecurityDescriptorDacl(ours.0, &mut present, &mut wanted, &mut defaulted) } == 0 || wanted.is_null()
+    {
+        return Err(last_error());
+    }
+    // SAFETY: `owner` and `dacl` point into `_descriptor` (alive) or are NULL; `owner_wanted` holds a
+    // valid SID and `wanted` is the DACL of `ours`.
+    Ok(!owner.is_null() && unsafe { EqualSid(owner, owner_wanted.sid()) } != 0 && unsafe { same_aces(dacl, wanted) })
+}
+
+/// Whether two access lists hold the same entries in the same order (type, flags, rights, SID).
+///
+/// # Safety
+/// `a` NULL or a valid ACL; `b` a valid ACL.
+unsafe fn same_aces(a: *mut ACL, b: *mut ACL) -> bool {
+    if a.is_null() {
+        return false; // a NULL DACL lets everyone in
+    }
+    // SAFETY: both valid ACLs (the caller's contract).
+    let (na, nb) = unsafe { ((*a).AceCount, (*b).AceCount) };
+    if na != nb {
+        return false;
+    }
+    (0..u32::from(na)).all(|i| {
+        let (mut x, mut y): (*mut c_void, *mut c_void) = (ptr::null_mut(), ptr::null_mut());
+        // SAFETY: valid ACLs and an index below their count; the out-pointers are writable.
+        if unsafe { GetAce(a, i, &mut x) == 0 || GetAce(b, i, &mut y) == 0 } {
+            return false;
+        }
+        let (x, y) = (x.cast::<ACCESS_ALLOWED_ACE>(), y.cast::<ACCESS_ALLOWED_ACE>());
+        // SAFETY: entries of valid ACLs; every entry starts with an ACE_HEADER, and the mask and the
+        // SID follow as in ACCESS_ALLOWED_ACE for the allow and deny types compared here.
+        unsafe {
+            let (hx, hy) = ((*x).Header, (*y).Header);
+            hx.AceType == hy.AceType
+                && hx.AceFlags == hy.AceFlags
+                && u32::from(hx.AceType) <= 1 // ACCESS_ALLOWED_ACE_TYPE, ACCESS_DENIED_ACE_TYPE
+                && (*x).Mask == (*y).Mask
+                && EqualSid(ptr::addr_of_mut!((*x).SidStart).cast(), ptr::addr_of_mut!((*y).SidStart).cast()) != 0
+        }
+    })
+}
+
+/// A SID of this process's token (its user, or the owner it gives new objects).
+struct TokenSid {
+    /// TOKEN_USER or TOKEN_OWNER, then the SID it points at: 8-byte aligned, larger than any needs.
+    buffer: [u64; 64],
+    /// Where in `buffer` the SID starts, in bytes (the structure's pointer is into the buffer where
+    /// it was written, which moves with `self`).
+    offset: usize,
+}
+
+impl TokenSid {
+    /// `class`: TokenUser or TokenOwner (both begin with the SID's pointer).
+    fn of(class: TOKEN_INFORMATION_CLASS) -> Result<TokenSid, HRESULT> {
+        let mut token: HANDLE = ptr::null_mut();
+        // SAFETY: the process's own pseudo-handle; `token` writable.
+        if unsafe { OpenProcessToken(GetCurrentProcess(), TOKEN_QUERY, &mut token) } == 0 {
+            return Err(last_error());
+        }
+        let token = Handle(token);
+        let mut buffer = [0u64; 64];
+        let size = core::mem::size_of_val(&buffer);
+        let mut written = 0u32;
+        // SAFETY: a token opened for query; the buffer and its size in bytes; `written` writable.
+        let ok = unsafe { GetTokenInformation(token.0, class, buffer.as_mut_ptr().cast(), size as u32, &mut written) };
+        if ok == 0 {
+            return Err(last_error());
+        }
+        // SAFETY: TOKEN_USER and TOKEN_OWNER both begin with the SID's pointer, which
+        // GetTokenInformation wrote at the start of the (aligned) buffer.
+        let sid = unsafe { *buffer.as_ptr().cast::<PSID>() } as usize;
+        let offset = sid.wrapping_sub(buffer.as_ptr() as usize);
+        // The SID lies within the buffer, after the pointer to it.
+        if sid == 0 || offset < core::mem::size_of::<PSID>() || offset >= size {
+            return Err(E_UNEXPECTED);
+        }
+        Ok(TokenSid { buffer, offset })
+    }
+
+    /// The SID, inside `self.buffer`: valid while `self` is borrowed.
+    fn sid(&self) -> PSID {
+        // SAFETY: `offset` is within the buffer (checked when it was read).
+        unsafe { self.buffer.as_ptr().cast::<u8>().add(self.offset) as PSID }
+    }
+
+    /// The SID as text (S-1-5-...).
+    fn text(&self) -> Result<String, HRESULT> {
+        let mut text: *mut u16 = ptr::null_mut();
+        // SAFETY: a valid SID inside `self.buffer`; `text` writable.
+        if unsafe { ConvertSidToStringSidW(self.sid(), &mut text) } == 0 || text.is_null() {
+            return Err(last_error());
+        }
+        let text = LocalDescriptor(text.cast());
+        // SAFETY: a NUL-terminated string from ConvertSidToStringSidW, alive until `text` drops; a
+        // SID's text is far shorter than the bound.
+        let units = unsafe { wstr_units(text.0.cast(), 256) }.ok_or(E_UNEXPECTED)?;
+        Ok(String::from_utf16_lossy(units))
+    }
+}
+
+/// A handle closed when dropped.
+struct Handle(HANDLE);
+
+impl Drop for Handle {
+    fn drop(&mut self) {
+        // SAFETY: a handle this owns.
+        unsafe { CloseHandle(self.0) };
     }
 }
 
@@ -273,12 +504,12 @@ pub(super) fn run(
 
 /// Serving, until the last client left or a stop.
 fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result<HRESULT, Fail> {
-    let stop = Event::new(ptr::null())?;
-    let idle = Event::new(ptr::null())?;
+    let stop = Event::new()?;
+    let idle = Event::new()?;
     let named = if o.stop_event_name.is_null() {
         None
     } else {
-        Some(Event::new(o.stop_event_name)?)
+        Some(Event::named(o.stop_event_name)?)
     };
     STOP.store(stop.0, Ordering::Release);
     IDLE.store(idle.0, Ordering::Release);
@@ -338,18 +569,30 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
         if !ending {
             continue;
         }
-        // The last client left (or none came): a while for a client already on its way here, then
-        // the end, decided atomically with the count.
-        if wait(&stops, linger).is_some() {
+        // The last client left (or none came): serve `linger` more after the last release.
+        match linger_after_last_release(&events, linger) {
+            Idle::Stopped => break true,
+            Idle::Busy => {
+                // A client came and holds the server: serve on, with the class objects handed out
+                // again (Windows suspended them when the count fell to zero).
+                if !registered.0.is_empty() {
+                    // SAFETY: no arguments.
+                    unsafe { CoResumeClassObjects() };
+                }
+                continue;
+            }
+            Idle::Quiet => {}
+        }
+        // New clients go to a new process from now on; one already on its way here is still served
+        // during the pause. Then the end, decided atomically with the count.
+        registered.revoke();
+        if wait(&stops, END_PAUSE_MS).is_some() {
             break true;
         }
         if COUNT.close_if_idle() {
             break false;
         }
-        // A client came meanwhile: serve on, with the class objects handed out again (Windows
-        // suspended them when the count fell to zero).
-        // SAFETY: no arguments.
-        unsafe { CoResumeClassObjects() };
+        // A client came during the pause: serve it (without class objects) until it leaves.
     };
     let mut result = S_OK;
     if stopped {
@@ -371,6 +614,37 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
     }
     drop(registered);
     Ok(result)
+}
+
+/// How the linger after the last release ended.
+enum Idle {
+    /// `linger` milliseconds passed with nothing held.
+    Quiet,
+    /// Something is held (a client came and stays).
+    Busy,
+    /// A stop.
+    Stopped,
+}
+
+/// Waits until nothing has been held for `linger` milliseconds since the last release: a client that
+/// comes and goes meanwhile (the count falls to zero again, `events[0]`) starts the time again. The
+/// other events are stops.
+fn linger_after_last_release(events: &[HANDLE], linger: u32) -> Idle {
+    loop {
+        if COUNT.held() > 0 {
+            return Idle::Busy;
+        }
+        match wait(events, linger) {
+            Some(0) => {
+                // SAFETY: the host's event; the count is read again at the top.
+                unsafe { ResetEvent(events[0]) };
+            }
+            Some(_) => return Idle::Stopped,
+            None => {
+                return if COUNT.held() > 0 { Idle::Busy } else { Idle::Quiet };
+            }
+        }
+    }
 }
 
 /// Whether nothing is held on the server within `ms` milliseconds.
