@@ -936,11 +936,17 @@ typedef struct OpcSecurityOptions {
 } OpcSecurityOptions;
 
 /**
- * Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
- * into `outer` when `outer` is not NULL (only for a class with OPC_CLASS_AGGREGATABLE; `riid` is then
- * IID_IUnknown and the result the inner, non-delegating IUnknown), its interface `riid` in `*ppv`.
- * Return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...). The library has
- * already checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+ * Makes an instance of a server's class for IClassFactory::CreateInstance. The library has already
+ * checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+ *
+ * @param context OpcServerClass::context.
+ * @param outer the controlling IUnknown to aggregate the object into, or NULL (only for a class with
+ *   OPC_CLASS_AGGREGATABLE; `riid` is then IID_IUnknown and the result the inner, non-delegating
+ *   IUnknown).
+ * @param riid the interface the client asks for.
+ * @param[out] ppv where to store the object's interface `riid`; left NULL on failure.
+ *
+ * @return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...).
  *
  * @ingroup plumbing
  */
@@ -987,6 +993,8 @@ typedef struct OpcServerClass {
  * multithreaded apartment) while clients may still be connected: ask them to disconnect here
  * (IOPCShutdown, OpcShutdownNotifyBounded() with a timeout, so that a hung client cannot hold the
  * stop). Not called when the server ends because its last client left.
+ *
+ * @param context OpcExeServerOptions::context.
  *
  * @ingroup plumbing
  */
@@ -5226,9 +5234,13 @@ HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecuri
  * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun(), or a
  * DllGetClassObject of its own.
  *
- * Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
- * a NULL `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is
- * IID_IClassFactory or IID_IUnknown. `*ppv` is NULL on failure.
+ * @param cls the class (OpcServerClass).
+ * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown.
+ * @param[out] ppv receives the class object, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`, a NULL
+ * `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is IID_IClassFactory or
+ * IID_IUnknown.
  *
  * @par Safety
  * `cls` NULL or valid as documented on OpcServerClass (and kept so while the class object lives);
@@ -5261,13 +5273,18 @@ void OPCCOMN_CDECL OpcServerLock(void);
 void OPCCOMN_CDECL OpcServerUnlock(void);
 
 /**
- * DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)
- * whose CLSID is `rclsid`, as OpcClassFactoryCreate() makes it.
+ * DllGetClassObject for a DLL server: the class object of one class of a table, as
+ * OpcClassFactoryCreate() makes it.
  *
- * Returns S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count
- * of 0 or over 256, or a class OpcClassFactoryCreate() refuses; CLASS_E_CLASSNOTAVAILABLE for a
- * CLSID not in the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown. `*ppv` is
- * NULL on failure.
+ * @param classes the server's classes (OpcServerClass).
+ * @param count how many `classes` holds (1 to 256).
+ * @param rclsid the class COM asks for.
+ * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown.
+ * @param[out] ppv receives the class object, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count of 0 or
+ * over 256, or a class OpcClassFactoryCreate() refuses; CLASS_E_CLASSNOTAVAILABLE for a CLSID not in
+ * the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
  *
  * @par Safety
  * `classes` NULL or `count` classes valid as documented on OpcServerClass (kept so while the DLL is
@@ -5278,23 +5295,29 @@ void OPCCOMN_CDECL OpcServerUnlock(void);
 HRESULT OPCCOMN_CDECL OpcModuleGetClassObject(const struct OpcServerClass *classes, uint32_t count, REFCLSID rclsid, REFIID riid, void **ppv);
 
 /**
- * DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock() or
- * LockServer lock is held), no object of the library is alive (the server's sessions, connection
- * points and enumerators among them; with opccomn.dll shared between modules, every module's), and
- * no proxy, stub or bounded shutdown notification of the library is at work, else S_FALSE.
+ * DllCanUnloadNow for a DLL server: whether COM may unload it.
+ *
+ * @return S_OK when nothing counts on the server (no OpcServerLock() or LockServer lock is held), no object of
+ * the library is alive (the server's sessions, connection points and enumerators among them; with
+ * opccomn.dll shared between modules, every module's), and no proxy, stub or bounded shutdown
+ * notification of the library is at work; else S_FALSE.
  *
  * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
 
 /**
- * Registers every class of the table that has a `registration` (OpcRegisterServer() for each, in
- * order), in `reg` (NULL: the system registry): for DllRegisterServer, or `/RegServer`. A DLL that
- * uses opccomn.dll must set `module_path` in its registrations (NULL would be opccomn.dll's path).
- * When one fails, the classes registered before it are unregistered again.
+ * Registers every class of a table that has a `registration` (OpcRegisterServer() for each, in order):
+ * for DllRegisterServer, or `/RegServer`. A DLL that uses opccomn.dll must set `module_path` in its
+ * registrations (NULL would be opccomn.dll's path). When one fails, the classes registered before it
+ * are unregistered again.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a
- * registration whose CLSID is not its class's; the errors of OpcRegisterServer().
+ * @param classes the server's classes (OpcServerClass).
+ * @param count how many `classes` holds (1 to 256).
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a registration
+ * whose CLSID is not its class's; the errors of OpcRegisterServer().
  *
  * @par Safety
  * `classes` NULL or `count` classes valid as documented on OpcServerClass; `reg` NULL or a live handle.
@@ -5304,12 +5327,15 @@ HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
 HRESULT OPCCOMN_CDECL OpcModuleRegister(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg);
 
 /**
- * Unregisters every class of the table that has a `registration` (OpcUnregisterServer() for each, in
- * reverse order), from `reg` (NULL: the system registry): for DllUnregisterServer, or `/UnregServer`.
- * Goes on after a class that fails and returns the first failure; a class that is not registered
- * (REGDB_E_KEYMISSING) is no failure.
+ * Unregisters every class of a table that has a `registration` (OpcUnregisterServer() for each, in
+ * reverse order): for DllUnregisterServer, or `/UnregServer`. Goes on after a class that fails and
+ * returns the first failure; a class that is not registered (REGDB_E_KEYMISSING) is no failure.
  *
- * Returns S_OK; the errors of OpcModuleRegister() for a bad table; the errors of OpcUnregisterServer().
+ * @param classes the server's classes, as given to OpcModuleRegister().
+ * @param count how many `classes` holds (1 to 256).
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK; the errors of OpcModuleRegister() for a bad table; the errors of OpcUnregisterServer().
  *
  * @par Safety
  * As for OpcModuleRegister().
@@ -5342,19 +5368,22 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *   go. The host creates the named event itself, not set, with access for SYSTEM, the administrators
  *   and the server's own account only; a name that already exists is refused.
  *
- * `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
- * CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
- * CoUninitialize would wait for it (under Wine possibly for ever); return from `main` (or call
- * ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time.
+ * The host returns without CoUninitialize: a client's last Release may still be on its way back on an
+ * RPC thread, and CoUninitialize would wait for it (under Wine possibly for ever); return from `main`
+ * (or call ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time. Off Windows it
+ * returns E_NOTIMPL after checking its arguments.
  *
- * Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
- * after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
- * a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
- * command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the
- * process; HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named
- * `stop_event_name` already exists (an event or any other kind: another instance of the server, or
- * a name someone took first), before anything is served; the errors of CoInitializeEx,
- * CoRegisterClassObject and of registration.
+ * @param options the server's classes and how it is stopped (OpcExeServerOptions).
+ * @param command_line the command line, or NULL for the process's (GetCommandLineW; off Windows, none).
+ *
+ * @return S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE after a
+ * stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for a NULL
+ * `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a command
+ * line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process;
+ * HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named `stop_event_name`
+ * already exists (an event or any other kind: another instance of the server, or a name someone took
+ * first), before anything is served; the errors of CoInitializeEx, CoRegisterClassObject and of
+ * registration.
  *
  * @par Safety
  * `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
@@ -5369,7 +5398,7 @@ HRESULT OPCCOMN_CDECL OpcExeServerRun(const struct OpcExeServerOptions *options,
  * calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
  * for example a service's control handler or the server's own user interface.
  *
- * Returns S_OK; S_FALSE when no host runs.
+ * @return S_OK; S_FALSE when no host runs.
  *
  * @ingroup plumbing
  */
