@@ -46,7 +46,14 @@ impl IUnknown {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 3;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IUnknown pointer, and the arguments valid as the IDL declares them.
@@ -55,7 +62,10 @@ impl IUnknown {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IUnknown pointer, and the arguments valid as the IDL declares them.
@@ -64,7 +74,10 @@ impl IUnknown {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IUnknown pointer, and the arguments valid as the IDL declares them.
@@ -114,19 +127,32 @@ impl Vtable for IUnknownVtbl {}
 /// The IUnknown methods of a slot: how an object (or one of its slots) answers QueryInterface,
 /// AddRef and Release. The framework's implementations are in `super::object`.
 pub trait IUnknownImpl {
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// Called by the generated shim with `This`, a slot whose vtable was made with this
     /// implementation, and the COM caller's arguments.
     unsafe fn QueryInterface(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult;
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// Called by the generated shim with `This`, a slot whose vtable was made with this
     /// implementation, and the COM caller's arguments.
     unsafe fn AddRef(This: *mut IUnknown) -> ULONG;
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// Called by the generated shim with `This`, a slot whose vtable was made with this
@@ -177,7 +203,14 @@ impl IEnumGUID {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -186,7 +219,10 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -195,7 +231,10 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -204,7 +243,15 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` elements that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -213,7 +260,13 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).Next)(this, celt, rgelt, pceltFetched) }.get()
     }
 
-    /// Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -224,6 +277,9 @@ impl IEnumGUID {
 
     /// Starts the enumeration again from the first element.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -232,6 +288,12 @@ impl IEnumGUID {
     }
 
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -309,17 +371,40 @@ impl Vtable for IEnumGUIDVtbl {}
 /// What an object implements to present IEnumGUID: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumGUIDImpl: ComClass {
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` elements that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> FfiResult;
-    /// Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -379,7 +464,14 @@ impl IEnumConnections {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -388,7 +480,10 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -397,7 +492,10 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -406,7 +504,15 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+    /// Copies the next connections (each `pUnk` AddRef'ed: the caller releases it).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `rgcd`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -415,7 +521,13 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).Next)(this, cConnections, rgcd, pcFetched) }.get()
     }
 
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -426,6 +538,9 @@ impl IEnumConnections {
 
     /// Starts the enumeration again from the first element.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -434,6 +549,12 @@ impl IEnumConnections {
     }
 
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -519,7 +640,15 @@ impl Vtable for IEnumConnectionsVtbl {}
 /// What an object implements to present IEnumConnections: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumConnectionsImpl: ComClass {
-    /// Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+    /// Copies the next connections (each `pUnk` AddRef'ed: the caller releases it).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `rgcd`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -530,11 +659,26 @@ pub trait IEnumConnectionsImpl: ComClass {
         rgcd: *mut CONNECTDATA,
         pcFetched: *mut ULONG,
     ) -> FfiResult;
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, cConnections: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -602,7 +746,14 @@ impl IConnectionPoint {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 8;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -611,7 +762,10 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -620,7 +774,10 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -629,7 +786,13 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+    /// The outgoing interface this point calls.
+    ///
+    /// # Parameters
+    /// - `pIID`: receives its IID (IID_IOPCShutdown).
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -638,7 +801,13 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).GetConnectionInterface)(this, pIID) }.get()
     }
 
-    /// The container (the server object) this point belongs to, AddRef'ed.
+    /// The container (the server object) this point belongs to.
+    ///
+    /// # Parameters
+    /// - `ppCPC`: receives the container, AddRef'ed.
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -647,7 +816,15 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).GetConnectionPointContainer)(this, ppCPC) }.get()
     }
 
-    /// Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+    /// Connects a sink.
+    ///
+    /// # Parameters
+    /// - `pUnkSink`: the sink, which must answer the outgoing interface.
+    /// - `pdwCookie`: receives the connection's cookie, or 0 on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
+    /// when the point has all the sinks it takes.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -656,7 +833,13 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).Advise)(this, pUnkSink, pdwCookie) }.get()
     }
 
-    /// Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+    /// Disconnects a sink.
+    ///
+    /// # Parameters
+    /// - `dwCookie`: the cookie Advise returned.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION for an unknown cookie.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -666,6 +849,12 @@ impl IConnectionPoint {
     }
 
     /// An enumerator of the current connections.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -757,13 +946,25 @@ impl Vtable for IConnectionPointVtbl {}
 /// What an object implements to present IConnectionPoint: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IConnectionPointImpl: ComClass {
-    /// The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+    /// The outgoing interface this point calls.
+    ///
+    /// # Parameters
+    /// - `pIID`: receives its IID (IID_IOPCShutdown).
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn GetConnectionInterface(this: &ComObject<Self>, pIID: *mut IID) -> FfiResult;
-    /// The container (the server object) this point belongs to, AddRef'ed.
+    /// The container (the server object) this point belongs to.
+    ///
+    /// # Parameters
+    /// - `ppCPC`: receives the container, AddRef'ed.
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -772,15 +973,35 @@ pub trait IConnectionPointImpl: ComClass {
         this: &ComObject<Self>,
         ppCPC: *mut *mut IConnectionPointContainer,
     ) -> FfiResult;
-    /// Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+    /// Connects a sink.
+    ///
+    /// # Parameters
+    /// - `pUnkSink`: the sink, which must answer the outgoing interface.
+    /// - `pdwCookie`: receives the connection's cookie, or 0 on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
+    /// when the point has all the sinks it takes.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn Advise(this: &ComObject<Self>, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> FfiResult;
-    /// Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+    /// Disconnects a sink.
+    ///
+    /// # Parameters
+    /// - `dwCookie`: the cookie Advise returned.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION for an unknown cookie.
     fn Unadvise(this: &ComObject<Self>, dwCookie: DWORD) -> FfiResult;
     /// An enumerator of the current connections.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -859,7 +1080,14 @@ impl IEnumConnectionPoints {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -868,7 +1096,10 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -877,7 +1108,10 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -886,7 +1120,15 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+    /// Copies the next connection points (each AddRef'ed).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `ppCP`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -900,7 +1142,13 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).Next)(this, cConnections, ppCP, pcFetched) }.get()
     }
 
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -911,6 +1159,9 @@ impl IEnumConnectionPoints {
 
     /// Starts the enumeration again from the first element.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -919,6 +1170,12 @@ impl IEnumConnectionPoints {
     }
 
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -1007,7 +1264,15 @@ impl Vtable for IEnumConnectionPointsVtbl {}
 /// What an object implements to present IEnumConnectionPoints: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumConnectionPointsImpl: ComClass {
-    /// Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+    /// Copies the next connection points (each AddRef'ed).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `ppCP`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1018,11 +1283,26 @@ pub trait IEnumConnectionPointsImpl: ComClass {
         ppCP: *mut *mut IConnectionPoint,
         pcFetched: *mut ULONG,
     ) -> FfiResult;
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, cConnections: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1092,7 +1372,14 @@ impl IConnectionPointContainer {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 5;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1101,7 +1388,10 @@ impl IConnectionPointContainer {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1110,7 +1400,10 @@ impl IConnectionPointContainer {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1121,6 +1414,12 @@ impl IConnectionPointContainer {
 
     /// An enumerator of the container's connection points.
     ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
+    ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn EnumConnectionPoints(this: *mut Self, ppEnum: *mut *mut IEnumConnectionPoints) -> HRESULT {
@@ -1128,7 +1427,14 @@ impl IConnectionPointContainer {
         unsafe { ((*(*this).lpVtbl).EnumConnectionPoints)(this, ppEnum) }.get()
     }
 
-    /// The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+    /// The connection point for an outgoing interface.
+    ///
+    /// # Parameters
+    /// - `riid`: the outgoing interface (IID_IOPCShutdown).
+    /// - `ppCP`: receives the connection point, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1210,11 +1516,24 @@ impl Vtable for IConnectionPointContainerVtbl {}
 pub trait IConnectionPointContainerImpl: ComClass {
     /// An enumerator of the container's connection points.
     ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
+    ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult;
-    /// The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+    /// The connection point for an outgoing interface.
+    ///
+    /// # Parameters
+    /// - `riid`: the outgoing interface (IID_IOPCShutdown).
+    /// - `ppCP`: receives the connection point, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1265,7 +1584,14 @@ impl IClassFactory {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 5;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1274,7 +1600,10 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1283,7 +1612,10 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1292,7 +1624,16 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+    /// Creates an instance of the class.
+    ///
+    /// # Parameters
+    /// - `pUnkOuter`: the controlling IUnknown of an object that aggregates the instance, or NULL.
+    /// - `riid`: the interface wanted (IID_IUnknown with a `pUnkOuter`).
+    /// - `ppvObject`: receives the interface, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
+    /// `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1306,7 +1647,13 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).CreateInstance)(this, pUnkOuter, riid, ppvObject) }.get()
     }
 
-    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
+    /// Keeps the server running without an object, or ends that.
+    ///
+    /// # Parameters
+    /// - `fLock`: TRUE to take a lock, FALSE to give one back.
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1381,7 +1728,16 @@ impl Vtable for IClassFactoryVtbl {}
 /// What an object implements to present IClassFactory: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IClassFactoryImpl: ComClass {
-    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+    /// Creates an instance of the class.
+    ///
+    /// # Parameters
+    /// - `pUnkOuter`: the controlling IUnknown of an object that aggregates the instance, or NULL.
+    /// - `riid`: the interface wanted (IID_IUnknown with a `pUnkOuter`).
+    /// - `ppvObject`: receives the interface, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
+    /// `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1392,7 +1748,13 @@ pub trait IClassFactoryImpl: ComClass {
         riid: REFIID,
         ppvObject: *mut *mut c_void,
     ) -> FfiResult;
-    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
+    /// Keeps the server running without an object, or ends that.
+    ///
+    /// # Parameters
+    /// - `fLock`: TRUE to take a lock, FALSE to give one back.
+    ///
+    /// # Returns
+    /// S_OK.
     fn LockServer(this: &ComObject<Self>, fLock: BOOL) -> FfiResult;
 }
 
@@ -1437,7 +1799,14 @@ impl IOPCShutdown {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 4;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1446,7 +1815,10 @@ impl IOPCShutdown {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1455,7 +1827,10 @@ impl IOPCShutdown {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1464,9 +1839,14 @@ impl IOPCShutdown {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// The server asks the client to release every reference to the server's objects; `szReason` is an
-    /// optional text saying why (NULL or empty allowed). The client should return S_OK at once and
-    /// release its references afterwards, not from inside the call.
+    /// The server asks the client to release every reference to the server's objects. The client
+    /// should return S_OK at once and release its references afterwards, not from inside the call.
+    ///
+    /// # Parameters
+    /// - `szReason`: an optional text saying why (NULL or empty allowed).
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1526,9 +1906,14 @@ impl Vtable for IOPCShutdownVtbl {}
 /// What an object implements to present IOPCShutdown: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCShutdownImpl: ComClass {
-    /// The server asks the client to release every reference to the server's objects; `szReason` is an
-    /// optional text saying why (NULL or empty allowed). The client should return S_OK at once and
-    /// release its references afterwards, not from inside the call.
+    /// The server asks the client to release every reference to the server's objects. The client
+    /// should return S_OK at once and release its references afterwards, not from inside the call.
+    ///
+    /// # Parameters
+    /// - `szReason`: an optional text saying why (NULL or empty allowed).
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1564,7 +1949,14 @@ impl IOPCCommon {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 8;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1573,7 +1965,10 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1582,7 +1977,10 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1592,8 +1990,14 @@ impl IOPCCommon {
     }
 
     /// Sets the locale the server uses for this client's strings (error texts, and whatever else the server
-    /// localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
-    /// QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+    /// localises).
+    ///
+    /// # Parameters
+    /// - `dwLcid`: the locale: one QueryAvailableLocaleIDs lists (opccomn: OpcCommonOptions::locales,
+    ///   and OpcCommonOptions::accept_locale decides).
+    ///
+    /// # Returns
+    /// S_OK, or E_INVALIDARG for a locale the server does not support.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1602,8 +2006,13 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).SetLocaleID)(this, dwLcid) }.get()
     }
 
-    /// Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
-    /// E_INVALIDARG for a NULL `pdwLcid`.
+    /// The session's current locale.
+    ///
+    /// # Parameters
+    /// - `pdwLcid`: receives the locale (LOCALE_SYSTEM_DEFAULT until the client sets one).
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL `pdwLcid`.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1612,8 +2021,15 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).GetLocaleID)(this, pdwLcid) }.get()
     }
 
-    /// Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
-    /// with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+    /// The locales SetLocaleID accepts.
+    ///
+    /// # Parameters
+    /// - `pdwCount`: receives how many; 0 on failure.
+    /// - `pdwLcid`: receives an array of `*pdwCount` locales, which the caller frees with CoTaskMemFree
+    ///   (OpcTaskMemFree off Windows); NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1622,8 +2038,14 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).QueryAvailableLocaleIDs)(this, pdwCount, pdwLcid) }.get()
     }
 
-    /// Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
-    /// CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+    /// The text of an error code in the session's locale.
+    ///
+    /// # Parameters
+    /// - `dwError`: the error code.
+    /// - `ppString`: receives the text, which the caller frees with CoTaskMemFree; NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a code the server has no text for.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1632,8 +2054,14 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).GetErrorString)(this, dwError, ppString) }.get()
     }
 
-    /// The client tells the server its name (for the server's diagnostics; opccomn:
-    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+    /// The client tells the server its name, for the server's diagnostics (opccomn:
+    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
+    ///
+    /// # Parameters
+    /// - `szName`: the name.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1717,18 +2145,36 @@ impl Vtable for IOPCCommonVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCCommonImpl: ComClass {
     /// Sets the locale the server uses for this client's strings (error texts, and whatever else the server
-    /// localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
-    /// QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+    /// localises).
+    ///
+    /// # Parameters
+    /// - `dwLcid`: the locale: one QueryAvailableLocaleIDs lists (opccomn: OpcCommonOptions::locales,
+    ///   and OpcCommonOptions::accept_locale decides).
+    ///
+    /// # Returns
+    /// S_OK, or E_INVALIDARG for a locale the server does not support.
     fn SetLocaleID(this: &ComObject<Self>, dwLcid: LCID) -> FfiResult;
-    /// Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
-    /// E_INVALIDARG for a NULL `pdwLcid`.
+    /// The session's current locale.
+    ///
+    /// # Parameters
+    /// - `pdwLcid`: receives the locale (LOCALE_SYSTEM_DEFAULT until the client sets one).
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL `pdwLcid`.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult;
-    /// Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
-    /// with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+    /// The locales SetLocaleID accepts.
+    ///
+    /// # Parameters
+    /// - `pdwCount`: receives how many; 0 on failure.
+    /// - `pdwLcid`: receives an array of `*pdwCount` locales, which the caller frees with CoTaskMemFree
+    ///   (OpcTaskMemFree off Windows); NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1738,15 +2184,27 @@ pub trait IOPCCommonImpl: ComClass {
         pdwCount: *mut DWORD,
         pdwLcid: *mut *mut LCID,
     ) -> FfiResult;
-    /// Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
-    /// CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+    /// The text of an error code in the session's locale.
+    ///
+    /// # Parameters
+    /// - `dwError`: the error code.
+    /// - `ppString`: receives the text, which the caller frees with CoTaskMemFree; NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a code the server has no text for.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: *mut LPWSTR) -> FfiResult;
-    /// The client tells the server its name (for the server's diagnostics; opccomn:
-    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+    /// The client tells the server its name, for the server's diagnostics (opccomn:
+    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
+    ///
+    /// # Parameters
+    /// - `szName`: the name.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -1821,7 +2279,14 @@ impl IOPCServerList {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 6;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1830,7 +2295,10 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1839,7 +2307,10 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1848,9 +2319,18 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
-    /// require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
-    /// the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+    /// Enumerates the classes that implement any of the given categories and require no category outside
+    /// the others, each once.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require; one requiring any other is left out.
+    /// - `ppenumClsid`: receives an IEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1876,8 +2356,16 @@ impl IOPCServerList {
         .get()
     }
 
-    /// Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
-    /// REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+    /// A class's ProgID and user type name.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID, which the caller frees with CoTaskMemFree; NULL on failure.
+    /// - `ppszUserType`: receives its user type name, which the caller frees with CoTaskMemFree; NULL on
+    ///   failure.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1891,8 +2379,15 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).GetClassDetails)(this, clsid, ppszProgID, ppszUserType) }.get()
     }
 
-    /// Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
-    /// is not registered, CO_E_CLASSSTRING when it cannot be one.
+    /// The CLSID registered for a ProgID on the browsed machine.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
+    /// one; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1988,9 +2483,18 @@ impl Vtable for IOPCServerListVtbl {}
 /// What an object implements to present IOPCServerList: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCServerListImpl: ComClass {
-    /// Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
-    /// require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
-    /// the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+    /// Enumerates the classes that implement any of the given categories and require no category outside
+    /// the others, each once.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require; one requiring any other is left out.
+    /// - `ppenumClsid`: receives an IEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -2003,8 +2507,16 @@ pub trait IOPCServerListImpl: ComClass {
         rgcatidReq: *mut CATID,
         ppenumClsid: *mut *mut IEnumGUID,
     ) -> FfiResult;
-    /// Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
-    /// REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+    /// A class's ProgID and user type name.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID, which the caller frees with CoTaskMemFree; NULL on failure.
+    /// - `ppszUserType`: receives its user type name, which the caller frees with CoTaskMemFree; NULL on
+    ///   failure.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -2015,8 +2527,15 @@ pub trait IOPCServerListImpl: ComClass {
         ppszProgID: *mut LPOLESTR,
         ppszUserType: *mut LPOLESTR,
     ) -> FfiResult;
-    /// Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
-    /// is not registered, CO_E_CLASSSTRING when it cannot be one.
+    /// The CLSID registered for a ProgID on the browsed machine.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
+    /// one; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -2096,7 +2615,14 @@ impl IOPCEnumGUID {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2105,7 +2631,10 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2114,7 +2643,10 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2123,8 +2655,15 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
-    /// when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` GUIDs that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2133,7 +2672,13 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).Next)(this, celt, rgelt, pceltFetched) }.get()
     }
 
-    /// Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+    /// Skips GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2144,6 +2689,9 @@ impl IOPCEnumGUID {
 
     /// Starts the enumeration again from the first GUID.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -2151,7 +2699,13 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).Reset)(this) }.get()
     }
 
-    /// A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+    /// A new enumerator over the same GUIDs at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2236,18 +2790,40 @@ impl Vtable for IOPCEnumGUIDVtbl {}
 /// What an object implements to present IOPCEnumGUID: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCEnumGUIDImpl: ComClass {
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
-    /// when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` GUIDs that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
     /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
     unsafe fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> FfiResult;
-    /// Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+    /// Skips GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first GUID.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
-    /// A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+    /// A new enumerator over the same GUIDs at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -2311,7 +2887,14 @@ impl IOPCServerList2 {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 6;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2320,7 +2903,10 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2329,7 +2915,10 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2338,7 +2927,17 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+    /// As IOPCServerList::EnumClassesOfCategories, with an IOPCEnumGUID as the result.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require.
+    /// - `ppenumClsid`: receives an IOPCEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::EnumClassesOfCategories.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2364,8 +2963,18 @@ impl IOPCServerList2 {
         .get()
     }
 
-    /// As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
-    /// registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+    /// As IOPCServerList::GetClassDetails, with the version-independent ProgID.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszUserType`: receives its user type name (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszVerIndProgID`: receives its version-independent ProgID, the registry's
+    ///   `VersionIndependentProgID` (freed with CoTaskMemFree; opccomn returns an empty string for a
+    ///   class that has none); NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::GetClassDetails.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2380,6 +2989,13 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).GetClassDetails)(this, clsid, ppszProgID, ppszUserType, ppszVerIndProgID) }.get()
     }
 
+    /// As IOPCServerList::CLSIDFromProgID.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
     /// As IOPCServerList::CLSIDFromProgID.
     ///
     /// # Safety
@@ -2478,7 +3094,17 @@ impl Vtable for IOPCServerList2Vtbl {}
 /// What an object implements to present IOPCServerList2: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCServerList2Impl: ComClass {
-    /// As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+    /// As IOPCServerList::EnumClassesOfCategories, with an IOPCEnumGUID as the result.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require.
+    /// - `ppenumClsid`: receives an IOPCEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::EnumClassesOfCategories.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -2491,8 +3117,18 @@ pub trait IOPCServerList2Impl: ComClass {
         rgcatidReq: *mut CATID,
         ppenumClsid: *mut *mut IOPCEnumGUID,
     ) -> FfiResult;
-    /// As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
-    /// registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+    /// As IOPCServerList::GetClassDetails, with the version-independent ProgID.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszUserType`: receives its user type name (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszVerIndProgID`: receives its version-independent ProgID, the registry's
+    ///   `VersionIndependentProgID` (freed with CoTaskMemFree; opccomn returns an empty string for a
+    ///   class that has none); NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::GetClassDetails.
     ///
     /// # Safety
     /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
@@ -2504,6 +3140,13 @@ pub trait IOPCServerList2Impl: ComClass {
         ppszUserType: *mut LPOLESTR,
         ppszVerIndProgID: *mut LPOLESTR,
     ) -> FfiResult;
+    /// As IOPCServerList::CLSIDFromProgID.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
     /// As IOPCServerList::CLSIDFromProgID.
     ///
     /// # Safety
@@ -2586,7 +3229,14 @@ impl IMarshal {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 9;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IMarshal pointer, and the arguments valid as the IDL declares them.
@@ -2595,7 +3245,10 @@ impl IMarshal {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IMarshal pointer, and the arguments valid as the IDL declares them.
@@ -2604,7 +3257,10 @@ impl IMarshal {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IMarshal pointer, and the arguments valid as the IDL declares them.
@@ -3011,7 +3667,14 @@ impl IGlobalInterfaceTable {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 6;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IGlobalInterfaceTable pointer, and the arguments valid as the IDL declares them.
@@ -3020,7 +3683,10 @@ impl IGlobalInterfaceTable {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IGlobalInterfaceTable pointer, and the arguments valid as the IDL declares them.
@@ -3029,7 +3695,10 @@ impl IGlobalInterfaceTable {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IGlobalInterfaceTable pointer, and the arguments valid as the IDL declares them.
@@ -3252,7 +3921,14 @@ impl ICatRegister {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 9;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid ICatRegister pointer, and the arguments valid as the IDL declares them.
@@ -3261,7 +3937,10 @@ impl ICatRegister {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid ICatRegister pointer, and the arguments valid as the IDL declares them.
@@ -3270,7 +3949,10 @@ impl ICatRegister {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid ICatRegister pointer, and the arguments valid as the IDL declares them.

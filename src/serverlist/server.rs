@@ -63,9 +63,14 @@ impl IClassFactoryImpl for Factory {
 /// Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
 /// servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
-/// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
-/// IID_IUnknown. `*ppv` is NULL on failure.
+/// # Parameters
+/// - `rclsid`: the class: CLSID_OPCServerList, or on Windows CLSID_OpcComnProxyStub.
+/// - `riid`: the interface wanted: IID_IClassFactory or IID_IUnknown for CLSID_OPCServerList.
+/// - `ppv` (out): receives the class object, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`; CLASS_E_CLASSNOTAVAILABLE for any other
+/// class; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
 ///
 /// # Safety
 /// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
@@ -87,6 +92,9 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
     })
 }
 
+/// Whether COM may unload opccomn.dll (its DllCanUnloadNow).
+///
+/// # Returns
 /// S_OK when no object of the library is alive, no server lock is held, no proxy or stub is in use
 /// and no worker of `OpcShutdownNotifyBounded` is still calling a sink, so COM may unload the DLL;
 /// S_FALSE otherwise.
@@ -119,7 +127,10 @@ fn server_list_registration() -> ServerDescription {
 /// Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
 /// ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
 /// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
-/// changing it. Returns S_OK or SELFREG_E_CLASS.
+/// changing it.
+///
+/// # Returns
+/// S_OK or SELFREG_E_CLASS.
 #[no_mangle]
 pub extern "C" fn OpcDllRegisterServer() -> Hr {
     ffi::guard!(SELFREG_E_CLASS, {
@@ -132,8 +143,10 @@ pub extern "C" fn OpcDllRegisterServer() -> Hr {
 }
 
 /// Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
-/// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
-/// SELFREG_E_CLASS.
+/// the same CLSID in particular). Unregistering what is not registered succeeds.
+///
+/// # Returns
+/// S_OK or SELFREG_E_CLASS.
 #[no_mangle]
 pub extern "C" fn OpcDllUnregisterServer() -> Hr {
     ffi::guard!(SELFREG_E_CLASS, {
