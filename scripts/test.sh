@@ -446,15 +446,19 @@ stage_win7_build() {
 }
 
 # The Windows 7 builds differ from the others in the system functions they import, not in the host's
-# lifetime: the reconnect test (a minute of gaps) runs in c-windows and c-x86 only.
+# lifetime or the benchmark's registration: the reconnect test (a minute of gaps) and the benchmark's
+# registration test run in c-windows and c-x86 only. (The latter ends the servers of a stalled run, and
+# Wine keeps an ended server's class registration for the rest of the session: a second run of it in
+# the same session, here with the same CLSIDs, would meet those.)
+win7_excluded='^oop\.(reconnect|bench_registration)$'
 stage_c_win7_x64() {
     build_win7 x64
-    ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300 -E '^oop\.reconnect$'
+    ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300 -E "$win7_excluded"
 }
 
 stage_c_win7_x86() {
     build_win7 x86
-    run_x86_c_tests "$build/windows7-x86" '^oop\.reconnect$'
+    run_x86_c_tests "$build/windows7-x86" "$win7_excluded"
 }
 
 stage_package_windows() {
