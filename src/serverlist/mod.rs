@@ -1,6 +1,6 @@
 //! The OPC server browser (specification chapter 7; IOPCServerList2 from OPC Common 1.10): the class
-//! OPCServerList with IOPCServerList and IOPCServerList2, its enumerator, and the COM server plumbing
-//! (class factory, DllGetClassObject, DllRegisterServer...) that lets clients create it by CLSID.
+//! OPCServerList with IOPCServerList and IOPCServerList2 and its enumerator. Clients create it by CLSID
+//! through opccomn's class table (`crate::module`), served by the server plumbing (`crate::server`).
 //!
 //! The answers are computed from the registry (through the [`Registry`] abstraction), not from the
 //! system's ICatInformation, whose behaviour differs between Windows and Wine:
@@ -34,7 +34,6 @@
 //! without a ProgID.
 
 pub mod interfaces;
-pub mod server;
 
 use core::ffi::c_void;
 use core::ptr;
