@@ -18,6 +18,13 @@
 //!   is one `ffi::boundary!` (HRESULT methods: the interface's NULL rule, the IDL's `[out]`
 //!   parameters reset on entry and on failure, panics caught) or `ffi::guard!` (the others)
 //!   around a call of the trait's method.
+//! - The trait's methods are safe: the shim checks every pointer argument once, under the
+//!   interface's NULL rule, and hands the method what it checked, typed from the IDL and valid
+//!   for the call only: `[out]` as [`ffi::Out`] (`Option` where COM allows NULL), `[out,
+//!   size_is]` as [`ffi::OutArray`], `REFIID`/`REFCLSID` as a reference, `[in, string]` as
+//!   [`ffi::WStr`], `[in, size_is]` as [`ffi::InArray`], an interface pointer as
+//!   [`ffi::Iface`] (`Option` for `[unique]`), `void *` as [`ffi::Opaque`], and an IUnknown
+//!   method's `This` as a [`ThisSlot`].
 //! - `IFoo::IID` and `IFoo::METHODS` (IUnknown's three included).
 
 #![allow(non_snake_case, clippy::too_many_arguments)]
@@ -25,7 +32,7 @@
 use core::ffi::c_void;
 
 use super::ffi::{self, Crossed, FfiResult, Foreign, Hr};
-use super::object::{ComClass, ComObject, Vtable};
+use super::object::{ComClass, ComObject, ThisSlot, Vtable};
 use super::types::{
     BOOL, CATEGORYINFO, CATID, CLSID, CONNECTDATA, DWORD, GUID, HRESULT, IID, LCID, LPCLSID, LPCOLESTR, LPCWSTR,
     LPOLESTR, LPWSTR, REFCLSID, REFIID, ULONG,
@@ -115,23 +122,11 @@ impl Vtable for IUnknownVtbl {}
 /// AddRef and Release. The framework's implementations are in `super::object`.
 pub trait IUnknownImpl {
     /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
-    ///
-    /// # Safety
-    /// Called by the generated shim with `This`, a slot whose vtable was made with this
-    /// implementation, and the COM caller's arguments.
-    unsafe fn QueryInterface(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult;
+    fn QueryInterface(This: ThisSlot<'_>, riid: &IID, ppvObject: ffi::Out<'_, *mut c_void>) -> FfiResult;
     /// Adds a reference; returns the new count (for diagnostics only).
-    ///
-    /// # Safety
-    /// Called by the generated shim with `This`, a slot whose vtable was made with this
-    /// implementation, and the COM caller's arguments.
-    unsafe fn AddRef(This: *mut IUnknown) -> ULONG;
+    fn AddRef(This: ThisSlot<'_>) -> ULONG;
     /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
-    ///
-    /// # Safety
-    /// Called by the generated shim with `This`, a slot whose vtable was made with this
-    /// implementation, and the COM caller's arguments.
-    unsafe fn Release(This: *mut IUnknown) -> ULONG;
+    fn Release(This: ThisSlot<'_>) -> ULONG;
 }
 
 unsafe extern "system" fn IUnknown_QueryInterface<U: IUnknownImpl, I>(
@@ -140,25 +135,30 @@ unsafe extern "system" fn IUnknown_QueryInterface<U: IUnknownImpl, I>(
     ppvObject: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppvObject], {
-        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the
-        // arguments are the COM caller's.
-        unsafe { <U as IUnknownImpl>::QueryInterface(This.cast(), riid, ppvObject) }
+        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for, so
+        // `This` is a slot of a live object of the library; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, ppvObject) = unsafe { (ThisSlot::new(This.cast()), ffi::in_ref(riid)?, ffi::out(ppvObject)?) };
+        <U as IUnknownImpl>::QueryInterface(this, riid, ppvObject)
     })
 }
 
 unsafe extern "system" fn IUnknown_AddRef<U: IUnknownImpl, I>(This: *mut I) -> Crossed<ULONG> {
     ffi::guard!(0, {
-        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the
-        // arguments are the COM caller's.
-        unsafe { <U as IUnknownImpl>::AddRef(This.cast()) }
+        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for, so
+        // `This` is a slot of a live object of the library.
+        let this = unsafe { ThisSlot::new(This.cast()) };
+        <U as IUnknownImpl>::AddRef(this)
     })
 }
 
 unsafe extern "system" fn IUnknown_Release<U: IUnknownImpl, I>(This: *mut I) -> Crossed<ULONG> {
     ffi::guard!(0, {
-        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the
-        // arguments are the COM caller's.
-        unsafe { <U as IUnknownImpl>::Release(This.cast()) }
+        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for, so
+        // `This` is a slot of a live object of the library.
+        let this = unsafe { ThisSlot::new(This.cast()) };
+        <U as IUnknownImpl>::Release(this)
     })
 }
 
@@ -310,21 +310,18 @@ impl Vtable for IEnumGUIDVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumGUIDImpl: ComClass {
     /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> FfiResult;
+    fn Next(
+        this: &ComObject<Self>,
+        celt: ULONG,
+        rgelt: ffi::OutArray<'_, GUID>,
+        pceltFetched: Option<ffi::Out<'_, ULONG>>,
+    ) -> FfiResult;
     /// Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppenum: *mut *mut IEnumGUID) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IEnumGUID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IEnumGUID_Next<T: IEnumGUIDImpl>(
@@ -334,33 +331,47 @@ unsafe extern "system" fn IEnumGUID_Next<T: IEnumGUIDImpl>(
     pceltFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pceltFetched], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Next(ComObject::<T>::from_interface(This), celt, rgelt, pceltFetched) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgelt, pceltFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(rgelt, celt)?,
+                ffi::out_opt(pceltFetched),
+            )
+        };
+        <T as IEnumGUIDImpl>::Next(this, celt, rgelt, pceltFetched)
     })
 }
 
 unsafe extern "system" fn IEnumGUID_Skip<T: IEnumGUIDImpl>(This: *mut IEnumGUID, celt: ULONG) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Skip(ComObject::<T>::from_interface(This), celt) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumGUIDImpl>::Skip(this, celt)
     })
 }
 
 unsafe extern "system" fn IEnumGUID_Reset<T: IEnumGUIDImpl>(This: *mut IEnumGUID) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumGUIDImpl>::Reset(this)
     })
 }
 
 unsafe extern "system" fn IEnumGUID_Clone<T: IEnumGUIDImpl>(This: *mut IEnumGUID, ppenum: *mut *mut IEnumGUID) -> Hr {
     ffi::boundary!(Com, [ppenum], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Clone(ComObject::<T>::from_interface(This), ppenum) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppenum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppenum)?) };
+        <T as IEnumGUIDImpl>::Clone(this, ppenum)
     })
 }
 
@@ -520,26 +531,18 @@ impl Vtable for IEnumConnectionsVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumConnectionsImpl: ComClass {
     /// Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(
+    fn Next(
         this: &ComObject<Self>,
         cConnections: ULONG,
-        rgcd: *mut CONNECTDATA,
-        pcFetched: *mut ULONG,
+        rgcd: ffi::OutArray<'_, CONNECTDATA>,
+        pcFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
     /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, cConnections: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnections) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult;
 }
 
 unsafe extern "system" fn IEnumConnections_Next<T: IEnumConnectionsImpl>(
@@ -549,11 +552,18 @@ unsafe extern "system" fn IEnumConnections_Next<T: IEnumConnectionsImpl>(
     pcFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pcFetched], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IEnumConnectionsImpl>::Next(ComObject::<T>::from_interface(This), cConnections, rgcd, pcFetched)
-        }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcd, pcFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(rgcd, cConnections)?,
+                ffi::out_opt(pcFetched),
+            )
+        };
+        <T as IEnumConnectionsImpl>::Next(this, cConnections, rgcd, pcFetched)
     })
 }
 
@@ -562,17 +572,19 @@ unsafe extern "system" fn IEnumConnections_Skip<T: IEnumConnectionsImpl>(
     cConnections: ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionsImpl>::Skip(ComObject::<T>::from_interface(This), cConnections) }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionsImpl>::Skip(this, cConnections)
     })
 }
 
 unsafe extern "system" fn IEnumConnections_Reset<T: IEnumConnectionsImpl>(This: *mut IEnumConnections) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionsImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionsImpl>::Reset(this)
     })
 }
 
@@ -581,9 +593,12 @@ unsafe extern "system" fn IEnumConnections_Clone<T: IEnumConnectionsImpl>(
     ppEnum: *mut *mut IEnumConnections,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionsImpl>::Clone(ComObject::<T>::from_interface(This), ppEnum) }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IEnumConnectionsImpl>::Clone(this, ppEnum)
     })
 }
 
@@ -758,34 +773,18 @@ impl Vtable for IConnectionPointVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IConnectionPointImpl: ComClass {
     /// The IID of the outgoing interface this point calls (IID_IOPCShutdown).
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetConnectionInterface(this: &ComObject<Self>, pIID: *mut IID) -> FfiResult;
+    fn GetConnectionInterface(this: &ComObject<Self>, pIID: ffi::Out<'_, IID>) -> FfiResult;
     /// The container (the server object) this point belongs to, AddRef'ed.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetConnectionPointContainer(
+    fn GetConnectionPointContainer(
         this: &ComObject<Self>,
-        ppCPC: *mut *mut IConnectionPointContainer,
+        ppCPC: ffi::Out<'_, *mut IConnectionPointContainer>,
     ) -> FfiResult;
     /// Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Advise(this: &ComObject<Self>, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> FfiResult;
+    fn Advise(this: &ComObject<Self>, pUnkSink: ffi::Iface<'_, IUnknown>, pdwCookie: ffi::Out<'_, DWORD>) -> FfiResult;
     /// Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
     fn Unadvise(this: &ComObject<Self>, dwCookie: DWORD) -> FfiResult;
     /// An enumerator of the current connections.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumConnections(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnections) -> FfiResult;
+    fn EnumConnections(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult;
 }
 
 unsafe extern "system" fn IConnectionPoint_GetConnectionInterface<T: IConnectionPointImpl>(
@@ -793,9 +792,12 @@ unsafe extern "system" fn IConnectionPoint_GetConnectionInterface<T: IConnection
     pIID: *mut IID,
 ) -> Hr {
     ffi::boundary!(Com, [pIID], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::GetConnectionInterface(ComObject::<T>::from_interface(This), pIID) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pIID) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(pIID)?) };
+        <T as IConnectionPointImpl>::GetConnectionInterface(this, pIID)
     })
 }
 
@@ -804,9 +806,12 @@ unsafe extern "system" fn IConnectionPoint_GetConnectionPointContainer<T: IConne
     ppCPC: *mut *mut IConnectionPointContainer,
 ) -> Hr {
     ffi::boundary!(Com, [ppCPC], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::GetConnectionPointContainer(ComObject::<T>::from_interface(This), ppCPC) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppCPC) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppCPC)?) };
+        <T as IConnectionPointImpl>::GetConnectionPointContainer(this, ppCPC)
     })
 }
 
@@ -816,9 +821,18 @@ unsafe extern "system" fn IConnectionPoint_Advise<T: IConnectionPointImpl>(
     pdwCookie: *mut DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [pdwCookie], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::Advise(ComObject::<T>::from_interface(This), pUnkSink, pdwCookie) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pUnkSink, pdwCookie) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_iface(pUnkSink)?,
+                ffi::out(pdwCookie)?,
+            )
+        };
+        <T as IConnectionPointImpl>::Advise(this, pUnkSink, pdwCookie)
     })
 }
 
@@ -827,9 +841,10 @@ unsafe extern "system" fn IConnectionPoint_Unadvise<T: IConnectionPointImpl>(
     dwCookie: DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::Unadvise(ComObject::<T>::from_interface(This), dwCookie) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IConnectionPointImpl>::Unadvise(this, dwCookie)
     })
 }
 
@@ -838,9 +853,12 @@ unsafe extern "system" fn IConnectionPoint_EnumConnections<T: IConnectionPointIm
     ppEnum: *mut *mut IEnumConnections,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::EnumConnections(ComObject::<T>::from_interface(This), ppEnum) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IConnectionPointImpl>::EnumConnections(this, ppEnum)
     })
 }
 
@@ -1008,26 +1026,18 @@ impl Vtable for IEnumConnectionPointsVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumConnectionPointsImpl: ComClass {
     /// Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(
+    fn Next(
         this: &ComObject<Self>,
         cConnections: ULONG,
-        ppCP: *mut *mut IConnectionPoint,
-        pcFetched: *mut ULONG,
+        ppCP: ffi::OutArray<'_, *mut IConnectionPoint>,
+        pcFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
     /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, cConnections: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult;
 }
 
 unsafe extern "system" fn IEnumConnectionPoints_Next<T: IEnumConnectionPointsImpl>(
@@ -1037,11 +1047,18 @@ unsafe extern "system" fn IEnumConnectionPoints_Next<T: IEnumConnectionPointsImp
     pcFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pcFetched], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IEnumConnectionPointsImpl>::Next(ComObject::<T>::from_interface(This), cConnections, ppCP, pcFetched)
-        }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppCP, pcFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(ppCP, cConnections)?,
+                ffi::out_opt(pcFetched),
+            )
+        };
+        <T as IEnumConnectionPointsImpl>::Next(this, cConnections, ppCP, pcFetched)
     })
 }
 
@@ -1050,9 +1067,10 @@ unsafe extern "system" fn IEnumConnectionPoints_Skip<T: IEnumConnectionPointsImp
     cConnections: ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionPointsImpl>::Skip(ComObject::<T>::from_interface(This), cConnections) }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionPointsImpl>::Skip(this, cConnections)
     })
 }
 
@@ -1060,9 +1078,10 @@ unsafe extern "system" fn IEnumConnectionPoints_Reset<T: IEnumConnectionPointsIm
     This: *mut IEnumConnectionPoints,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionPointsImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionPointsImpl>::Reset(this)
     })
 }
 
@@ -1071,9 +1090,12 @@ unsafe extern "system" fn IEnumConnectionPoints_Clone<T: IEnumConnectionPointsIm
     ppEnum: *mut *mut IEnumConnectionPoints,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionPointsImpl>::Clone(ComObject::<T>::from_interface(This), ppEnum) }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IEnumConnectionPointsImpl>::Clone(this, ppEnum)
     })
 }
 
@@ -1209,17 +1231,9 @@ impl Vtable for IConnectionPointContainerVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IConnectionPointContainerImpl: ComClass {
     /// An enumerator of the container's connection points.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult;
+    fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult;
     /// The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn FindConnectionPoint(this: &ComObject<Self>, riid: REFIID, ppCP: *mut *mut IConnectionPoint) -> FfiResult;
+    fn FindConnectionPoint(this: &ComObject<Self>, riid: &IID, ppCP: ffi::Out<'_, *mut IConnectionPoint>) -> FfiResult;
 }
 
 unsafe extern "system" fn IConnectionPointContainer_EnumConnectionPoints<T: IConnectionPointContainerImpl>(
@@ -1227,11 +1241,12 @@ unsafe extern "system" fn IConnectionPointContainer_EnumConnectionPoints<T: ICon
     ppEnum: *mut *mut IEnumConnectionPoints,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IConnectionPointContainerImpl>::EnumConnectionPoints(ComObject::<T>::from_interface(This), ppEnum)
-        }
+        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots
+        // of `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is
+        // the COM caller's, NULL or valid for the call as the IDL declares it, which is what its
+        // reader requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IConnectionPointContainerImpl>::EnumConnectionPoints(this, ppEnum)
     })
 }
 
@@ -1241,11 +1256,18 @@ unsafe extern "system" fn IConnectionPointContainer_FindConnectionPoint<T: IConn
     ppCP: *mut *mut IConnectionPoint,
 ) -> Hr {
     ffi::boundary!(Com, [ppCP], {
-        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IConnectionPointContainerImpl>::FindConnectionPoint(ComObject::<T>::from_interface(This), riid, ppCP)
-        }
+        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots
+        // of `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is
+        // the COM caller's, NULL or valid for the call as the IDL declares it, which is what its
+        // reader requires.
+        let (this, riid, ppCP) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_ref(riid)?,
+                ffi::out(ppCP)?,
+            )
+        };
+        <T as IConnectionPointContainerImpl>::FindConnectionPoint(this, riid, ppCP)
     })
 }
 
@@ -1382,15 +1404,11 @@ impl Vtable for IClassFactoryVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IClassFactoryImpl: ComClass {
     /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CreateInstance(
+    fn CreateInstance(
         this: &ComObject<Self>,
-        pUnkOuter: *mut IUnknown,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
+        pUnkOuter: Option<ffi::Iface<'_, IUnknown>>,
+        riid: &IID,
+        ppvObject: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
     /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
     fn LockServer(this: &ComObject<Self>, fLock: BOOL) -> FfiResult;
@@ -1403,19 +1421,28 @@ unsafe extern "system" fn IClassFactory_CreateInstance<T: IClassFactoryImpl>(
     ppvObject: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppvObject], {
-        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IClassFactoryImpl>::CreateInstance(ComObject::<T>::from_interface(This), pUnkOuter, riid, ppvObject)
-        }
+        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pUnkOuter, riid, ppvObject) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_iface_opt(pUnkOuter),
+                ffi::in_ref(riid)?,
+                ffi::out(ppvObject)?,
+            )
+        };
+        <T as IClassFactoryImpl>::CreateInstance(this, pUnkOuter, riid, ppvObject)
     })
 }
 
 unsafe extern "system" fn IClassFactory_LockServer<T: IClassFactoryImpl>(This: *mut IClassFactory, fLock: BOOL) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IClassFactoryImpl>::LockServer(ComObject::<T>::from_interface(This), fLock) }
+        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IClassFactoryImpl>::LockServer(this, fLock)
     })
 }
 
@@ -1529,11 +1556,7 @@ pub trait IOPCShutdownImpl: ComClass {
     /// The server asks the client to release every reference to the server's objects; `szReason` is an
     /// optional text saying why (NULL or empty allowed). The client should return S_OK at once and
     /// release its references afterwards, not from inside the call.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn ShutdownRequest(this: &ComObject<Self>, szReason: LPCWSTR) -> FfiResult;
+    fn ShutdownRequest(this: &ComObject<Self>, szReason: Option<ffi::WStr<'_>>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCShutdown_ShutdownRequest<T: IOPCShutdownImpl>(
@@ -1541,9 +1564,12 @@ unsafe extern "system" fn IOPCShutdown_ShutdownRequest<T: IOPCShutdownImpl>(
     szReason: LPCWSTR,
 ) -> Hr {
     ffi::boundary!(Opc, [], {
-        // SAFETY: `IOPCShutdownVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCShutdownImpl>::ShutdownRequest(ComObject::<T>::from_interface(This), szReason) }
+        // SAFETY: `IOPCShutdownVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szReason) = unsafe { (ComObject::<T>::from_interface(This), ffi::in_wstr_opt(szReason)) };
+        <T as IOPCShutdownImpl>::ShutdownRequest(this, szReason)
     })
 }
 
@@ -1722,51 +1748,39 @@ pub trait IOPCCommonImpl: ComClass {
     fn SetLocaleID(this: &ComObject<Self>, dwLcid: LCID) -> FfiResult;
     /// Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
     /// E_INVALIDARG for a NULL `pdwLcid`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult;
+    fn GetLocaleID(this: &ComObject<Self>, pdwLcid: ffi::Out<'_, LCID>) -> FfiResult;
     /// Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
     /// with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn QueryAvailableLocaleIDs(
+    fn QueryAvailableLocaleIDs(
         this: &ComObject<Self>,
-        pdwCount: *mut DWORD,
-        pdwLcid: *mut *mut LCID,
+        pdwCount: ffi::Out<'_, DWORD>,
+        pdwLcid: ffi::Out<'_, *mut LCID>,
     ) -> FfiResult;
     /// Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
     /// CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: *mut LPWSTR) -> FfiResult;
+    fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: ffi::Out<'_, LPWSTR>) -> FfiResult;
     /// The client tells the server its name (for the server's diagnostics; opccomn:
     /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn SetClientName(this: &ComObject<Self>, szName: LPCWSTR) -> FfiResult;
+    fn SetClientName(this: &ComObject<Self>, szName: ffi::WStr<'_>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCCommon_SetLocaleID<T: IOPCCommonImpl>(This: *mut IOPCCommon, dwLcid: LCID) -> Hr {
     ffi::boundary!(Opc, [], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::SetLocaleID(ComObject::<T>::from_interface(This), dwLcid) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IOPCCommonImpl>::SetLocaleID(this, dwLcid)
     })
 }
 
 unsafe extern "system" fn IOPCCommon_GetLocaleID<T: IOPCCommonImpl>(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> Hr {
     ffi::boundary!(Opc, [pdwLcid], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::GetLocaleID(ComObject::<T>::from_interface(This), pdwLcid) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pdwLcid) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(pdwLcid)?) };
+        <T as IOPCCommonImpl>::GetLocaleID(this, pdwLcid)
     })
 }
 
@@ -1776,11 +1790,18 @@ unsafe extern "system" fn IOPCCommon_QueryAvailableLocaleIDs<T: IOPCCommonImpl>(
     pdwLcid: *mut *mut LCID,
 ) -> Hr {
     ffi::boundary!(Opc, [pdwCount, pdwLcid], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCCommonImpl>::QueryAvailableLocaleIDs(ComObject::<T>::from_interface(This), pdwCount, pdwLcid)
-        }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pdwCount, pdwLcid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out(pdwCount)?,
+                ffi::out(pdwLcid)?,
+            )
+        };
+        <T as IOPCCommonImpl>::QueryAvailableLocaleIDs(this, pdwCount, pdwLcid)
     })
 }
 
@@ -1790,17 +1811,23 @@ unsafe extern "system" fn IOPCCommon_GetErrorString<T: IOPCCommonImpl>(
     ppString: *mut LPWSTR,
 ) -> Hr {
     ffi::boundary!(Opc, [ppString], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::GetErrorString(ComObject::<T>::from_interface(This), dwError, ppString) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppString) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppString)?) };
+        <T as IOPCCommonImpl>::GetErrorString(this, dwError, ppString)
     })
 }
 
 unsafe extern "system" fn IOPCCommon_SetClientName<T: IOPCCommonImpl>(This: *mut IOPCCommon, szName: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::SetClientName(ComObject::<T>::from_interface(This), szName) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szName) = unsafe { (ComObject::<T>::from_interface(This), ffi::in_wstr(szName)?) };
+        <T as IOPCCommonImpl>::SetClientName(this, szName)
     })
 }
 
@@ -1991,37 +2018,25 @@ pub trait IOPCServerListImpl: ComClass {
     /// Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
     /// require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
     /// the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumClassesOfCategories(
+    fn EnumClassesOfCategories(
         this: &ComObject<Self>,
         cImplemented: ULONG,
-        rgcatidImpl: *mut CATID,
+        rgcatidImpl: ffi::InArray<'_, CATID>,
         cRequired: ULONG,
-        rgcatidReq: *mut CATID,
-        ppenumClsid: *mut *mut IEnumGUID,
+        rgcatidReq: ffi::InArray<'_, CATID>,
+        ppenumClsid: ffi::Out<'_, *mut IEnumGUID>,
     ) -> FfiResult;
     /// Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
     /// REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetClassDetails(
+    fn GetClassDetails(
         this: &ComObject<Self>,
-        clsid: REFCLSID,
-        ppszProgID: *mut LPOLESTR,
-        ppszUserType: *mut LPOLESTR,
+        clsid: &CLSID,
+        ppszProgID: ffi::Out<'_, LPOLESTR>,
+        ppszUserType: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult;
     /// Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
     /// is not registered, CO_E_CLASSSTRING when it cannot be one.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: LPCOLESTR, clsid: LPCLSID) -> FfiResult;
+    fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCServerList_EnumClassesOfCategories<T: IOPCServerListImpl>(
@@ -2033,18 +2048,26 @@ unsafe extern "system" fn IOPCServerList_EnumClassesOfCategories<T: IOPCServerLi
     ppenumClsid: *mut *mut IEnumGUID,
 ) -> Hr {
     ffi::boundary!(Opc, [ppenumClsid], {
-        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerListImpl>::EnumClassesOfCategories(
+        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcatidImpl, rgcatidReq, ppenumClsid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                cImplemented,
-                rgcatidImpl,
-                cRequired,
-                rgcatidReq,
-                ppenumClsid,
+                ffi::in_array_arg(rgcatidImpl, cImplemented),
+                ffi::in_array_arg(rgcatidReq, cRequired),
+                ffi::out(ppenumClsid)?,
             )
-        }
+        };
+        <T as IOPCServerListImpl>::EnumClassesOfCategories(
+            this,
+            cImplemented,
+            rgcatidImpl,
+            cRequired,
+            rgcatidReq,
+            ppenumClsid,
+        )
     })
 }
 
@@ -2055,16 +2078,19 @@ unsafe extern "system" fn IOPCServerList_GetClassDetails<T: IOPCServerListImpl>(
     ppszUserType: *mut LPOLESTR,
 ) -> Hr {
     ffi::boundary!(Opc, [ppszProgID, ppszUserType], {
-        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerListImpl>::GetClassDetails(
+        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, clsid, ppszProgID, ppszUserType) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                clsid,
-                ppszProgID,
-                ppszUserType,
+                ffi::in_ref(clsid)?,
+                ffi::out(ppszProgID)?,
+                ffi::out(ppszUserType)?,
             )
-        }
+        };
+        <T as IOPCServerListImpl>::GetClassDetails(this, clsid, ppszProgID, ppszUserType)
     })
 }
 
@@ -2074,9 +2100,18 @@ unsafe extern "system" fn IOPCServerList_CLSIDFromProgID<T: IOPCServerListImpl>(
     clsid: LPCLSID,
 ) -> Hr {
     ffi::boundary!(Opc, [clsid], {
-        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCServerListImpl>::CLSIDFromProgID(ComObject::<T>::from_interface(This), szProgId, clsid) }
+        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szProgId, clsid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_wstr(szProgId)?,
+                ffi::out(clsid)?,
+            )
+        };
+        <T as IOPCServerListImpl>::CLSIDFromProgID(this, szProgId, clsid)
     })
 }
 
@@ -2238,21 +2273,18 @@ impl Vtable for IOPCEnumGUIDVtbl {}
 pub trait IOPCEnumGUIDImpl: ComClass {
     /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
     /// when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> FfiResult;
+    fn Next(
+        this: &ComObject<Self>,
+        celt: ULONG,
+        rgelt: ffi::OutArray<'_, GUID>,
+        pceltFetched: Option<ffi::Out<'_, ULONG>>,
+    ) -> FfiResult;
     /// Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first GUID.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same GUIDs at the same position, in `*ppenum`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppenum: *mut *mut IOPCEnumGUID) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IOPCEnumGUID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCEnumGUID_Next<T: IOPCEnumGUIDImpl>(
@@ -2262,25 +2294,36 @@ unsafe extern "system" fn IOPCEnumGUID_Next<T: IOPCEnumGUIDImpl>(
     pceltFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pceltFetched], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Next(ComObject::<T>::from_interface(This), celt, rgelt, pceltFetched) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgelt, pceltFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(rgelt, celt)?,
+                ffi::out_opt(pceltFetched),
+            )
+        };
+        <T as IOPCEnumGUIDImpl>::Next(this, celt, rgelt, pceltFetched)
     })
 }
 
 unsafe extern "system" fn IOPCEnumGUID_Skip<T: IOPCEnumGUIDImpl>(This: *mut IOPCEnumGUID, celt: ULONG) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Skip(ComObject::<T>::from_interface(This), celt) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IOPCEnumGUIDImpl>::Skip(this, celt)
     })
 }
 
 unsafe extern "system" fn IOPCEnumGUID_Reset<T: IOPCEnumGUIDImpl>(This: *mut IOPCEnumGUID) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IOPCEnumGUIDImpl>::Reset(this)
     })
 }
 
@@ -2289,9 +2332,12 @@ unsafe extern "system" fn IOPCEnumGUID_Clone<T: IOPCEnumGUIDImpl>(
     ppenum: *mut *mut IOPCEnumGUID,
 ) -> Hr {
     ffi::boundary!(Com, [ppenum], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Clone(ComObject::<T>::from_interface(This), ppenum) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppenum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppenum)?) };
+        <T as IOPCEnumGUIDImpl>::Clone(this, ppenum)
     })
 }
 
@@ -2479,37 +2525,25 @@ impl Vtable for IOPCServerList2Vtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCServerList2Impl: ComClass {
     /// As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumClassesOfCategories(
+    fn EnumClassesOfCategories(
         this: &ComObject<Self>,
         cImplemented: ULONG,
-        rgcatidImpl: *mut CATID,
+        rgcatidImpl: ffi::InArray<'_, CATID>,
         cRequired: ULONG,
-        rgcatidReq: *mut CATID,
-        ppenumClsid: *mut *mut IOPCEnumGUID,
+        rgcatidReq: ffi::InArray<'_, CATID>,
+        ppenumClsid: ffi::Out<'_, *mut IOPCEnumGUID>,
     ) -> FfiResult;
     /// As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
     /// registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetClassDetails(
+    fn GetClassDetails(
         this: &ComObject<Self>,
-        clsid: REFCLSID,
-        ppszProgID: *mut LPOLESTR,
-        ppszUserType: *mut LPOLESTR,
-        ppszVerIndProgID: *mut LPOLESTR,
+        clsid: &CLSID,
+        ppszProgID: ffi::Out<'_, LPOLESTR>,
+        ppszUserType: ffi::Out<'_, LPOLESTR>,
+        ppszVerIndProgID: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult;
     /// As IOPCServerList::CLSIDFromProgID.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: LPCOLESTR, clsid: LPCLSID) -> FfiResult;
+    fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCServerList2_EnumClassesOfCategories<T: IOPCServerList2Impl>(
@@ -2521,18 +2555,26 @@ unsafe extern "system" fn IOPCServerList2_EnumClassesOfCategories<T: IOPCServerL
     ppenumClsid: *mut *mut IOPCEnumGUID,
 ) -> Hr {
     ffi::boundary!(Opc, [ppenumClsid], {
-        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerList2Impl>::EnumClassesOfCategories(
+        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcatidImpl, rgcatidReq, ppenumClsid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                cImplemented,
-                rgcatidImpl,
-                cRequired,
-                rgcatidReq,
-                ppenumClsid,
+                ffi::in_array_arg(rgcatidImpl, cImplemented),
+                ffi::in_array_arg(rgcatidReq, cRequired),
+                ffi::out(ppenumClsid)?,
             )
-        }
+        };
+        <T as IOPCServerList2Impl>::EnumClassesOfCategories(
+            this,
+            cImplemented,
+            rgcatidImpl,
+            cRequired,
+            rgcatidReq,
+            ppenumClsid,
+        )
     })
 }
 
@@ -2544,17 +2586,20 @@ unsafe extern "system" fn IOPCServerList2_GetClassDetails<T: IOPCServerList2Impl
     ppszVerIndProgID: *mut LPOLESTR,
 ) -> Hr {
     ffi::boundary!(Opc, [ppszProgID, ppszUserType, ppszVerIndProgID], {
-        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerList2Impl>::GetClassDetails(
+        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, clsid, ppszProgID, ppszUserType, ppszVerIndProgID) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                clsid,
-                ppszProgID,
-                ppszUserType,
-                ppszVerIndProgID,
+                ffi::in_ref(clsid)?,
+                ffi::out(ppszProgID)?,
+                ffi::out(ppszUserType)?,
+                ffi::out(ppszVerIndProgID)?,
             )
-        }
+        };
+        <T as IOPCServerList2Impl>::GetClassDetails(this, clsid, ppszProgID, ppszUserType, ppszVerIndProgID)
     })
 }
 
@@ -2564,9 +2609,18 @@ unsafe extern "system" fn IOPCServerList2_CLSIDFromProgID<T: IOPCServerList2Impl
     clsid: LPCLSID,
 ) -> Hr {
     ffi::boundary!(Opc, [clsid], {
-        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCServerList2Impl>::CLSIDFromProgID(ComObject::<T>::from_interface(This), szProgId, clsid) }
+        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szProgId, clsid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_wstr(szProgId)?,
+                ffi::out(clsid)?,
+            )
+        };
+        <T as IOPCServerList2Impl>::CLSIDFromProgID(this, szProgId, clsid)
     })
 }
 
@@ -2826,64 +2880,44 @@ impl Vtable for IMarshalVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IMarshalImpl: ComClass {
     /// The CLSID of the object that unmarshals the interface.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetUnmarshalClass(
+    fn GetUnmarshalClass(
         this: &ComObject<Self>,
-        riid: REFIID,
-        pv: *mut c_void,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         dwDestContext: DWORD,
-        pvDestContext: *mut c_void,
+        pvDestContext: ffi::Opaque<'_>,
         mshlflags: DWORD,
-        pCid: *mut CLSID,
+        pCid: ffi::Out<'_, CLSID>,
     ) -> FfiResult;
     /// An upper bound of the size of the marshaled data.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetMarshalSizeMax(
+    fn GetMarshalSizeMax(
         this: &ComObject<Self>,
-        riid: REFIID,
-        pv: *mut c_void,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         dwDestContext: DWORD,
-        pvDestContext: *mut c_void,
+        pvDestContext: ffi::Opaque<'_>,
         mshlflags: DWORD,
-        pSize: *mut DWORD,
+        pSize: ffi::Out<'_, DWORD>,
     ) -> FfiResult;
     /// Writes the data that UnmarshalInterface needs into the stream.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn MarshalInterface(
+    fn MarshalInterface(
         this: &ComObject<Self>,
-        pStm: *mut c_void,
-        riid: REFIID,
-        pv: *mut c_void,
+        pStm: ffi::Opaque<'_>,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         dwDestContext: DWORD,
-        pvDestContext: *mut c_void,
+        pvDestContext: ffi::Opaque<'_>,
         mshlflags: DWORD,
     ) -> FfiResult;
     /// Reads the marshaled data and returns the interface.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnmarshalInterface(
+    fn UnmarshalInterface(
         this: &ComObject<Self>,
-        pStm: *mut c_void,
-        riid: REFIID,
-        ppv: *mut *mut c_void,
+        pStm: ffi::Opaque<'_>,
+        riid: &IID,
+        ppv: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
     /// Destroys marshaled data that will not be unmarshaled.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn ReleaseMarshalData(this: &ComObject<Self>, pStm: *mut c_void) -> FfiResult;
+    fn ReleaseMarshalData(this: &ComObject<Self>, pStm: ffi::Opaque<'_>) -> FfiResult;
     /// Disconnects the object's remote connections.
     fn DisconnectObject(this: &ComObject<Self>, dwReserved: DWORD) -> FfiResult;
 }
@@ -2898,19 +2932,20 @@ unsafe extern "system" fn IMarshal_GetUnmarshalClass<T: IMarshalImpl>(
     pCid: *mut CLSID,
 ) -> Hr {
     ffi::boundary!(Com, [pCid], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IMarshalImpl>::GetUnmarshalClass(
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, pv, pvDestContext, pCid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                riid,
-                pv,
-                dwDestContext,
-                pvDestContext,
-                mshlflags,
-                pCid,
+                ffi::in_ref(riid)?,
+                ffi::opaque(pv),
+                ffi::opaque(pvDestContext),
+                ffi::out(pCid)?,
             )
-        }
+        };
+        <T as IMarshalImpl>::GetUnmarshalClass(this, riid, pv, dwDestContext, pvDestContext, mshlflags, pCid)
     })
 }
 
@@ -2924,19 +2959,20 @@ unsafe extern "system" fn IMarshal_GetMarshalSizeMax<T: IMarshalImpl>(
     pSize: *mut DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [pSize], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IMarshalImpl>::GetMarshalSizeMax(
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, pv, pvDestContext, pSize) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                riid,
-                pv,
-                dwDestContext,
-                pvDestContext,
-                mshlflags,
-                pSize,
+                ffi::in_ref(riid)?,
+                ffi::opaque(pv),
+                ffi::opaque(pvDestContext),
+                ffi::out(pSize)?,
             )
-        }
+        };
+        <T as IMarshalImpl>::GetMarshalSizeMax(this, riid, pv, dwDestContext, pvDestContext, mshlflags, pSize)
     })
 }
 
@@ -2950,19 +2986,20 @@ unsafe extern "system" fn IMarshal_MarshalInterface<T: IMarshalImpl>(
     mshlflags: DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IMarshalImpl>::MarshalInterface(
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pStm, riid, pv, pvDestContext) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                pStm,
-                riid,
-                pv,
-                dwDestContext,
-                pvDestContext,
-                mshlflags,
+                ffi::opaque(pStm),
+                ffi::in_ref(riid)?,
+                ffi::opaque(pv),
+                ffi::opaque(pvDestContext),
             )
-        }
+        };
+        <T as IMarshalImpl>::MarshalInterface(this, pStm, riid, pv, dwDestContext, pvDestContext, mshlflags)
     })
 }
 
@@ -2973,25 +3010,39 @@ unsafe extern "system" fn IMarshal_UnmarshalInterface<T: IMarshalImpl>(
     ppv: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppv], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IMarshalImpl>::UnmarshalInterface(ComObject::<T>::from_interface(This), pStm, riid, ppv) }
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pStm, riid, ppv) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::opaque(pStm),
+                ffi::in_ref(riid)?,
+                ffi::out(ppv)?,
+            )
+        };
+        <T as IMarshalImpl>::UnmarshalInterface(this, pStm, riid, ppv)
     })
 }
 
 unsafe extern "system" fn IMarshal_ReleaseMarshalData<T: IMarshalImpl>(This: *mut IMarshal, pStm: *mut c_void) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IMarshalImpl>::ReleaseMarshalData(ComObject::<T>::from_interface(This), pStm) }
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pStm) = unsafe { (ComObject::<T>::from_interface(This), ffi::opaque(pStm)) };
+        <T as IMarshalImpl>::ReleaseMarshalData(this, pStm)
     })
 }
 
 unsafe extern "system" fn IMarshal_DisconnectObject<T: IMarshalImpl>(This: *mut IMarshal, dwReserved: DWORD) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IMarshalImpl>::DisconnectObject(ComObject::<T>::from_interface(This), dwReserved) }
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IMarshalImpl>::DisconnectObject(this, dwReserved)
     })
 }
 
@@ -3158,28 +3209,20 @@ impl Vtable for IGlobalInterfaceTableVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IGlobalInterfaceTableImpl: ComClass {
     /// Registers an interface and returns its cookie.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterInterfaceInGlobal(
+    fn RegisterInterfaceInGlobal(
         this: &ComObject<Self>,
-        pUnk: *mut IUnknown,
-        riid: REFIID,
-        pdwCookie: *mut DWORD,
+        pUnk: ffi::Iface<'_, IUnknown>,
+        riid: &IID,
+        pdwCookie: ffi::Out<'_, DWORD>,
     ) -> FfiResult;
     /// Revokes the registration with this cookie.
     fn RevokeInterfaceFromGlobal(this: &ComObject<Self>, dwCookie: DWORD) -> FfiResult;
     /// The interface registered under this cookie, valid in the calling apartment.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetInterfaceFromGlobal(
+    fn GetInterfaceFromGlobal(
         this: &ComObject<Self>,
         dwCookie: DWORD,
-        riid: REFIID,
-        ppv: *mut *mut c_void,
+        riid: &IID,
+        ppv: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
 }
 
@@ -3190,16 +3233,19 @@ unsafe extern "system" fn IGlobalInterfaceTable_RegisterInterfaceInGlobal<T: IGl
     pdwCookie: *mut DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [pdwCookie], {
-        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IGlobalInterfaceTableImpl>::RegisterInterfaceInGlobal(
+        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pUnk, riid, pdwCookie) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                pUnk,
-                riid,
-                pdwCookie,
+                ffi::in_iface(pUnk)?,
+                ffi::in_ref(riid)?,
+                ffi::out(pdwCookie)?,
             )
-        }
+        };
+        <T as IGlobalInterfaceTableImpl>::RegisterInterfaceInGlobal(this, pUnk, riid, pdwCookie)
     })
 }
 
@@ -3208,11 +3254,10 @@ unsafe extern "system" fn IGlobalInterfaceTable_RevokeInterfaceFromGlobal<T: IGl
     dwCookie: DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IGlobalInterfaceTableImpl>::RevokeInterfaceFromGlobal(ComObject::<T>::from_interface(This), dwCookie)
-        }
+        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IGlobalInterfaceTableImpl>::RevokeInterfaceFromGlobal(this, dwCookie)
     })
 }
 
@@ -3223,16 +3268,12 @@ unsafe extern "system" fn IGlobalInterfaceTable_GetInterfaceFromGlobal<T: IGloba
     ppv: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppv], {
-        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IGlobalInterfaceTableImpl>::GetInterfaceFromGlobal(
-                ComObject::<T>::from_interface(This),
-                dwCookie,
-                riid,
-                ppv,
-            )
-        }
+        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, ppv) = unsafe { (ComObject::<T>::from_interface(This), ffi::in_ref(riid)?, ffi::out(ppv)?) };
+        <T as IGlobalInterfaceTableImpl>::GetInterfaceFromGlobal(this, dwCookie, riid, ppv)
     })
 }
 
@@ -3481,64 +3522,40 @@ impl Vtable for ICatRegisterVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait ICatRegisterImpl: ComClass {
     /// Creates (or describes) the categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterCategories(
+    fn RegisterCategories(
         this: &ComObject<Self>,
         cCategories: ULONG,
-        rgCategoryInfo: *mut CATEGORYINFO,
+        rgCategoryInfo: ffi::InArray<'_, CATEGORYINFO>,
     ) -> FfiResult;
     /// Removes the categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnRegisterCategories(this: &ComObject<Self>, cCategories: ULONG, rgcatid: *mut CATID) -> FfiResult;
+    fn UnRegisterCategories(this: &ComObject<Self>, cCategories: ULONG, rgcatid: ffi::InArray<'_, CATID>) -> FfiResult;
     /// Records that the class implements the categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterClassImplCategories(
+    fn RegisterClassImplCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
     /// Removes the class's implemented categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnRegisterClassImplCategories(
+    fn UnRegisterClassImplCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
     /// Records that the class requires the categories of its clients.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterClassReqCategories(
+    fn RegisterClassReqCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
     /// Removes the class's required categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnRegisterClassReqCategories(
+    fn UnRegisterClassReqCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
 }
 
@@ -3548,15 +3565,17 @@ unsafe extern "system" fn ICatRegister_RegisterCategories<T: ICatRegisterImpl>(
     rgCategoryInfo: *mut CATEGORYINFO,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::RegisterCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgCategoryInfo) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                cCategories,
-                rgCategoryInfo,
+                ffi::in_array_arg(rgCategoryInfo, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::RegisterCategories(this, cCategories, rgCategoryInfo)
     })
 }
 
@@ -3566,11 +3585,17 @@ unsafe extern "system" fn ICatRegister_UnRegisterCategories<T: ICatRegisterImpl>
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::UnRegisterCategories(ComObject::<T>::from_interface(This), cCategories, rgcatid)
-        }
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcatid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_array_arg(rgcatid, cCategories),
+            )
+        };
+        <T as ICatRegisterImpl>::UnRegisterCategories(this, cCategories, rgcatid)
     })
 }
 
@@ -3581,16 +3606,18 @@ unsafe extern "system" fn ICatRegister_RegisterClassImplCategories<T: ICatRegist
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::RegisterClassImplCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::RegisterClassImplCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
@@ -3601,16 +3628,18 @@ unsafe extern "system" fn ICatRegister_UnRegisterClassImplCategories<T: ICatRegi
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::UnRegisterClassImplCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::UnRegisterClassImplCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
@@ -3621,16 +3650,18 @@ unsafe extern "system" fn ICatRegister_RegisterClassReqCategories<T: ICatRegiste
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::RegisterClassReqCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::RegisterClassReqCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
@@ -3641,16 +3672,18 @@ unsafe extern "system" fn ICatRegister_UnRegisterClassReqCategories<T: ICatRegis
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::UnRegisterClassReqCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::UnRegisterClassReqCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
