@@ -3,8 +3,13 @@
 //! A `ComObject<T>` is one heap block laid out as
 //!
 //! ```text
-//! ComHeader { inner: Slot (the non-delegating IUnknown), refs, outer, query, destroy } | T
+//! ComHeader { inner: Slot (the non-delegating IUnknown), refs, outer, class, module_lock } | T
 //! ```
+//!
+//! `class` points at the [`Class`] of `T`, a constant in static memory (`ComObject::<T>::CLASS`):
+//! the functions that find a slot of a `T` and free a `T`, and `T`'s type, by which
+//! [`ThisSlot::object`] tells the objects of a class from the others. What belongs to the class is
+//! kept with the class, not copied into every object.
 //!
 //! `T` holds one [`Slot`] per interface it implements. A slot is what C sees as the interface pointer:
 //! its first word is the vtable pointer, its second points back at the header, so every method shim
@@ -18,7 +23,7 @@
 //! **Pointers.** The back pointer every slot keeps is the raw pointer of the whole allocation (taken
 //! from `Box::into_raw` before anything else refers to the block), so it may reach the class state
 //! behind the header and free the block. Everything that goes beyond the header or frees it
-//! (`query`, `destroy`, the final Release, [`ComObject::from_interface`], [`ComRef`]) works from that
+//! (the class's `query` and `destroy`, the final Release, [`ComObject::from_interface`], [`ComRef`]) works from that
 //! `NonNull`, never by widening a `&ComHeader` or by freeing memory a live reference points into; a
 //! `&ComHeader` is only used for the header's own fields. Miri checks this under Stacked and Tree
 //! Borrows (`scripts/test.sh`).
@@ -29,6 +34,7 @@
 //! nothing, and the object is never freed: a leak, where wrapping would free a live object. (The
 //! standard library's `Arc` aborts the process instead, which a DLL hosted by an OPC client must not.)
 
+use core::any::TypeId;
 use core::ffi::c_void;
 use core::marker::PhantomData;
 use core::ptr::{self, NonNull};
@@ -121,14 +127,26 @@ impl Binder {
     }
 }
 
+/// What the objects of one class share: `ComObject::<T>::CLASS`, a constant in static memory per
+/// class, which every object's header points at. (The compiler may keep more than one copy of a
+/// constant; nothing compares their addresses: objects are told apart by `type_id`.)
+pub struct Class {
+    /// The slot of the object for an IID (`ComClass::interface`), NULL for none.
+    query: unsafe fn(NonNull<ComHeader>, &GUID) -> *mut c_void,
+    /// Frees the object, after its last reference.
+    destroy: unsafe fn(NonNull<ComHeader>),
+    /// The class's type.
+    type_id: fn() -> TypeId,
+}
+
 /// Bookkeeping shared by all library objects; always at offset 0 of a `ComObject<T>`.
 #[repr(C)]
 pub struct ComHeader {
     inner: Slot,
     refs: AtomicU32,
     outer: *mut IUnknown,
-    query: unsafe fn(NonNull<ComHeader>, &GUID) -> *mut c_void,
-    destroy: unsafe fn(NonNull<ComHeader>),
+    /// The object's class (its `ComObject::<T>::CLASS`).
+    class: &'static Class,
     /// The EXE server's module lock that counted this object, unlocked once it is freed.
     module_lock: Option<ModuleLock>,
 }
@@ -175,8 +193,8 @@ impl ComHeader {
             // SAFETY: the object is live.
             unsafe { this.as_ref() }.inner.as_ptr()
         } else {
-            // SAFETY: `query` was set for the object type this header belongs to; `this` reaches it.
-            unsafe { (this.as_ref().query)(this, iid) }
+            // SAFETY: `class` is the class of the object this header belongs to; `this` reaches it.
+            unsafe { (this.as_ref().class.query)(this, iid) }
         };
         if found.is_null() {
             return Err(E_NOINTERFACE);
@@ -225,10 +243,10 @@ impl ComHeader {
             // Synchronise with every earlier Release before destroying. An acquire load (rather than
             // a standalone acquire fence) also lets ThreadSanitizer see the ordering.
             let _ = refs.load(Ordering::Acquire);
-            // SAFETY: the last reference is gone; `destroy` frees the object through the pointer of
-            // its allocation, and no reference into the object is live here.
+            // SAFETY: the last reference is gone; the class's `destroy` frees the object through the
+            // pointer of its allocation, and no reference into the object is live here.
             unsafe {
-                let destroy = (*this.as_ptr()).destroy;
+                let destroy = (*this.as_ptr()).class.destroy;
                 destroy(this);
             }
             return 0;
@@ -268,6 +286,13 @@ impl<T> Drop for Unbuilt<T> {
 }
 
 impl<T: ComClass> ComObject<T> {
+    /// The class of `T`'s objects, which their headers point at.
+    pub const CLASS: &'static Class = &Class {
+        query: query_thunk::<T>,
+        destroy: destroy_thunk::<T>,
+        type_id: TypeId::of::<T>,
+    };
+
     /// Allocates an object with one reference (owned by the caller through its inner IUnknown).
     /// `build` receives a [`Binder`] for making the object's interface slots.
     #[allow(clippy::new_ret_no_self)] // the caller gets a counted reference, never the object by value
@@ -306,8 +331,7 @@ impl<T: ComClass> ComObject<T> {
                     inner: binder.slot(&INNER_VTBL),
                     refs: AtomicU32::new(1),
                     outer,
-                    query: query_thunk::<T>,
-                    destroy: destroy_thunk::<T>,
+                    class: Self::CLASS,
                     module_lock: if counted { ModuleLock::lock() } else { None },
                 },
                 state: value,
@@ -532,6 +556,20 @@ impl ThisSlot<'_> {
     /// The slot as the interface pointer the caller called (not AddRef'd).
     pub fn as_unknown(&self) -> *mut IUnknown {
         self.slot.as_ptr().cast()
+    }
+
+    /// The object whose slot this is, if it is a `T`: its class's type is checked, so the answer is
+    /// right whatever vtable the slot presents.
+    pub fn object<T: ComClass>(&self) -> Option<&ComObject<T>> {
+        let header = self.header();
+        // SAFETY: the object is live for the call (`new`'s contract).
+        if (unsafe { header.as_ref() }.class.type_id)() != TypeId::of::<T>() {
+            return None;
+        }
+        // SAFETY: the object is a live ComObject<T> (its class says so), whose header is at offset 0;
+        // the reference is bound to `self`, which Release takes by value, so it ends before the
+        // object can go.
+        Some(unsafe { header.cast::<ComObject<T>>().as_ref() })
     }
 
     /// AddRef through the slot's own IUnknown (which counts where the slot's references count: on the
@@ -830,6 +868,42 @@ mod tests {
             assert_eq!((vt.Release)(t), 0);
         }
         assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn the_objects_of_a_class_point_at_its_class_which_tells_them_from_others() {
+        let died = Arc::new(AtomicBool::new(false));
+        let (a, b) = (create(&died), create(&Arc::new(AtomicBool::new(false))));
+        // SAFETY: `a` and `b` are live interface pointers until their last Release.
+        unsafe {
+            let (oa, ob) = (
+                ComObject::<TestObject>::from_interface(a),
+                ComObject::<TestObject>::from_interface(b),
+            );
+            // Each header points at the class's constant: its functions and its type.
+            assert_eq!((oa.header().class.type_id)(), TypeId::of::<TestObject>());
+            assert_eq!(
+                (ob.header().class.type_id)(),
+                (ComObject::<TestObject>::CLASS.type_id)()
+            );
+            // A slot of `a`, as an IUnknown method sees it: a TestObject, and nothing else.
+            {
+                let this = ThisSlot::new(a.cast());
+                assert!(this.object::<TestObject>().is_some_and(|o| o.value == 42));
+                assert!(this.object::<Other>().is_none());
+            }
+            assert_eq!(((*(*a).lpVtbl).Release)(a), 0);
+            assert_eq!(((*(*b).lpVtbl).Release)(b), 0);
+        }
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    /// Another class, for the type check.
+    struct Other;
+    impl ComClass for Other {
+        fn interface(&self, _: &GUID) -> Option<&Slot> {
+            None
+        }
     }
 
     #[test]

@@ -417,9 +417,7 @@ struct PointUnknown;
 impl PointUnknown {
     /// The named container of the object whose point `this` is, if any.
     fn named_container(this: &ThisSlot<'_>) -> Option<*mut IUnknown> {
-        // SAFETY: only POINT_VTBL's slots reach PointUnknown, and those are the point slots of live
-        // shutdown objects (`this` is one for the call); the reference is not used after this returns.
-        let obj = unsafe { ComObject::<OpcShutdown>::from_interface(this.as_unknown()) };
+        let obj = this.object::<OpcShutdown>()?;
         obj.named_container.as_ref().map(|c| c.0.as_ptr())
     }
 }
