@@ -55,27 +55,27 @@ OPCCOMN_STDCALL_ENTRY(IOPCServerList2, CLSIDFromProgID, HRESULT (__attribute__((
 /* Exported functions, with the convention of their Rust definition. */
 OPCCOMN_CONVENTION(&OpcObjectCount, uint32_t (__attribute__((cdecl)) *)(void), "OpcObjectCount must be cdecl");
 OPCCOMN_CONVENTION(&OpcTaskMemAlloc, void * (__attribute__((cdecl)) *)(size_t size), "OpcTaskMemAlloc must be cdecl");
-OPCCOMN_CONVENTION(&OpcTaskMemFree, void (__attribute__((cdecl)) *)(void *p), "OpcTaskMemFree must be cdecl");
+OPCCOMN_CONVENTION(&OpcTaskMemFree, void (__attribute__((cdecl)) *)(void *memory), "OpcTaskMemFree must be cdecl");
 OPCCOMN_CONVENTION(&OpcSetModuleLock, HRESULT (__attribute__((cdecl)) *)(const struct OpcModuleLock *lock), "OpcSetModuleLock must be cdecl");
 OPCCOMN_CONVENTION(&OpcCommonCreate, HRESULT (__attribute__((cdecl)) *)(const struct OpcCommonOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcCommonCreate must be cdecl");
-OPCCOMN_CONVENTION(&OpcCommonGetClientName, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LPWSTR *ppName), "OpcCommonGetClientName must be cdecl");
-OPCCOMN_CONVENTION(&OpcCommonGetLocale, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LCID *lcid), "OpcCommonGetLocale must be cdecl");
-OPCCOMN_CONVENTION(&OpcGetErrorString, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, LPWSTR *ppString), "OpcGetErrorString must be cdecl");
-OPCCOMN_CONVENTION(&OpcGetErrorStringEx, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString), "OpcGetErrorStringEx must be cdecl");
-OPCCOMN_CONVENTION(&OpcErrorCodesOfKind, HRESULT (__attribute__((cdecl)) *)(uint32_t kind, DWORD *pdwCount, HRESULT **ppCodes), "OpcErrorCodesOfKind must be cdecl");
-OPCCOMN_CONVENTION(&OpcErrorSymbol, HRESULT (__attribute__((cdecl)) *)(HRESULT code, uint32_t kind, LPWSTR *ppSymbol), "OpcErrorSymbol must be cdecl");
+OPCCOMN_CONVENTION(&OpcCommonGetClientName, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LPWSTR *name), "OpcCommonGetClientName must be cdecl");
+OPCCOMN_CONVENTION(&OpcCommonGetLocale, HRESULT (__attribute__((cdecl)) *)(IUnknown *common, LCID *locale), "OpcCommonGetLocale must be cdecl");
+OPCCOMN_CONVENTION(&OpcGetErrorString, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, LPWSTR *text), "OpcGetErrorString must be cdecl");
+OPCCOMN_CONVENTION(&OpcGetErrorStringEx, HRESULT (__attribute__((cdecl)) *)(HRESULT code, LCID locale, uint32_t kind, LPWSTR *text), "OpcGetErrorStringEx must be cdecl");
+OPCCOMN_CONVENTION(&OpcErrorCodesOfKind, HRESULT (__attribute__((cdecl)) *)(uint32_t kind, DWORD *count, HRESULT **codes), "OpcErrorCodesOfKind must be cdecl");
+OPCCOMN_CONVENTION(&OpcErrorSymbol, HRESULT (__attribute__((cdecl)) *)(HRESULT code, uint32_t kind, LPWSTR *symbol), "OpcErrorSymbol must be cdecl");
 OPCCOMN_CONVENTION(&MatchPatternW, BOOL (__attribute__((cdecl)) *)(LPCWSTR string, LPCWSTR pattern, BOOL bCaseSensitive), "MatchPatternW must be cdecl");
 OPCCOMN_CONVENTION(&MatchPatternA, BOOL (__attribute__((cdecl)) *)(LPCSTR string, LPCSTR pattern, BOOL bCaseSensitive), "MatchPatternA must be cdecl");
-OPCCOMN_CONVENTION(&OpcPatternCompileW, HRESULT (__attribute__((cdecl)) *)(LPCWSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern), "OpcPatternCompileW must be cdecl");
-OPCCOMN_CONVENTION(&OpcPatternCompileA, HRESULT (__attribute__((cdecl)) *)(LPCSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern), "OpcPatternCompileA must be cdecl");
-OPCCOMN_CONVENTION(&OpcPatternMatchW, BOOL (__attribute__((cdecl)) *)(const struct OpcPattern *pattern, LPCWSTR string), "OpcPatternMatchW must be cdecl");
-OPCCOMN_CONVENTION(&OpcPatternMatchA, BOOL (__attribute__((cdecl)) *)(const struct OpcPattern *pattern, LPCSTR string), "OpcPatternMatchA must be cdecl");
-OPCCOMN_CONVENTION(&OpcPatternFree, void (__attribute__((cdecl)) *)(struct OpcPattern *pattern), "OpcPatternFree must be cdecl");
+OPCCOMN_CONVENTION(&OpcPatternCompileW, HRESULT (__attribute__((cdecl)) *)(LPCWSTR pattern, BOOL case_sensitive, struct OpcPattern **filter), "OpcPatternCompileW must be cdecl");
+OPCCOMN_CONVENTION(&OpcPatternCompileA, HRESULT (__attribute__((cdecl)) *)(LPCSTR pattern, BOOL case_sensitive, struct OpcPattern **filter), "OpcPatternCompileA must be cdecl");
+OPCCOMN_CONVENTION(&OpcPatternMatchW, BOOL (__attribute__((cdecl)) *)(const struct OpcPattern *filter, LPCWSTR string), "OpcPatternMatchW must be cdecl");
+OPCCOMN_CONVENTION(&OpcPatternMatchA, BOOL (__attribute__((cdecl)) *)(const struct OpcPattern *filter, LPCSTR string), "OpcPatternMatchA must be cdecl");
+OPCCOMN_CONVENTION(&OpcPatternFree, void (__attribute__((cdecl)) *)(struct OpcPattern *filter), "OpcPatternFree must be cdecl");
 OPCCOMN_CONVENTION(&OpcRegisterProxyStub, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg, uint32_t flags), "OpcRegisterProxyStub must be cdecl");
 OPCCOMN_CONVENTION(&OpcUnregisterProxyStub, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg), "OpcUnregisterProxyStub must be cdecl");
 OPCCOMN_CONVENTION(&OpcDllInstall, HRESULT (__attribute__((cdecl)) *)(BOOL install, LPCWSTR command_line), "OpcDllInstall must be cdecl");
-OPCCOMN_CONVENTION(&OpcRegistryCreateMemory, HRESULT (__attribute__((cdecl)) *)(struct OpcRegistry **out), "OpcRegistryCreateMemory must be cdecl");
-OPCCOMN_CONVENTION(&OpcRegistryOpenSystem, HRESULT (__attribute__((cdecl)) *)(struct OpcRegistry **out), "OpcRegistryOpenSystem must be cdecl");
+OPCCOMN_CONVENTION(&OpcRegistryCreateMemory, HRESULT (__attribute__((cdecl)) *)(struct OpcRegistry **reg), "OpcRegistryCreateMemory must be cdecl");
+OPCCOMN_CONVENTION(&OpcRegistryOpenSystem, HRESULT (__attribute__((cdecl)) *)(struct OpcRegistry **reg), "OpcRegistryOpenSystem must be cdecl");
 OPCCOMN_CONVENTION(&OpcRegistryRelease, void (__attribute__((cdecl)) *)(struct OpcRegistry *reg), "OpcRegistryRelease must be cdecl");
 OPCCOMN_CONVENTION(&OpcRegistryGetString, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg, LPCWSTR key, LPCWSTR name, LPWSTR *data), "OpcRegistryGetString must be cdecl");
 OPCCOMN_CONVENTION(&OpcCreateComponentCategory, HRESULT (__attribute__((cdecl)) *)(const struct OpcRegistry *reg, const CATID *catid, LPCWSTR description), "OpcCreateComponentCategory must be cdecl");
@@ -115,10 +115,10 @@ OPCCOMN_CONVENTION(&OpcDllUnregisterServer, HRESULT (__attribute__((cdecl)) *)(v
 OPCCOMN_CONVENTION(&OpcShutdownCreate, HRESULT (__attribute__((cdecl)) *)(IUnknown *outer, REFIID riid, void **ppv), "OpcShutdownCreate must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownCreateEx, HRESULT (__attribute__((cdecl)) *)(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv), "OpcShutdownCreateEx must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownNotify, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason), "OpcShutdownNotify must be cdecl");
-OPCCOMN_CONVENTION(&OpcShutdownNotifyEx, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed), "OpcShutdownNotifyEx must be cdecl");
-OPCCOMN_CONVENTION(&OpcShutdownNotifyBounded, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *pNotified, ULONG *pFailed, ULONG *pTimedOut), "OpcShutdownNotifyBounded must be cdecl");
+OPCCOMN_CONVENTION(&OpcShutdownNotifyEx, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, ULONG *notified, ULONG *failed), "OpcShutdownNotifyEx must be cdecl");
+OPCCOMN_CONVENTION(&OpcShutdownNotifyBounded, HRESULT (__attribute__((cdecl)) *)(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *notified, ULONG *failed, ULONG *timed_out), "OpcShutdownNotifyBounded must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownSinkCreate, HRESULT (__attribute__((cdecl)) *)(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv), "OpcShutdownSinkCreate must be cdecl");
-OPCCOMN_CONVENTION(&OpcShutdownAdvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, IUnknown *sink, DWORD *pdwCookie), "OpcShutdownAdvise must be cdecl");
+OPCCOMN_CONVENTION(&OpcShutdownAdvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, IUnknown *sink, DWORD *cookie), "OpcShutdownAdvise must be cdecl");
 OPCCOMN_CONVENTION(&OpcShutdownUnadvise, HRESULT (__attribute__((cdecl)) *)(IUnknown *server, DWORD cookie), "OpcShutdownUnadvise must be cdecl");
 
 /* Callback types. */

@@ -717,7 +717,7 @@ static void case_IOPCServerList2__CLSIDFromProgID__clsid(void) {
     cases++;
 }
 
-static void case_OpcTaskMemFree__p(void) {
+static void case_OpcTaskMemFree__memory(void) {
     nr_setup();
     OpcTaskMemFree(NULL);
     CHECK(1); /* returned without a crash */
@@ -745,16 +745,16 @@ static void case_OpcCommonCreate__ppv(void) {
 
 static void case_OpcCommonGetClientName__common(void) {
     nr_setup();
-    LPWSTR out_ppName;
-    memset(&out_ppName, 0xA5, sizeof out_ppName);
-    CHECK_HR(OpcCommonGetClientName(NULL, &out_ppName), E_INVALIDARG);
-    if (!nr_is_zero(&out_ppName, sizeof out_ppName)) fprintf(stderr, "OpcCommonGetClientName(common = NULL): `ppName` not reset\n");
-    CHECK(nr_is_zero(&out_ppName, sizeof out_ppName));
+    LPWSTR out_name;
+    memset(&out_name, 0xA5, sizeof out_name);
+    CHECK_HR(OpcCommonGetClientName(NULL, &out_name), E_INVALIDARG);
+    if (!nr_is_zero(&out_name, sizeof out_name)) fprintf(stderr, "OpcCommonGetClientName(common = NULL): `name` not reset\n");
+    CHECK(nr_is_zero(&out_name, sizeof out_name));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcCommonGetClientName__ppName(void) {
+static void case_OpcCommonGetClientName__name(void) {
     nr_setup();
     CHECK_HR(OpcCommonGetClientName(nr_common_unknown(), NULL), E_INVALIDARG);
     nr_teardown();
@@ -763,59 +763,59 @@ static void case_OpcCommonGetClientName__ppName(void) {
 
 static void case_OpcCommonGetLocale__common(void) {
     nr_setup();
-    LCID out_lcid;
-    memset(&out_lcid, 0xA5, sizeof out_lcid);
-    CHECK_HR(OpcCommonGetLocale(NULL, &out_lcid), E_INVALIDARG);
-    if (!nr_is_zero(&out_lcid, sizeof out_lcid)) fprintf(stderr, "OpcCommonGetLocale(common = NULL): `lcid` not reset\n");
-    CHECK(nr_is_zero(&out_lcid, sizeof out_lcid));
+    LCID out_locale;
+    memset(&out_locale, 0xA5, sizeof out_locale);
+    CHECK_HR(OpcCommonGetLocale(NULL, &out_locale), E_INVALIDARG);
+    if (!nr_is_zero(&out_locale, sizeof out_locale)) fprintf(stderr, "OpcCommonGetLocale(common = NULL): `locale` not reset\n");
+    CHECK(nr_is_zero(&out_locale, sizeof out_locale));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcCommonGetLocale__lcid(void) {
+static void case_OpcCommonGetLocale__locale(void) {
     nr_setup();
     CHECK_HR(OpcCommonGetLocale(nr_common_unknown(), NULL), E_INVALIDARG);
     nr_teardown();
     cases++;
 }
 
-static void case_OpcGetErrorString__ppString(void) {
+static void case_OpcGetErrorString__text(void) {
     nr_setup();
     CHECK_HR(OpcGetErrorString((HRESULT)0x80004005L, 0x409, NULL), E_INVALIDARG);
     nr_teardown();
     cases++;
 }
 
-static void case_OpcGetErrorStringEx__ppString(void) {
+static void case_OpcGetErrorStringEx__text(void) {
     nr_setup();
     CHECK_HR(OpcGetErrorStringEx((HRESULT)0x80004005L, 0x409, 0, NULL), E_INVALIDARG);
     nr_teardown();
     cases++;
 }
 
-static void case_OpcErrorCodesOfKind__pdwCount(void) {
+static void case_OpcErrorCodesOfKind__count(void) {
     nr_setup();
-    HRESULT * out_ppCodes;
-    memset(&out_ppCodes, 0xA5, sizeof out_ppCodes);
-    CHECK_HR(OpcErrorCodesOfKind(0, NULL, &out_ppCodes), E_INVALIDARG);
-    if (!nr_is_zero(&out_ppCodes, sizeof out_ppCodes)) fprintf(stderr, "OpcErrorCodesOfKind(pdwCount = NULL): `ppCodes` not reset\n");
-    CHECK(nr_is_zero(&out_ppCodes, sizeof out_ppCodes));
+    HRESULT * out_codes;
+    memset(&out_codes, 0xA5, sizeof out_codes);
+    CHECK_HR(OpcErrorCodesOfKind(0, NULL, &out_codes), E_INVALIDARG);
+    if (!nr_is_zero(&out_codes, sizeof out_codes)) fprintf(stderr, "OpcErrorCodesOfKind(count = NULL): `codes` not reset\n");
+    CHECK(nr_is_zero(&out_codes, sizeof out_codes));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcErrorCodesOfKind__ppCodes(void) {
+static void case_OpcErrorCodesOfKind__codes(void) {
     nr_setup();
-    DWORD out_pdwCount;
-    memset(&out_pdwCount, 0xA5, sizeof out_pdwCount);
-    CHECK_HR(OpcErrorCodesOfKind(0, &out_pdwCount, NULL), E_INVALIDARG);
-    if (!nr_is_zero(&out_pdwCount, sizeof out_pdwCount)) fprintf(stderr, "OpcErrorCodesOfKind(ppCodes = NULL): `pdwCount` not reset\n");
-    CHECK(nr_is_zero(&out_pdwCount, sizeof out_pdwCount));
+    DWORD out_count;
+    memset(&out_count, 0xA5, sizeof out_count);
+    CHECK_HR(OpcErrorCodesOfKind(0, &out_count, NULL), E_INVALIDARG);
+    if (!nr_is_zero(&out_count, sizeof out_count)) fprintf(stderr, "OpcErrorCodesOfKind(codes = NULL): `count` not reset\n");
+    CHECK(nr_is_zero(&out_count, sizeof out_count));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcErrorSymbol__ppSymbol(void) {
+static void case_OpcErrorSymbol__symbol(void) {
     nr_setup();
     CHECK_HR(OpcErrorSymbol((HRESULT)0x80004005L, 0, NULL), E_INVALIDARG);
     nr_teardown();
@@ -852,16 +852,16 @@ static void case_MatchPatternA__pattern(void) {
 
 static void case_OpcPatternCompileW__pattern(void) {
     nr_setup();
-    OpcPattern * out_ppPattern;
-    memset(&out_ppPattern, 0xA5, sizeof out_ppPattern);
-    CHECK_HR(OpcPatternCompileW(NULL, TRUE, &out_ppPattern), E_INVALIDARG);
-    if (!nr_is_zero(&out_ppPattern, sizeof out_ppPattern)) fprintf(stderr, "OpcPatternCompileW(pattern = NULL): `ppPattern` not reset\n");
-    CHECK(nr_is_zero(&out_ppPattern, sizeof out_ppPattern));
+    OpcPattern * out_filter;
+    memset(&out_filter, 0xA5, sizeof out_filter);
+    CHECK_HR(OpcPatternCompileW(NULL, TRUE, &out_filter), E_INVALIDARG);
+    if (!nr_is_zero(&out_filter, sizeof out_filter)) fprintf(stderr, "OpcPatternCompileW(pattern = NULL): `filter` not reset\n");
+    CHECK(nr_is_zero(&out_filter, sizeof out_filter));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcPatternCompileW__ppPattern(void) {
+static void case_OpcPatternCompileW__filter(void) {
     nr_setup();
     CHECK_HR(OpcPatternCompileW(W("a*"), TRUE, NULL), E_INVALIDARG);
     nr_teardown();
@@ -870,23 +870,23 @@ static void case_OpcPatternCompileW__ppPattern(void) {
 
 static void case_OpcPatternCompileA__pattern(void) {
     nr_setup();
-    OpcPattern * out_ppPattern;
-    memset(&out_ppPattern, 0xA5, sizeof out_ppPattern);
-    CHECK_HR(OpcPatternCompileA(NULL, TRUE, &out_ppPattern), E_INVALIDARG);
-    if (!nr_is_zero(&out_ppPattern, sizeof out_ppPattern)) fprintf(stderr, "OpcPatternCompileA(pattern = NULL): `ppPattern` not reset\n");
-    CHECK(nr_is_zero(&out_ppPattern, sizeof out_ppPattern));
+    OpcPattern * out_filter;
+    memset(&out_filter, 0xA5, sizeof out_filter);
+    CHECK_HR(OpcPatternCompileA(NULL, TRUE, &out_filter), E_INVALIDARG);
+    if (!nr_is_zero(&out_filter, sizeof out_filter)) fprintf(stderr, "OpcPatternCompileA(pattern = NULL): `filter` not reset\n");
+    CHECK(nr_is_zero(&out_filter, sizeof out_filter));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcPatternCompileA__ppPattern(void) {
+static void case_OpcPatternCompileA__filter(void) {
     nr_setup();
     CHECK_HR(OpcPatternCompileA("a*", TRUE, NULL), E_INVALIDARG);
     nr_teardown();
     cases++;
 }
 
-static void case_OpcPatternMatchW__pattern(void) {
+static void case_OpcPatternMatchW__filter(void) {
     nr_setup();
     CHECK(OpcPatternMatchW(NULL, W("abc")) == FALSE);
     nr_teardown();
@@ -900,7 +900,7 @@ static void case_OpcPatternMatchW__string(void) {
     cases++;
 }
 
-static void case_OpcPatternMatchA__pattern(void) {
+static void case_OpcPatternMatchA__filter(void) {
     nr_setup();
     CHECK(OpcPatternMatchA(NULL, "abc") == FALSE);
     nr_teardown();
@@ -914,7 +914,7 @@ static void case_OpcPatternMatchA__string(void) {
     cases++;
 }
 
-static void case_OpcPatternFree__pattern(void) {
+static void case_OpcPatternFree__filter(void) {
     nr_setup();
     OpcPatternFree(NULL);
     CHECK(1); /* returned without a crash */
@@ -929,14 +929,14 @@ static void case_OpcDllInstall__command_line(void) {
     cases++;
 }
 
-static void case_OpcRegistryCreateMemory__out(void) {
+static void case_OpcRegistryCreateMemory__reg(void) {
     nr_setup();
     CHECK_HR(OpcRegistryCreateMemory(NULL), E_INVALIDARG);
     nr_teardown();
     cases++;
 }
 
-static void case_OpcRegistryOpenSystem__out(void) {
+static void case_OpcRegistryOpenSystem__reg(void) {
     nr_setup();
     CHECK_HR(OpcRegistryOpenSystem(NULL), E_INVALIDARG);
     nr_teardown();
@@ -1386,34 +1386,34 @@ static void case_OpcShutdownNotify__shutdown(void) {
 
 static void case_OpcShutdownNotifyEx__shutdown(void) {
     nr_setup();
-    ULONG out_pNotified;
-    memset(&out_pNotified, 0xA5, sizeof out_pNotified);
-    ULONG out_pFailed;
-    memset(&out_pFailed, 0xA5, sizeof out_pFailed);
-    CHECK_HR(OpcShutdownNotifyEx(NULL, W("abc"), &out_pNotified, &out_pFailed), E_INVALIDARG);
-    if (!nr_is_zero(&out_pNotified, sizeof out_pNotified)) fprintf(stderr, "OpcShutdownNotifyEx(shutdown = NULL): `pNotified` not reset\n");
-    CHECK(nr_is_zero(&out_pNotified, sizeof out_pNotified));
-    if (!nr_is_zero(&out_pFailed, sizeof out_pFailed)) fprintf(stderr, "OpcShutdownNotifyEx(shutdown = NULL): `pFailed` not reset\n");
-    CHECK(nr_is_zero(&out_pFailed, sizeof out_pFailed));
+    ULONG out_notified;
+    memset(&out_notified, 0xA5, sizeof out_notified);
+    ULONG out_failed;
+    memset(&out_failed, 0xA5, sizeof out_failed);
+    CHECK_HR(OpcShutdownNotifyEx(NULL, W("abc"), &out_notified, &out_failed), E_INVALIDARG);
+    if (!nr_is_zero(&out_notified, sizeof out_notified)) fprintf(stderr, "OpcShutdownNotifyEx(shutdown = NULL): `notified` not reset\n");
+    CHECK(nr_is_zero(&out_notified, sizeof out_notified));
+    if (!nr_is_zero(&out_failed, sizeof out_failed)) fprintf(stderr, "OpcShutdownNotifyEx(shutdown = NULL): `failed` not reset\n");
+    CHECK(nr_is_zero(&out_failed, sizeof out_failed));
     nr_teardown();
     cases++;
 }
 
 static void case_OpcShutdownNotifyBounded__shutdown(void) {
     nr_setup();
-    ULONG out_pNotified;
-    memset(&out_pNotified, 0xA5, sizeof out_pNotified);
-    ULONG out_pFailed;
-    memset(&out_pFailed, 0xA5, sizeof out_pFailed);
-    ULONG out_pTimedOut;
-    memset(&out_pTimedOut, 0xA5, sizeof out_pTimedOut);
-    CHECK_HR(OpcShutdownNotifyBounded(NULL, W("abc"), NULL, &out_pNotified, &out_pFailed, &out_pTimedOut), E_INVALIDARG);
-    if (!nr_is_zero(&out_pNotified, sizeof out_pNotified)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `pNotified` not reset\n");
-    CHECK(nr_is_zero(&out_pNotified, sizeof out_pNotified));
-    if (!nr_is_zero(&out_pFailed, sizeof out_pFailed)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `pFailed` not reset\n");
-    CHECK(nr_is_zero(&out_pFailed, sizeof out_pFailed));
-    if (!nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `pTimedOut` not reset\n");
-    CHECK(nr_is_zero(&out_pTimedOut, sizeof out_pTimedOut));
+    ULONG out_notified;
+    memset(&out_notified, 0xA5, sizeof out_notified);
+    ULONG out_failed;
+    memset(&out_failed, 0xA5, sizeof out_failed);
+    ULONG out_timed_out;
+    memset(&out_timed_out, 0xA5, sizeof out_timed_out);
+    CHECK_HR(OpcShutdownNotifyBounded(NULL, W("abc"), NULL, &out_notified, &out_failed, &out_timed_out), E_INVALIDARG);
+    if (!nr_is_zero(&out_notified, sizeof out_notified)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `notified` not reset\n");
+    CHECK(nr_is_zero(&out_notified, sizeof out_notified));
+    if (!nr_is_zero(&out_failed, sizeof out_failed)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `failed` not reset\n");
+    CHECK(nr_is_zero(&out_failed, sizeof out_failed));
+    if (!nr_is_zero(&out_timed_out, sizeof out_timed_out)) fprintf(stderr, "OpcShutdownNotifyBounded(shutdown = NULL): `timed_out` not reset\n");
+    CHECK(nr_is_zero(&out_timed_out, sizeof out_timed_out));
     nr_teardown();
     cases++;
 }
@@ -1449,27 +1449,27 @@ static void case_OpcShutdownSinkCreate__ppv(void) {
 
 static void case_OpcShutdownAdvise__server(void) {
     nr_setup();
-    DWORD out_pdwCookie;
-    memset(&out_pdwCookie, 0xA5, sizeof out_pdwCookie);
-    CHECK_HR(OpcShutdownAdvise(NULL, nr_sink_unknown(), &out_pdwCookie), E_INVALIDARG);
-    if (!nr_is_zero(&out_pdwCookie, sizeof out_pdwCookie)) fprintf(stderr, "OpcShutdownAdvise(server = NULL): `pdwCookie` not reset\n");
-    CHECK(nr_is_zero(&out_pdwCookie, sizeof out_pdwCookie));
+    DWORD out_cookie;
+    memset(&out_cookie, 0xA5, sizeof out_cookie);
+    CHECK_HR(OpcShutdownAdvise(NULL, nr_sink_unknown(), &out_cookie), E_INVALIDARG);
+    if (!nr_is_zero(&out_cookie, sizeof out_cookie)) fprintf(stderr, "OpcShutdownAdvise(server = NULL): `cookie` not reset\n");
+    CHECK(nr_is_zero(&out_cookie, sizeof out_cookie));
     nr_teardown();
     cases++;
 }
 
 static void case_OpcShutdownAdvise__sink(void) {
     nr_setup();
-    DWORD out_pdwCookie;
-    memset(&out_pdwCookie, 0xA5, sizeof out_pdwCookie);
-    CHECK_HR(OpcShutdownAdvise(nr_container_unknown(), NULL, &out_pdwCookie), E_INVALIDARG);
-    if (!nr_is_zero(&out_pdwCookie, sizeof out_pdwCookie)) fprintf(stderr, "OpcShutdownAdvise(sink = NULL): `pdwCookie` not reset\n");
-    CHECK(nr_is_zero(&out_pdwCookie, sizeof out_pdwCookie));
+    DWORD out_cookie;
+    memset(&out_cookie, 0xA5, sizeof out_cookie);
+    CHECK_HR(OpcShutdownAdvise(nr_container_unknown(), NULL, &out_cookie), E_INVALIDARG);
+    if (!nr_is_zero(&out_cookie, sizeof out_cookie)) fprintf(stderr, "OpcShutdownAdvise(sink = NULL): `cookie` not reset\n");
+    CHECK(nr_is_zero(&out_cookie, sizeof out_cookie));
     nr_teardown();
     cases++;
 }
 
-static void case_OpcShutdownAdvise__pdwCookie(void) {
+static void case_OpcShutdownAdvise__cookie(void) {
     nr_setup();
     CHECK_HR(OpcShutdownAdvise(nr_container_unknown(), nr_sink_unknown(), NULL), E_INVALIDARG);
     nr_teardown();
@@ -1552,34 +1552,34 @@ int main(void) {
     case_IOPCServerList2__GetClassDetails__ppszVerIndProgID();
     case_IOPCServerList2__CLSIDFromProgID__szProgId();
     case_IOPCServerList2__CLSIDFromProgID__clsid();
-    case_OpcTaskMemFree__p();
+    case_OpcTaskMemFree__memory();
     case_OpcCommonCreate__riid();
     case_OpcCommonCreate__ppv();
     case_OpcCommonGetClientName__common();
-    case_OpcCommonGetClientName__ppName();
+    case_OpcCommonGetClientName__name();
     case_OpcCommonGetLocale__common();
-    case_OpcCommonGetLocale__lcid();
-    case_OpcGetErrorString__ppString();
-    case_OpcGetErrorStringEx__ppString();
-    case_OpcErrorCodesOfKind__pdwCount();
-    case_OpcErrorCodesOfKind__ppCodes();
-    case_OpcErrorSymbol__ppSymbol();
+    case_OpcCommonGetLocale__locale();
+    case_OpcGetErrorString__text();
+    case_OpcGetErrorStringEx__text();
+    case_OpcErrorCodesOfKind__count();
+    case_OpcErrorCodesOfKind__codes();
+    case_OpcErrorSymbol__symbol();
     case_MatchPatternW__string();
     case_MatchPatternW__pattern();
     case_MatchPatternA__string();
     case_MatchPatternA__pattern();
     case_OpcPatternCompileW__pattern();
-    case_OpcPatternCompileW__ppPattern();
+    case_OpcPatternCompileW__filter();
     case_OpcPatternCompileA__pattern();
-    case_OpcPatternCompileA__ppPattern();
-    case_OpcPatternMatchW__pattern();
+    case_OpcPatternCompileA__filter();
+    case_OpcPatternMatchW__filter();
     case_OpcPatternMatchW__string();
-    case_OpcPatternMatchA__pattern();
+    case_OpcPatternMatchA__filter();
     case_OpcPatternMatchA__string();
-    case_OpcPatternFree__pattern();
+    case_OpcPatternFree__filter();
     case_OpcDllInstall__command_line();
-    case_OpcRegistryCreateMemory__out();
-    case_OpcRegistryOpenSystem__out();
+    case_OpcRegistryCreateMemory__reg();
+    case_OpcRegistryOpenSystem__reg();
     case_OpcRegistryGetString__key();
     case_OpcRegistryGetString__data();
     case_OpcCreateComponentCategory__catid();
@@ -1638,7 +1638,7 @@ int main(void) {
     case_OpcShutdownSinkCreate__ppv();
     case_OpcShutdownAdvise__server();
     case_OpcShutdownAdvise__sink();
-    case_OpcShutdownAdvise__pdwCookie();
+    case_OpcShutdownAdvise__cookie();
     case_OpcShutdownUnadvise__server();
     printf("test_null_rule: %d cases\n", cases);
     return test_summary("test_null_rule");

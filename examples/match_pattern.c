@@ -1,5 +1,6 @@
-/* MatchPattern from C, on Linux and on Windows alike: the snippet of docs/guide/matchpattern.md and of
- * the README, built and run by ctest (example.match_pattern_c, C11 with incompatible pointer types an
+/* MatchPattern from C, on Linux and on Windows alike: the snippet of docs/guide/matchpattern.md, of
+ * the README and of the C API reference's page "MatchPattern" (the lines between its snippet
+ * markers), built and run by ctest (example.match_pattern_c, C11 with incompatible pointer types an
  * error) so that it keeps compiling.
  *
  * Wide strings are UTF-16 on every platform (WCHAR is 16 bits). `u"..."` (C11) is a UTF-16 literal
@@ -20,6 +21,7 @@ static void expect(const char *what, BOOL got, BOOL want) {
 }
 
 int main(void) {
+    /* [pattern] */
     /* One name, one pattern. */
     expect("MatchPatternA", MatchPatternA("Channel1.Device2.Tag7", "Channel?.Device[1-3].Tag*", FALSE), TRUE);
     expect("MatchPatternW", MatchPatternW(u"Channel1.Device4.Tag7", u"Channel?.Device[1-3].Tag*", FALSE), FALSE);
@@ -38,6 +40,7 @@ int main(void) {
         printf("FAIL OpcPatternCompileW: 0x%08lX\n", (unsigned long)hr);
         failures++;
     }
+    /* [pattern] */
 
     /* A malformed pattern (an unclosed list) is refused with the code a browse returns. */
     filter = NULL;

@@ -35,7 +35,7 @@ c-valgrind|linux|C tests (Linux, valgrind --leak-check=full, no sanitizer)
 tsan|linux|thread stress test (ThreadSanitizer, instrumented standard library)
 package-linux|linux|installed package: find_package(opccomn CONFIG) and pkg-config; the static library linked with the README'"'"'s and pkg-config'"'"'s lists
 no-dll-exports|linux|library without the standard Dll* exports (for COM DLLs that have their own)
-docs|linux|C API reference (Doxygen): 0 undocumented items, every function listed, rendered in headless Chromium
+docs|linux|C API reference (Doxygen): every item, parameter and result documented, a page per area with its example, search; rendered in headless Chromium
 cmake-msvc|linux|CMake'"'"'s Visual Studio paths (stand-in MSVC toolchain, x64 and Win32): the project and add_subdirectory configure
 msvc-build-script|linux|the build script for Visual Studio (x86_64-pc-windows-msvc): stops naming missing tools; with stand-ins, calls cl, lib, rc, mc
 fuzz|linux|fuzz targets (libFuzzer + AddressSanitizer, a bounded time per target)

@@ -43,6 +43,9 @@ mod struct_size_table;
 
 /// How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
 /// connection points, enumerators, ...). Meant for leak checks in tests.
+///
+/// # Returns
+/// The number of the library's objects not yet freed, in the whole process.
 #[no_mangle]
 pub extern "C" fn OpcObjectCount() -> com::ffi::Crossed<u32> {
     com::ffi::guard!(0, { com::object::live_objects() as u32 })

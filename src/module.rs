@@ -30,8 +30,8 @@ use crate::com::{IUnknown, CLASS_E_CLASSNOTAVAILABLE, HRESULT, REFCLSID, REFIID,
 use crate::registry::register::{OpcServerRegistration, OpcServerType, OPC_REGISTRATION_KEEP_EXISTING};
 use crate::registry::registries;
 use crate::server::{
-    OpcModuleCanUnloadNow, OpcModuleGetClassObject, OpcModuleRegister, OpcModuleUnregister, OpcServerClass,
-    OPC_CLASS_AGGREGATABLE,
+    OpcCreateInstanceFn, OpcModuleCanUnloadNow, OpcModuleGetClassObject, OpcModuleRegister, OpcModuleUnregister,
+    OpcServerClass, OPC_CLASS_AGGREGATABLE,
 };
 
 /// `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
@@ -109,15 +109,17 @@ unsafe extern "C" fn create_server_list(
     })
 }
 
-/// The type of `OpcServerClass::create`.
-type CreateFn = unsafe extern "C" fn(*mut c_void, *mut IUnknown, REFIID, *mut *mut c_void) -> HRESULT;
-
 /// `create_server_list` as `OpcServerClass::create`, whose result is the plain HRESULT that `Hr` is.
-const CREATE_SERVER_LIST: CreateFn = {
+const CREATE_SERVER_LIST: OpcCreateInstanceFn = {
     let f: unsafe extern "C" fn(*mut c_void, *mut IUnknown, REFIID, *mut *mut c_void) -> Hr = create_server_list;
     // SAFETY: function pointers of ABI-compatible signatures: the result types differ only by a
     // transparent wrapper (`Crossed<HRESULT>` is `#[repr(transparent)]`).
-    unsafe { core::mem::transmute::<unsafe extern "C" fn(_, _, _, _) -> Hr, CreateFn>(f) }
+    Some(unsafe {
+        core::mem::transmute::<
+            unsafe extern "C" fn(_, _, _, _) -> Hr,
+            unsafe extern "C" fn(*mut c_void, *mut IUnknown, REFIID, *mut *mut c_void) -> HRESULT,
+        >(f)
+    })
 };
 
 /// opccomn's class table: OPCServerList, aggregatable (with IID_IUnknown, as COM requires), made over
@@ -125,7 +127,7 @@ const CREATE_SERVER_LIST: CreateFn = {
 static CLASSES: Shared<[OpcServerClass; 1]> = Shared([OpcServerClass {
     struct_size: core::mem::size_of::<OpcServerClass>() as u32,
     clsid: &CLSID_OPCServerList,
-    create: Some(CREATE_SERVER_LIST),
+    create: CREATE_SERVER_LIST,
     context: ptr::null_mut(),
     flags: OPC_CLASS_AGGREGATABLE,
     registration: &REGISTRATION.0,
@@ -141,9 +143,14 @@ fn classes() -> (*const OpcServerClass, u32) {
 /// Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
 /// servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
-/// CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
-/// IID_IUnknown. `*ppv` is NULL on failure.
+/// # Parameters
+/// - `rclsid`: the class: CLSID_OPCServerList, or on Windows CLSID_OpcComnProxyStub.
+/// - `riid`: the interface wanted: IID_IClassFactory or IID_IUnknown for CLSID_OPCServerList.
+/// - `ppv` (out): receives the class object, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`; CLASS_E_CLASSNOTAVAILABLE for any other
+/// class; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
 ///
 /// # Safety
 /// `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
@@ -166,6 +173,9 @@ pub unsafe extern "C" fn OpcDllGetClassObject(rclsid: REFCLSID, riid: REFIID, pp
     })
 }
 
+/// Whether COM may unload opccomn.dll (its DllCanUnloadNow).
+///
+/// # Returns
 /// S_OK when no object of the library is alive, no server lock is held, no proxy or stub is in use
 /// and no worker of `OpcShutdownNotifyBounded` is still calling a sink, so COM may unload the DLL;
 /// S_FALSE otherwise.
@@ -177,7 +187,10 @@ pub extern "C" fn OpcDllCanUnloadNow() -> Hr {
 /// Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
 /// ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
 /// ServerList Class") in the system registry, adding to an existing OpcEnum registration without
-/// changing it. Returns S_OK or SELFREG_E_CLASS.
+/// changing it.
+///
+/// # Returns
+/// S_OK or SELFREG_E_CLASS.
 #[no_mangle]
 pub extern "C" fn OpcDllRegisterServer() -> Hr {
     ffi::guard!(SELFREG_E_CLASS, {
@@ -191,8 +204,10 @@ pub extern "C" fn OpcDllRegisterServer() -> Hr {
 }
 
 /// Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
-/// the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
-/// SELFREG_E_CLASS.
+/// the same CLSID in particular). Unregistering what is not registered succeeds.
+///
+/// # Returns
+/// S_OK or SELFREG_E_CLASS.
 #[no_mangle]
 pub extern "C" fn OpcDllUnregisterServer() -> Hr {
     ffi::guard!(SELFREG_E_CLASS, {

@@ -9,6 +9,8 @@ written by hand and checked here, in every tracked file but the changelog (which
 - `opccomn-<version>-windows` names the current whole version ("0.3.0-dev");
 - `libopccomn.so.X.Y.Z` names the current numbers (the installed file);
 - a line starting `opccomn-check <version>: ` (sample output) names the current whole version;
+- the lock files of the workspaces that build the library as a path dependency (`fuzz/Cargo.lock`)
+  name the current version (the fuzz stage builds with `--locked`, which refuses a stale one);
 - the README's status: for a version in development ("0.3.0-dev") that main is the development of
   **0.3.0**, that it builds `0.3.0-dev`, and that the latest release is the newest version of
   CHANGELOG.md; for a release, "Version **0.3.0**".
@@ -65,6 +67,14 @@ for name in files:
             if hit.group(1) != want:
                 line = text.count("\n", 0, hit.start()) + 1
                 problems.append(f"{name}:{line}: {what} says {hit.group(1)}, Cargo.toml {want} ({version})")
+
+for lock in ("fuzz/Cargo.lock",):
+    text = (root / lock).read_text()
+    hit = re.search(r'^name = "opccomn"\nversion = "([^"]+)"', text, re.M)
+    checked += 1
+    if not hit or hit.group(1) != version:
+        problems.append(f"{lock}: opccomn is {hit.group(1) if hit else 'missing'}, Cargo.toml {version} "
+                        f"(run `cargo update -w --offline` in {lock.rsplit('/', 1)[0]})")
 
 readme = (root / "README.md").read_text()
 if prerelease:

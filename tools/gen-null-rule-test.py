@@ -32,9 +32,9 @@ OPC_INTERFACES = {"IOPCCommon", "IOPCShutdown", "IOPCServerList", "IOPCServerLis
 OPTIONAL = {
     ("*", "outer"), ("*", "pUnkOuter"), ("*", "options"), ("*", "context"), ("*", "reg"),
     ("OpcShutdownNotify", "reason"), ("OpcShutdownNotifyEx", "reason"),
-    ("OpcShutdownNotifyEx", "pNotified"), ("OpcShutdownNotifyEx", "pFailed"),
-    ("OpcShutdownNotifyBounded", "reason"), ("OpcShutdownNotifyBounded", "pNotified"),
-    ("OpcShutdownNotifyBounded", "pFailed"), ("OpcShutdownNotifyBounded", "pTimedOut"),
+    ("OpcShutdownNotifyEx", "notified"), ("OpcShutdownNotifyEx", "failed"),
+    ("OpcShutdownNotifyBounded", "reason"), ("OpcShutdownNotifyBounded", "notified"),
+    ("OpcShutdownNotifyBounded", "failed"), ("OpcShutdownNotifyBounded", "timed_out"),
     ("OpcSetModuleLock", "lock"),
     ("OpcExeServerRun", "options"), ("OpcExeServerRun", "command_line"),
     ("IOPCShutdown::ShutdownRequest", "szReason"),
@@ -77,7 +77,7 @@ VALID_BY_NAME = {
     "command_line": 'W("/RegServer")', "key": 'W("CLSID")', "pattern": None, "string": None,
     "celt": None, "cConnections": None, "count": "1", "cImplemented": "1", "cRequired": "1", "dwLcid": "0x409",
     "locale": "0x409", "dwError": "(HRESULT)0x80004005L", "code": "(HRESULT)0x80004005L", "kind": "0",
-    "bCaseSensitive": "TRUE", "caseSensitive": "TRUE", "dwCookie": "1", "cookie": "1",
+    "bCaseSensitive": "TRUE", "case_sensitive": "TRUE", "dwCookie": "1", "cookie": "1",
     "ms": "0x00010002", "ls": "3", "size": "8", "szName": 'W("client")', "text": 'W("x")',
     "a": "&nr_version", "b": "&nr_version", "candidate": "&nr_version", "installed": "&nr_version",
     "version": "&nr_version",
@@ -166,8 +166,12 @@ def pointee(typ):
     return base
 
 
-def optional(name, arg):
-    return ("*", arg) in OPTIONAL or (name, arg) in OPTIONAL
+def optional(name, arg, typ=None):
+    """Whether `arg` of `name` may be NULL by contract. A name listed for every function ("*") is an
+    input there: an out-parameter of the same name (OpcRegistryCreateMemory's `reg`) is not optional."""
+    if (name, arg) in OPTIONAL:
+        return True
+    return ("*", arg) in OPTIONAL and (typ is None or not is_pointer(typ) or is_in(typ))
 
 
 def valid(name, arg, typ, method):
@@ -225,7 +229,7 @@ def emit(items):
     for label, target, rule, ret, args in items:
         method = target[1] if target else None
         for i, (arg, typ) in enumerate(args):
-            if not is_pointer(typ) or optional(label, arg):
+            if not is_pointer(typ) or optional(label, arg, typ):
                 continue
             fn = "case_" + re.sub(r"\W", "_", label) + "__" + arg
             names.append(fn)

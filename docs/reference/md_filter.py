@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Doxygen's input filter for the Markdown pages of the C API reference (docs/reference/Doxyfile,
 FILTER_PATTERNS): docs/api-conventions.md becomes the page `api_conventions`, its sections get labels
-(a link `(#name)` within it, as GitHub resolves it, becomes a link to the section), and its links to
-other pages of docs/, which the reference does not contain, become their paths in the sources. Other
-files pass unchanged.
+(a link `(#name)` within it, as GitHub resolves it, becomes a link to the section), its links to
+other pages of docs/, which the reference does not contain, become their paths in the sources, and a
+function of the header named in backticks (`OpcTaskMemFree`) gets the `()` with which Doxygen links
+it. Other files pass unchanged.
 
 Usage (by Doxygen): md_filter.py FILE
 """
@@ -12,6 +13,13 @@ import re
 import sys
 
 PAGE = "api_conventions"
+HEADER = pathlib.Path(__file__).resolve().parent.parent.parent / "include" / "opccomn" / "opccomn.h"
+
+
+def functions():
+    """The functions the header declares."""
+    text = HEADER.read_text(encoding="utf-8")
+    return set(re.findall(r"^[A-Za-z].* OPCCOMN_(?:CDECL|STDCALL) \*?([A-Za-z0-9_]+)\(", text, re.M))
 
 
 def slug(heading):
@@ -30,6 +38,7 @@ def main():
     if path.name != "api-conventions.md":
         sys.stdout.write(text)
         return
+    declared = functions()
     out = []
     for line in text.splitlines():
         m = re.match(r"^(#+) (.*)$", line)
@@ -49,6 +58,8 @@ def main():
             name = l.group(1)
             return f"`{shown}`" if name.strip("`") in (l.group(2), shown) else f"{name} (`{shown}`)"
         line = re.sub(r"\[([^\]]+)\]\(([^)#:]+\.md(?:#[^)]*)?)\)", outside, line)
+        # A function in backticks, linked as Doxygen links functions.
+        line = re.sub(r"`([A-Za-z0-9_]+)`", lambda f: f"`{f.group(1)}()`" if f.group(1) in declared else f.group(0), line)
         out.append(line)
     sys.stdout.write("\n".join(out) + "\n")
 

@@ -9,25 +9,47 @@
  * @file opccomn/opccomn.h
  * @brief opccomn, the OPC Common Definitions and Interfaces: the whole C and C++ API in one header.
  *
- * IOPCCommon sessions (OpcCommonCreate()), shutdown on both sides (OpcShutdownCreate(),
- * OpcShutdownAdvise()), the server browser and registration (OpcRegisterServer(), CLSID_OPCServerList),
- * error texts (OpcGetErrorString()) and MatchPattern (MatchPatternW()), with the OPC Common interfaces
- * declared as MIDL declares them (IOPCCommon, IOPCShutdown, IOPCServerList, IOPCServerList2,
- * IOPCEnumGUID). Include it beside or instead of the OPC Foundation's headers, in either order.
- * docs/api-conventions.md states the rules every function follows.
+ * IOPCCommon sessions (OpcCommonCreate()), error texts (OpcGetErrorString()), shutdown on both sides
+ * (OpcShutdownCreate(), OpcShutdownAdvise()), the server browser (CLSID_OPCServerList), registration
+ * (OpcRegisterServer()), MatchPattern (MatchPatternW()), a server's COM plumbing (OpcExeServerRun(),
+ * OpcModuleGetClassObject()), DCOM security (OpcInitializeServerSecurity()) and the proxy/stub
+ * (OpcRegisterProxyStub()), with the OPC Common interfaces declared as MIDL declares them (IOPCCommon,
+ * IOPCShutdown, IOPCServerList, IOPCServerList2, IOPCEnumGUID). Include it beside or instead of the
+ * OPC Foundation's headers, in either order. Every declaration names its area of the reference
+ * (`@ingroup`); docs/api-conventions.md states the rules every function follows.
  */
 
-/** The library's major version (from Cargo.toml). */
+/**
+ * The library's major version (from Cargo.toml).
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_VERSION_MAJOR 0
-/** The library's minor version. */
+/**
+ * The library's minor version.
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_VERSION_MINOR 3
-/** The library's patch version. */
+/**
+ * The library's patch version.
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_VERSION_PATCH 0
-/** The library's version as text: "MAJOR.MINOR.PATCH", with "-PRERELEASE" after it for a version in
-    development (OPCCOMN_VERSION_PRERELEASE). */
+/**
+ * The library's version as text: "MAJOR.MINOR.PATCH", with "-PRERELEASE" after it for a version in
+ * development (OPCCOMN_VERSION_PRERELEASE).
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_VERSION "0.3.0-dev"
-/** Defined only in the header of a version in development (a build of the main branch, not a
-    release): the pre-release part of OPCCOMN_VERSION, which then names the version to come. */
+/**
+ * Defined only in the header of a version in development (a build of the main branch, not a
+ * release): the pre-release part of OPCCOMN_VERSION, which then names the version to come.
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_VERSION_PRERELEASE "dev"
 
 /* On Windows the COM base types (GUID, HRESULT, IUnknown, ...) come from the system headers; elsewhere
@@ -51,7 +73,11 @@
 #define STDMETHODCALLTYPE
 #endif
 #ifndef MIDL_INTERFACE
-/** An interface's class declaration (C++), as the Windows SDK spells it: a struct off Windows. */
+/**
+ * An interface's class declaration (C++), as the Windows SDK spells it: a struct off Windows.
+ *
+ * @ingroup com
+ */
 #define MIDL_INTERFACE(x) struct
 #endif
 #ifndef BEGIN_INTERFACE
@@ -73,9 +99,17 @@
 #define OPCCOMN_CDECL __cdecl
 #define OPCCOMN_STDCALL __stdcall
 #else
-/** The calling convention of the exported functions and callbacks with `extern "C"` definitions. */
+/**
+ * The calling convention of the exported functions and callbacks with `extern "C"` definitions.
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_CDECL
-/** The calling convention of the exports with `extern "system"` definitions (__stdcall on x86). */
+/**
+ * The calling convention of the exports with `extern "system"` definitions (__stdcall on x86).
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_STDCALL
 #endif
 
@@ -85,7 +119,11 @@
 #ifdef __cplusplus
 #define OPCCOMN_RIID(iid) (iid)
 #else
-/** An interface identifier as a REFIID argument, for C and C++ alike: `OPCCOMN_RIID(IID_IOPCCommon)`. */
+/**
+ * An interface identifier as a REFIID argument, for C and C++ alike: `OPCCOMN_RIID(IID_IOPCCommon)`.
+ *
+ * @ingroup header
+ */
 #define OPCCOMN_RIID(iid) (&(iid))
 #endif
 
@@ -156,15 +194,19 @@ typedef struct IOPCServerList2 IOPCServerList2;
 
 
 /**
- * `OpcRegisterProxyStub` flag: also take over interfaces another installed proxy/stub serves (the
- * previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
+ * OpcRegisterProxyStub() flag: also take over interfaces another installed proxy/stub serves (the
+ * previous `ProxyStubClsid32` is restored by OpcUnregisterProxyStub()).
+ *
+ * @ingroup proxystub
  */
 #define OPC_PROXY_STUB_TAKE_OVER 1
 
 /**
- * `OpcServerRegistration::flags`: leave values that already exist as they are, instead of replacing
+ * OpcServerRegistration::flags: leave values that already exist as they are, instead of replacing
  * them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
  * another product registers too (opccomn's own server list under the CLSID of OpcEnum).
+ *
+ * @ingroup registration
  */
 #define OPC_REGISTRATION_KEEP_EXISTING 1
 
@@ -172,41 +214,55 @@ typedef struct IOPCServerList2 IOPCServerList2;
  * `RPC_C_AUTHN_LEVEL_PKT_INTEGRITY`: the `AuthenticationLevel` registration gives an AppID unless
  * told otherwise, the lowest level Windows accepts for activation since its DCOM hardening
  * (KB5004442, enforced since March 2023).
+ *
+ * @ingroup registration
  */
 #define OPC_AUTHN_LEVEL_PKT_INTEGRITY 5
 
 /**
- * `OpcSecurityOptions::flags`: accept an authentication level below RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
+ * OpcSecurityOptions::flags: accept an authentication level below RPC_C_AUTHN_LEVEL_PKT_INTEGRITY.
  * Warning: Windows hardened DCOM against it (KB5004442, CVE-2021-26414; enforced since March
  * 2023): servers refuse activation requests below PKT_INTEGRITY, so a process using a weaker level
  * stops talking to other machines. Only for tests or for peers on systems without the hardening.
+ *
+ * @ingroup security
  */
 #define OPC_SECURITY_ALLOW_WEAKER_AUTHN 1
 
 /**
- * `OpcServerClass::flags`: instances may be aggregated (CreateInstance with an outer object).
+ * OpcServerClass::flags: instances may be aggregated (CreateInstance with an outer object).
+ *
+ * @ingroup plumbing
  */
 #define OPC_CLASS_AGGREGATABLE 1
 
 /**
  * The most threads the library runs at the same time, in the whole process, to call sinks for
- * `OpcShutdownNotifyBounded` (every notification of every shutdown object together).
+ * OpcShutdownNotifyBounded() (every notification of every shutdown object together).
+ *
+ * @ingroup shutdown
  */
 #define OPC_SHUTDOWN_MAX_NOTIFY_THREADS 64
 
 /**
  * A timeout that never ends: the notification waits for the answer however long it takes.
+ *
+ * @ingroup shutdown
  */
 #define OPC_SHUTDOWN_NO_TIMEOUT 4294967295
 
 /**
  * The whole notification's deadline when the caller sets none (`timeout_ms` 0), in milliseconds.
+ *
+ * @ingroup shutdown
  */
 #define OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS 5000
 
 /**
  * The kind of OPC server asking for a text; it decides which specification's text a colliding code
  * gets (other codes get their text whatever the kind).
+ *
+ * @ingroup errors
  */
 enum OpcServerKind
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
@@ -240,16 +296,26 @@ enum OpcServerKind
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
-/** The type of enum OpcServerKind's values. */
+/**
+ * The type of enum OpcServerKind's values.
+ *
+ * @ingroup errors
+ */
 typedef enum OpcServerKind OpcServerKind;
 #else
-/** The type of enum OpcServerKind's values. */
+/**
+ * The type of enum OpcServerKind's values.
+ *
+ * @ingroup errors
+ */
 typedef uint32_t OpcServerKind;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
 /**
  * What an EXE server's command line asks it to do.
+ *
+ * @ingroup registration
  */
 enum OpcServerCommand
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
@@ -275,16 +341,26 @@ enum OpcServerCommand
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
-/** The type of enum OpcServerCommand's values. */
+/**
+ * The type of enum OpcServerCommand's values.
+ *
+ * @ingroup registration
+ */
 typedef enum OpcServerCommand OpcServerCommand;
 #else
-/** The type of enum OpcServerCommand's values. */
+/**
+ * The type of enum OpcServerCommand's values.
+ *
+ * @ingroup registration
+ */
 typedef uint32_t OpcServerCommand;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
 /**
  * How a server is packaged.
+ *
+ * @ingroup registration
  */
 enum OpcServerType
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
@@ -302,39 +378,57 @@ enum OpcServerType
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
-/** The type of enum OpcServerType's values. */
+/**
+ * The type of enum OpcServerType's values.
+ *
+ * @ingroup registration
+ */
 typedef enum OpcServerType OpcServerType;
 #else
-/** The type of enum OpcServerType's values. */
+/**
+ * The type of enum OpcServerType's values.
+ *
+ * @ingroup registration
+ */
 typedef uint32_t OpcServerType;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
 /**
- * A compiled filter: a pattern checked and prepared once by `OpcPatternCompileW` or
- * `OpcPatternCompileA`, then tested against many strings with `OpcPatternMatchW` / `OpcPatternMatchA`,
- * and released with `OpcPatternFree`. It is never modified after compilation, so several threads may
+ * A compiled filter: a pattern checked and prepared once by OpcPatternCompileW() or
+ * OpcPatternCompileA(), then tested against many strings with OpcPatternMatchW() / OpcPatternMatchA(),
+ * and released with OpcPatternFree(). It is never modified after compilation, so several threads may
  * use one filter at the same time.
+ *
+ * @ingroup pattern
  */
 typedef struct OpcPattern OpcPattern;
 
 /**
  * A registry the C API works on: the system registry, or one held in memory (for tests and for
- * preparing `.reg` files). Create with `OpcRegistryCreateMemory` or `OpcRegistryOpenSystem`, free
- * with `OpcRegistryRelease`. Objects made over a registry (server lists) keep it alive themselves,
+ * preparing `.reg` files). Create with OpcRegistryCreateMemory() or OpcRegistryOpenSystem(), free
+ * with OpcRegistryRelease(). Objects made over a registry (server lists) keep it alive themselves,
  * so the handle may be released while they live. A handle may be used from several threads.
+ *
+ * @ingroup registry
  */
 typedef struct OpcRegistry OpcRegistry;
 
 /**
- * One function of a module lock: called with the lock's `context`. May be called from any thread,
- * concurrently; must not call into the library.
+ * One function of a module lock. May be called from any thread, concurrently; must not call into the
+ * library.
+ *
+ * @param context the lock's `context` (OpcModuleLock::context).
+ *
+ * @ingroup plumbing
  */
 typedef void (OPCCOMN_CDECL *OpcModuleLockFn)(void *context);
 
 /**
  * The functions an EXE server's module lock consists of. Zero-initialise it, set `struct_size` to
  * `sizeof(OpcModuleLock)`, then set `lock`, `unlock` and `context`.
+ *
+ * @ingroup plumbing
  */
 typedef struct OpcModuleLock {
   /**
@@ -359,6 +453,8 @@ typedef struct OpcModuleLock {
 #if !defined(_WIN32)
 /**
  * A locale identifier.
+ *
+ * @ingroup com
  */
 typedef uint32_t LCID;
 #endif
@@ -366,6 +462,8 @@ typedef uint32_t LCID;
 #if !defined(_WIN32)
 /**
  * A COM result code. Negative values are failures (`FAILED(hr)`).
+ *
+ * @ingroup com
  */
 typedef int32_t HRESULT;
 #endif
@@ -373,6 +471,8 @@ typedef int32_t HRESULT;
 #if !defined(_WIN32)
 /**
  * A UTF-16 code unit.
+ *
+ * @ingroup com
  */
 typedef uint16_t WCHAR;
 #endif
@@ -380,46 +480,74 @@ typedef uint16_t WCHAR;
 #if !defined(_WIN32)
 /**
  * A NUL-terminated UTF-16 string that is only read.
+ *
+ * @ingroup com
  */
 typedef const WCHAR *LPCWSTR;
 #endif
 
 /**
- * A server's own texts for its vendor-specific codes, asked before the catalog.
+ * A server's own texts for its vendor-specific codes, asked before the catalog. May be called from
+ * any thread, concurrently.
  *
- * Called with the code and the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete
- * locale, e.g. 0x0407). To answer, store a NUL-terminated string in `*text` and return S_OK; the
- * library copies it into task memory before the callback is called again, so a static string or one
- * the server keeps is fine. Any other return (S_FALSE to decline) lets the library look the code up
- * itself. May be called from any thread, concurrently.
+ * @param context OpcCommonOptions::vendor_error_context.
+ * @param code the error code the client asks about.
+ * @param locale the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete locale, e.g.
+ *   0x0407).
+ * @param[out] text where to store the answer, a NUL-terminated string; the library copies it into task
+ *   memory before the callback is called again, so a static string or one the server keeps is fine.
+ *
+ * @return S_OK with `*text` set to answer; any other code (S_FALSE to decline) lets the library look the
+ * code up itself.
+ *
+ * @ingroup errors
  */
 typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorStringFn)(void *context, HRESULT code, LCID locale, LPCWSTR *text);
 
 /**
- * Called after a client set its name; `name` is valid only during the call. May be called from any
- * thread; never called while the library holds a lock.
+ * Called after a client set its name (IOPCCommon::SetClientName). May be called from any thread;
+ * never called while the library holds a lock.
+ *
+ * @param context OpcCommonOptions::client_name_context.
+ * @param name the client's new name, valid only during the call.
+ *
+ * @ingroup iopccommon
  */
 typedef void (OPCCOMN_CDECL *OpcClientNameFn)(void *context, LPCWSTR name);
 
 /**
- * Decides whether a session may use a locale: called by SetLocaleID with the locale and whether it is
- * one the session declared (`listed` nonzero: in `locales`, or one of the four special locales).
- * Return nonzero to accept it, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
- * locale). May be called from any thread, concurrently; never while the library holds a lock.
+ * Decides whether a session may use a locale: called by SetLocaleID. May be called from any thread,
+ * concurrently; never while the library holds a lock.
+ *
+ * @param context OpcCommonOptions::accept_locale_context.
+ * @param locale the locale the client asks for, as it gave it.
+ * @param listed nonzero when the session declared it (in OpcCommonOptions::locales, or one of the four
+ *   special locales).
+ *
+ * @return Nonzero to accept the locale, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
+ * locale).
+ *
+ * @ingroup iopccommon
  */
 typedef int32_t (OPCCOMN_CDECL *OpcAcceptLocaleFn)(void *context, LCID locale, int32_t listed);
 
 /**
- * Called after a client changed the session's locale with SetLocaleID, with the new locale (as the
- * client gave it, e.g. LOCALE_SYSTEM_DEFAULT). May be called from any thread; never called while the
- * library holds a lock. When two clients' calls race, the calls may arrive in either order: read
- * the current value with `OpcCommonGetLocale` if the order matters.
+ * Called after a client changed the session's locale with SetLocaleID. May be called from any
+ * thread; never called while the library holds a lock. When two clients' calls race, the calls may
+ * arrive in either order: read the current value with OpcCommonGetLocale() if the order matters.
+ *
+ * @param context OpcCommonOptions::locale_changed_context.
+ * @param locale the new locale, as the client gave it (e.g. LOCALE_SYSTEM_DEFAULT).
+ *
+ * @ingroup iopccommon
  */
 typedef void (OPCCOMN_CDECL *OpcLocaleChangedFn)(void *context, LCID locale);
 
 #if !defined(_WIN32)
 /**
  * A NUL-terminated UTF-16 string the callee may write or the caller must free.
+ *
+ * @ingroup com
  */
 typedef WCHAR *LPWSTR;
 #endif
@@ -427,14 +555,21 @@ typedef WCHAR *LPWSTR;
 /**
  * A server's own texts for its vendor-specific codes, handed over as task memory: the form for a
  * server that formats its texts into a new buffer (no thread-local storage, no lifetime to keep).
+ * Called as ::OpcVendorErrorStringFn; may be called from any thread, concurrently.
  *
- * Called as `OpcVendorErrorStringFn`, with `*text` NULL on entry. To answer, store a NUL-terminated
- * string allocated with `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows) in `*text` and return S_OK: the
- * library takes ownership and hands that very string to the client. Any other return (S_FALSE to
- * decline) lets the library look the code up itself. A string stored in `*text` is the library's
- * whatever the return, and it frees it when it does not use it (also when it is longer than the
- * library's string bound, 2^19 code units, which is then treated as declined). May be called from any
- * thread, concurrently.
+ * @param context OpcCommonOptions::vendor_error_context.
+ * @param code the error code the client asks about.
+ * @param locale the resolved locale (the concrete locale, e.g. 0x0407).
+ * @param[out] text NULL on entry; where to store the answer, a NUL-terminated string allocated with
+ *   OpcTaskMemAlloc() (CoTaskMemAlloc on Windows). A string stored here is the library's whatever the
+ *   return: it hands that very string to the client, or frees it when it does not use it (also when
+ *   it is longer than the library's string bound, 2^19 code units, which is then treated as
+ *   declined).
+ *
+ * @return S_OK with `*text` set to answer; any other code (S_FALSE to decline) lets the library look the
+ * code up itself.
+ *
+ * @ingroup errors
  */
 typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorTextFn)(void *context, HRESULT code, LCID locale, LPWSTR *text);
 
@@ -443,6 +578,8 @@ typedef HRESULT (OPCCOMN_CDECL *OpcVendorErrorTextFn)(void *context, HRESULT cod
  * `sizeof(OpcCommonOptions)`, then set what you need: fields added in later versions go at the end,
  * and the library reads only the first `struct_size` bytes, so code built against an older header
  * keeps working.
+ *
+ * @ingroup iopccommon
  */
 typedef struct OpcCommonOptions {
   /**
@@ -450,7 +587,7 @@ typedef struct OpcCommonOptions {
    */
   uint32_t struct_size;
   /**
-   * Which kind of server this session belongs to (`OpcServerKind`); 0 is Data Access.
+   * Which kind of server this session belongs to (OpcServerKind); 0 is Data Access.
    */
   uint32_t server_kind;
   /**
@@ -506,7 +643,9 @@ typedef struct OpcCommonOptions {
 
 #if !defined(_WIN32)
 /**
- * A globally unique identifier, laid out exactly as Windows' `GUID`.
+ * A globally unique identifier, laid out exactly as Windows' GUID.
+ *
+ * @ingroup com
  */
 typedef struct GUID {
   /**
@@ -531,6 +670,8 @@ typedef struct GUID {
 #if !defined(_WIN32)
 /**
  * An interface identifier.
+ *
+ * @ingroup com
  */
 typedef struct GUID IID;
 #endif
@@ -549,6 +690,8 @@ typedef const IID *REFIID;
 #if !defined(_WIN32)
 /**
  * A 32-bit unsigned integer.
+ *
+ * @ingroup com
  */
 typedef uint32_t DWORD;
 #endif
@@ -556,6 +699,8 @@ typedef uint32_t DWORD;
 #if !defined(_WIN32)
 /**
  * A Win32 boolean: 0 is FALSE, 1 is TRUE.
+ *
+ * @ingroup com
  */
 typedef int32_t BOOL;
 #endif
@@ -563,6 +708,8 @@ typedef int32_t BOOL;
 #if !defined(_WIN32)
 /**
  * A NUL-terminated narrow string (UTF-8, or the ANSI code page on Windows).
+ *
+ * @ingroup com
  */
 typedef const char *LPCSTR;
 #endif
@@ -570,6 +717,8 @@ typedef const char *LPCSTR;
 #if !defined(_WIN32)
 /**
  * A component category identifier.
+ *
+ * @ingroup com
  */
 typedef struct GUID CATID;
 #endif
@@ -577,6 +726,8 @@ typedef struct GUID CATID;
 #if !defined(_WIN32)
 /**
  * A class identifier.
+ *
+ * @ingroup com
  */
 typedef struct GUID CLSID;
 #endif
@@ -593,11 +744,13 @@ typedef const CLSID *REFCLSID;
 #endif
 
 /**
- * A server's registration, described once and passed to `OpcRegisterServer`,
- * `OpcUnregisterServer` and `OpcRegistrationExport`. Zero-initialise it, set `struct_size` to
+ * A server's registration, described once and passed to OpcRegisterServer(),
+ * OpcUnregisterServer() and OpcRegistrationExport(). Zero-initialise it, set `struct_size` to
  * `sizeof(OpcServerRegistration)` and fill what applies; NULL strings and arrays mean "none". Fields
  * added in later versions go at the end; the library reads only `struct_size` bytes, and takes the
  * fields of a shorter (older) structure as zero.
+ *
+ * @ingroup registration
  */
 typedef struct OpcServerRegistration {
   /**
@@ -605,7 +758,7 @@ typedef struct OpcServerRegistration {
    */
   uint32_t struct_size;
   /**
-   * `OpcServerType`: in-process (0, `InprocServer32`) or local (1, `LocalServer32`).
+   * OpcServerType: in-process (0, `InprocServer32`) or local (1, `LocalServer32`).
    */
   uint32_t server_type;
   /**
@@ -639,7 +792,7 @@ typedef struct OpcServerRegistration {
    */
   LPCWSTR threading_model;
   /**
-   * The categories the server implements (for example `CATID_OPCDAServer20`).
+   * The categories the server implements (for example CATID_OPCDAServer20).
    */
   const CATID *implemented_categories;
   /**
@@ -684,7 +837,7 @@ typedef struct OpcServerRegistration {
    */
   LPCWSTR app_id_dll_surrogate;
   /**
-   * `OPC_REGISTRATION_KEEP_EXISTING` or 0.
+   * ::OPC_REGISTRATION_KEEP_EXISTING or 0.
    */
   uint32_t flags;
   /**
@@ -704,7 +857,7 @@ typedef struct OpcServerRegistration {
   LPCWSTR app_id_launch_permission;
   /**
    * `AuthenticationLevel` of the AppID, an `RPC_C_AUTHN_LEVEL_*` value: 0 gives
-   * `OPC_AUTHN_LEVEL_PKT_INTEGRITY` (5), the level every AppID gets unless told otherwise (also when
+   * ::OPC_AUTHN_LEVEL_PKT_INTEGRITY (5), the level every AppID gets unless told otherwise (also when
    * an older, shorter structure is passed); 1 to 6 is written as given. Below 5 (NONE 1, CONNECT 2,
    * CALL 3, PKT 4), clients on other machines cannot activate the server since Windows' DCOM
    * hardening (KB5004442, CVE-2021-26414), and `opccomn-check --dcom` fails the AppID: set a lower
@@ -716,6 +869,8 @@ typedef struct OpcServerRegistration {
 
 /**
  * A version `MM.mm.bb` (each part 0 to 65535, the range of a version resource field).
+ *
+ * @ingroup registration
  */
 typedef struct OpcVersion {
   /**
@@ -733,9 +888,11 @@ typedef struct OpcVersion {
 } OpcVersion;
 
 /**
- * What `OpcInitializeServerSecurity`, `OpcInitializeClientSecurity` and `OpcSetProxyBlanket` ask COM
+ * What OpcInitializeServerSecurity(), OpcInitializeClientSecurity() and OpcSetProxyBlanket() ask COM
  * for. Zero-initialise it, set `struct_size` to `sizeof(OpcSecurityOptions)`, then set what you
  * need; every zero field means the hardened default. NULL options are all defaults.
+ *
+ * @ingroup security
  */
 typedef struct OpcSecurityOptions {
   /**
@@ -746,13 +903,13 @@ typedef struct OpcSecurityOptions {
    * An RPC_C_AUTHN_LEVEL_* value: 0 means RPC_C_AUTHN_LEVEL_PKT_INTEGRITY (5), not COM's
    * RPC_C_AUTHN_LEVEL_DEFAULT; PKT_PRIVACY (6) is accepted. A level below PKT_INTEGRITY (NONE 1,
    * CONNECT 2, CALL 3, PKT 4) is refused with E_INVALIDARG unless `flags` has
-   * `OPC_SECURITY_ALLOW_WEAKER_AUTHN`.
+   * ::OPC_SECURITY_ALLOW_WEAKER_AUTHN.
    */
   uint32_t authn_level;
   /**
    * An RPC_C_IMP_LEVEL_* value (1 to 4): 0 means RPC_C_IMP_LEVEL_IDENTIFY (2) for
-   * `OpcInitializeServerSecurity` (a server that never acts as its caller needs no more) and
-   * RPC_C_IMP_LEVEL_IMPERSONATE (3) for `OpcInitializeClientSecurity` and `OpcSetProxyBlanket`.
+   * OpcInitializeServerSecurity() (a server that never acts as its caller needs no more) and
+   * RPC_C_IMP_LEVEL_IMPERSONATE (3) for OpcInitializeClientSecurity() and OpcSetProxyBlanket().
    */
   uint32_t imp_level;
   /**
@@ -763,7 +920,7 @@ typedef struct OpcSecurityOptions {
    * The process's AppID, or NULL. When set, CoInitializeSecurity gets EOAC_APPID and COM takes the
    * process's security from the AppID's registry key (AuthenticationLevel, AccessPermission), so
    * an administrator's dcomcnfg settings apply; COM then ignores the levels passed. Not with
-   * `access_sddl`; NULL for `OpcSetProxyBlanket`. (Declared as a CLSID pointer: the GUID type of this
+   * `access_sddl`; NULL for OpcSetProxyBlanket(). (Declared as a CLSID pointer: the GUID type of this
    * header with and without the Windows headers; an AppID is often the server's CLSID.)
    */
   const CLSID *appid;
@@ -773,17 +930,25 @@ typedef struct OpcSecurityOptions {
    * requires, e.g. `O:BAG:BAD:(A;;0x3;;;AU)(A;;0x3;;;SY)` (authenticated users and SYSTEM;
    * 0x3 = COM_RIGHTS_EXECUTE | COM_RIGHTS_EXECUTE_LOCAL, add 0x4 COM_RIGHTS_EXECUTE_REMOTE for
    * remote callers). NULL with a NULL `appid`: COM checks no access list, so everyone who
-   * authenticates at the level may call. Not with `appid`; NULL for `OpcSetProxyBlanket`.
+   * authenticates at the level may call. Not with `appid`; NULL for OpcSetProxyBlanket().
    */
   LPCWSTR access_sddl;
 } OpcSecurityOptions;
 
 /**
- * Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
- * into `outer` when `outer` is not NULL (only for a class with OPC_CLASS_AGGREGATABLE; `riid` is then
- * IID_IUnknown and the result the inner, non-delegating IUnknown), its interface `riid` in `*ppv`.
- * Return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...). The library has
- * already checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+ * Makes an instance of a server's class for IClassFactory::CreateInstance. The library has already
+ * checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+ *
+ * @param context OpcServerClass::context.
+ * @param outer the controlling IUnknown to aggregate the object into, or NULL (only for a class with
+ *   OPC_CLASS_AGGREGATABLE; `riid` is then IID_IUnknown and the result the inner, non-delegating
+ *   IUnknown).
+ * @param riid the interface the client asks for.
+ * @param[out] ppv where to store the object's interface `riid`; left NULL on failure.
+ *
+ * @return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...).
+ *
+ * @ingroup plumbing
  */
 typedef HRESULT (OPCCOMN_CDECL *OpcCreateInstanceFn)(void *context, IUnknown *outer, REFIID riid, void **ppv);
 
@@ -792,6 +957,8 @@ typedef HRESULT (OPCCOMN_CDECL *OpcCreateInstanceFn)(void *context, IUnknown *ou
  * Zero-initialise it, set `struct_size` to `sizeof(OpcServerClass)`, then set what you need; the
  * library reads only the first `struct_size` bytes. Keep it (and everything it points at) alive
  * while the class objects made from it may be used: a static table is usual.
+ *
+ * @ingroup plumbing
  */
 typedef struct OpcServerClass {
   /**
@@ -815,7 +982,7 @@ typedef struct OpcServerClass {
    */
   uint32_t flags;
   /**
-   * What `/RegServer` (OpcExeServerRun) and OpcModuleRegister write for the class, NULL for a
+   * What `/RegServer` (OpcExeServerRun()) and OpcModuleRegister() write for the class, NULL for a
    * class that is not registered by them. Its `clsid` must be this class's.
    */
   const struct OpcServerRegistration *registration;
@@ -824,14 +991,20 @@ typedef struct OpcServerClass {
 /**
  * Called when an EXE server is stopped by its operator, on the host's thread (COM initialised, in the
  * multithreaded apartment) while clients may still be connected: ask them to disconnect here
- * (IOPCShutdown, `OpcShutdownNotifyBounded` with a timeout, so that a hung client cannot hold the
+ * (IOPCShutdown, OpcShutdownNotifyBounded() with a timeout, so that a hung client cannot hold the
  * stop). Not called when the server ends because its last client left.
+ *
+ * @param context OpcExeServerOptions::context.
+ *
+ * @ingroup plumbing
  */
 typedef void (OPCCOMN_CDECL *OpcExeServerStopFn)(void *context);
 
 /**
- * How `OpcExeServerRun` runs an EXE server. Zero-initialise it, set `struct_size` to
+ * How OpcExeServerRun() runs an EXE server. Zero-initialise it, set `struct_size` to
  * `sizeof(OpcExeServerOptions)`, then set what you need.
+ *
+ * @ingroup plumbing
  */
 typedef struct OpcExeServerOptions {
   /**
@@ -852,7 +1025,7 @@ typedef struct OpcExeServerOptions {
    * `L"Local\\VendorServerStop"`), NULL for none. The host creates it (manual reset, not set) with
    * access for SYSTEM, the administrators and the account the server runs as, and nobody else:
    * they may set it (OpenEventW with EVENT_MODIFY_STATE, then SetEvent). If an object of that name
-   * already exists, OpcExeServerRun refuses to serve (0x800700B7): it never adopts an event someone
+   * already exists, OpcExeServerRun() refuses to serve (0x800700B7): it never adopts an event someone
    * else created.
    */
   LPCWSTR stop_event_name;
@@ -890,6 +1063,8 @@ typedef struct OpcExeServerOptions {
  * How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
  * `sizeof(OpcShutdownOptions)`, then set what you need; the library reads only the first
  * `struct_size` bytes, so code built against an older header keeps working.
+ *
+ * @ingroup shutdown
  */
 typedef struct OpcShutdownOptions {
   /**
@@ -924,13 +1099,17 @@ typedef struct OpcShutdownOptions {
 #if !defined(_WIN32)
 /**
  * A 32-bit unsigned integer (reference counts, element counts).
+ *
+ * @ingroup com
  */
 typedef uint32_t ULONG;
 #endif
 
 /**
- * How long `OpcShutdownNotifyBounded` waits for the clients. Zero-initialise it, set `struct_size` to
+ * How long OpcShutdownNotifyBounded() waits for the clients. Zero-initialise it, set `struct_size` to
  * `sizeof(OpcShutdownNotifyOptions)`, then set what you need; NULL gives the defaults.
+ *
+ * @ingroup shutdown
  */
 typedef struct OpcShutdownNotifyOptions {
   /**
@@ -951,17 +1130,24 @@ typedef struct OpcShutdownNotifyOptions {
 } OpcShutdownNotifyOptions;
 
 /**
- * Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
- * the server gave no reason) and is valid only during the call. Runs on the thread that called
+ * Called when the server asks the client to disconnect. Runs on the thread that called
  * ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
  * in-process server in another apartment calls it directly); the library holds no lock, so the
  * callback may unadvise the sink and release the server.
+ *
+ * @param context the `context` given to OpcShutdownSinkCreate().
+ * @param reason the server's reason, never NULL (a NUL string when the server gave none), valid only
+ *   during the call.
+ *
+ * @ingroup shutdown
  */
 typedef void (OPCCOMN_CDECL *OpcShutdownCallback)(void *context, LPCWSTR reason);
 
 #if !defined(_WIN32)
 /**
  * One connection of a connection point: the sink and the cookie Advise returned for it.
+ *
+ * @ingroup com
  */
 typedef struct CONNECTDATA {
   /**
@@ -978,20 +1164,26 @@ typedef struct CONNECTDATA {
 #if !defined(_WIN32)
 /**
  * A pointer to a class identifier the callee writes.
+ *
+ * @ingroup com
  */
 typedef CLSID *LPCLSID;
 #endif
 
 #if !defined(_WIN32)
 /**
- * A COM string allocated with the task allocator (same as `LPWSTR`).
+ * A COM string allocated with the task allocator (same as ::LPWSTR).
+ *
+ * @ingroup com
  */
 typedef WCHAR *LPOLESTR;
 #endif
 
 #if !defined(_WIN32)
 /**
- * A read-only COM string (same as `LPCWSTR`).
+ * A read-only COM string (same as ::LPCWSTR).
+ *
+ * @ingroup com
  */
 typedef const WCHAR *LPCOLESTR;
 #endif
@@ -999,6 +1191,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Success.
+ *
+ * @ingroup com
  */
 #define S_OK 0
 #endif
@@ -1006,6 +1200,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Success, with a negative answer (fewer elements than asked, a declined request).
+ *
+ * @ingroup com
  */
 #define S_FALSE 1
 #endif
@@ -1013,6 +1209,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Not implemented.
+ *
+ * @ingroup com
  */
 #define E_NOTIMPL ((HRESULT)0x80004001L)
 #endif
@@ -1020,6 +1218,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The object has no such interface.
+ *
+ * @ingroup com
  */
 #define E_NOINTERFACE ((HRESULT)0x80004002L)
 #endif
@@ -1027,6 +1227,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * A NULL pointer where COM requires one (the COM methods' rule; OPC methods use E_INVALIDARG).
+ *
+ * @ingroup com
  */
 #define E_POINTER ((HRESULT)0x80004003L)
 #endif
@@ -1034,6 +1236,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Unspecified failure.
+ *
+ * @ingroup com
  */
 #define E_FAIL ((HRESULT)0x80004005L)
 #endif
@@ -1041,6 +1245,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Unexpected failure (opccomn: a panic caught at the boundary).
+ *
+ * @ingroup com
  */
 #define E_UNEXPECTED ((HRESULT)0x8000FFFFL)
 #endif
@@ -1048,6 +1254,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Out of memory.
+ *
+ * @ingroup com
  */
 #define E_OUTOFMEMORY ((HRESULT)0x8007000EL)
 #endif
@@ -1055,6 +1263,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * An argument is invalid (OPC methods: also a NULL pointer).
+ *
+ * @ingroup com
  */
 #define E_INVALIDARG ((HRESULT)0x80070057L)
 #endif
@@ -1062,6 +1272,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The class cannot be aggregated this way (an outer object with an IID other than IUnknown).
+ *
+ * @ingroup com
  */
 #define CLASS_E_NOAGGREGATION ((HRESULT)0x80040110L)
 #endif
@@ -1069,6 +1281,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The class object does not serve this CLSID.
+ *
+ * @ingroup com
  */
 #define CLASS_E_CLASSNOTAVAILABLE ((HRESULT)0x80040111L)
 #endif
@@ -1076,6 +1290,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * No such connection (an unknown cookie, or no such connection point).
+ *
+ * @ingroup com
  */
 #define CONNECT_E_NOCONNECTION ((HRESULT)0x80040200L)
 #endif
@@ -1083,6 +1299,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The connection point takes no more sinks.
+ *
+ * @ingroup com
  */
 #define CONNECT_E_ADVISELIMIT ((HRESULT)0x80040201L)
 #endif
@@ -1090,6 +1308,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The sink does not implement the connection point's interface.
+ *
+ * @ingroup com
  */
 #define CONNECT_E_CANNOTCONNECT ((HRESULT)0x80040202L)
 #endif
@@ -1097,6 +1317,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The class is not registered.
+ *
+ * @ingroup com
  */
 #define REGDB_E_CLASSNOTREG ((HRESULT)0x80040154L)
 #endif
@@ -1104,25 +1326,33 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * Not a valid ProgID or CLSID string.
+ *
+ * @ingroup com
  */
 #define CO_E_CLASSSTRING ((HRESULT)0x800401F3L)
 #endif
 
 /**
  * The filter string was not valid (MatchPattern's compiled filter).
+ *
+ * @ingroup pattern
  */
 #define OPC_E_INVALIDFILTER ((HRESULT)0xC0040009L)
 
 #if !defined(_WIN32)
 /**
- * `FALSE`.
+ * ::FALSE.
+ *
+ * @ingroup com
  */
 #define FALSE 0
 #endif
 
 #if !defined(_WIN32)
 /**
- * `TRUE`.
+ * ::TRUE.
+ *
+ * @ingroup com
  */
 #define TRUE 1
 #endif
@@ -1130,6 +1360,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The system's default locale (a session starts with it).
+ *
+ * @ingroup com
  */
 #define LOCALE_SYSTEM_DEFAULT 2048
 #endif
@@ -1137,6 +1369,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The user's default locale.
+ *
+ * @ingroup com
  */
 #define LOCALE_USER_DEFAULT 1024
 #endif
@@ -1144,6 +1378,8 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The neutral locale.
+ *
+ * @ingroup com
  */
 #define LOCALE_NEUTRAL 0
 #endif
@@ -1151,27 +1387,35 @@ typedef const WCHAR *LPCOLESTR;
 #if !defined(_WIN32)
 /**
  * The invariant locale (English texts).
+ *
+ * @ingroup com
  */
 #define LOCALE_INVARIANT 127
 #endif
 
 #if !defined(_WIN32)
 /**
- * `REGDB_E_KEYMISSING`: a registry key the operation needs is missing.
+ * ::REGDB_E_KEYMISSING: a registry key the operation needs is missing.
+ *
+ * @ingroup registry
  */
 #define REGDB_E_KEYMISSING ((HRESULT)0x80040152L)
 #endif
 
 #if !defined(_WIN32)
 /**
- * `REGDB_E_INVALIDVALUE`: a registry value is not of the expected type or form.
+ * ::REGDB_E_INVALIDVALUE: a registry value is not of the expected type or form.
+ *
+ * @ingroup registry
  */
 #define REGDB_E_INVALIDVALUE ((HRESULT)0x80040153L)
 #endif
 
 #if !defined(_WIN32)
 /**
- * `SELFREG_E_CLASS` (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
+ * ::SELFREG_E_CLASS (olectl.h): DllRegisterServer / DllUnregisterServer could not write the class.
+ *
+ * @ingroup browser
  */
 #define SELFREG_E_CLASS ((HRESULT)0x80040201L)
 #endif
@@ -1231,13 +1475,19 @@ extern "C" {
 #ifndef __IUnknown_INTERFACE_DEFINED__
 #define __IUnknown_INTERFACE_DEFINED__
 
-/** The interface identifier of IUnknown, {00000000-0000-0000-C000-000000000046}. */
+/**
+ * The interface identifier of IUnknown, {00000000-0000-0000-C000-000000000046}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IUnknown;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
 /**
  * COM's base interface: identity and reference counting (declared here off Windows).
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("00000000-0000-0000-c000-000000000046")
 IUnknown
@@ -1245,19 +1495,28 @@ IUnknown
 public:
     BEGIN_INTERFACE
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     virtual HRESULT STDMETHODCALLTYPE QueryInterface(
         /* [in] */ REFIID riid,
         /* [out, iid_is(riid)] */ void **ppvObject) = 0;
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @return The new count, for diagnostics only.
      */
     virtual ULONG STDMETHODCALLTYPE AddRef(void) = 0;
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @return The new count, for diagnostics only.
      */
     virtual ULONG STDMETHODCALLTYPE Release(void) = 0;
 
@@ -1270,14 +1529,24 @@ __CRT_UUID_DECL(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,0
 
 #else /* C style interface */
 
-/** The methods of IUnknown in vtable order, its own first (the C form of the interface). */
+/**
+ * The methods of IUnknown in vtable order, its own first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IUnknownVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IUnknown *This,
@@ -1285,13 +1554,19 @@ typedef struct IUnknownVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IUnknown *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IUnknown *This);
@@ -1301,6 +1576,8 @@ typedef struct IUnknownVtbl
 
 /**
  * COM's base interface: identity and reference counting (declared here off Windows).
+ *
+ * @ingroup com
  */
 struct IUnknown
 {
@@ -1329,20 +1606,32 @@ OPCCOMN_UUIDOF_DECL_(IUnknown, 0x00000000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0
 #ifndef __IEnumGUID_INTERFACE_DEFINED__
 #define __IEnumGUID_INTERFACE_DEFINED__
 
-/** The interface identifier of IEnumGUID, {0002E000-0000-0000-C000-000000000046}. */
+/**
+ * The interface identifier of IEnumGUID, {0002E000-0000-0000-C000-000000000046}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IEnumGUID;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
 /**
  * COM's enumerator of GUIDs (returned by IOPCServerList::EnumClassesOfCategories).
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("0002e000-0000-0000-c000-000000000046")
 IEnumGUID : public IUnknown
 {
 public:
     /**
-     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+     * Copies the next GUIDs.
+     *
+     * @param celt how many to copy at most.
+     * @param[out] rgelt an array of `celt` elements that receives them.
+     * @param[out] pceltFetched receives how many were copied; may be NULL only when `celt` is 1.
+     *
+     * @return S_OK when `celt` were copied, S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG celt,
@@ -1350,18 +1639,28 @@ public:
         /* [out] */ ULONG *pceltFetched) = 0;
 
     /**
-     * Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+     * Skips elements.
+     *
+     * @param celt how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG celt) = 0;
 
     /**
      * Starts the enumeration again from the first element.
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
     /**
      * A new enumerator over the same elements at the same position.
+     *
+     * @param[out] ppenum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IEnumGUID **ppenum) = 0;
@@ -1374,14 +1673,24 @@ __CRT_UUID_DECL(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0x00,
 
 #else /* C style interface */
 
-/** The methods of IEnumGUID in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IEnumGUID in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IEnumGUIDVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IEnumGUID *This,
@@ -1389,20 +1698,33 @@ typedef struct IEnumGUIDVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IEnumGUID *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IEnumGUID *This);
 
     /* IEnumGUID methods */
     /**
-     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+     * Copies the next GUIDs.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param celt how many to copy at most.
+     * @param[out] rgelt an array of `celt` elements that receives them.
+     * @param[out] pceltFetched receives how many were copied; may be NULL only when `celt` is 1.
+     *
+     * @return S_OK when `celt` were copied, S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IEnumGUID *This,
@@ -1411,7 +1733,12 @@ typedef struct IEnumGUIDVtbl
         /* [out] */ ULONG *pceltFetched);
 
     /**
-     * Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+     * Skips elements.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param celt how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IEnumGUID *This,
@@ -1419,12 +1746,20 @@ typedef struct IEnumGUIDVtbl
 
     /**
      * Starts the enumeration again from the first element.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IEnumGUID *This);
 
     /**
      * A new enumerator over the same elements at the same position.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppenum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IEnumGUID *This,
@@ -1435,6 +1770,8 @@ typedef struct IEnumGUIDVtbl
 
 /**
  * COM's enumerator of GUIDs (returned by IOPCServerList::EnumClassesOfCategories).
+ *
+ * @ingroup com
  */
 struct IEnumGUID
 {
@@ -1471,20 +1808,32 @@ OPCCOMN_UUIDOF_DECL_(IEnumGUID, 0x0002e000, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,
 #ifndef __IEnumConnections_INTERFACE_DEFINED__
 #define __IEnumConnections_INTERFACE_DEFINED__
 
-/** The interface identifier of IEnumConnections, {B196B287-BAB4-101A-B69C-00AA00341D07}. */
+/**
+ * The interface identifier of IEnumConnections, {B196B287-BAB4-101A-B69C-00AA00341D07}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IEnumConnections;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
 /**
  * COM's enumerator of a connection point's connections (CONNECTDATA: the sink and its cookie).
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("b196b287-bab4-101a-b69c-00aa00341d07")
 IEnumConnections : public IUnknown
 {
 public:
     /**
-     * Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+     * Copies the next connections (each `pUnk` AddRef'ed: the caller releases it).
+     *
+     * @param cConnections how many to copy at most.
+     * @param[out] rgcd an array of `cConnections` elements that receives them.
+     * @param[out] pcFetched receives how many were copied; may be NULL only when `cConnections` is 1.
+     *
+     * @return S_OK when `cConnections` were copied, S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG cConnections,
@@ -1492,18 +1841,28 @@ public:
         /* [out] */ ULONG *pcFetched) = 0;
 
     /**
-     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     * Skips elements.
+     *
+     * @param cConnections how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG cConnections) = 0;
 
     /**
      * Starts the enumeration again from the first element.
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
     /**
      * A new enumerator over the same elements at the same position.
+     *
+     * @param[out] ppEnum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IEnumConnections **ppEnum) = 0;
@@ -1516,14 +1875,24 @@ __CRT_UUID_DECL(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xa
 
 #else /* C style interface */
 
-/** The methods of IEnumConnections in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IEnumConnections in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IEnumConnectionsVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IEnumConnections *This,
@@ -1531,20 +1900,33 @@ typedef struct IEnumConnectionsVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IEnumConnections *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IEnumConnections *This);
 
     /* IEnumConnections methods */
     /**
-     * Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+     * Copies the next connections (each `pUnk` AddRef'ed: the caller releases it).
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param cConnections how many to copy at most.
+     * @param[out] rgcd an array of `cConnections` elements that receives them.
+     * @param[out] pcFetched receives how many were copied; may be NULL only when `cConnections` is 1.
+     *
+     * @return S_OK when `cConnections` were copied, S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IEnumConnections *This,
@@ -1553,7 +1935,12 @@ typedef struct IEnumConnectionsVtbl
         /* [out] */ ULONG *pcFetched);
 
     /**
-     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     * Skips elements.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param cConnections how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IEnumConnections *This,
@@ -1561,12 +1948,20 @@ typedef struct IEnumConnectionsVtbl
 
     /**
      * Starts the enumeration again from the first element.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IEnumConnections *This);
 
     /**
      * A new enumerator over the same elements at the same position.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppEnum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IEnumConnections *This,
@@ -1577,6 +1972,8 @@ typedef struct IEnumConnectionsVtbl
 
 /**
  * COM's enumerator of a connection point's connections (CONNECTDATA: the sink and its cookie).
+ *
+ * @ingroup com
  */
 struct IEnumConnections
 {
@@ -1613,45 +2010,73 @@ OPCCOMN_UUIDOF_DECL_(IEnumConnections, 0xb196b287, 0xbab4, 0x101a, 0xb6,0x9c,0x0
 #ifndef __IConnectionPoint_INTERFACE_DEFINED__
 #define __IConnectionPoint_INTERFACE_DEFINED__
 
-/** The interface identifier of IConnectionPoint, {B196B286-BAB4-101A-B69C-00AA00341D07}. */
+/**
+ * The interface identifier of IConnectionPoint, {B196B286-BAB4-101A-B69C-00AA00341D07}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IConnectionPoint;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
 /**
  * COM's connection point: where a client advises its sink for one outgoing interface (IOPCShutdown for OPC servers).
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("b196b286-bab4-101a-b69c-00aa00341d07")
 IConnectionPoint : public IUnknown
 {
 public:
     /**
-     * The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+     * The outgoing interface this point calls.
+     *
+     * @param[out] pIID receives its IID (IID_IOPCShutdown).
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE GetConnectionInterface(
         /* [out] */ IID *pIID) = 0;
 
     /**
-     * The container (the server object) this point belongs to, AddRef'ed.
+     * The container (the server object) this point belongs to.
+     *
+     * @param[out] ppCPC receives the container, AddRef'ed.
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE GetConnectionPointContainer(
         /* [out] */ IConnectionPointContainer **ppCPC) = 0;
 
     /**
-     * Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+     * Connects a sink.
+     *
+     * @param pUnkSink the sink, which must answer the outgoing interface.
+     * @param[out] pdwCookie receives the connection's cookie, or 0 on failure.
+     *
+     * @return S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
+     * when the point has all the sinks it takes.
      */
     virtual HRESULT STDMETHODCALLTYPE Advise(
         /* [in] */ IUnknown *pUnkSink,
         /* [out] */ DWORD *pdwCookie) = 0;
 
     /**
-     * Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+     * Disconnects a sink.
+     *
+     * @param dwCookie the cookie Advise returned.
+     *
+     * @return S_OK; CONNECT_E_NOCONNECTION for an unknown cookie.
      */
     virtual HRESULT STDMETHODCALLTYPE Unadvise(
         /* [in] */ DWORD dwCookie) = 0;
 
     /**
      * An enumerator of the current connections.
+     *
+     * @param[out] ppEnum receives the enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     virtual HRESULT STDMETHODCALLTYPE EnumConnections(
         /* [out] */ IEnumConnections **ppEnum) = 0;
@@ -1664,14 +2089,24 @@ __CRT_UUID_DECL(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x00,0xa
 
 #else /* C style interface */
 
-/** The methods of IConnectionPoint in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IConnectionPoint in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IConnectionPointVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IConnectionPoint *This,
@@ -1679,34 +2114,57 @@ typedef struct IConnectionPointVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IConnectionPoint *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IConnectionPoint *This);
 
     /* IConnectionPoint methods */
     /**
-     * The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+     * The outgoing interface this point calls.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] pIID receives its IID (IID_IOPCShutdown).
+     *
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *GetConnectionInterface)(
         IConnectionPoint *This,
         /* [out] */ IID *pIID);
 
     /**
-     * The container (the server object) this point belongs to, AddRef'ed.
+     * The container (the server object) this point belongs to.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppCPC receives the container, AddRef'ed.
+     *
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *GetConnectionPointContainer)(
         IConnectionPoint *This,
         /* [out] */ IConnectionPointContainer **ppCPC);
 
     /**
-     * Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+     * Connects a sink.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param pUnkSink the sink, which must answer the outgoing interface.
+     * @param[out] pdwCookie receives the connection's cookie, or 0 on failure.
+     *
+     * @return S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
+     * when the point has all the sinks it takes.
      */
     HRESULT (STDMETHODCALLTYPE *Advise)(
         IConnectionPoint *This,
@@ -1714,7 +2172,12 @@ typedef struct IConnectionPointVtbl
         /* [out] */ DWORD *pdwCookie);
 
     /**
-     * Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+     * Disconnects a sink.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param dwCookie the cookie Advise returned.
+     *
+     * @return S_OK; CONNECT_E_NOCONNECTION for an unknown cookie.
      */
     HRESULT (STDMETHODCALLTYPE *Unadvise)(
         IConnectionPoint *This,
@@ -1722,6 +2185,11 @@ typedef struct IConnectionPointVtbl
 
     /**
      * An enumerator of the current connections.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppEnum receives the enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     HRESULT (STDMETHODCALLTYPE *EnumConnections)(
         IConnectionPoint *This,
@@ -1732,6 +2200,8 @@ typedef struct IConnectionPointVtbl
 
 /**
  * COM's connection point: where a client advises its sink for one outgoing interface (IOPCShutdown for OPC servers).
+ *
+ * @ingroup com
  */
 struct IConnectionPoint
 {
@@ -1770,20 +2240,32 @@ OPCCOMN_UUIDOF_DECL_(IConnectionPoint, 0xb196b286, 0xbab4, 0x101a, 0xb6,0x9c,0x0
 #ifndef __IEnumConnectionPoints_INTERFACE_DEFINED__
 #define __IEnumConnectionPoints_INTERFACE_DEFINED__
 
-/** The interface identifier of IEnumConnectionPoints, {B196B285-BAB4-101A-B69C-00AA00341D07}. */
+/**
+ * The interface identifier of IEnumConnectionPoints, {B196B285-BAB4-101A-B69C-00AA00341D07}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IEnumConnectionPoints;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
 /**
  * COM's enumerator of a container's connection points.
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("b196b285-bab4-101a-b69c-00aa00341d07")
 IEnumConnectionPoints : public IUnknown
 {
 public:
     /**
-     * Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+     * Copies the next connection points (each AddRef'ed).
+     *
+     * @param cConnections how many to copy at most.
+     * @param[out] ppCP an array of `cConnections` elements that receives them.
+     * @param[out] pcFetched receives how many were copied; may be NULL only when `cConnections` is 1.
+     *
+     * @return S_OK when `cConnections` were copied, S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG cConnections,
@@ -1791,18 +2273,28 @@ public:
         /* [out] */ ULONG *pcFetched) = 0;
 
     /**
-     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     * Skips elements.
+     *
+     * @param cConnections how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG cConnections) = 0;
 
     /**
      * Starts the enumeration again from the first element.
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
     /**
      * A new enumerator over the same elements at the same position.
+     *
+     * @param[out] ppEnum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IEnumConnectionPoints **ppEnum) = 0;
@@ -1815,14 +2307,24 @@ __CRT_UUID_DECL(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9c,0x0
 
 #else /* C style interface */
 
-/** The methods of IEnumConnectionPoints in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IEnumConnectionPoints in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IEnumConnectionPointsVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IEnumConnectionPoints *This,
@@ -1830,20 +2332,33 @@ typedef struct IEnumConnectionPointsVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IEnumConnectionPoints *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IEnumConnectionPoints *This);
 
     /* IEnumConnectionPoints methods */
     /**
-     * Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+     * Copies the next connection points (each AddRef'ed).
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param cConnections how many to copy at most.
+     * @param[out] ppCP an array of `cConnections` elements that receives them.
+     * @param[out] pcFetched receives how many were copied; may be NULL only when `cConnections` is 1.
+     *
+     * @return S_OK when `cConnections` were copied, S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IEnumConnectionPoints *This,
@@ -1852,7 +2367,12 @@ typedef struct IEnumConnectionPointsVtbl
         /* [out] */ ULONG *pcFetched);
 
     /**
-     * Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+     * Skips elements.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param cConnections how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IEnumConnectionPoints *This,
@@ -1860,12 +2380,20 @@ typedef struct IEnumConnectionPointsVtbl
 
     /**
      * Starts the enumeration again from the first element.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IEnumConnectionPoints *This);
 
     /**
      * A new enumerator over the same elements at the same position.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppEnum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IEnumConnectionPoints *This,
@@ -1876,6 +2404,8 @@ typedef struct IEnumConnectionPointsVtbl
 
 /**
  * COM's enumerator of a container's connection points.
+ *
+ * @ingroup com
  */
 struct IEnumConnectionPoints
 {
@@ -1912,13 +2442,19 @@ OPCCOMN_UUIDOF_DECL_(IEnumConnectionPoints, 0xb196b285, 0xbab4, 0x101a, 0xb6,0x9
 #ifndef __IConnectionPointContainer_INTERFACE_DEFINED__
 #define __IConnectionPointContainer_INTERFACE_DEFINED__
 
-/** The interface identifier of IConnectionPointContainer, {B196B284-BAB4-101A-B69C-00AA00341D07}. */
+/**
+ * The interface identifier of IConnectionPointContainer, {B196B284-BAB4-101A-B69C-00AA00341D07}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IConnectionPointContainer;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
 
 /**
  * COM's connection point container: an OPC server object offers its IOPCShutdown connection point through it (specification 4.1).
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("b196b284-bab4-101a-b69c-00aa00341d07")
 IConnectionPointContainer : public IUnknown
@@ -1926,12 +2462,21 @@ IConnectionPointContainer : public IUnknown
 public:
     /**
      * An enumerator of the container's connection points.
+     *
+     * @param[out] ppEnum receives the enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     virtual HRESULT STDMETHODCALLTYPE EnumConnectionPoints(
         /* [out] */ IEnumConnectionPoints **ppEnum) = 0;
 
     /**
-     * The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+     * The connection point for an outgoing interface.
+     *
+     * @param riid the outgoing interface (IID_IOPCShutdown).
+     * @param[out] ppCP receives the connection point, or NULL on failure.
+     *
+     * @return S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
      */
     virtual HRESULT STDMETHODCALLTYPE FindConnectionPoint(
         /* [in] */ REFIID riid,
@@ -1945,14 +2490,24 @@ __CRT_UUID_DECL(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6,0x9c
 
 #else /* C style interface */
 
-/** The methods of IConnectionPointContainer in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IConnectionPointContainer in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IConnectionPointContainerVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IConnectionPointContainer *This,
@@ -1960,13 +2515,19 @@ typedef struct IConnectionPointContainerVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IConnectionPointContainer *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IConnectionPointContainer *This);
@@ -1974,13 +2535,24 @@ typedef struct IConnectionPointContainerVtbl
     /* IConnectionPointContainer methods */
     /**
      * An enumerator of the container's connection points.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppEnum receives the enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     HRESULT (STDMETHODCALLTYPE *EnumConnectionPoints)(
         IConnectionPointContainer *This,
         /* [out] */ IEnumConnectionPoints **ppEnum);
 
     /**
-     * The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+     * The connection point for an outgoing interface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the outgoing interface (IID_IOPCShutdown).
+     * @param[out] ppCP receives the connection point, or NULL on failure.
+     *
+     * @return S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
      */
     HRESULT (STDMETHODCALLTYPE *FindConnectionPoint)(
         IConnectionPointContainer *This,
@@ -1992,6 +2564,8 @@ typedef struct IConnectionPointContainerVtbl
 
 /**
  * COM's connection point container: an OPC server object offers its IOPCShutdown connection point through it (specification 4.1).
+ *
+ * @ingroup com
  */
 struct IConnectionPointContainer
 {
@@ -2024,7 +2598,11 @@ OPCCOMN_UUIDOF_DECL_(IConnectionPointContainer, 0xb196b284, 0xbab4, 0x101a, 0xb6
 #ifndef __IClassFactory_INTERFACE_DEFINED__
 #define __IClassFactory_INTERFACE_DEFINED__
 
-/** The interface identifier of IClassFactory, {00000001-0000-0000-C000-000000000046}. */
+/**
+ * The interface identifier of IClassFactory, {00000001-0000-0000-C000-000000000046}.
+ *
+ * @ingroup com
+ */
 EXTERN_C const IID IID_IClassFactory;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
@@ -2032,13 +2610,22 @@ EXTERN_C const IID IID_IClassFactory;
 /**
  * COM's class object interface: what DllGetClassObject returns and CoRegisterClassObject registers
  * (opccomn: OpcClassFactoryCreate(), OpcModuleGetClassObject()).
+ *
+ * @ingroup com
  */
 MIDL_INTERFACE("00000001-0000-0000-c000-000000000046")
 IClassFactory : public IUnknown
 {
 public:
     /**
-     * Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+     * Creates an instance of the class.
+     *
+     * @param pUnkOuter the controlling IUnknown of an object that aggregates the instance, or NULL.
+     * @param riid the interface wanted (IID_IUnknown with a `pUnkOuter`).
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
+     * `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
      */
     virtual HRESULT STDMETHODCALLTYPE CreateInstance(
         /* [in, unique] */ IUnknown *pUnkOuter,
@@ -2046,7 +2633,11 @@ public:
         /* [out, iid_is(riid)] */ void **ppvObject) = 0;
 
     /**
-     * Locks the server in memory (TRUE) or releases such a lock (FALSE).
+     * Keeps the server running without an object, or ends that.
+     *
+     * @param fLock TRUE to take a lock, FALSE to give one back.
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE LockServer(
         /* [in] */ BOOL fLock) = 0;
@@ -2059,14 +2650,24 @@ __CRT_UUID_DECL(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0x00,0
 
 #else /* C style interface */
 
-/** The methods of IClassFactory in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IClassFactory in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup com
+ */
 typedef struct IClassFactoryVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IClassFactory *This,
@@ -2074,20 +2675,34 @@ typedef struct IClassFactoryVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IClassFactory *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IClassFactory *This);
 
     /* IClassFactory methods */
     /**
-     * Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+     * Creates an instance of the class.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param pUnkOuter the controlling IUnknown of an object that aggregates the instance, or NULL.
+     * @param riid the interface wanted (IID_IUnknown with a `pUnkOuter`).
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
+     * `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
      */
     HRESULT (STDMETHODCALLTYPE *CreateInstance)(
         IClassFactory *This,
@@ -2096,7 +2711,12 @@ typedef struct IClassFactoryVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Locks the server in memory (TRUE) or releases such a lock (FALSE).
+     * Keeps the server running without an object, or ends that.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param fLock TRUE to take a lock, FALSE to give one back.
+     *
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *LockServer)(
         IClassFactory *This,
@@ -2108,6 +2728,8 @@ typedef struct IClassFactoryVtbl
 /**
  * COM's class object interface: what DllGetClassObject returns and CoRegisterClassObject registers
  * (opccomn: OpcClassFactoryCreate(), OpcModuleGetClassObject()).
+ *
+ * @ingroup com
  */
 struct IClassFactory
 {
@@ -2142,7 +2764,11 @@ OPCCOMN_UUIDOF_DECL_(IClassFactory, 0x00000001, 0x0000, 0x0000, 0xc0,0x00,0x00,0
 #ifndef __IOPCShutdown_INTERFACE_DEFINED__
 #define __IOPCShutdown_INTERFACE_DEFINED__
 
-/** The interface identifier of IOPCShutdown, {F31DFDE1-07B6-11d2-B2D8-0060083BA1FB}. */
+/**
+ * The interface identifier of IOPCShutdown, {F31DFDE1-07B6-11d2-B2D8-0060083BA1FB}.
+ *
+ * @ingroup shutdown
+ */
 EXTERN_C const IID IID_IOPCShutdown;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
@@ -2152,15 +2778,20 @@ EXTERN_C const IID IID_IOPCShutdown;
  * server's IConnectionPointContainer (connection point IID_IOPCShutdown), and the server calls it before it
  * shuts down. opccomn implements the server side (OpcShutdownCreate(), OpcShutdownNotify()) and a client
  * sink (OpcShutdownAdvise()).
+ *
+ * @ingroup shutdown
  */
 MIDL_INTERFACE("f31dfde1-07b6-11d2-b2d8-0060083ba1fb")
 IOPCShutdown : public IUnknown
 {
 public:
     /**
-     * The server asks the client to release every reference to the server's objects; `szReason` is an
-     * optional text saying why (NULL or empty allowed). The client should return S_OK at once and
-     * release its references afterwards, not from inside the call.
+     * The server asks the client to release every reference to the server's objects. The client
+     * should return S_OK at once and release its references afterwards, not from inside the call.
+     *
+     * @param szReason an optional text saying why (NULL or empty allowed).
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE ShutdownRequest(
         /* [in, string] */ LPCWSTR szReason) = 0;
@@ -2173,14 +2804,24 @@ __CRT_UUID_DECL(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x
 
 #else /* C style interface */
 
-/** The methods of IOPCShutdown in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IOPCShutdown in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup shutdown
+ */
 typedef struct IOPCShutdownVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCShutdown *This,
@@ -2188,22 +2829,32 @@ typedef struct IOPCShutdownVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCShutdown *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCShutdown *This);
 
     /* IOPCShutdown methods */
     /**
-     * The server asks the client to release every reference to the server's objects; `szReason` is an
-     * optional text saying why (NULL or empty allowed). The client should return S_OK at once and
-     * release its references afterwards, not from inside the call.
+     * The server asks the client to release every reference to the server's objects. The client
+     * should return S_OK at once and release its references afterwards, not from inside the call.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param szReason an optional text saying why (NULL or empty allowed).
+     *
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *ShutdownRequest)(
         IOPCShutdown *This,
@@ -2217,6 +2868,8 @@ typedef struct IOPCShutdownVtbl
  * server's IConnectionPointContainer (connection point IID_IOPCShutdown), and the server calls it before it
  * shuts down. opccomn implements the server side (OpcShutdownCreate(), OpcShutdownNotify()) and a client
  * sink (OpcShutdownAdvise()).
+ *
+ * @ingroup shutdown
  */
 struct IOPCShutdown
 {
@@ -2247,7 +2900,11 @@ OPCCOMN_UUIDOF_DECL_(IOPCShutdown, 0xf31dfde1, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x
 #ifndef __IOPCCommon_INTERFACE_DEFINED__
 #define __IOPCCommon_INTERFACE_DEFINED__
 
-/** The interface identifier of IOPCCommon, {F31DFDE2-07B6-11d2-B2D8-0060083BA1FB}. */
+/**
+ * The interface identifier of IOPCCommon, {F31DFDE2-07B6-11d2-B2D8-0060083BA1FB}.
+ *
+ * @ingroup iopccommon
+ */
 EXTERN_C const IID IID_IOPCCommon;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
@@ -2256,6 +2913,8 @@ EXTERN_C const IID IID_IOPCCommon;
  * The per-client session of every OPC server but DA 1.0 (specification chapter 5): the client's locale,
  * its name, and texts for error codes. opccomn's implementation is created by OpcCommonCreate() and
  * configured with OpcCommonOptions; each object is one client's session.
+ *
+ * @ingroup iopccommon
  */
 MIDL_INTERFACE("f31dfde2-07b6-11d2-b2d8-0060083ba1fb")
 IOPCCommon : public IUnknown
@@ -2263,38 +2922,58 @@ IOPCCommon : public IUnknown
 public:
     /**
      * Sets the locale the server uses for this client's strings (error texts, and whatever else the server
-     * localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
-     * QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+     * localises).
+     *
+     * @param dwLcid the locale: one QueryAvailableLocaleIDs lists (opccomn: OpcCommonOptions::locales,
+     *   and OpcCommonOptions::accept_locale decides).
+     *
+     * @return S_OK, or E_INVALIDARG for a locale the server does not support.
      */
     virtual HRESULT STDMETHODCALLTYPE SetLocaleID(
         /* [in] */ LCID dwLcid) = 0;
 
     /**
-     * Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
-     * E_INVALIDARG for a NULL `pdwLcid`.
+     * The session's current locale.
+     *
+     * @param[out] pdwLcid receives the locale (LOCALE_SYSTEM_DEFAULT until the client sets one).
+     *
+     * @return S_OK; E_INVALIDARG for a NULL `pdwLcid`.
      */
     virtual HRESULT STDMETHODCALLTYPE GetLocaleID(
         /* [out] */ LCID *pdwLcid) = 0;
 
     /**
-     * Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
-     * with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+     * The locales SetLocaleID accepts.
+     *
+     * @param[out] pdwCount receives how many; 0 on failure.
+     * @param[out] pdwLcid receives an array of `*pdwCount` locales, which the caller frees with CoTaskMemFree
+     *   (OpcTaskMemFree() off Windows); NULL on failure.
+     *
+     * @return S_OK; E_INVALIDARG for a NULL argument.
      */
     virtual HRESULT STDMETHODCALLTYPE QueryAvailableLocaleIDs(
         /* [out] */ DWORD *pdwCount,
         /* [out, size_is(, *pdwCount)] */ LCID **pdwLcid) = 0;
 
     /**
-     * Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
-     * CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+     * The text of an error code in the session's locale.
+     *
+     * @param dwError the error code.
+     * @param[out] ppString receives the text, which the caller frees with CoTaskMemFree; NULL on failure.
+     *
+     * @return S_OK; E_INVALIDARG for a code the server has no text for.
      */
     virtual HRESULT STDMETHODCALLTYPE GetErrorString(
         /* [in] */ HRESULT dwError,
         /* [out, string] */ LPWSTR *ppString) = 0;
 
     /**
-     * The client tells the server its name (for the server's diagnostics; opccomn:
-     * OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+     * The client tells the server its name, for the server's diagnostics (opccomn:
+     * OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
+     *
+     * @param szName the name.
+     *
+     * @return S_OK; E_INVALIDARG for NULL.
      */
     virtual HRESULT STDMETHODCALLTYPE SetClientName(
         /* [in, string] */ LPCWSTR szName) = 0;
@@ -2307,14 +2986,24 @@ __CRT_UUID_DECL(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60,0x08
 
 #else /* C style interface */
 
-/** The methods of IOPCCommon in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IOPCCommon in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup iopccommon
+ */
 typedef struct IOPCCommonVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCCommon *This,
@@ -2322,13 +3011,19 @@ typedef struct IOPCCommonVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCCommon *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCCommon *This);
@@ -2336,24 +3031,39 @@ typedef struct IOPCCommonVtbl
     /* IOPCCommon methods */
     /**
      * Sets the locale the server uses for this client's strings (error texts, and whatever else the server
-     * localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
-     * QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+     * localises).
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param dwLcid the locale: one QueryAvailableLocaleIDs lists (opccomn: OpcCommonOptions::locales,
+     *   and OpcCommonOptions::accept_locale decides).
+     *
+     * @return S_OK, or E_INVALIDARG for a locale the server does not support.
      */
     HRESULT (STDMETHODCALLTYPE *SetLocaleID)(
         IOPCCommon *This,
         /* [in] */ LCID dwLcid);
 
     /**
-     * Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
-     * E_INVALIDARG for a NULL `pdwLcid`.
+     * The session's current locale.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] pdwLcid receives the locale (LOCALE_SYSTEM_DEFAULT until the client sets one).
+     *
+     * @return S_OK; E_INVALIDARG for a NULL `pdwLcid`.
      */
     HRESULT (STDMETHODCALLTYPE *GetLocaleID)(
         IOPCCommon *This,
         /* [out] */ LCID *pdwLcid);
 
     /**
-     * Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
-     * with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+     * The locales SetLocaleID accepts.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] pdwCount receives how many; 0 on failure.
+     * @param[out] pdwLcid receives an array of `*pdwCount` locales, which the caller frees with CoTaskMemFree
+     *   (OpcTaskMemFree() off Windows); NULL on failure.
+     *
+     * @return S_OK; E_INVALIDARG for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryAvailableLocaleIDs)(
         IOPCCommon *This,
@@ -2361,8 +3071,13 @@ typedef struct IOPCCommonVtbl
         /* [out, size_is(, *pdwCount)] */ LCID **pdwLcid);
 
     /**
-     * Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
-     * CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+     * The text of an error code in the session's locale.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param dwError the error code.
+     * @param[out] ppString receives the text, which the caller frees with CoTaskMemFree; NULL on failure.
+     *
+     * @return S_OK; E_INVALIDARG for a code the server has no text for.
      */
     HRESULT (STDMETHODCALLTYPE *GetErrorString)(
         IOPCCommon *This,
@@ -2370,8 +3085,13 @@ typedef struct IOPCCommonVtbl
         /* [out, string] */ LPWSTR *ppString);
 
     /**
-     * The client tells the server its name (for the server's diagnostics; opccomn:
-     * OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+     * The client tells the server its name, for the server's diagnostics (opccomn:
+     * OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param szName the name.
+     *
+     * @return S_OK; E_INVALIDARG for NULL.
      */
     HRESULT (STDMETHODCALLTYPE *SetClientName)(
         IOPCCommon *This,
@@ -2384,6 +3104,8 @@ typedef struct IOPCCommonVtbl
  * The per-client session of every OPC server but DA 1.0 (specification chapter 5): the client's locale,
  * its name, and texts for error codes. opccomn's implementation is created by OpcCommonCreate() and
  * configured with OpcCommonOptions; each object is one client's session.
+ *
+ * @ingroup iopccommon
  */
 struct IOPCCommon
 {
@@ -2422,7 +3144,11 @@ OPCCOMN_UUIDOF_DECL_(IOPCCommon, 0xf31dfde2, 0x07b6, 0x11d2, 0xb2,0xd8,0x00,0x60
 #ifndef __IOPCServerList_INTERFACE_DEFINED__
 #define __IOPCServerList_INTERFACE_DEFINED__
 
-/** The interface identifier of IOPCServerList, {13486D50-4821-11D2-A494-3CB306C10000}. */
+/**
+ * The interface identifier of IOPCServerList, {13486D50-4821-11D2-A494-3CB306C10000}.
+ *
+ * @ingroup browser
+ */
 EXTERN_C const IID IID_IOPCServerList;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
@@ -2431,15 +3157,24 @@ EXTERN_C const IID IID_IOPCServerList;
  * The server browser (specification chapter 7): finds the OPC servers of a machine by component
  * category. CLSID_OPCServerList is served by the Foundation's OpcEnum or by opccomn (in process, or
  * out of process by opccomn_browser.exe).
+ *
+ * @ingroup browser
  */
 MIDL_INTERFACE("13486d50-4821-11d2-a494-3cb306c10000")
 IOPCServerList : public IUnknown
 {
 public:
     /**
-     * Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
-     * require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
-     * the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+     * Enumerates the classes that implement any of the given categories and require no category outside
+     * the others, each once.
+     *
+     * @param cImplemented how many categories `rgcatidImpl` holds (0: no condition).
+     * @param rgcatidImpl the categories of which a class must implement one.
+     * @param cRequired how many categories `rgcatidReq` holds (0: no condition).
+     * @param rgcatidReq the categories a class may require; one requiring any other is left out.
+     * @param[out] ppenumClsid receives an IEnumGUID over the classes' CLSIDs, or NULL on failure.
+     *
+     * @return S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
      */
     virtual HRESULT STDMETHODCALLTYPE EnumClassesOfCategories(
         /* [in] */ ULONG cImplemented,
@@ -2449,8 +3184,14 @@ public:
         /* [out] */ IEnumGUID **ppenumClsid) = 0;
 
     /**
-     * Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
-     * REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+     * A class's ProgID and user type name.
+     *
+     * @param clsid the class.
+     * @param[out] ppszProgID receives its ProgID, which the caller frees with CoTaskMemFree; NULL on failure.
+     * @param[out] ppszUserType receives its user type name, which the caller frees with CoTaskMemFree; NULL on
+     *   failure.
+     *
+     * @return S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
      */
     virtual HRESULT STDMETHODCALLTYPE GetClassDetails(
         /* [in] */ REFCLSID clsid,
@@ -2458,8 +3199,13 @@ public:
         /* [out] */ LPOLESTR *ppszUserType) = 0;
 
     /**
-     * Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
-     * is not registered, CO_E_CLASSSTRING when it cannot be one.
+     * The CLSID registered for a ProgID on the browsed machine.
+     *
+     * @param szProgId the ProgID.
+     * @param[out] clsid receives the CLSID.
+     *
+     * @return S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
+     * one; E_INVALIDARG for a NULL argument.
      */
     virtual HRESULT STDMETHODCALLTYPE CLSIDFromProgID(
         /* [in] */ LPCOLESTR szProgId,
@@ -2473,14 +3219,24 @@ __CRT_UUID_DECL(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,0xb3,
 
 #else /* C style interface */
 
-/** The methods of IOPCServerList in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IOPCServerList in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup browser
+ */
 typedef struct IOPCServerListVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCServerList *This,
@@ -2488,22 +3244,36 @@ typedef struct IOPCServerListVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCServerList *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCServerList *This);
 
     /* IOPCServerList methods */
     /**
-     * Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
-     * require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
-     * the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+     * Enumerates the classes that implement any of the given categories and require no category outside
+     * the others, each once.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param cImplemented how many categories `rgcatidImpl` holds (0: no condition).
+     * @param rgcatidImpl the categories of which a class must implement one.
+     * @param cRequired how many categories `rgcatidReq` holds (0: no condition).
+     * @param rgcatidReq the categories a class may require; one requiring any other is left out.
+     * @param[out] ppenumClsid receives an IEnumGUID over the classes' CLSIDs, or NULL on failure.
+     *
+     * @return S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
      */
     HRESULT (STDMETHODCALLTYPE *EnumClassesOfCategories)(
         IOPCServerList *This,
@@ -2514,8 +3284,15 @@ typedef struct IOPCServerListVtbl
         /* [out] */ IEnumGUID **ppenumClsid);
 
     /**
-     * Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
-     * REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+     * A class's ProgID and user type name.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param clsid the class.
+     * @param[out] ppszProgID receives its ProgID, which the caller frees with CoTaskMemFree; NULL on failure.
+     * @param[out] ppszUserType receives its user type name, which the caller frees with CoTaskMemFree; NULL on
+     *   failure.
+     *
+     * @return S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *GetClassDetails)(
         IOPCServerList *This,
@@ -2524,8 +3301,14 @@ typedef struct IOPCServerListVtbl
         /* [out] */ LPOLESTR *ppszUserType);
 
     /**
-     * Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
-     * is not registered, CO_E_CLASSSTRING when it cannot be one.
+     * The CLSID registered for a ProgID on the browsed machine.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param szProgId the ProgID.
+     * @param[out] clsid receives the CLSID.
+     *
+     * @return S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
+     * one; E_INVALIDARG for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *CLSIDFromProgID)(
         IOPCServerList *This,
@@ -2539,6 +3322,8 @@ typedef struct IOPCServerListVtbl
  * The server browser (specification chapter 7): finds the OPC servers of a machine by component
  * category. CLSID_OPCServerList is served by the Foundation's OpcEnum or by opccomn (in process, or
  * out of process by opccomn_browser.exe).
+ *
+ * @ingroup browser
  */
 struct IOPCServerList
 {
@@ -2573,9 +3358,17 @@ OPCCOMN_UUIDOF_DECL_(IOPCServerList, 0x13486d50, 0x4821, 0x11d2, 0xa4,0x94,0x3c,
 #ifndef __IOPCEnumGUID_INTERFACE_DEFINED__
 #define __IOPCEnumGUID_INTERFACE_DEFINED__
 
-/** MIDL's pointer type for IOPCEnumGUID. */
+/**
+ * MIDL's pointer type for IOPCEnumGUID.
+ *
+ * @ingroup browser
+ */
 typedef IOPCEnumGUID *LPOPCENUMGUID;
-/** The interface identifier of IOPCEnumGUID, {55C382C8-21C7-4e88-96C1-BECFB1E3F483}. */
+/**
+ * The interface identifier of IOPCEnumGUID, {55C382C8-21C7-4e88-96C1-BECFB1E3F483}.
+ *
+ * @ingroup browser
+ */
 EXTERN_C const IID IID_IOPCEnumGUID;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
@@ -2583,14 +3376,21 @@ EXTERN_C const IID IID_IOPCEnumGUID;
 /**
  * An enumerator of GUIDs with IEnumGUID's layout (OPC Common 1.10), returned by
  * IOPCServerList2::EnumClassesOfCategories.
+ *
+ * @ingroup browser
  */
 MIDL_INTERFACE("55c382c8-21c7-4e88-96c1-becfb1e3f483")
 IOPCEnumGUID : public IUnknown
 {
 public:
     /**
-     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
-     * when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+     * Copies the next GUIDs.
+     *
+     * @param celt how many to copy at most.
+     * @param[out] rgelt an array of `celt` GUIDs that receives them.
+     * @param[out] pceltFetched receives how many were copied; may be NULL only when `celt` is 1.
+     *
+     * @return S_OK when `celt` were copied, S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Next(
         /* [in] */ ULONG celt,
@@ -2598,18 +3398,28 @@ public:
         /* [out] */ ULONG *pceltFetched) = 0;
 
     /**
-     * Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+     * Skips GUIDs.
+     *
+     * @param celt how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     virtual HRESULT STDMETHODCALLTYPE Skip(
         /* [in] */ ULONG celt) = 0;
 
     /**
      * Starts the enumeration again from the first GUID.
+     *
+     * @return S_OK.
      */
     virtual HRESULT STDMETHODCALLTYPE Reset(void) = 0;
 
     /**
-     * A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+     * A new enumerator over the same GUIDs at the same position.
+     *
+     * @param[out] ppenum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     virtual HRESULT STDMETHODCALLTYPE Clone(
         /* [out] */ IOPCEnumGUID **ppenum) = 0;
@@ -2622,14 +3432,24 @@ __CRT_UUID_DECL(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0xcf,0x
 
 #else /* C style interface */
 
-/** The methods of IOPCEnumGUID in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IOPCEnumGUID in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup browser
+ */
 typedef struct IOPCEnumGUIDVtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCEnumGUID *This,
@@ -2637,21 +3457,33 @@ typedef struct IOPCEnumGUIDVtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCEnumGUID *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCEnumGUID *This);
 
     /* IOPCEnumGUID methods */
     /**
-     * Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
-     * when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+     * Copies the next GUIDs.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param celt how many to copy at most.
+     * @param[out] rgelt an array of `celt` GUIDs that receives them.
+     * @param[out] pceltFetched receives how many were copied; may be NULL only when `celt` is 1.
+     *
+     * @return S_OK when `celt` were copied, S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Next)(
         IOPCEnumGUID *This,
@@ -2660,7 +3492,12 @@ typedef struct IOPCEnumGUIDVtbl
         /* [out] */ ULONG *pceltFetched);
 
     /**
-     * Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+     * Skips GUIDs.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param celt how many.
+     *
+     * @return S_OK, or S_FALSE when fewer remained.
      */
     HRESULT (STDMETHODCALLTYPE *Skip)(
         IOPCEnumGUID *This,
@@ -2668,12 +3505,20 @@ typedef struct IOPCEnumGUIDVtbl
 
     /**
      * Starts the enumeration again from the first GUID.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return S_OK.
      */
     HRESULT (STDMETHODCALLTYPE *Reset)(
         IOPCEnumGUID *This);
 
     /**
-     * A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+     * A new enumerator over the same GUIDs at the same position.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param[out] ppenum receives the new enumerator, or NULL on failure.
+     *
+     * @return S_OK; E_OUTOFMEMORY.
      */
     HRESULT (STDMETHODCALLTYPE *Clone)(
         IOPCEnumGUID *This,
@@ -2685,6 +3530,8 @@ typedef struct IOPCEnumGUIDVtbl
 /**
  * An enumerator of GUIDs with IEnumGUID's layout (OPC Common 1.10), returned by
  * IOPCServerList2::EnumClassesOfCategories.
+ *
+ * @ingroup browser
  */
 struct IOPCEnumGUID
 {
@@ -2721,7 +3568,11 @@ OPCCOMN_UUIDOF_DECL_(IOPCEnumGUID, 0x55c382c8, 0x21c7, 0x4e88, 0x96,0xc1,0xbe,0x
 #ifndef __IOPCServerList2_INTERFACE_DEFINED__
 #define __IOPCServerList2_INTERFACE_DEFINED__
 
-/** The interface identifier of IOPCServerList2, {9DD0B56C-AD9E-43ee-8305-487F3188BF7A}. */
+/**
+ * The interface identifier of IOPCServerList2, {9DD0B56C-AD9E-43ee-8305-487F3188BF7A}.
+ *
+ * @ingroup browser
+ */
 EXTERN_C const IID IID_IOPCServerList2;
 
 #if defined(__cplusplus) && !defined(CINTERFACE)
@@ -2729,13 +3580,23 @@ EXTERN_C const IID IID_IOPCServerList2;
 /**
  * IOPCServerList of OPC Common 1.10: the same services, with IOPCEnumGUID as the enumerator and the
  * version-independent ProgID in GetClassDetails.
+ *
+ * @ingroup browser
  */
 MIDL_INTERFACE("9dd0b56c-ad9e-43ee-8305-487f3188bf7a")
 IOPCServerList2 : public IUnknown
 {
 public:
     /**
-     * As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+     * As IOPCServerList::EnumClassesOfCategories, with an IOPCEnumGUID as the result.
+     *
+     * @param cImplemented how many categories `rgcatidImpl` holds (0: no condition).
+     * @param rgcatidImpl the categories of which a class must implement one.
+     * @param cRequired how many categories `rgcatidReq` holds (0: no condition).
+     * @param rgcatidReq the categories a class may require.
+     * @param[out] ppenumClsid receives an IOPCEnumGUID over the classes' CLSIDs, or NULL on failure.
+     *
+     * @return As IOPCServerList::EnumClassesOfCategories.
      */
     virtual HRESULT STDMETHODCALLTYPE EnumClassesOfCategories(
         /* [in] */ ULONG cImplemented,
@@ -2745,8 +3606,16 @@ public:
         /* [out] */ IOPCEnumGUID **ppenumClsid) = 0;
 
     /**
-     * As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
-     * registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+     * As IOPCServerList::GetClassDetails, with the version-independent ProgID.
+     *
+     * @param clsid the class.
+     * @param[out] ppszProgID receives its ProgID (freed with CoTaskMemFree); NULL on failure.
+     * @param[out] ppszUserType receives its user type name (freed with CoTaskMemFree); NULL on failure.
+     * @param[out] ppszVerIndProgID receives its version-independent ProgID, the registry's
+     *   `VersionIndependentProgID` (freed with CoTaskMemFree; opccomn returns an empty string for a
+     *   class that has none); NULL on failure.
+     *
+     * @return As IOPCServerList::GetClassDetails.
      */
     virtual HRESULT STDMETHODCALLTYPE GetClassDetails(
         /* [in] */ REFCLSID clsid,
@@ -2756,6 +3625,11 @@ public:
 
     /**
      * As IOPCServerList::CLSIDFromProgID.
+     *
+     * @param szProgId the ProgID.
+     * @param[out] clsid receives the CLSID.
+     *
+     * @return As IOPCServerList::CLSIDFromProgID.
      */
     virtual HRESULT STDMETHODCALLTYPE CLSIDFromProgID(
         /* [in] */ LPCOLESTR szProgId,
@@ -2769,14 +3643,24 @@ __CRT_UUID_DECL(IOPCServerList2, 0x9dd0b56c, 0xad9e, 0x43ee, 0x83,0x05,0x48,0x7f
 
 #else /* C style interface */
 
-/** The methods of IOPCServerList2 in vtable order, IUnknown first (the C form of the interface). */
+/**
+ * The methods of IOPCServerList2 in vtable order, IUnknown first (the C form of the interface).
+ *
+ * @ingroup browser
+ */
 typedef struct IOPCServerList2Vtbl
 {
     BEGIN_INTERFACE
 
     /* IUnknown methods */
     /**
-     * Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+     * Asks the object for one of its interfaces.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface (AddRef'ed), or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
      */
     HRESULT (STDMETHODCALLTYPE *QueryInterface)(
         IOPCServerList2 *This,
@@ -2784,20 +3668,35 @@ typedef struct IOPCServerList2Vtbl
         /* [out, iid_is(riid)] */ void **ppvObject);
 
     /**
-     * Adds a reference; returns the new count (for diagnostics only).
+     * Adds a reference.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *AddRef)(
         IOPCServerList2 *This);
 
     /**
-     * Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+     * Releases a reference; the object goes with the last.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
      */
     ULONG (STDMETHODCALLTYPE *Release)(
         IOPCServerList2 *This);
 
     /* IOPCServerList2 methods */
     /**
-     * As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+     * As IOPCServerList::EnumClassesOfCategories, with an IOPCEnumGUID as the result.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param cImplemented how many categories `rgcatidImpl` holds (0: no condition).
+     * @param rgcatidImpl the categories of which a class must implement one.
+     * @param cRequired how many categories `rgcatidReq` holds (0: no condition).
+     * @param rgcatidReq the categories a class may require.
+     * @param[out] ppenumClsid receives an IOPCEnumGUID over the classes' CLSIDs, or NULL on failure.
+     *
+     * @return As IOPCServerList::EnumClassesOfCategories.
      */
     HRESULT (STDMETHODCALLTYPE *EnumClassesOfCategories)(
         IOPCServerList2 *This,
@@ -2808,8 +3707,17 @@ typedef struct IOPCServerList2Vtbl
         /* [out] */ IOPCEnumGUID **ppenumClsid);
 
     /**
-     * As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
-     * registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+     * As IOPCServerList::GetClassDetails, with the version-independent ProgID.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param clsid the class.
+     * @param[out] ppszProgID receives its ProgID (freed with CoTaskMemFree); NULL on failure.
+     * @param[out] ppszUserType receives its user type name (freed with CoTaskMemFree); NULL on failure.
+     * @param[out] ppszVerIndProgID receives its version-independent ProgID, the registry's
+     *   `VersionIndependentProgID` (freed with CoTaskMemFree; opccomn returns an empty string for a
+     *   class that has none); NULL on failure.
+     *
+     * @return As IOPCServerList::GetClassDetails.
      */
     HRESULT (STDMETHODCALLTYPE *GetClassDetails)(
         IOPCServerList2 *This,
@@ -2820,6 +3728,12 @@ typedef struct IOPCServerList2Vtbl
 
     /**
      * As IOPCServerList::CLSIDFromProgID.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param szProgId the ProgID.
+     * @param[out] clsid receives the CLSID.
+     *
+     * @return As IOPCServerList::CLSIDFromProgID.
      */
     HRESULT (STDMETHODCALLTYPE *CLSIDFromProgID)(
         IOPCServerList2 *This,
@@ -2832,6 +3746,8 @@ typedef struct IOPCServerList2Vtbl
 /**
  * IOPCServerList of OPC Common 1.10: the same services, with IOPCEnumGUID as the enumerator and the
  * version-independent ProgID in GetClassDetails.
+ *
+ * @ingroup browser
  */
 struct IOPCServerList2
 {
@@ -2871,10 +3787,18 @@ typedef struct CATID_OPCDAServer10 CATID_OPCDAServer10;
 #endif
 #ifndef __CATID_OPCDAServer10_INTERFACE_DEFINED__
 #define __CATID_OPCDAServer10_INTERFACE_DEFINED__
-/** The category OPC Data Access Servers Version 1.0, {63D5F430-CFE4-11d1-B2C8-0060083BA1FB} (`CATID_OPCDAServer10` names it; declared as an interface, as opcda.h does). */
+/**
+ * The category OPC Data Access Servers Version 1.0, {63D5F430-CFE4-11d1-B2C8-0060083BA1FB} (CATID_OPCDAServer10 names it; declared as an interface, as opcda.h does).
+ *
+ * @ingroup registration
+ */
 EXTERN_C const IID IID_CATID_OPCDAServer10;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-/** The category OPC Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 MIDL_INTERFACE("63d5f430-cfe4-11d1-b2c8-0060083ba1fb")
 CATID_OPCDAServer10 : public IUnknown
 {
@@ -2884,19 +3808,45 @@ public:
 __CRT_UUID_DECL(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif
 #else
-/** The vtable of the category's interface form: IUnknown's methods only. */
+/**
+ * The vtable of the category's interface form: IUnknown's methods only.
+ *
+ * @ingroup registration
+ */
 typedef struct CATID_OPCDAServer10Vtbl
 {
     BEGIN_INTERFACE
-    /** IUnknown::QueryInterface. */
-    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer10 *This, REFIID riid, void **ppvObject);
-    /** IUnknown::AddRef. */
+    /**
+     * IUnknown::QueryInterface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer10 *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);
+    /**
+     * IUnknown::AddRef.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCDAServer10 *This);
-    /** IUnknown::Release. */
+    /**
+     * IUnknown::Release.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCDAServer10 *This);
     END_INTERFACE
 } CATID_OPCDAServer10Vtbl;
-/** The category OPC Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 struct CATID_OPCDAServer10
 {
     /** IUnknown's methods. */
@@ -2909,7 +3859,11 @@ OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer10, 0x63d5f430, 0xcfe4, 0x11d1, 0xb2,0xc8,
 #define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer10
-/** The category OPC Data Access Servers Version 1.0: `IID_CATID_OPCDAServer10` under the name code uses. */
+/**
+ * The category OPC Data Access Servers Version 1.0: ::IID_CATID_OPCDAServer10 under the name code uses.
+ *
+ * @ingroup com
+ */
 #define CATID_OPCDAServer10 IID_CATID_OPCDAServer10
 #endif
 
@@ -2920,10 +3874,18 @@ typedef struct CATID_OPCDAServer20 CATID_OPCDAServer20;
 #endif
 #ifndef __CATID_OPCDAServer20_INTERFACE_DEFINED__
 #define __CATID_OPCDAServer20_INTERFACE_DEFINED__
-/** The category OPC Data Access Servers Version 2.0, {63D5F432-CFE4-11d1-B2C8-0060083BA1FB} (`CATID_OPCDAServer20` names it; declared as an interface, as opcda.h does). */
+/**
+ * The category OPC Data Access Servers Version 2.0, {63D5F432-CFE4-11d1-B2C8-0060083BA1FB} (CATID_OPCDAServer20 names it; declared as an interface, as opcda.h does).
+ *
+ * @ingroup registration
+ */
 EXTERN_C const IID IID_CATID_OPCDAServer20;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-/** The category OPC Data Access Servers Version 2.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Data Access Servers Version 2.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 MIDL_INTERFACE("63d5f432-cfe4-11d1-b2c8-0060083ba1fb")
 CATID_OPCDAServer20 : public IUnknown
 {
@@ -2933,19 +3895,45 @@ public:
 __CRT_UUID_DECL(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,0x00,0x60,0x08,0x3b,0xa1,0xfb)
 #endif
 #else
-/** The vtable of the category's interface form: IUnknown's methods only. */
+/**
+ * The vtable of the category's interface form: IUnknown's methods only.
+ *
+ * @ingroup registration
+ */
 typedef struct CATID_OPCDAServer20Vtbl
 {
     BEGIN_INTERFACE
-    /** IUnknown::QueryInterface. */
-    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer20 *This, REFIID riid, void **ppvObject);
-    /** IUnknown::AddRef. */
+    /**
+     * IUnknown::QueryInterface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer20 *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);
+    /**
+     * IUnknown::AddRef.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCDAServer20 *This);
-    /** IUnknown::Release. */
+    /**
+     * IUnknown::Release.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCDAServer20 *This);
     END_INTERFACE
 } CATID_OPCDAServer20Vtbl;
-/** The category OPC Data Access Servers Version 2.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Data Access Servers Version 2.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 struct CATID_OPCDAServer20
 {
     /** IUnknown's methods. */
@@ -2958,7 +3946,11 @@ OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer20, 0x63d5f432, 0xcfe4, 0x11d1, 0xb2,0xc8,
 #define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer20_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer20
-/** The category OPC Data Access Servers Version 2.0: `IID_CATID_OPCDAServer20` under the name code uses. */
+/**
+ * The category OPC Data Access Servers Version 2.0: ::IID_CATID_OPCDAServer20 under the name code uses.
+ *
+ * @ingroup com
+ */
 #define CATID_OPCDAServer20 IID_CATID_OPCDAServer20
 #endif
 
@@ -2969,10 +3961,18 @@ typedef struct CATID_OPCDAServer30 CATID_OPCDAServer30;
 #endif
 #ifndef __CATID_OPCDAServer30_INTERFACE_DEFINED__
 #define __CATID_OPCDAServer30_INTERFACE_DEFINED__
-/** The category OPC Data Access Servers Version 3.0, {CC603642-66D7-48f1-B69A-B625E73652D7} (`CATID_OPCDAServer30` names it; declared as an interface, as opcda.h does). */
+/**
+ * The category OPC Data Access Servers Version 3.0, {CC603642-66D7-48f1-B69A-B625E73652D7} (CATID_OPCDAServer30 names it; declared as an interface, as opcda.h does).
+ *
+ * @ingroup registration
+ */
 EXTERN_C const IID IID_CATID_OPCDAServer30;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-/** The category OPC Data Access Servers Version 3.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Data Access Servers Version 3.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 MIDL_INTERFACE("cc603642-66d7-48f1-b69a-b625e73652d7")
 CATID_OPCDAServer30 : public IUnknown
 {
@@ -2982,19 +3982,45 @@ public:
 __CRT_UUID_DECL(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,0xb6,0x25,0xe7,0x36,0x52,0xd7)
 #endif
 #else
-/** The vtable of the category's interface form: IUnknown's methods only. */
+/**
+ * The vtable of the category's interface form: IUnknown's methods only.
+ *
+ * @ingroup registration
+ */
 typedef struct CATID_OPCDAServer30Vtbl
 {
     BEGIN_INTERFACE
-    /** IUnknown::QueryInterface. */
-    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer30 *This, REFIID riid, void **ppvObject);
-    /** IUnknown::AddRef. */
+    /**
+     * IUnknown::QueryInterface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCDAServer30 *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);
+    /**
+     * IUnknown::AddRef.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCDAServer30 *This);
-    /** IUnknown::Release. */
+    /**
+     * IUnknown::Release.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCDAServer30 *This);
     END_INTERFACE
 } CATID_OPCDAServer30Vtbl;
-/** The category OPC Data Access Servers Version 3.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Data Access Servers Version 3.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 struct CATID_OPCDAServer30
 {
     /** IUnknown's methods. */
@@ -3007,7 +4033,11 @@ OPCCOMN_UUIDOF_DECL_(CATID_OPCDAServer30, 0xcc603642, 0x66d7, 0x48f1, 0xb6,0x9a,
 #define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCDAServer30_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCDAServer30
-/** The category OPC Data Access Servers Version 3.0: `IID_CATID_OPCDAServer30` under the name code uses. */
+/**
+ * The category OPC Data Access Servers Version 3.0: ::IID_CATID_OPCDAServer30 under the name code uses.
+ *
+ * @ingroup com
+ */
 #define CATID_OPCDAServer30 IID_CATID_OPCDAServer30
 #endif
 
@@ -3018,10 +4048,18 @@ typedef struct CATID_XMLDAServer10 CATID_XMLDAServer10;
 #endif
 #ifndef __CATID_XMLDAServer10_INTERFACE_DEFINED__
 #define __CATID_XMLDAServer10_INTERFACE_DEFINED__
-/** The category OPC XML Data Access Servers Version 1.0, {3098EDA4-A006-48b2-A27F-247453959408} (`CATID_XMLDAServer10` names it; declared as an interface, as opcda.h does). */
+/**
+ * The category OPC XML Data Access Servers Version 1.0, {3098EDA4-A006-48b2-A27F-247453959408} (CATID_XMLDAServer10 names it; declared as an interface, as opcda.h does).
+ *
+ * @ingroup registration
+ */
 EXTERN_C const IID IID_CATID_XMLDAServer10;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-/** The category OPC XML Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC XML Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 MIDL_INTERFACE("3098eda4-a006-48b2-a27f-247453959408")
 CATID_XMLDAServer10 : public IUnknown
 {
@@ -3031,19 +4069,45 @@ public:
 __CRT_UUID_DECL(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,0x24,0x74,0x53,0x95,0x94,0x08)
 #endif
 #else
-/** The vtable of the category's interface form: IUnknown's methods only. */
+/**
+ * The vtable of the category's interface form: IUnknown's methods only.
+ *
+ * @ingroup registration
+ */
 typedef struct CATID_XMLDAServer10Vtbl
 {
     BEGIN_INTERFACE
-    /** IUnknown::QueryInterface. */
-    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_XMLDAServer10 *This, REFIID riid, void **ppvObject);
-    /** IUnknown::AddRef. */
+    /**
+     * IUnknown::QueryInterface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_XMLDAServer10 *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);
+    /**
+     * IUnknown::AddRef.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_XMLDAServer10 *This);
-    /** IUnknown::Release. */
+    /**
+     * IUnknown::Release.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_XMLDAServer10 *This);
     END_INTERFACE
 } CATID_XMLDAServer10Vtbl;
-/** The category OPC XML Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC XML Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 struct CATID_XMLDAServer10
 {
     /** IUnknown's methods. */
@@ -3056,7 +4120,11 @@ OPCCOMN_UUIDOF_DECL_(CATID_XMLDAServer10, 0x3098eda4, 0xa006, 0x48b2, 0xa2,0x7f,
 #define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_XMLDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_XMLDAServer10
-/** The category OPC XML Data Access Servers Version 1.0: `IID_CATID_XMLDAServer10` under the name code uses. */
+/**
+ * The category OPC XML Data Access Servers Version 1.0: ::IID_CATID_XMLDAServer10 under the name code uses.
+ *
+ * @ingroup com
+ */
 #define CATID_XMLDAServer10 IID_CATID_XMLDAServer10
 #endif
 
@@ -3067,10 +4135,18 @@ typedef struct OPCEventServerCATID OPCEventServerCATID;
 #endif
 #ifndef __OPCEventServerCATID_INTERFACE_DEFINED__
 #define __OPCEventServerCATID_INTERFACE_DEFINED__
-/** The category OPC Alarm & Event Server Version 1.0, {58E13251-AC87-11d1-84D5-00608CB8A7E9} (`CATID_OPCAEServer10` names it; declared as an interface, as opcda.h does). */
+/**
+ * The category OPC Alarm & Event Server Version 1.0, {58E13251-AC87-11d1-84D5-00608CB8A7E9} (::CATID_OPCAEServer10 names it; declared as an interface, as opcda.h does).
+ *
+ * @ingroup registration
+ */
 EXTERN_C const IID IID_OPCEventServerCATID;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-/** The category OPC Alarm & Event Server Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Alarm & Event Server Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 MIDL_INTERFACE("58e13251-ac87-11d1-84d5-00608cb8a7e9")
 OPCEventServerCATID : public IUnknown
 {
@@ -3080,19 +4156,45 @@ public:
 __CRT_UUID_DECL(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,0x00,0x60,0x8c,0xb8,0xa7,0xe9)
 #endif
 #else
-/** The vtable of the category's interface form: IUnknown's methods only. */
+/**
+ * The vtable of the category's interface form: IUnknown's methods only.
+ *
+ * @ingroup registration
+ */
 typedef struct OPCEventServerCATIDVtbl
 {
     BEGIN_INTERFACE
-    /** IUnknown::QueryInterface. */
-    HRESULT (STDMETHODCALLTYPE *QueryInterface)(OPCEventServerCATID *This, REFIID riid, void **ppvObject);
-    /** IUnknown::AddRef. */
+    /**
+     * IUnknown::QueryInterface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(OPCEventServerCATID *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);
+    /**
+     * IUnknown::AddRef.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(OPCEventServerCATID *This);
-    /** IUnknown::Release. */
+    /**
+     * IUnknown::Release.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *Release)(OPCEventServerCATID *This);
     END_INTERFACE
 } OPCEventServerCATIDVtbl;
-/** The category OPC Alarm & Event Server Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC Alarm & Event Server Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 struct OPCEventServerCATID
 {
     /** IUnknown's methods. */
@@ -3105,7 +4207,11 @@ OPCCOMN_UUIDOF_DECL_(OPCEventServerCATID, 0x58e13251, 0xac87, 0x11d1, 0x84,0xd5,
 #define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __OPCEventServerCATID_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCAEServer10
-/** The category OPC Alarm & Event Server Version 1.0: `IID_OPCEventServerCATID` under the name code uses. */
+/**
+ * The category OPC Alarm & Event Server Version 1.0: ::IID_OPCEventServerCATID under the name code uses.
+ *
+ * @ingroup com
+ */
 #define CATID_OPCAEServer10 IID_OPCEventServerCATID
 #endif
 
@@ -3116,10 +4222,18 @@ typedef struct CATID_OPCHDAServer10 CATID_OPCHDAServer10;
 #endif
 #ifndef __CATID_OPCHDAServer10_INTERFACE_DEFINED__
 #define __CATID_OPCHDAServer10_INTERFACE_DEFINED__
-/** The category OPC History Data Access Servers Version 1.0, {7DE5B060-E089-11d2-A5E6-000086339399} (`CATID_OPCHDAServer10` names it; declared as an interface, as opcda.h does). */
+/**
+ * The category OPC History Data Access Servers Version 1.0, {7DE5B060-E089-11d2-A5E6-000086339399} (CATID_OPCHDAServer10 names it; declared as an interface, as opcda.h does).
+ *
+ * @ingroup registration
+ */
 EXTERN_C const IID IID_CATID_OPCHDAServer10;
 #if defined(__cplusplus) && !defined(CINTERFACE)
-/** The category OPC History Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC History Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 MIDL_INTERFACE("7de5b060-e089-11d2-a5e6-000086339399")
 CATID_OPCHDAServer10 : public IUnknown
 {
@@ -3129,19 +4243,45 @@ public:
 __CRT_UUID_DECL(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6,0x00,0x00,0x86,0x33,0x93,0x99)
 #endif
 #else
-/** The vtable of the category's interface form: IUnknown's methods only. */
+/**
+ * The vtable of the category's interface form: IUnknown's methods only.
+ *
+ * @ingroup registration
+ */
 typedef struct CATID_OPCHDAServer10Vtbl
 {
     BEGIN_INTERFACE
-    /** IUnknown::QueryInterface. */
-    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCHDAServer10 *This, REFIID riid, void **ppvObject);
-    /** IUnknown::AddRef. */
+    /**
+     * IUnknown::QueryInterface.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @param riid the interface wanted.
+     * @param[out] ppvObject receives the interface, or NULL on failure.
+     *
+     * @return S_OK; E_NOINTERFACE.
+     */
+    HRESULT (STDMETHODCALLTYPE *QueryInterface)(CATID_OPCHDAServer10 *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);
+    /**
+     * IUnknown::AddRef.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *AddRef)(CATID_OPCHDAServer10 *This);
-    /** IUnknown::Release. */
+    /**
+     * IUnknown::Release.
+     *
+     * @param This the object the method is called on (the interface pointer)
+     * @return The new count, for diagnostics only.
+     */
     ULONG (STDMETHODCALLTYPE *Release)(CATID_OPCHDAServer10 *This);
     END_INTERFACE
 } CATID_OPCHDAServer10Vtbl;
-/** The category OPC History Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods. */
+/**
+ * The category OPC History Data Access Servers Version 1.0 in the interface form of the Foundation's headers: no methods.
+ *
+ * @ingroup registration
+ */
 struct CATID_OPCHDAServer10
 {
     /** IUnknown's methods. */
@@ -3154,43 +4294,71 @@ OPCCOMN_UUIDOF_DECL_(CATID_OPCHDAServer10, 0x7de5b060, 0xe089, 0x11d2, 0xa5,0xe6
 #define OPCCOMN_UUIDOF_REDIRECT_ 1
 #endif /* __CATID_OPCHDAServer10_INTERFACE_DEFINED__ */
 #ifndef CATID_OPCHDAServer10
-/** The category OPC History Data Access Servers Version 1.0: `IID_CATID_OPCHDAServer10` under the name code uses. */
+/**
+ * The category OPC History Data Access Servers Version 1.0: ::IID_CATID_OPCHDAServer10 under the name code uses.
+ *
+ * @ingroup com
+ */
 #define CATID_OPCHDAServer10 IID_CATID_OPCHDAServer10
 #endif
 
 /* CATID_OPCBatchServer10 {A8080DA0-E23E-11D2-AFA7-00C04F539421}: OPC Batch Server Version 1.0 */
 #ifndef CATID_OPCBatchServer10
-/** {A8080DA0-E23E-11D2-AFA7-00C04F539421}: OPC Batch Server Version 1.0. */
+/**
+ * {A8080DA0-E23E-11D2-AFA7-00C04F539421}: OPC Batch Server Version 1.0.
+ *
+ * @ingroup com
+ */
 EXTERN_C const CATID CATID_OPCBatchServer10;
 #endif
 
 /* CATID_OPCBatchServer20 {843DE67B-B0C9-11d4-A0B7-000102A980B1}: OPC Batch Server Version 2.0 */
 #ifndef CATID_OPCBatchServer20
-/** {843DE67B-B0C9-11d4-A0B7-000102A980B1}: OPC Batch Server Version 2.0. */
+/**
+ * {843DE67B-B0C9-11d4-A0B7-000102A980B1}: OPC Batch Server Version 2.0.
+ *
+ * @ingroup com
+ */
 EXTERN_C const CATID CATID_OPCBatchServer20;
 #endif
 
 /* CATID_OPCDXServer10 {A0C85BB8-4161-4fd6-8655-BB584601C9E0}: OPC Data Exchange Servers Version 1.0 */
 #ifndef CATID_OPCDXServer10
-/** {A0C85BB8-4161-4fd6-8655-BB584601C9E0}: OPC Data Exchange Servers Version 1.0. */
+/**
+ * {A0C85BB8-4161-4fd6-8655-BB584601C9E0}: OPC Data Exchange Servers Version 1.0.
+ *
+ * @ingroup com
+ */
 EXTERN_C const CATID CATID_OPCDXServer10;
 #endif
 
 /* CATID_OPCCMDServer10 {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution Servers Version 1.0 */
 #ifndef CATID_OPCCMDServer10
-/** {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution Servers Version 1.0. */
+/**
+ * {2D869D5C-3B05-41fb-851A-642FB2B801A0}: OPC Command Execution Servers Version 1.0.
+ *
+ * @ingroup com
+ */
 EXTERN_C const CATID CATID_OPCCMDServer10;
 #endif
 
 /* CLSID_OPCServerList {13486D51-4821-11D2-A494-3CB306C10000}: the class OPC.ServerList.1 */
 #ifndef CLSID_OPCServerList
-/** {13486D51-4821-11D2-A494-3CB306C10000}: the class OPC.ServerList.1. */
+/**
+ * {13486D51-4821-11D2-A494-3CB306C10000}: the class OPC.ServerList.1.
+ *
+ * @ingroup com
+ */
 EXTERN_C const CLSID CLSID_OPCServerList;
 #endif
 
 /* CLSID_OpcComnProxyStub {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces) */
 #ifndef CLSID_OpcComnProxyStub
-/** {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces). */
+/**
+ * {3D738B71-0B9D-4337-A725-E8541A96D1C9}: the class PSFactoryBuffer (opccomn.dll as the proxy/stub of the OPC Common interfaces).
+ *
+ * @ingroup com
+ */
 EXTERN_C const CLSID CLSID_OpcComnProxyStub;
 #endif
 
@@ -3212,41 +4380,60 @@ extern "C" {
 /**
  * How many COM objects created by the library are still alive (IOPCCommon sessions, shutdown
  * connection points, enumerators, ...). Meant for leak checks in tests.
+ *
+ * @return The number of the library's objects not yet freed, in the whole process.
+ *
+ * @ingroup memory
  */
 uint32_t OPCCOMN_CDECL OpcObjectCount(void);
 
 /**
- * Allocates `size` bytes with the allocator the library uses for all memory it hands to callers:
- * CoTaskMemAlloc on Windows, malloc elsewhere. Returns NULL when out of memory; a size of 0 returns
- * a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
+ * Allocates memory with the allocator the library uses for all memory it hands to callers:
+ * CoTaskMemAlloc on Windows, malloc elsewhere. What a server hands to the library to free or keep
+ * (the text of an OpcVendorErrorTextFn) comes from here.
+ *
+ * @param size the number of bytes; 0 still gives a unique pointer.
+ *
+ * @return The memory, to be freed with OpcTaskMemFree() (or CoTaskMemFree on Windows); NULL when out of
+ * memory.
+ *
+ * @ingroup memory
  */
 void * OPCCOMN_CDECL OpcTaskMemAlloc(size_t size);
 
 /**
- * Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`. NULL is ignored.
+ * Frees memory returned by the library (strings, arrays) or by OpcTaskMemAlloc().
+ *
+ * @param memory the memory, or NULL (ignored).
  *
  * @par Safety
- * `p` must be NULL or memory from the library's task allocator that has not been freed yet.
+ * `memory` must be NULL or memory from the library's task allocator that has not been freed yet.
+ *
+ * @ingroup memory
  */
-void OPCCOMN_CDECL OpcTaskMemFree(void *p);
+void OPCCOMN_CDECL OpcTaskMemFree(void *memory);
 
 /**
- * Sets the module lock of an EXE server (see `OpcModuleLock`): from now on, every object the library
+ * Sets the module lock of an EXE server (see OpcModuleLock): from now on, every object the library
  * makes (server lists, enumerators, IOPCCommon sessions, shutdown objects, sinks, ...) calls `lock`
  * when it is made and `unlock` once it has been freed, so an EXE server that counts them exits only
  * when the last of the objects it handed out, directly or not, is released (COM's rule for local
  * servers). Objects made before the call are not counted; each object calls the `unlock` of the
- * module lock that counted it, even when another was set since. NULL stops the counting for objects
- * made from then on. Set it once, before registering the class objects; an in-process (DLL) server
- * has no need of it.
+ * module lock that counted it, even when another was set since. Set it once, before registering the
+ * class objects; an in-process (DLL) server has no need of it. The library's EXE host
+ * (OpcExeServerRun()) sets its own.
  *
- * Returns S_OK; E_INVALIDARG when `lock` is not NULL and `struct_size` is not the size of some
- * version of `OpcModuleLock`, or `lock` or `unlock` is NULL.
+ * @param lock the module lock, copied; NULL stops the counting for objects made from then on.
+ *
+ * @return S_OK; E_INVALIDARG when `lock` is not NULL and its `struct_size` is not the size of some version
+ * of OpcModuleLock, or its `lock` or `unlock` is NULL.
  *
  * @par Safety
- * `lock` must be NULL or point at `struct_size` readable bytes laid out as `OpcModuleLock`; its
+ * `lock` must be NULL or point at `struct_size` readable bytes laid out as OpcModuleLock; its
  * functions must be callable with its context from any thread, at any time until the process ends,
  * and must not call into the library.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcSetModuleLock(const struct OpcModuleLock *lock);
 
@@ -3254,113 +4441,149 @@ HRESULT OPCCOMN_CDECL OpcSetModuleLock(const struct OpcModuleLock *lock);
  * Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
  * first) and client name.
  *
- * `options` may be NULL for the defaults (a Data Access server supporting the catalog's languages).
- * With `outer` NULL, `riid` may be IID_IOPCCommon or IID_IUnknown. To aggregate the object into a
- * server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown as `riid`: the
- * result is the inner, non-delegating IUnknown, which the server keeps, releases when it is
- * destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
+ * To aggregate the object into a server object, pass the server's controlling IUnknown as `outer`
+ * and IID_IUnknown as `riid`: the result is the inner, non-delegating IUnknown, which the server
+ * keeps, releases when it is destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
  *
- * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
- * `riid` other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown
- * `server_kind`, more than 4096 locales, or a count without an array); E_NOINTERFACE. `*ppv` is NULL
- * on failure.
+ * @param options the session's settings (OpcCommonOptions), or NULL for the defaults (a Data Access
+ *   server supporting the catalog's languages).
+ * @param outer the controlling IUnknown of the server object that aggregates the session, or NULL.
+ * @param riid the interface wanted: IID_IOPCCommon or IID_IUnknown, only IID_IUnknown with an `outer`.
+ * @param[out] ppv receives the interface, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a `riid`
+ * other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown `server_kind`,
+ * more than 4096 locales, or a count without an array); E_NOINTERFACE.
  *
  * @par Safety
  * `options` must be NULL or valid as documented on OpcCommonOptions; `outer` NULL or a valid
  * IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or writable.
+ *
+ * @ingroup iopccommon
  */
 HRESULT OPCCOMN_CDECL OpcCommonCreate(const struct OpcCommonOptions *options, IUnknown *outer, REFIID riid, void **ppv);
 
 /**
  * Gives a server the client name of one of its IOPCCommon sessions.
  *
- * `common` is any interface of the session: the IOPCCommon pointer, the inner IUnknown from
- * `OpcCommonCreate`, or the server object that aggregates it. `*ppName` receives a new string (an
- * empty one while the client has set no name; free it with `OpcTaskMemFree`), or NULL on failure.
- * Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+ * @param common any interface of the session: the IOPCCommon pointer, the inner IUnknown from
+ *   OpcCommonCreate(), or the server object that aggregates it.
+ * @param[out] name receives a new string, the name the client set (empty while it has set none;
+ *   free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
  *
  * @par Safety
- * `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
+ * `common` must be NULL or a valid COM interface pointer; `name` NULL or writable.
+ *
+ * @ingroup iopccommon
  */
-HRESULT OPCCOMN_CDECL OpcCommonGetClientName(IUnknown *common, LPWSTR *ppName);
+HRESULT OPCCOMN_CDECL OpcCommonGetClientName(IUnknown *common, LPWSTR *name);
 
 /**
  * Gives a server the current locale of one of its IOPCCommon sessions (what GetLocaleID returns).
  *
- * `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
- * pointer itself is the cheap form: the library recognises its own object and reads the locale
- * without a QueryInterface. For any other interface the library asks for IOPCCommon first (one
- * QueryInterface and Release). A server that aggregates the session keeps the inner IUnknown from
- * `OpcCommonCreate` and passes that, not an IOPCCommon pointer: every interface of an aggregated
- * object but its inner IUnknown counts its references on the outer object, so a kept IOPCCommon
- * pointer would keep the server object alive for ever. `locale_changed` tells a server of every change
- * without a call. `*lcid` receives the locale, or 0 on failure.
- * Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+ * Passing the IOPCCommon pointer itself is the cheap form: the library recognises its own object and
+ * reads the locale without a QueryInterface. For any other interface the library asks for IOPCCommon
+ * first (one QueryInterface and Release). A server that aggregates the session keeps the inner
+ * IUnknown from OpcCommonCreate() and passes that, not an IOPCCommon pointer: every interface of an
+ * aggregated object but its inner IUnknown counts its references on the outer object, so a kept
+ * IOPCCommon pointer would keep the server object alive for ever. OpcCommonOptions::locale_changed
+ * tells a server of every change without a call.
+ *
+ * @param common any interface of the session, as for OpcCommonGetClientName().
+ * @param[out] locale receives the locale, or 0 on failure.
+ *
+ * @return S_OK; E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
  *
  * @par Safety
- * `common` must be NULL or a valid COM interface pointer; `lcid` NULL or writable.
+ * `common` must be NULL or a valid COM interface pointer; `locale` NULL or writable.
+ *
+ * @ingroup iopccommon
  */
-HRESULT OPCCOMN_CDECL OpcCommonGetLocale(IUnknown *common, LCID *lcid);
+HRESULT OPCCOMN_CDECL OpcCommonGetLocale(IUnknown *common, LCID *locale);
 
 /**
- * Returns the text for an OPC, COM or system error code in the given locale, for servers that
- * implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
- * Texts are those of a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
+ * The text of an OPC, COM or system error code in a locale, for servers that implement the
+ * locale-taking `GetErrorString` of their own interfaces (IOPCServer and others). Texts are those of
+ * a Data Access server where codes collide; OpcGetErrorStringEx() chooses.
  *
- * `locale` may be a concrete LCID or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
- * LOCALE_INVARIANT. `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree
- * on Windows), or NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
+ * @param code the error code.
+ * @param locale a concrete LCID, or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
+ *   LOCALE_INVARIANT.
+ * @param[out] text receives a new string (free it with OpcTaskMemFree(), or CoTaskMemFree on
+ *   Windows), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `text` or a code without a text.
  *
  * @par Safety
- * `ppString` must be NULL or writable.
+ * `text` must be NULL or writable.
+ *
+ * @ingroup errors
  */
-HRESULT OPCCOMN_CDECL OpcGetErrorString(HRESULT code, LCID locale, LPWSTR *ppString);
+HRESULT OPCCOMN_CDECL OpcGetErrorString(HRESULT code, LCID locale, LPWSTR *text);
 
 /**
- * `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
- * server passes OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized
- * as an area name." rather than the Data Access text.
+ * OpcGetErrorString() for a given kind of server: an Alarms & Events server passes
+ * OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized as an area
+ * name." rather than the Data Access text.
  *
- * Returns E_INVALIDARG, with `*ppString` NULL, for an unknown `kind`, a NULL `ppString` or a code
- * without a text.
+ * @param code the error code.
+ * @param locale as for OpcGetErrorString().
+ * @param kind the kind of server (an OpcServerKind value).
+ * @param[out] text receives a new string (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for an unknown `kind`, a NULL `text` or a code without a text.
  *
  * @par Safety
- * `ppString` must be NULL or writable.
+ * `text` must be NULL or writable.
+ *
+ * @ingroup errors
  */
-HRESULT OPCCOMN_CDECL OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *ppString);
+HRESULT OPCCOMN_CDECL OpcGetErrorStringEx(HRESULT code, LCID locale, uint32_t kind, LPWSTR *text);
 
 /**
- * The error codes the specification of a kind of server publishes (an `OpcServerKind` value): the
- * codes whose text that kind of server answers with its own specification's text, in ascending
- * order (as unsigned numbers: success codes first). For a client or a test tool that checks a server's GetErrorString against the published
- * list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind, ...)`, its
- * name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data Access 15.
+ * The error codes the specification of a kind of server publishes: the codes whose text that kind
+ * of server answers with its own specification's text, in ascending order (as unsigned numbers:
+ * success codes first). For a client or a test tool that checks a server's GetErrorString against
+ * the published list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind,
+ * ...)`, its name OpcErrorSymbol(). Data Access has 28 codes, Alarms & Events 8, Historical Data
+ * Access 15.
  *
- * `*ppCodes` receives a new array of `*pdwCount` codes (free it with `OpcTaskMemFree`).
- * Returns S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument (`*pdwCount` 0 and `*ppCodes`
- * NULL on failure).
+ * @param kind the kind of server (an OpcServerKind value).
+ * @param[out] count receives the number of codes, or 0 on failure.
+ * @param[out] codes receives a new array of `*count` codes (free it with OpcTaskMemFree()), or NULL
+ *   on failure.
+ *
+ * @return S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument.
  *
  * @par Safety
- * `pdwCount` and `ppCodes` must be NULL or writable.
+ * `count` and `codes` must be NULL or writable.
+ *
+ * @ingroup errors
  */
-HRESULT OPCCOMN_CDECL OpcErrorCodesOfKind(uint32_t kind, DWORD *pdwCount, HRESULT **ppCodes);
+HRESULT OPCCOMN_CDECL OpcErrorCodesOfKind(uint32_t kind, DWORD *count, HRESULT **codes);
 
 /**
  * The name of an error code as the header of its specification spells it (`OPC_E_INVALIDHANDLE`,
- * `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of `kind` (C0040203 is
- * `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events), into
- * `*ppSymbol`, freed with `OpcTaskMemFree`.
+ * ::CONNECT_E_NOCONNECTION, ::E_INVALIDARG), for a server of a kind: C0040203 is
+ * `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events.
  *
- * Returns S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL
- * `ppSymbol` (`*ppSymbol` NULL on failure).
+ * @param code the error code.
+ * @param kind the kind of server (an OpcServerKind value).
+ * @param[out] symbol receives a new string (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL `symbol`.
  *
  * @par Safety
- * `ppSymbol` must be NULL or writable.
+ * `symbol` must be NULL or writable.
+ *
+ * @ingroup errors
  */
-HRESULT OPCCOMN_CDECL OpcErrorSymbol(HRESULT code, uint32_t kind, LPWSTR *ppSymbol);
+HRESULT OPCCOMN_CDECL OpcErrorSymbol(HRESULT code, uint32_t kind, LPWSTR *symbol);
 
 /**
- * Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
+ * Whether a string matches a filter pattern (OPC Common, Appendix B: MatchPattern).
  *
  * The pattern syntax is that of Visual Basic's `Like` operator:
  * `?` any one character; `*` zero or more characters; `#` one digit `0`-`9`;
@@ -3373,295 +4596,416 @@ HRESULT OPCCOMN_CDECL OpcErrorSymbol(HRESULT code, uint32_t kind, LPWSTR *ppSymb
  * one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
  * in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
  *
- * Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
- * reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
- * reads past either terminating NUL (strings have no length limit). Time is at most proportional to
- * len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
- * read in place and allocate no memory; longer ones with a `*` are compiled first, as
- * `OpcPatternCompileW` does. Thread-safe.
+ * Never reads past either terminating NUL (strings have no length limit). Time is at most
+ * proportional to len(string) x len(pattern), and linear for typical filters. Patterns of up to 128
+ * code units are read in place and allocate no memory; longer ones with a `*` are compiled first, as
+ * OpcPatternCompileW() does. Thread-safe. The parameters have the specification's names.
+ *
+ * @param string the string to test, NUL-terminated UTF-16.
+ * @param pattern the filter pattern, NUL-terminated UTF-16.
+ * @param bCaseSensitive TRUE to compare characters as they are; FALSE to compare them by Unicode simple
+ *   case folding.
+ *
+ * @return TRUE (1) if `string` matches `pattern`; FALSE (0) if not, if either argument is NULL, or if the
+ * pattern is malformed (an unclosed `[` or a reversed range such as `[Z-A]`; OpcPatternCompileW()
+ * reports these as OPC_E_INVALIDFILTER).
  *
  * @par Safety
  * `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
+ *
+ * @ingroup pattern
  */
 BOOL OPCCOMN_CDECL MatchPatternW(LPCWSTR string, LPCWSTR pattern, BOOL bCaseSensitive);
 
 /**
- * Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
- * strings, with the same syntax and rules.
+ * MatchPatternW() for narrow strings, with the same syntax and rules.
  *
  * Narrow strings are UTF-8, except on Windows where they are in the process's ANSI code page (as for
  * every `...A` Win32 function). A byte that does not decode is one character of its own, matched only
  * by itself, `?`, `*` or a list containing that same byte; it is never rejected and never causes a
  * read past the terminating NUL.
  *
+ * @param string the string to test, NUL-terminated.
+ * @param pattern the filter pattern, NUL-terminated.
+ * @param bCaseSensitive as for MatchPatternW().
+ *
+ * @return TRUE (1) if `string` matches `pattern`; FALSE (0) if not, if either argument is NULL, or if the
+ * pattern is malformed.
+ *
  * @par Safety
  * `string` and `pattern` must each be NULL or point at a NUL-terminated string.
+ *
+ * @ingroup pattern
  */
 BOOL OPCCOMN_CDECL MatchPatternA(LPCSTR string, LPCSTR pattern, BOOL bCaseSensitive);
 
 /**
- * Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
+ * Compiles a filter pattern (the syntax of MatchPatternW()) once for matching many strings.
  *
- * `*ppPattern` receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
- * `caseSensitive` FALSE makes matches compare by Unicode simple case folding.
+ * @param pattern the filter pattern, NUL-terminated UTF-16.
+ * @param case_sensitive TRUE to compare characters as they are; FALSE to compare them by Unicode
+ *   simple case folding.
+ * @param[out] filter receives the compiled filter (free it with OpcPatternFree()), or NULL on failure.
  *
- * Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
- * as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
- * `pattern` or `ppPattern`.
+ * @return S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such as
+ * `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
+ * `pattern` or `filter`.
  *
  * @par Safety
- * `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
+ * `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `filter` must be NULL or
  * writable.
+ *
+ * @ingroup pattern
  */
-HRESULT OPCCOMN_CDECL OpcPatternCompileW(LPCWSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
+HRESULT OPCCOMN_CDECL OpcPatternCompileW(LPCWSTR pattern, BOOL case_sensitive, struct OpcPattern **filter);
 
 /**
- * `OpcPatternCompileW` for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
+ * OpcPatternCompileW() for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
  * filter matches wide and narrow strings alike.
  *
- * @par Safety
- * `pattern` must be NULL or point at a NUL-terminated string; `ppPattern` must be NULL or writable.
- */
-HRESULT OPCCOMN_CDECL OpcPatternCompileA(LPCSTR pattern, BOOL caseSensitive, struct OpcPattern **ppPattern);
-
-/**
- * Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
- * NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
- * Allocates nothing; thread-safe.
+ * @param pattern the filter pattern, NUL-terminated.
+ * @param case_sensitive as for OpcPatternCompileW().
+ * @param[out] filter receives the compiled filter (free it with OpcPatternFree()), or NULL on failure.
+ *
+ * @return As OpcPatternCompileW().
  *
  * @par Safety
- * `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
- * or point at a NUL-terminated UTF-16 string.
+ * `pattern` must be NULL or point at a NUL-terminated string; `filter` must be NULL or writable.
+ *
+ * @ingroup pattern
  */
-BOOL OPCCOMN_CDECL OpcPatternMatchW(const struct OpcPattern *pattern, LPCWSTR string);
+HRESULT OPCCOMN_CDECL OpcPatternCompileA(LPCSTR pattern, BOOL case_sensitive, struct OpcPattern **filter);
 
 /**
- * `OpcPatternMatchW` for a narrow string (UTF-8; the ANSI code page on Windows).
+ * Whether a string matches a compiled filter: the result of MatchPatternW() with the pattern and
+ * case mode the filter was compiled from. Allocates nothing; thread-safe.
+ *
+ * @param filter the compiled filter.
+ * @param string the string to test, NUL-terminated UTF-16.
+ *
+ * @return TRUE (1) if `string` matches; FALSE (0) if not or if either argument is NULL.
  *
  * @par Safety
- * `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
- * or point at a NUL-terminated string.
+ * `filter` must be NULL or a filter from OpcPatternCompileW() or OpcPatternCompileA() not yet freed;
+ * `string` must be NULL or point at a NUL-terminated UTF-16 string.
+ *
+ * @ingroup pattern
  */
-BOOL OPCCOMN_CDECL OpcPatternMatchA(const struct OpcPattern *pattern, LPCSTR string);
+BOOL OPCCOMN_CDECL OpcPatternMatchW(const struct OpcPattern *filter, LPCWSTR string);
 
 /**
- * Frees a filter from `OpcPatternCompileW`/`A`. NULL is allowed and ignored.
+ * OpcPatternMatchW() for a narrow string (UTF-8; the ANSI code page on Windows).
+ *
+ * @param filter the compiled filter.
+ * @param string the string to test, NUL-terminated.
+ *
+ * @return TRUE (1) if `string` matches; FALSE (0) if not or if either argument is NULL.
  *
  * @par Safety
- * `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
- * other thread may be using it.
+ * `filter` must be NULL or a filter from OpcPatternCompileW() or OpcPatternCompileA() not yet freed;
+ * `string` must be NULL or point at a NUL-terminated string.
+ *
+ * @ingroup pattern
  */
-void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *pattern);
+BOOL OPCCOMN_CDECL OpcPatternMatchA(const struct OpcPattern *filter, LPCSTR string);
+
+/**
+ * Frees a compiled filter.
+ *
+ * @param filter a filter from OpcPatternCompileW() or OpcPatternCompileA(), or NULL (ignored).
+ *
+ * @par Safety
+ * `filter` must be NULL or a filter from OpcPatternCompileW() or OpcPatternCompileA() that has not
+ * been freed, and no other thread may be using it.
+ *
+ * @ingroup pattern
+ */
+void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *filter);
 
 /**
  * Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
- * IOPCEnumGUID in `reg` (NULL: the system registry; on 64-bit Windows the view of the calling
- * process, so a 32-bit opccomn.dll registers the 32-bit view). Writes `CLSID_OpcComnProxyStub` with
- * this module as its `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}`
- * with `NumMethods` and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another
- * installed proxy/stub (the OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has
- * `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
- * exactly that. Registering twice is harmless.
+ * IOPCEnumGUID. Writes ::CLSID_OpcComnProxyStub with this module as its `InprocServer32`
+ * (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods` and
+ * `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub (the
+ * OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has ::OPC_PROXY_STUB_TAKE_OVER. Records
+ * what it adds or replaces, so OpcUnregisterProxyStub() undoes exactly that. Registering twice is
+ * harmless.
  *
- * Returns S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with
- * another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+ * @param reg the registry to write, or NULL for the system registry (on 64-bit Windows the view of the
+ *   calling process, so a 32-bit opccomn.dll registers the 32-bit view).
+ * @param flags 0 or ::OPC_PROXY_STUB_TAKE_OVER.
+ *
+ * @return S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with another;
+ * E_INVALIDARG for unknown flags; registry errors as HRESULTs.
  *
  * @par Safety
  * `reg` must be NULL or a live registry handle.
+ *
+ * @ingroup proxystub
  */
 HRESULT OPCCOMN_CDECL OpcRegisterProxyStub(const struct OpcRegistry *reg, uint32_t flags);
 
 /**
- * Removes what `OpcRegisterProxyStub` added to `reg` (NULL: the system registry) and restores the
- * `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
- * are left as they are. Unregistering what is not registered succeeds. Returns S_OK or a registry
- * error.
+ * Removes what OpcRegisterProxyStub() added and restores the `ProxyStubClsid32` values it replaced;
+ * interfaces another proxy/stub registered itself for since are left as they are. Unregistering what
+ * is not registered succeeds.
+ *
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK, or a registry error as an HRESULT.
  *
  * @par Safety
  * `reg` must be NULL or a live registry handle.
+ *
+ * @ingroup proxystub
  */
 HRESULT OPCCOMN_CDECL OpcUnregisterProxyStub(const struct OpcRegistry *reg);
 
 /**
  * `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
- * registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
- * takes over from another installed proxy/stub; with `install` FALSE (`regsvr32 /u /i:ProxyStub`) it
- * unregisters it. Words are case-insensitive and separated by commas or blanks. regsvr32 also calls
- * DllRegisterServer / DllUnregisterServer unless given `/n`.
+ * registers the proxy/stub in the system registry (OpcRegisterProxyStub()), `ProxyStub,TakeOver` also
+ * takes over from another installed proxy/stub. Words are case-insensitive and separated by commas or
+ * blanks. regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
  *
- * Returns what the registration function returns; E_INVALIDARG for a NULL, empty or unknown command
- * line.
+ * @param install TRUE to register; FALSE to unregister (`regsvr32 /u /i:ProxyStub`).
+ * @param command_line what follows `/i:`.
+ *
+ * @return What OpcRegisterProxyStub() or OpcUnregisterProxyStub() returns; E_INVALIDARG for a NULL, empty or
+ * unknown command line.
  *
  * @par Safety
  * `command_line` must be NULL or a NUL-terminated UTF-16 string.
+ *
+ * @ingroup proxystub
  */
 HRESULT OPCCOMN_CDECL OpcDllInstall(BOOL install, LPCWSTR command_line);
 
 /**
  * Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
- * the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
+ * the registration functions or OpcRegistryApply(); read it with OpcRegistryExport().
  *
- * Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
+ * @param[out] reg receives the new registry's handle (free it with OpcRegistryRelease()), or NULL on
+ *   failure.
+ *
+ * @return S_OK, or E_INVALIDARG for a NULL `reg`.
  *
  * @par Safety
- * `out` must be NULL or writable.
+ * `reg` must be NULL or writable.
+ *
+ * @ingroup registry
  */
-HRESULT OPCCOMN_CDECL OpcRegistryCreateMemory(struct OpcRegistry **out);
+HRESULT OPCCOMN_CDECL OpcRegistryCreateMemory(struct OpcRegistry **reg);
 
 /**
  * Opens the system registry: on Windows `HKEY_CLASSES_ROOT`, where registration writes to the
  * registry view of the calling process and the server list reads both the 64-bit and the 32-bit view;
  * elsewhere the process-wide in-memory registry that `DllRegisterServer` and the server list created by
- * `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
+ * `DllGetClassObject` or OpcServerListCreate() use. Passing NULL to a function taking a registry means
  * the same registry.
  *
- * Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
+ * @param[out] reg receives the handle (free it with OpcRegistryRelease()), or NULL on failure.
+ *
+ * @return S_OK, or E_INVALIDARG for a NULL `reg`.
  *
  * @par Safety
- * `out` must be NULL or writable.
+ * `reg` must be NULL or writable.
+ *
+ * @ingroup registry
  */
-HRESULT OPCCOMN_CDECL OpcRegistryOpenSystem(struct OpcRegistry **out);
+HRESULT OPCCOMN_CDECL OpcRegistryOpenSystem(struct OpcRegistry **reg);
 
 /**
- * Frees a registry handle. NULL is ignored. Objects created over the registry stay usable.
+ * Frees a registry handle. Objects created over the registry stay usable.
+ *
+ * @param reg the handle, or NULL (ignored).
  *
  * @par Safety
  * `reg` must be NULL or a live handle that is not used again.
+ *
+ * @ingroup registry
  */
 void OPCCOMN_CDECL OpcRegistryRelease(struct OpcRegistry *reg);
 
 /**
- * Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
- * HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
+ * Reads a string value.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
- * UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
- * is not a string. `*data` is NULL on failure.
+ * @param reg the registry, or NULL for the system registry.
+ * @param key the key, relative to HKEY_CLASSES_ROOT (`CLSID\{...}`).
+ * @param name the value's name; NULL or "" for the key's default value.
+ * @param[out] data receives a new string (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid UTF-16;
+ * REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value is not
+ * a string.
  *
  * @par Safety
  * `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.
+ *
+ * @ingroup registry
  */
 HRESULT OPCCOMN_CDECL OpcRegistryGetString(const struct OpcRegistry *reg, LPCWSTR key, LPCWSTR name, LPWSTR *data);
 
 /**
- * Creates the component category `catid` with `description` in English (0x409), as the
- * specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
- * `description` uses the standard text of an OPC category. On Windows this goes through the Component
- * Categories Manager (ICatRegister::RegisterCategories) when COM can create it on the calling thread;
- * where COM is not initialised (a server registering before CoInitializeEx) the library writes the
- * same value itself.
+ * Creates a component category with its English (0x409) description, as the specification's
+ * CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. On Windows this goes
+ * through the Component Categories Manager (ICatRegister::RegisterCategories) when COM can create it
+ * on the calling thread; where COM is not initialised (a server registering before CoInitializeEx)
+ * the library writes the same value itself.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
- * is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
+ * @param reg the registry, or NULL for the system registry.
+ * @param catid the category.
+ * @param description its description, at most 127 characters (the limit of CATEGORYINFO); NULL for the
+ *   standard text of an OPC category.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that is
+ * not an OPC one, or a description over 127 characters; registry errors.
  *
  * @par Safety
  * `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcCreateComponentCategory(const struct OpcRegistry *reg, const CATID *catid, LPCWSTR description);
 
 /**
- * Registers `clsid` as implementing the category `catid` (the specification's
- * RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the
- * Component Categories Manager when COM can create it on the calling thread, else (COM not
- * initialised there) by creating the key itself.
+ * Registers a class as implementing a category (the specification's RegisterCLSIDInCategory):
+ * `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the Component Categories
+ * Manager when COM can create it on the calling thread, else (COM not initialised there) by creating
+ * the key itself.
  *
- * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+ * @param reg the registry, or NULL for the system registry.
+ * @param clsid the class.
+ * @param catid the category it implements.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `clsid` or `catid`; registry errors.
  *
  * @par Safety
  * `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcRegisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
 
 /**
- * Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
+ * Removes a class from a category (the specification's UnRegisterCLSIDInCategory): deletes
  * `CLSID\{clsid}\Implemented Categories\{catid}`, through the Component Categories Manager or
- * directly as `OpcRegisterClassInCategory` does. Succeeds when it was not registered.
+ * directly as OpcRegisterClassInCategory() does. Succeeds when it was not registered.
  *
- * Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+ * @param reg the registry, or NULL for the system registry.
+ * @param clsid the class.
+ * @param catid the category.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `clsid` or `catid`; registry errors.
  *
  * @par Safety
- * As for `OpcRegisterClassInCategory`.
+ * As for OpcRegisterClassInCategory().
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcUnregisterClassInCategory(const struct OpcRegistry *reg, REFCLSID clsid, const CATID *catid);
 
 /**
  * The standard English description of an OPC component category (for example "OPC Data Access
- * Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
+ * Servers Version 2.0" for CATID_OPCDAServer20).
  *
- * Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
- * `*description` is NULL on failure.
+ * @param catid the category.
+ * @param[out] description receives a new string (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
  *
  * @par Safety
  * `catid` NULL or readable; `description` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcCategoryDescription(const CATID *catid, LPWSTR *description);
 
 /**
- * Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
- * program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
- * `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
- * `OpcServerCommand` value: register, unregister, embedding or none.
+ * Tells what an EXE server's command line asks for: `/RegServer` or `-RegServer`, `/UnregServer` or
+ * `-UnregServer`, `-Embedding` or `/Embedding` (and `-Automation`), case-insensitive, as separate
+ * arguments. OpcExeServerRun() does this itself; this is for a `main` of your own.
  *
- * Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and
- * unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
+ * @param command_line the command line, with or without the program name (`GetCommandLineW()`).
+ * @param[out] command receives an OpcServerCommand value (register, unregister, embedding or none);
+ *   OPC_SERVER_COMMAND_NONE on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and unregisters or
+ * is not valid UTF-16.
  *
  * @par Safety
  * `command_line` NULL or NUL-terminated; `command` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcParseCommandLine(LPCWSTR command_line, uint32_t *command);
 
 /**
- * Exports the subtree at `key` (relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry,
- * which for the system registry is all of HKEY_CLASSES_ROOT and slow) as the text of a `.reg` file,
- * "Windows Registry Editor Version 5.00", into `*text` (free it with `OpcTaskMemFree`). On Windows the
- * registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
+ * Exports a subtree as the text of a `.reg` file, "Windows Registry Editor Version 5.00". On Windows
+ * the registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
  * regedit.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
- * REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
+ * @param reg the registry, or NULL for the system registry.
+ * @param key the subtree's key, relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry (for
+ *   the system registry all of HKEY_CLASSES_ROOT, which is slow).
+ * @param[out] text receives the text (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
+ * REGDB_E_KEYMISSING when `key` does not exist.
  *
  * @par Safety
  * `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
+ *
+ * @ingroup registry
  */
 HRESULT OPCCOMN_CDECL OpcRegistryExport(const struct OpcRegistry *reg, LPCWSTR key, LPWSTR *text);
 
 /**
- * Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
- * and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
+ * Applies the text of a `.reg` file to a registry. The whole text is checked first: a malformed file
+ * changes nothing.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
- * HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
- * case the changes before it remain.
+ * @param reg the registry, or NULL for the system registry.
+ * @param text the file's text: keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]` and
+ *   `"name"=-`.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
+ * HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which case
+ * the changes before it remain.
  *
  * @par Safety
  * `reg` NULL or a live handle; `text` NULL or NUL-terminated.
+ *
+ * @ingroup registry
  */
 HRESULT OPCCOMN_CDECL OpcRegistryApply(const struct OpcRegistry *reg, LPCWSTR text);
 
 /**
- * Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
- * registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
+ * Registers a server. Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
  * (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the
  * categories (created with their standard descriptions when missing; on Windows through the Component
  * Categories Manager when COM can create it on the calling thread, else, COM not being initialised
  * there, as EXE servers registering before CoInitializeEx do, by writing the same keys) and, for Data
- * Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
- * that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
- * reports OPC_SERVER_COMMAND_REGISTER.
+ * Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so OpcUnregisterServer() removes exactly
+ * that. Registering again is harmless. Call it from DllRegisterServer, or when OpcParseCommandLine()
+ * reports OPC_SERVER_COMMAND_REGISTER (OpcModuleRegister() and OpcExeServerRun() call it for a
+ * server on the library's plumbing).
  *
- * Returns S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
- * wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
- * categories or a count without an array, strings that are not valid UTF-16; a registry error (for
- * example E_ACCESSDENIED without administrator rights) when a write fails.
+ * @param server what to register (OpcServerRegistration).
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a wrong
+ * `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256 categories or a
+ * count without an array, strings that are not valid UTF-16; a registry error (for example
+ * E_ACCESSDENIED without administrator rights) when a write fails.
  *
  * @par Safety
  * `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *server, const struct OpcRegistry *reg);
 
 /**
- * Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
- * values and keys that registration added and restores values it replaced, leaving everything that
+ * Unregisters a server registered with OpcRegisterServer(): removes the values and keys that registration added and restores values it replaced, leaving everything that
  * was there before and everything other products wrote. Only what still holds the data registration
  * wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
  * re-registered after a take-over) is left as it is, never set back to older data, and while the
@@ -3672,96 +5016,138 @@ HRESULT OPCCOMN_CDECL OpcRegisterServer(const struct OpcServerRegistration *serv
  * there before the first. Like registration it works with or without COM initialised on the calling
  * thread.
  *
- * Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
- * `OpcRegisterServer` for a bad description or a failing registry write.
+ * @param server the description it was registered with.
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of OpcRegisterServer() for a
+ * bad description or a failing registry write.
  *
  * @par Safety
- * As for `OpcRegisterServer`.
+ * As for OpcRegisterServer().
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcUnregisterServer(const struct OpcServerRegistration *server, const struct OpcRegistry *reg);
 
 /**
- * Writes the registration `server` describes as the text of a `.reg` file ("Windows Registry Editor
- * Version 5.00") into `*text` (free with `OpcTaskMemFree`), for installers that register servers by
- * importing a file. It holds what `OpcRegisterServer` writes into an empty registry, including the
- * record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
- * module.
+ * A server's registration as the text of a `.reg` file ("Windows Registry Editor Version 5.00"), for
+ * installers that register servers by importing a file. It holds what OpcRegisterServer() writes into
+ * an empty registry, including the record OpcUnregisterServer() uses.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
- * `*text` is NULL on failure.
+ * @param server what to register; give an explicit OpcServerRegistration::module_path (the default is
+ *   this process's module).
+ * @param[out] text receives the text (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `text`; the errors of OpcRegisterServer() for a bad description.
  *
  * @par Safety
- * `server` as for `OpcRegisterServer`; `text` NULL or writable.
+ * `server` as for OpcRegisterServer(); `text` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcRegistrationExport(const struct OpcServerRegistration *server, LPWSTR *text);
 
 /**
- * Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
+ * Parses a version `MM.mm.bb`: three decimal numbers of at most 65535, nothing else.
  *
- * Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
- * failure.
+ * @param text the text.
+ * @param[out] version receives the version; 0.0.0 on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text.
  *
  * @par Safety
  * `text` NULL or NUL-terminated; `version` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcVersionParse(LPCWSTR text, struct OpcVersion *version);
 
 /**
- * Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
+ * Formats a version as `MM.mm.bb` (for example `5.2.41`).
  *
- * Returns S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
+ * @param version the version.
+ * @param[out] text receives a new string (free it with OpcTaskMemFree()), or NULL on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY.
  *
  * @par Safety
  * `version` NULL or readable; `text` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcVersionFormat(const struct OpcVersion *version, LPWSTR *text);
 
 /**
- * The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
- * `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
+ * The `FILEVERSION` / `PRODUCTVERSION` of a version as the two words of `VS_FIXEDFILEINFO` (the
+ * resource line `FILEVERSION MM,mm,0,bb`).
  *
- * Returns S_OK, or E_INVALIDARG for a NULL argument (the outputs that are not NULL are 0 then).
+ * @param version the version.
+ * @param[out] ms receives `MM << 16 | mm` (`dwFileVersionMS`); 0 on failure.
+ * @param[out] ls receives `0 << 16 | bb` (`dwFileVersionLS`); 0 on failure.
+ *
+ * @return S_OK, or E_INVALIDARG for a NULL argument.
  *
  * @par Safety
  * `version` NULL or readable; `ms` and `ls` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcVersionToFileVersion(const struct OpcVersion *version, DWORD *ms, DWORD *ls);
 
 /**
- * The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
- * convention.
+ * The version of a `VS_FIXEDFILEINFO` in the `MM,mm,0,bb` convention.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
- * does not follow the convention). `*version` is 0.0.0 on failure.
+ * @param ms `dwFileVersionMS`.
+ * @param ls `dwFileVersionLS`.
+ * @param[out] version receives the version; 0.0.0 on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file does
+ * not follow the convention).
  *
  * @par Safety
  * `version` NULL or writable.
+ *
+ * @ingroup registration
  */
 HRESULT OPCCOMN_CDECL OpcVersionFromFileVersion(DWORD ms, DWORD ls, struct OpcVersion *version);
 
 /**
- * Compares two versions: negative when `a` is older than `b`, 0 when equal, positive when newer
- * (major first, then minor, then build). A NULL argument counts as older than any version.
+ * Compares two versions: major first, then minor, then build. A NULL argument counts as older than
+ * any version.
+ *
+ * @param a one version.
+ * @param b the other.
+ *
+ * @return Negative when `a` is older than `b`, 0 when they are equal, positive when `a` is newer.
  *
  * @par Safety
  * `a` and `b` NULL or readable.
+ *
+ * @ingroup registration
  */
 int32_t OPCCOMN_CDECL OpcVersionCompare(const struct OpcVersion *a, const struct OpcVersion *b);
 
 /**
- * TRUE when `candidate` is strictly newer than `installed`, so an installer may replace the installed
- * file with it (specification section 6.5); FALSE otherwise, and when `candidate` is NULL. A NULL
- * `installed` (nothing installed) makes any candidate newer.
+ * Whether a file may replace the installed one (specification section 6.5): whether it is strictly
+ * newer.
+ *
+ * @param candidate the version of the file that would replace it.
+ * @param installed the version installed; NULL when nothing is installed.
+ *
+ * @return TRUE when `candidate` is strictly newer than `installed` or `installed` is NULL (and `candidate`
+ * is not); FALSE otherwise, and when `candidate` is NULL.
  *
  * @par Safety
  * `candidate` and `installed` NULL or readable.
+ *
+ * @ingroup registration
  */
 BOOL OPCCOMN_CDECL OpcVersionIsNewer(const struct OpcVersion *candidate, const struct OpcVersion *installed);
 
 /**
  * Sets the process security of an OPC server (CoInitializeSecurity), hardened: authentication at
  * RPC_C_AUTHN_LEVEL_PKT_INTEGRITY (or what `options->authn_level` asks, never below PKT_INTEGRITY
- * without `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IDENTIFY (the server
+ * without ::OPC_SECURITY_ALLOW_WEAKER_AUTHN), impersonation RPC_C_IMP_LEVEL_IDENTIFY (the server
  * learns who calls but cannot act as the caller), and for access: EOAC_APPID with
  * `options->appid` (COM then takes the settings from the AppID's registry key), else the access list
  * `options->access_sddl`, else none (everyone who authenticates at the level may call). The other
@@ -3771,58 +5157,71 @@ BOOL OPCCOMN_CDECL OpcVersionIsNewer(const struct OpcVersion *candidate, const s
  * class objects, creating or receiving proxies), because COM sets process security once, implicitly
  * at the first marshalling if nobody called CoInitializeSecurity.
  *
- * Returns S_OK; E_INVALIDARG for a `struct_size` other than `sizeof(OpcSecurityOptions)`, an
- * unknown flag, a level out of range or below PKT_INTEGRITY without the flag, both `appid` and
- * `access_sddl`, or an access list that is empty, is no valid SDDL, names no owner or group, or has
- * a SACL (Windows' conversion error, as an HRESULT, where it gives one); RPC_E_TOO_LATE when process
- * security is already set: by an earlier successful call of this function or
- * `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
- * Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
- * CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
- * Off Windows the options are checked as above (the access list with the library's SDDL subset, that
- * of registration: `docs/guide/dcom-appid.md`), then the result is E_NOTIMPL.
+ * @param options the settings (OpcSecurityOptions), or NULL for the defaults above.
+ *
+ * @return S_OK; E_INVALIDARG for a `struct_size` other than `sizeof(OpcSecurityOptions)`, an unknown flag, a
+ * level out of range or below PKT_INTEGRITY without the flag, both `appid` and `access_sddl`, or an
+ * access list that is empty, is no valid SDDL, names no owner or group, or has a SACL (Windows'
+ * conversion error, as an HRESULT, where it gives one); RPC_E_TOO_LATE when process security is
+ * already set: by an earlier successful call of this function or OpcInitializeClientSecurity() (the
+ * library answers that itself, without calling COM), or, on Windows, by the process itself or
+ * implicitly by COM (CoInitializeSecurity's answer); otherwise CoInitializeSecurity's result as it is
+ * (on Windows CO_E_NOTINITIALIZED before CoInitializeEx). Off Windows the options are checked as
+ * above (the access list with the library's SDDL subset, that of registration:
+ * `docs/guide/dcom-appid.md`), then the result is E_NOTIMPL.
  *
  * @par Safety
  * `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or
  * readable, its `access_sddl` NULL or a NUL-terminated UTF-16 string.
+ *
+ * @ingroup security
  */
 HRESULT OPCCOMN_CDECL OpcInitializeServerSecurity(const struct OpcSecurityOptions *options);
 
 /**
  * Sets the process security of an OPC client (CoInitializeSecurity), hardened: as
- * `OpcInitializeServerSecurity`, with impersonation RPC_C_IMP_LEVEL_IMPERSONATE by default (the
+ * OpcInitializeServerSecurity(), with impersonation RPC_C_IMP_LEVEL_IMPERSONATE by default (the
  * level servers expect of clients). A client is a DCOM server for the callbacks it receives
  * (IOPCShutdown::ShutdownRequest, data callbacks): a client that receives them from another machine
  * needs PKT_INTEGRITY here too, and `access_sddl` (or `appid`) decides who may call it back.
  *
- * Returns what `OpcInitializeServerSecurity` returns; off Windows E_NOTIMPL after checking the
- * options.
+ * @param options the settings (OpcSecurityOptions), or NULL for the defaults.
+ *
+ * @return What OpcInitializeServerSecurity() returns; off Windows E_NOTIMPL after checking the options.
  *
  * @par Safety
- * As for `OpcInitializeServerSecurity`.
+ * As for OpcInitializeServerSecurity().
+ *
+ * @ingroup security
  */
 HRESULT OPCCOMN_CDECL OpcInitializeClientSecurity(const struct OpcSecurityOptions *options);
 
 /**
  * Sets the authentication of one proxy (CoSetProxyBlanket), for clients that cannot set their
- * process security: on `proxy` and on its IUnknown (queried, set, released), because QueryInterface,
+ * process security: on the proxy and on its IUnknown (queried, set, released), because QueryInterface,
  * AddRef and Release travel through the IUnknown's own blanket. Authentication at
  * RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or `options->authn_level` (never below PKT_INTEGRITY without
- * `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IMPERSONATE or
+ * ::OPC_SECURITY_ALLOW_WEAKER_AUTHN), impersonation RPC_C_IMP_LEVEL_IMPERSONATE or
  * `options->imp_level`; the authentication and authorization services, the server principal name,
  * the identity and the capabilities stay the proxy's (RPC_C_AUTHN_DEFAULT, RPC_C_AUTHZ_DEFAULT,
  * COLE_DEFAULT_PRINCIPAL, COLE_DEFAULT_AUTHINFO, EOAC_DEFAULT). Each further interface the client
  * queries from the object gets a new proxy with the process's blanket: set it on each.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `proxy`, bad options (as `OpcInitializeServerSecurity`), or
- * an `appid` or `access_sddl`; E_NOINTERFACE when `proxy` is not a proxy (an in-process object has no
+ * @param proxy the interface pointer (a proxy) to secure.
+ * @param options the settings (OpcSecurityOptions; its `appid` and `access_sddl` must be NULL), or NULL
+ *   for the defaults.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `proxy`, bad options (as OpcInitializeServerSecurity()), or an
+ * `appid` or `access_sddl`; E_NOINTERFACE when `proxy` is not a proxy (an in-process object has no
  * IClientSecurity; nothing to secure, and nothing is changed); otherwise CoSetProxyBlanket's result
  * for the interface or, when that succeeded, for its IUnknown (the interface's blanket then stays
  * set), or QueryInterface's failure. Off Windows E_NOTIMPL after checking the arguments.
  *
  * @par Safety
  * `proxy` must be NULL or a valid COM interface pointer; `options` as for
- * `OpcInitializeServerSecurity`.
+ * OpcInitializeServerSecurity().
+ *
+ * @ingroup security
  */
 HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecurityOptions *options);
 
@@ -3831,85 +5230,117 @@ HRESULT OPCCOMN_CDECL OpcSetProxyBlanket(IUnknown *proxy, const struct OpcSecuri
  * `class->create` (checking the arguments first, refusing an outer object with CLASS_E_NOAGGREGATION
  * unless the class is OPC_CLASS_AGGREGATABLE and `riid` is IID_IUnknown, and making sure `*ppv` is
  * NULL on every failure: a function that reports success without an object gets E_UNEXPECTED);
- * LockServer(TRUE/FALSE) is OpcServerLock/OpcServerUnlock. The class object itself does not count
- * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun, or a
+ * LockServer(TRUE/FALSE) is OpcServerLock()/OpcServerUnlock(). The class object itself does not count
+ * on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun(), or a
  * DllGetClassObject of its own.
  *
- * Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
- * a NULL `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is
- * IID_IClassFactory or IID_IUnknown. `*ppv` is NULL on failure.
+ * @param cls the class (OpcServerClass).
+ * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown.
+ * @param[out] ppv receives the class object, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`, a NULL
+ * `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is IID_IClassFactory or
+ * IID_IUnknown.
  *
  * @par Safety
  * `cls` NULL or valid as documented on OpcServerClass (and kept so while the class object lives);
  * `riid` NULL or readable; `ppv` NULL or writable.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcClassFactoryCreate(const struct OpcServerClass *cls, REFIID riid, void **ppv);
 
 /**
  * Counts one more reference to the server: call it when an object of the server's own is made (and
- * OpcServerUnlock when it is freed), so that a DLL server is not unloaded and an EXE server does not
+ * OpcServerUnlock() when it is freed), so that a DLL server is not unloaded and an EXE server does not
  * exit while a client holds it. LockServer and the library's objects are counted without it, and so
  * is an object that aggregates one of the library's objects (IOPCCommon, the shutdown connection
- * point) for as long as it holds it. Under OpcExeServerRun this is COM's server process count
- * (CoAddRefServerProcess); elsewhere a count OpcModuleCanUnloadNow reads. Any thread.
+ * point) for as long as it holds it. Under OpcExeServerRun() this is COM's server process count
+ * (CoAddRefServerProcess); elsewhere a count OpcModuleCanUnloadNow() reads. Any thread.
+ *
+ * @ingroup plumbing
  */
 void OPCCOMN_CDECL OpcServerLock(void);
 
 /**
- * Takes back one OpcServerLock. Under OpcExeServerRun the last count on the server ends it once it
+ * Takes back one OpcServerLock(). Under OpcExeServerRun() the last count on the server ends it once it
  * has had a client (COM stops handing out its class objects at once). An unlock without an
- * OpcServerLock still held is ignored: it never takes the count of a LockServer lock or of an object
+ * OpcServerLock() still held is ignored: it never takes the count of a LockServer lock or of an object
  * of the library. Any thread.
+ *
+ * @ingroup plumbing
  */
 void OPCCOMN_CDECL OpcServerUnlock(void);
 
 /**
- * DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)
- * whose CLSID is `rclsid`, as OpcClassFactoryCreate makes it.
+ * DllGetClassObject for a DLL server: the class object of one class of a table, as
+ * OpcClassFactoryCreate() makes it.
  *
- * Returns S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count
- * of 0 or over 256, or a class OpcClassFactoryCreate refuses; CLASS_E_CLASSNOTAVAILABLE for a
- * CLSID not in the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown. `*ppv` is
- * NULL on failure.
+ * @param classes the server's classes (OpcServerClass).
+ * @param count how many `classes` holds (1 to 256).
+ * @param rclsid the class COM asks for.
+ * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown.
+ * @param[out] ppv receives the class object, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count of 0 or
+ * over 256, or a class OpcClassFactoryCreate() refuses; CLASS_E_CLASSNOTAVAILABLE for a CLSID not in
+ * the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
  *
  * @par Safety
  * `classes` NULL or `count` classes valid as documented on OpcServerClass (kept so while the DLL is
  * loaded); `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcModuleGetClassObject(const struct OpcServerClass *classes, uint32_t count, REFCLSID rclsid, REFIID riid, void **ppv);
 
 /**
- * DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock or
- * LockServer lock is held), no object of the library is alive (the server's sessions, connection
- * points and enumerators among them; with opccomn.dll shared between modules, every module's), and
- * no proxy, stub or bounded shutdown notification of the library is at work, else S_FALSE.
+ * DllCanUnloadNow for a DLL server: whether COM may unload it.
+ *
+ * @return S_OK when nothing counts on the server (no OpcServerLock() or LockServer lock is held), no object of
+ * the library is alive (the server's sessions, connection points and enumerators among them; with
+ * opccomn.dll shared between modules, every module's), and no proxy, stub or bounded shutdown
+ * notification of the library is at work; else S_FALSE.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcModuleCanUnloadNow(void);
 
 /**
- * Registers every class of the table that has a `registration` (OpcRegisterServer for each, in
- * order), in `reg` (NULL: the system registry): for DllRegisterServer, or `/RegServer`. A DLL that
- * uses opccomn.dll must set `module_path` in its registrations (NULL would be opccomn.dll's path).
- * When one fails, the classes registered before it are unregistered again.
+ * Registers every class of a table that has a `registration` (OpcRegisterServer() for each, in order):
+ * for DllRegisterServer, or `/RegServer`. A DLL that uses opccomn.dll must set `module_path` in its
+ * registrations (NULL would be opccomn.dll's path). When one fails, the classes registered before it
+ * are unregistered again.
  *
- * Returns S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a
- * registration whose CLSID is not its class's; the errors of OpcRegisterServer.
+ * @param classes the server's classes (OpcServerClass).
+ * @param count how many `classes` holds (1 to 256).
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a registration
+ * whose CLSID is not its class's; the errors of OpcRegisterServer().
  *
  * @par Safety
  * `classes` NULL or `count` classes valid as documented on OpcServerClass; `reg` NULL or a live handle.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcModuleRegister(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg);
 
 /**
- * Unregisters every class of the table that has a `registration` (OpcUnregisterServer for each, in
- * reverse order), from `reg` (NULL: the system registry): for DllUnregisterServer, or `/UnregServer`.
- * Goes on after a class that fails and returns the first failure; a class that is not registered
- * (REGDB_E_KEYMISSING) is no failure.
+ * Unregisters every class of a table that has a `registration` (OpcUnregisterServer() for each, in
+ * reverse order): for DllUnregisterServer, or `/UnregServer`. Goes on after a class that fails and
+ * returns the first failure; a class that is not registered (REGDB_E_KEYMISSING) is no failure.
  *
- * Returns S_OK; the errors of OpcModuleRegister for a bad table; the errors of OpcUnregisterServer.
+ * @param classes the server's classes, as given to OpcModuleRegister().
+ * @param count how many `classes` holds (1 to 256).
+ * @param reg the registry, or NULL for the system registry.
+ *
+ * @return S_OK; the errors of OpcModuleRegister() for a bad table; the errors of OpcUnregisterServer().
  *
  * @par Safety
- * As for OpcModuleRegister.
+ * As for OpcModuleRegister().
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, uint32_t count, const struct OpcRegistry *reg);
 
@@ -3920,95 +5351,126 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *   this EXE), unregistering again what it wrote when one fails; returns.
  * - `/UnregServer`: unregisters them, in reverse order (a class not registered is no failure); returns.
  * - Otherwise it serves: initialises COM (multithreaded apartment); when a class's registration has an
- *   AppID, sets the process's security from it (OpcInitializeServerSecurity with `appid`: EOAC_APPID,
+ *   AppID, sets the process's security from it (OpcInitializeServerSecurity() with `appid`: EOAC_APPID,
  *   so the AppID's AuthenticationLevel and permissions apply) unless the server set process security
  *   itself before the call; registers the class objects
  *   (REGCLS_MULTIPLEUSE), and keeps the process while anything counts on the server: every object the
  *   library makes (through the module lock, which the host sets), LockServer, and the server's own
- *   objects that call OpcServerLock/OpcServerUnlock or aggregate an object of the library. When the
+ *   objects that call OpcServerLock()/OpcServerUnlock() or aggregate an object of the library. When the
  *   last goes it serves `idle_linger_ms` more after the last release (a client that connects again
  *   meanwhile keeps it serving), then revokes the class objects, serves one second more for a client
  *   already on its way, and returns, answering any later CreateInstance or LockServer with
  *   CO_E_SERVER_STOPPING (COM then starts a new server process). LockServer(FALSE) and
- *   OpcServerUnlock give back only what LockServer(TRUE) and OpcServerLock took. Started by COM
+ *   OpcServerUnlock() give back only what LockServer(TRUE) and OpcServerLock() took. Started by COM
  *   (`-Embedding`) it gives up after `first_client_timeout_ms` without a client; started by hand it
  *   serves until stopped. A stop (console control, the named event `stop_event_name`,
- *   OpcExeServerStop) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
+ *   OpcExeServerStop()) calls `on_stop`, then waits `release_timeout_ms` at most for the clients to let
  *   go. The host creates the named event itself, not set, with access for SYSTEM, the administrators
  *   and the server's own account only; a name that already exists is refused.
  *
- * `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
- * CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
- * CoUninitialize would wait for it (under Wine possibly for ever); return from `main` (or call
- * ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time.
+ * The host returns without CoUninitialize: a client's last Release may still be on its way back on an
+ * RPC thread, and CoUninitialize would wait for it (under Wine possibly for ever); return from `main`
+ * (or call ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time. Off Windows it
+ * returns E_NOTIMPL after checking its arguments.
  *
- * Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
- * after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
- * a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
- * command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the
- * process; HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named
- * `stop_event_name` already exists (an event or any other kind: another instance of the server, or
- * a name someone took first), before anything is served; the errors of CoInitializeEx,
- * CoRegisterClassObject and of registration.
+ * @param options the server's classes and how it is stopped (OpcExeServerOptions).
+ * @param command_line the command line, or NULL for the process's (GetCommandLineW; off Windows, none).
+ *
+ * @return S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE after a
+ * stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for a NULL
+ * `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a command
+ * line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process;
+ * HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named `stop_event_name`
+ * already exists (an event or any other kind: another instance of the server, or a name someone took
+ * first), before anything is served; the errors of CoInitializeEx, CoRegisterClassObject and of
+ * registration.
  *
  * @par Safety
  * `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
  * call returns); `command_line` NULL or a NUL-terminated string.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcExeServerRun(const struct OpcExeServerOptions *options, LPCWSTR command_line);
 
 /**
- * Stops the EXE server that OpcExeServerRun runs in this process, as its operator would: the host
+ * Stops the EXE server that OpcExeServerRun() runs in this process, as its operator would: the host
  * calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
  * for example a service's control handler or the server's own user interface.
  *
- * Returns S_OK; S_FALSE when no host runs.
+ * @return S_OK; S_FALSE when no host runs.
+ *
+ * @ingroup plumbing
  */
 HRESULT OPCCOMN_CDECL OpcExeServerStop(void);
 
 /**
  * Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
- * (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
- * IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
- * (aggregation).
+ * (see OpcRegistryOpenSystem()), without going through COM activation.
  *
- * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION; E_NOINTERFACE. `*ppv` is
- * NULL on failure.
+ * @param outer the controlling IUnknown of an object that aggregates the browser, or NULL.
+ * @param riid the interface wanted: IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; only
+ *   IID_IUnknown with an `outer`.
+ * @param[out] ppv receives the interface, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a `riid`
+ * other than IID_IUnknown; E_NOINTERFACE.
  *
  * @par Safety
  * `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
  * writable.
+ *
+ * @ingroup browser
  */
 HRESULT OPCCOMN_CDECL OpcServerListCreate(IUnknown *outer, REFIID riid, void **ppv);
 
 /**
- * As `OpcServerListCreate`, over the registry `reg` (for example one from `OpcRegistryCreateMemory`,
- * to test a client's browsing against known contents). The object keeps the registry alive.
+ * As OpcServerListCreate(), over a registry of the caller's (for example one from
+ * OpcRegistryCreateMemory(), to test a client's browsing against known contents). The object keeps
+ * the registry alive.
+ *
+ * @param reg the registry to browse, or NULL for the system registry.
+ * @param outer as for OpcServerListCreate().
+ * @param riid as for OpcServerListCreate().
+ * @param[out] ppv receives the interface, or NULL on failure.
+ *
+ * @return As OpcServerListCreate().
  *
  * @par Safety
- * `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.
+ * `reg` NULL (the system registry) or a live handle; the rest as for OpcServerListCreate().
+ *
+ * @ingroup browser
  */
 HRESULT OPCCOMN_CDECL OpcServerListCreateOver(const struct OpcRegistry *reg, IUnknown *outer, REFIID riid, void **ppv);
 
 /**
  * The class object of CLSID_OPCServerList (an IClassFactory whose CreateInstance makes server lists
  * over the system registry, and which honours LockServer), as DllGetClassObject returns it; on
- * Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see `OpcRegisterProxyStub`). For
+ * Windows also the proxy/stub factory of CLSID_OpcComnProxyStub (see OpcRegisterProxyStub()). For
  * servers that link opccomn statically and have their own DllGetClassObject: forward these classes here.
  *
- * Returns S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`;
- * CLASS_E_CLASSNOTAVAILABLE for any other class; E_NOINTERFACE unless `riid` is IID_IClassFactory or
- * IID_IUnknown. `*ppv` is NULL on failure.
+ * @param rclsid the class: CLSID_OPCServerList, or on Windows CLSID_OpcComnProxyStub.
+ * @param riid the interface wanted: IID_IClassFactory or IID_IUnknown for CLSID_OPCServerList.
+ * @param[out] ppv receives the class object, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `ppv`, `rclsid` or `riid`; CLASS_E_CLASSNOTAVAILABLE for any other
+ * class; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
  *
  * @par Safety
  * `rclsid` and `riid` NULL or readable; `ppv` NULL or writable.
+ *
+ * @ingroup browser
  */
 HRESULT OPCCOMN_CDECL OpcDllGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv);
 
 /**
- * S_OK when no object of the library is alive, no server lock is held, no proxy or stub is in use
- * and no worker of `OpcShutdownNotifyBounded` is still calling a sink, so COM may unload the DLL;
+ * Whether COM may unload opccomn.dll (its DllCanUnloadNow).
+ *
+ * @return S_OK when no object of the library is alive, no server lock is held, no proxy or stub is in use
+ * and no worker of OpcShutdownNotifyBounded() is still calling a sink, so COM may unload the DLL;
  * S_FALSE otherwise.
+ *
+ * @ingroup browser
  */
 HRESULT OPCCOMN_CDECL OpcDllCanUnloadNow(void);
 
@@ -4016,14 +5478,21 @@ HRESULT OPCCOMN_CDECL OpcDllCanUnloadNow(void);
  * Registers CLSID_OPCServerList as an in-process server of this module (InprocServer32 with
  * ThreadingModel Both, ProgID OPC.ServerList.1, version-independent OPC.ServerList, user type "Opc
  * ServerList Class") in the system registry, adding to an existing OpcEnum registration without
- * changing it. Returns S_OK or SELFREG_E_CLASS.
+ * changing it.
+ *
+ * @return S_OK or SELFREG_E_CLASS.
+ *
+ * @ingroup browser
  */
 HRESULT OPCCOMN_CDECL OpcDllRegisterServer(void);
 
 /**
- * Removes what `OpcDllRegisterServer` added, leaving everything else (an OpcEnum registration under
- * the same CLSID in particular). Unregistering what is not registered succeeds. Returns S_OK or
- * SELFREG_E_CLASS.
+ * Removes what OpcDllRegisterServer() added, leaving everything else (an OpcEnum registration under
+ * the same CLSID in particular). Unregistering what is not registered succeeds.
+ *
+ * @return S_OK or SELFREG_E_CLASS.
+ *
+ * @ingroup browser
  */
 HRESULT OPCCOMN_CDECL OpcDllUnregisterServer(void);
 
@@ -4031,88 +5500,110 @@ HRESULT OPCCOMN_CDECL OpcDllUnregisterServer(void);
  * Creates a shutdown object with the default options (at most one advised sink): the
  * IConnectionPointContainer of an OPC server, with one connection point for IOPCShutdown.
  *
- * With `outer` NULL, `riid` may be IID_IConnectionPointContainer or IID_IUnknown. To aggregate the
- * object into a server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown
- * as `riid`: the result is the inner, non-delegating IUnknown, which the server keeps, releases when
- * it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer) to. A server object
- * that cannot aggregate (windows-rs objects, for one) and forwards instead names itself as the
- * container with `OpcShutdownCreateEx` (`OpcShutdownOptions::container`).
+ * To aggregate the object into a server object, pass the server's controlling IUnknown as `outer`
+ * and IID_IUnknown as `riid`: the result is the inner, non-delegating IUnknown, which the server
+ * keeps, releases when it is destroyed, and forwards QueryInterface(IID_IConnectionPointContainer)
+ * to. A server object that cannot aggregate (windows-rs objects, for one) and forwards instead names
+ * itself as the container with OpcShutdownCreateEx() (OpcShutdownOptions::container).
  *
- * Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
- * `riid` other than IID_IUnknown; E_NOINTERFACE. `*ppv` is NULL on failure.
+ * @param outer the controlling IUnknown of the server object that aggregates the shutdown object, or
+ *   NULL.
+ * @param riid the interface wanted: IID_IConnectionPointContainer or IID_IUnknown, only IID_IUnknown
+ *   with an `outer`.
+ * @param[out] ppv receives the interface, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a `riid`
+ * other than IID_IUnknown; E_NOINTERFACE.
  *
  * @par Safety
  * `outer` must be NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv`
  * NULL or writable.
+ *
+ * @ingroup shutdown
  */
 HRESULT OPCCOMN_CDECL OpcShutdownCreate(IUnknown *outer, REFIID riid, void **ppv);
 
 /**
- * As `OpcShutdownCreate`, with options (NULL for the defaults); see `OpcShutdownOptions`.
+ * As OpcShutdownCreate(), with options.
  *
- * Returns in addition E_INVALIDARG for a `struct_size` that is not the size of some version of
- * `OpcShutdownOptions` (4, 8, or `sizeof` as of this version: 16 on 64-bit, 12 on 32-bit), and for
- * a `container` together with an `outer` object.
+ * @param options the settings (OpcShutdownOptions), or NULL for the defaults.
+ * @param outer as for OpcShutdownCreate().
+ * @param riid as for OpcShutdownCreate().
+ * @param[out] ppv receives the interface, or NULL on failure.
+ *
+ * @return What OpcShutdownCreate() returns, and E_INVALIDARG for a `struct_size` that is not the size of some
+ * version of OpcShutdownOptions (4, 8, or `sizeof` as of this version: 16 on 64-bit, 12 on
+ * 32-bit), and for a `container` together with an `outer` object.
  *
  * @par Safety
  * `options` must be NULL or point at `options->struct_size` readable bytes, and its `container`
  * NULL or a valid IUnknown that outlives every reference to the connection point (they count on
- * it); otherwise as for `OpcShutdownCreate`.
+ * it); otherwise as for OpcShutdownCreate().
+ *
+ * @ingroup shutdown
  */
 HRESULT OPCCOMN_CDECL OpcShutdownCreateEx(const struct OpcShutdownOptions *options, IUnknown *outer, REFIID riid, void **ppv);
 
 /**
- * Asks every client advised on `shutdown` to disconnect: calls IOPCShutdown::ShutdownRequest on
- * each advised sink with `reason` (a NUL string when `reason` is NULL).
+ * Asks every client advised on a shutdown object to disconnect: calls IOPCShutdown::ShutdownRequest
+ * on each advised sink.
  *
- * `shutdown` is any interface of a shutdown object: the IConnectionPointContainer, the inner
- * IUnknown from `OpcShutdownCreate`, or the server object that aggregates it or forwards to it (the
- * server's IConnectionPointContainer hands out the shutdown object's connection point). The sinks are taken
- * from a snapshot made under the object's lock and called without holding it, one after the other
+ * The sinks are taken from a snapshot made under the object's lock and called without holding it, one after the other
  * on the calling thread, so a sink may Unadvise, release the server or call back in from inside
  * ShutdownRequest. A sink unadvised from inside the notification (by itself or an earlier sink) is
  * not called any more. A sink that fails (returns a failure code, or cannot be reached from this thread) does
  * not stop the others. On Windows, call it from a thread that has initialised COM: sinks are
  * fetched from the Global Interface Table for the calling apartment.
  *
- * Returns S_OK when every advised sink accepted the request (also when none is advised), S_FALSE
- * when at least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this
- * library. Use `OpcShutdownNotifyEx` for the counts.
- *
  * This call waits for every sink, however long it takes: a client that hangs in ShutdownRequest
  * holds it (and the sinks after it) for as long as it hangs. A server that must not wait without
- * bound uses `OpcShutdownNotifyBounded`.
+ * bound uses OpcShutdownNotifyBounded().
+ *
+ * @param shutdown any interface of a shutdown object: the IConnectionPointContainer, the inner IUnknown
+ *   from OpcShutdownCreate(), or the server object that aggregates it or forwards to it (the server's
+ *   IConnectionPointContainer hands out the shutdown object's connection point).
+ * @param reason why the server shuts down, passed to every sink; NULL passes a NUL string.
+ *
+ * @return S_OK when every advised sink accepted the request (also when none is advised), S_FALSE when at
+ * least one failed; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this library.
+ * Use OpcShutdownNotifyEx() for the counts.
  *
  * @par Safety
  * `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated
  * UTF-16 string.
+ *
+ * @ingroup shutdown
  */
 HRESULT OPCCOMN_CDECL OpcShutdownNotify(IUnknown *shutdown, LPCWSTR reason);
 
 /**
- * As `OpcShutdownNotify`, and reports how many sinks accepted the request (`*pNotified`) and how
- * many failed (`*pFailed`). Either pointer may be NULL; both are set (to 0 on failure) before
- * anything else happens.
+ * As OpcShutdownNotify(), and reports how many sinks accepted the request and how many failed. The
+ * counts are set (to 0 on failure) before anything else happens.
+ *
+ * @param shutdown as for OpcShutdownNotify().
+ * @param reason as for OpcShutdownNotify().
+ * @param[out] notified receives how many sinks accepted the request; may be NULL.
+ * @param[out] failed receives how many refused it or could not be reached; may be NULL.
+ *
+ * @return As OpcShutdownNotify().
  *
  * @par Safety
- * As for `OpcShutdownNotify`; `pNotified` and `pFailed` NULL or writable.
+ * As for OpcShutdownNotify(); `notified` and `failed` NULL or writable.
+ *
+ * @ingroup shutdown
  */
-HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, ULONG *pNotified, ULONG *pFailed);
+HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, ULONG *notified, ULONG *failed);
 
 /**
- * Asks every client advised on `shutdown` to disconnect, as `OpcShutdownNotify`, but waits for them
- * only until a deadline: the advised sinks are called at the same time on worker threads, so a slow
- * or hung client delays nobody else, and the call returns when every sink has answered or passed its
- * deadline (`options`: the whole notification's deadline, by default OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS,
- * and one per sink; NULL gives the defaults).
+ * Asks every client advised on a shutdown object to disconnect, as OpcShutdownNotify(), but waits for
+ * them only until a deadline: the advised sinks are called at the same time on worker threads, so a
+ * slow or hung client delays nobody else, and the call returns when every sink has answered or
+ * passed its deadline.
  *
- * The counts (each pointer may be NULL; all are set, to 0 on failure, before anything else happens)
- * say what became of every sink advised when the call started: `*pNotified` accepted the request,
- * `*pFailed` refused it or could not be reached (a client process that died), `*pTimedOut` had not
- * answered at its deadline, or was not called because its call from an earlier notification has not
- * returned yet. A timed-out call may still return later on its worker thread; the worker holds its
+ * The counts (all set, to 0 on failure, before anything else happens) say what became of every sink
+ * advised when the call started. A timed-out call may still return later on its worker thread; the worker holds its
  * own reference to the sink and its own copy of `reason`, so the caller may release the server and
- * free `reason` as soon as this returns. While such a worker runs, `OpcDllCanUnloadNow` says
+ * free `reason` as soon as this returns. While such a worker runs, OpcDllCanUnloadNow() says
  * S_FALSE.
  *
  * Threads: the workers are one pool for the whole process, shared by every notification of every
@@ -4132,64 +5623,90 @@ HRESULT OPCCOMN_CDECL OpcShutdownNotifyEx(IUnknown *shutdown, LPCWSTR reason, UL
  * could not take (no IOPCShutdown proxy/stub registered) cannot be called from there and counts as
  * failed. Call it from a thread that has initialised COM.
  *
- * Returns S_OK when every sink accepted the request (also when none is advised), S_FALSE when at
- * least one failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of
- * this library, or `options->struct_size` is not the size of some version of
- * `OpcShutdownNotifyOptions`.
+ * @param shutdown as for OpcShutdownNotify().
+ * @param reason as for OpcShutdownNotify().
+ * @param options the deadlines (OpcShutdownNotifyOptions: the whole notification's, by default
+ *   OPC_SHUTDOWN_DEFAULT_TIMEOUT_MS, and one per sink), or NULL for the defaults.
+ * @param[out] notified receives how many sinks accepted the request; may be NULL.
+ * @param[out] failed receives how many refused it or could not be reached (a client process that
+ *   died); may be NULL.
+ * @param[out] timed_out receives how many had not answered at their deadline, or were not called
+ *   because their call from an earlier notification has not returned yet; may be NULL.
+ *
+ * @return S_OK when every sink accepted the request (also when none is advised), S_FALSE when at least one
+ * failed or timed out; E_INVALIDARG when `shutdown` is NULL or not a shutdown object of this library,
+ * or `options->struct_size` is not the size of some version of OpcShutdownNotifyOptions.
  *
  * @par Safety
  * `shutdown` must be NULL or a valid COM interface pointer; `reason` NULL or a NUL-terminated UTF-16
- * string; `options` NULL or pointing at `options->struct_size` readable bytes; `pNotified`, `pFailed`
- * and `pTimedOut` NULL or writable.
+ * string; `options` NULL or pointing at `options->struct_size` readable bytes; `notified`, `failed`
+ * and `timed_out` NULL or writable.
+ *
+ * @ingroup shutdown
  */
-HRESULT OPCCOMN_CDECL OpcShutdownNotifyBounded(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *pNotified, ULONG *pFailed, ULONG *pTimedOut);
+HRESULT OPCCOMN_CDECL OpcShutdownNotifyBounded(IUnknown *shutdown, LPCWSTR reason, const struct OpcShutdownNotifyOptions *options, ULONG *notified, ULONG *failed, ULONG *timed_out);
 
 /**
  * Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
  * ShutdownRequest calls `callback(context, reason)` and returns S_OK.
  *
- * `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
- * IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
- * client may release its reference at any time. `context` must stay valid until the sink is
- * destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
+ * Pass the sink to OpcShutdownAdvise() (or to IConnectionPoint::Advise yourself); the server keeps its
+ * own reference until Unadvise, so the client may release its reference at any time.
  *
- * Returns S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`;
- * E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
+ * @param callback what ShutdownRequest calls (OpcShutdownCallback).
+ * @param context passed to `callback`; must stay valid until the sink is destroyed (after the last
+ *   Release: watch OpcObjectCount() or unadvise first).
+ * @param riid the interface wanted: IID_IUnknown or IID_IOPCShutdown.
+ * @param[out] ppv receives the interface, or NULL on failure.
+ *
+ * @return S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`; E_NOINTERFACE for another `riid`.
  *
  * @par Safety
  * `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
  * `ppv` NULL or writable.
+ *
+ * @ingroup shutdown
  */
 HRESULT OPCCOMN_CDECL OpcShutdownSinkCreate(OpcShutdownCallback callback, void *context, REFIID riid, void **ppv);
 
 /**
- * Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
- * IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
- *
- * `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
- * three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
- * IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
- * gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
- * E_INVALIDARG for a NULL argument.
+ * Advises a client's shutdown sink on the IOPCShutdown connection point of a server: QueryInterface
+ * for IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
  *
  * Across machines the sink receives ShutdownRequest as a DCOM call from the server's machine: the
  * client is then a DCOM server, and since Windows' DCOM hardening (KB5004442) the call arrives only
  * when the client's process security is at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or above. Call
- * `OpcInitializeClientSecurity` after CoInitializeEx and before creating the server.
+ * OpcInitializeClientSecurity() after CoInitializeEx and before creating the server.
+ *
+ * @param server any interface of the server object.
+ * @param sink the client's sink, an object with IOPCShutdown (OpcShutdownSinkCreate() makes one).
+ * @param[out] cookie receives the cookie for OpcShutdownUnadvise(), or 0 on failure.
+ *
+ * @return S_OK; E_INVALIDARG for a NULL argument; otherwise the errors of the three steps as they are, so a
+ * server without shutdown support gives E_NOINTERFACE (no IConnectionPointContainer) or
+ * CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise gives CONNECT_E_CANNOTCONNECT
+ * (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
  *
  * @par Safety
- * `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
+ * `server` and `sink` must be NULL or valid COM interface pointers; `cookie` NULL or writable.
+ *
+ * @ingroup shutdown
  */
-HRESULT OPCCOMN_CDECL OpcShutdownAdvise(IUnknown *server, IUnknown *sink, DWORD *pdwCookie);
+HRESULT OPCCOMN_CDECL OpcShutdownAdvise(IUnknown *server, IUnknown *sink, DWORD *cookie);
 
 /**
- * Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
+ * Unadvises a client's shutdown sink from a server.
  *
- * Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
- * gives CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
+ * @param server any interface of the server object.
+ * @param cookie the cookie OpcShutdownAdvise() returned.
+ *
+ * @return S_OK, or the error of the step that failed, as for OpcShutdownAdvise(); an unknown cookie gives
+ * CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
  *
  * @par Safety
  * `server` must be NULL or a valid COM interface pointer.
+ *
+ * @ingroup shutdown
  */
 HRESULT OPCCOMN_CDECL OpcShutdownUnadvise(IUnknown *server, DWORD cookie);
 
@@ -4201,18 +5718,34 @@ HRESULT OPCCOMN_CDECL OpcShutdownUnadvise(IUnknown *server, DWORD cookie);
 
 /* MatchPattern picks the wide or the narrow function as Win32 does for TCHAR functions. */
 #if !defined(OPCCOMN_TCHAR_MACROS)
-/** Defined once the TCHAR-style macros below are (define it first to have none). */
+/**
+ * Defined once the TCHAR-style macros below are (define it first to have none).
+ *
+ * @ingroup pattern
+ */
 #define OPCCOMN_TCHAR_MACROS
 #if defined(UNICODE)
 #define MatchPattern MatchPatternW
 #define OpcPatternCompile OpcPatternCompileW
 #define OpcPatternMatch OpcPatternMatchW
 #else
-/** MatchPatternW() with UNICODE defined, MatchPatternA() without (MBCS builds): prefer naming one. */
+/**
+ * MatchPatternW() with UNICODE defined, MatchPatternA() without (MBCS builds): prefer naming one.
+ *
+ * @ingroup pattern
+ */
 #define MatchPattern MatchPatternA
-/** OpcPatternCompileW() or OpcPatternCompileA(), as MatchPattern. */
+/**
+ * OpcPatternCompileW() or OpcPatternCompileA(), as MatchPattern.
+ *
+ * @ingroup pattern
+ */
 #define OpcPatternCompile OpcPatternCompileA
-/** OpcPatternMatchW() or OpcPatternMatchA(), as MatchPattern. */
+/**
+ * OpcPatternMatchW() or OpcPatternMatchA(), as MatchPattern.
+ *
+ * @ingroup pattern
+ */
 #define OpcPatternMatch OpcPatternMatchA
 #endif
 #endif

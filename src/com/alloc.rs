@@ -101,23 +101,33 @@ pub fn alloc_wstr_from_str(text: &str) -> Result<LPWSTR, HRESULT> {
     alloc_wstr(&units)
 }
 
-/// Allocates `size` bytes with the allocator the library uses for all memory it hands to callers:
-/// CoTaskMemAlloc on Windows, malloc elsewhere. Returns NULL when out of memory; a size of 0 returns
-/// a unique pointer. Free the result with `OpcTaskMemFree` (or CoTaskMemFree on Windows).
+/// Allocates memory with the allocator the library uses for all memory it hands to callers:
+/// CoTaskMemAlloc on Windows, malloc elsewhere. What a server hands to the library to free or keep
+/// (the text of an OpcVendorErrorTextFn) comes from here.
+///
+/// # Parameters
+/// - `size`: the number of bytes; 0 still gives a unique pointer.
+///
+/// # Returns
+/// The memory, to be freed with `OpcTaskMemFree` (or CoTaskMemFree on Windows); NULL when out of
+/// memory.
 #[no_mangle]
 pub extern "C" fn OpcTaskMemAlloc(size: usize) -> Crossed<*mut c_void> {
     super::ffi::guard!(ptr::null_mut(), { task_alloc(size) })
 }
 
-/// Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`. NULL is ignored.
+/// Frees memory returned by the library (strings, arrays) or by `OpcTaskMemAlloc`.
+///
+/// # Parameters
+/// - `memory`: the memory, or NULL (ignored).
 ///
 /// # Safety
-/// `p` must be NULL or memory from the library's task allocator that has not been freed yet.
+/// `memory` must be NULL or memory from the library's task allocator that has not been freed yet.
 #[no_mangle]
-pub unsafe extern "C" fn OpcTaskMemFree(p: *mut c_void) {
+pub unsafe extern "C" fn OpcTaskMemFree(memory: *mut c_void) {
     super::ffi::guard!((), {
         // SAFETY: forwarded from the caller's contract.
-        unsafe { task_free(p) }
+        unsafe { task_free(memory) }
     })
 }
 

@@ -53,7 +53,14 @@ impl IUnknown {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 3;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IUnknown pointer, and the arguments valid as the IDL declares them.
@@ -62,7 +69,10 @@ impl IUnknown {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IUnknown pointer, and the arguments valid as the IDL declares them.
@@ -71,7 +81,10 @@ impl IUnknown {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IUnknown pointer, and the arguments valid as the IDL declares them.
@@ -121,11 +134,24 @@ impl Vtable for IUnknownVtbl {}
 /// The IUnknown methods of a slot: how an object (or one of its slots) answers QueryInterface,
 /// AddRef and Release. The framework's implementations are in `super::object`.
 pub trait IUnknownImpl {
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     fn QueryInterface(This: ThisSlot<'_>, riid: &IID, ppvObject: ffi::Out<'_, *mut c_void>) -> FfiResult;
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     fn AddRef(This: ThisSlot<'_>) -> ULONG;
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     fn Release(This: ThisSlot<'_>) -> ULONG;
 }
 
@@ -177,7 +203,14 @@ impl IEnumGUID {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -186,7 +219,10 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -195,7 +231,10 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -204,7 +243,15 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` elements that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -213,7 +260,13 @@ impl IEnumGUID {
         unsafe { ((*(*this).lpVtbl).Next)(this, celt, rgelt, pceltFetched) }.get()
     }
 
-    /// Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -224,6 +277,9 @@ impl IEnumGUID {
 
     /// Starts the enumeration again from the first element.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -232,6 +288,12 @@ impl IEnumGUID {
     }
 
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -309,18 +371,41 @@ impl Vtable for IEnumGUIDVtbl {}
 /// What an object implements to present IEnumGUID: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumGUIDImpl: ComClass {
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched`: S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` elements that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     fn Next(
         this: &ComObject<Self>,
         celt: ULONG,
         rgelt: ffi::OutArray<'_, GUID>,
         pceltFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
-    /// Skips `celt` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IEnumGUID>) -> FfiResult;
 }
 
@@ -390,7 +475,14 @@ impl IEnumConnections {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -399,7 +491,10 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -408,7 +503,10 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -417,7 +515,15 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+    /// Copies the next connections (each `pUnk` AddRef'ed: the caller releases it).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `rgcd`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -426,7 +532,13 @@ impl IEnumConnections {
         unsafe { ((*(*this).lpVtbl).Next)(this, cConnections, rgcd, pcFetched) }.get()
     }
 
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -437,6 +549,9 @@ impl IEnumConnections {
 
     /// Starts the enumeration again from the first element.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -445,6 +560,12 @@ impl IEnumConnections {
     }
 
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnections pointer, and the arguments valid as the IDL declares them.
@@ -530,18 +651,41 @@ impl Vtable for IEnumConnectionsVtbl {}
 /// What an object implements to present IEnumConnections: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumConnectionsImpl: ComClass {
-    /// Copies up to `cConnections` connections into `rgcd` (each `pUnk` AddRef'ed: the caller releases it) and their number into `*pcFetched`.
+    /// Copies the next connections (each `pUnk` AddRef'ed: the caller releases it).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `rgcd`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     fn Next(
         this: &ComObject<Self>,
         cConnections: ULONG,
         rgcd: ffi::OutArray<'_, CONNECTDATA>,
         pcFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, cConnections: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     fn Clone(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult;
 }
 
@@ -617,7 +761,14 @@ impl IConnectionPoint {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 8;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -626,7 +777,10 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -635,7 +789,10 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -644,7 +801,13 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+    /// The outgoing interface this point calls.
+    ///
+    /// # Parameters
+    /// - `pIID`: receives its IID (IID_IOPCShutdown).
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -653,7 +816,13 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).GetConnectionInterface)(this, pIID) }.get()
     }
 
-    /// The container (the server object) this point belongs to, AddRef'ed.
+    /// The container (the server object) this point belongs to.
+    ///
+    /// # Parameters
+    /// - `ppCPC`: receives the container, AddRef'ed.
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -662,7 +831,15 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).GetConnectionPointContainer)(this, ppCPC) }.get()
     }
 
-    /// Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+    /// Connects a sink.
+    ///
+    /// # Parameters
+    /// - `pUnkSink`: the sink, which must answer the outgoing interface.
+    /// - `pdwCookie`: receives the connection's cookie, or 0 on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
+    /// when the point has all the sinks it takes.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -671,7 +848,13 @@ impl IConnectionPoint {
         unsafe { ((*(*this).lpVtbl).Advise)(this, pUnkSink, pdwCookie) }.get()
     }
 
-    /// Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+    /// Disconnects a sink.
+    ///
+    /// # Parameters
+    /// - `dwCookie`: the cookie Advise returned.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION for an unknown cookie.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -681,6 +864,12 @@ impl IConnectionPoint {
     }
 
     /// An enumerator of the current connections.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPoint pointer, and the arguments valid as the IDL declares them.
@@ -772,18 +961,50 @@ impl Vtable for IConnectionPointVtbl {}
 /// What an object implements to present IConnectionPoint: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IConnectionPointImpl: ComClass {
-    /// The IID of the outgoing interface this point calls (IID_IOPCShutdown).
+    /// The outgoing interface this point calls.
+    ///
+    /// # Parameters
+    /// - `pIID`: receives its IID (IID_IOPCShutdown).
+    ///
+    /// # Returns
+    /// S_OK.
     fn GetConnectionInterface(this: &ComObject<Self>, pIID: ffi::Out<'_, IID>) -> FfiResult;
-    /// The container (the server object) this point belongs to, AddRef'ed.
+    /// The container (the server object) this point belongs to.
+    ///
+    /// # Parameters
+    /// - `ppCPC`: receives the container, AddRef'ed.
+    ///
+    /// # Returns
+    /// S_OK.
     fn GetConnectionPointContainer(
         this: &ComObject<Self>,
         ppCPC: ffi::Out<'_, *mut IConnectionPointContainer>,
     ) -> FfiResult;
-    /// Connects the sink `pUnkSink` (which must answer the outgoing interface) and returns its cookie in `*pdwCookie`.
+    /// Connects a sink.
+    ///
+    /// # Parameters
+    /// - `pUnkSink`: the sink, which must answer the outgoing interface.
+    /// - `pdwCookie`: receives the connection's cookie, or 0 on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
+    /// when the point has all the sinks it takes.
     fn Advise(this: &ComObject<Self>, pUnkSink: ffi::Iface<'_, IUnknown>, pdwCookie: ffi::Out<'_, DWORD>) -> FfiResult;
-    /// Disconnects the sink with this cookie; CONNECT_E_NOCONNECTION for an unknown cookie.
+    /// Disconnects a sink.
+    ///
+    /// # Parameters
+    /// - `dwCookie`: the cookie Advise returned.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION for an unknown cookie.
     fn Unadvise(this: &ComObject<Self>, dwCookie: DWORD) -> FfiResult;
     /// An enumerator of the current connections.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     fn EnumConnections(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult;
 }
 
@@ -877,7 +1098,14 @@ impl IEnumConnectionPoints {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -886,7 +1114,10 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -895,7 +1126,10 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -904,7 +1138,15 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+    /// Copies the next connection points (each AddRef'ed).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `ppCP`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -918,7 +1160,13 @@ impl IEnumConnectionPoints {
         unsafe { ((*(*this).lpVtbl).Next)(this, cConnections, ppCP, pcFetched) }.get()
     }
 
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -929,6 +1177,9 @@ impl IEnumConnectionPoints {
 
     /// Starts the enumeration again from the first element.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -937,6 +1188,12 @@ impl IEnumConnectionPoints {
     }
 
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IEnumConnectionPoints pointer, and the arguments valid as the IDL declares them.
@@ -1025,18 +1282,41 @@ impl Vtable for IEnumConnectionPointsVtbl {}
 /// What an object implements to present IEnumConnectionPoints: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IEnumConnectionPointsImpl: ComClass {
-    /// Copies up to `cConnections` connection points into `ppCP` (each AddRef'ed) and their number into `*pcFetched`.
+    /// Copies the next connection points (each AddRef'ed).
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many to copy at most.
+    /// - `ppCP`: an array of `cConnections` elements that receives them.
+    /// - `pcFetched`: receives how many were copied; may be NULL only when `cConnections` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
     fn Next(
         this: &ComObject<Self>,
         cConnections: ULONG,
         ppCP: ffi::OutArray<'_, *mut IConnectionPoint>,
         pcFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
-    /// Skips `cConnections` elements: S_OK, or S_FALSE when fewer remained.
+    /// Skips elements.
+    ///
+    /// # Parameters
+    /// - `cConnections`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, cConnections: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first element.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
     /// A new enumerator over the same elements at the same position.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     fn Clone(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult;
 }
 
@@ -1114,7 +1394,14 @@ impl IConnectionPointContainer {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 5;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1123,7 +1410,10 @@ impl IConnectionPointContainer {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1132,7 +1422,10 @@ impl IConnectionPointContainer {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1143,6 +1436,12 @@ impl IConnectionPointContainer {
 
     /// An enumerator of the container's connection points.
     ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
+    ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn EnumConnectionPoints(this: *mut Self, ppEnum: *mut *mut IEnumConnectionPoints) -> HRESULT {
@@ -1150,7 +1449,14 @@ impl IConnectionPointContainer {
         unsafe { ((*(*this).lpVtbl).EnumConnectionPoints)(this, ppEnum) }.get()
     }
 
-    /// The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+    /// The connection point for an outgoing interface.
+    ///
+    /// # Parameters
+    /// - `riid`: the outgoing interface (IID_IOPCShutdown).
+    /// - `ppCP`: receives the connection point, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
     ///
     /// # Safety
     /// `this` must be a valid IConnectionPointContainer pointer, and the arguments valid as the IDL declares them.
@@ -1231,8 +1537,21 @@ impl Vtable for IConnectionPointContainerVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IConnectionPointContainerImpl: ComClass {
     /// An enumerator of the container's connection points.
+    ///
+    /// # Parameters
+    /// - `ppEnum`: receives the enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult;
-    /// The connection point for the outgoing interface `riid` (IID_IOPCShutdown), or CONNECT_E_NOCONNECTION.
+    /// The connection point for an outgoing interface.
+    ///
+    /// # Parameters
+    /// - `riid`: the outgoing interface (IID_IOPCShutdown).
+    /// - `ppCP`: receives the connection point, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
     fn FindConnectionPoint(this: &ComObject<Self>, riid: &IID, ppCP: ffi::Out<'_, *mut IConnectionPoint>) -> FfiResult;
 }
 
@@ -1287,7 +1606,14 @@ impl IClassFactory {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 5;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1296,7 +1622,10 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1305,7 +1634,10 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1314,7 +1646,16 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+    /// Creates an instance of the class.
+    ///
+    /// # Parameters
+    /// - `pUnkOuter`: the controlling IUnknown of an object that aggregates the instance, or NULL.
+    /// - `riid`: the interface wanted (IID_IUnknown with a `pUnkOuter`).
+    /// - `ppvObject`: receives the interface, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
+    /// `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1328,7 +1669,13 @@ impl IClassFactory {
         unsafe { ((*(*this).lpVtbl).CreateInstance)(this, pUnkOuter, riid, ppvObject) }.get()
     }
 
-    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
+    /// Keeps the server running without an object, or ends that.
+    ///
+    /// # Parameters
+    /// - `fLock`: TRUE to take a lock, FALSE to give one back.
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IClassFactory pointer, and the arguments valid as the IDL declares them.
@@ -1403,14 +1750,29 @@ impl Vtable for IClassFactoryVtbl {}
 /// What an object implements to present IClassFactory: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IClassFactoryImpl: ComClass {
-    /// Creates an instance of the class, aggregated into `pUnkOuter` when it is not NULL.
+    /// Creates an instance of the class.
+    ///
+    /// # Parameters
+    /// - `pUnkOuter`: the controlling IUnknown of an object that aggregates the instance, or NULL.
+    /// - `riid`: the interface wanted (IID_IUnknown with a `pUnkOuter`).
+    /// - `ppvObject`: receives the interface, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
+    /// `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
     fn CreateInstance(
         this: &ComObject<Self>,
         pUnkOuter: Option<ffi::Iface<'_, IUnknown>>,
         riid: &IID,
         ppvObject: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
-    /// Locks the server in memory (TRUE) or releases such a lock (FALSE).
+    /// Keeps the server running without an object, or ends that.
+    ///
+    /// # Parameters
+    /// - `fLock`: TRUE to take a lock, FALSE to give one back.
+    ///
+    /// # Returns
+    /// S_OK.
     fn LockServer(this: &ComObject<Self>, fLock: BOOL) -> FfiResult;
 }
 
@@ -1464,7 +1826,14 @@ impl IOPCShutdown {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 4;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1473,7 +1842,10 @@ impl IOPCShutdown {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1482,7 +1854,10 @@ impl IOPCShutdown {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1491,9 +1866,14 @@ impl IOPCShutdown {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// The server asks the client to release every reference to the server's objects; `szReason` is an
-    /// optional text saying why (NULL or empty allowed). The client should return S_OK at once and
-    /// release its references afterwards, not from inside the call.
+    /// The server asks the client to release every reference to the server's objects. The client
+    /// should return S_OK at once and release its references afterwards, not from inside the call.
+    ///
+    /// # Parameters
+    /// - `szReason`: an optional text saying why (NULL or empty allowed).
+    ///
+    /// # Returns
+    /// S_OK.
     ///
     /// # Safety
     /// `this` must be a valid IOPCShutdown pointer, and the arguments valid as the IDL declares them.
@@ -1553,9 +1933,14 @@ impl Vtable for IOPCShutdownVtbl {}
 /// What an object implements to present IOPCShutdown: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCShutdownImpl: ComClass {
-    /// The server asks the client to release every reference to the server's objects; `szReason` is an
-    /// optional text saying why (NULL or empty allowed). The client should return S_OK at once and
-    /// release its references afterwards, not from inside the call.
+    /// The server asks the client to release every reference to the server's objects. The client
+    /// should return S_OK at once and release its references afterwards, not from inside the call.
+    ///
+    /// # Parameters
+    /// - `szReason`: an optional text saying why (NULL or empty allowed).
+    ///
+    /// # Returns
+    /// S_OK.
     fn ShutdownRequest(this: &ComObject<Self>, szReason: Option<ffi::WStr<'_>>) -> FfiResult;
 }
 
@@ -1590,7 +1975,14 @@ impl IOPCCommon {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 8;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1599,7 +1991,10 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1608,7 +2003,10 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1618,8 +2016,14 @@ impl IOPCCommon {
     }
 
     /// Sets the locale the server uses for this client's strings (error texts, and whatever else the server
-    /// localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
-    /// QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+    /// localises).
+    ///
+    /// # Parameters
+    /// - `dwLcid`: the locale: one QueryAvailableLocaleIDs lists (opccomn: OpcCommonOptions::locales,
+    ///   and OpcCommonOptions::accept_locale decides).
+    ///
+    /// # Returns
+    /// S_OK, or E_INVALIDARG for a locale the server does not support.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1628,8 +2032,13 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).SetLocaleID)(this, dwLcid) }.get()
     }
 
-    /// Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
-    /// E_INVALIDARG for a NULL `pdwLcid`.
+    /// The session's current locale.
+    ///
+    /// # Parameters
+    /// - `pdwLcid`: receives the locale (LOCALE_SYSTEM_DEFAULT until the client sets one).
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL `pdwLcid`.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1638,8 +2047,15 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).GetLocaleID)(this, pdwLcid) }.get()
     }
 
-    /// Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
-    /// with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+    /// The locales SetLocaleID accepts.
+    ///
+    /// # Parameters
+    /// - `pdwCount`: receives how many; 0 on failure.
+    /// - `pdwLcid`: receives an array of `*pdwCount` locales, which the caller frees with CoTaskMemFree
+    ///   (OpcTaskMemFree off Windows); NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1648,8 +2064,14 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).QueryAvailableLocaleIDs)(this, pdwCount, pdwLcid) }.get()
     }
 
-    /// Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
-    /// CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+    /// The text of an error code in the session's locale.
+    ///
+    /// # Parameters
+    /// - `dwError`: the error code.
+    /// - `ppString`: receives the text, which the caller frees with CoTaskMemFree; NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a code the server has no text for.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1658,8 +2080,14 @@ impl IOPCCommon {
         unsafe { ((*(*this).lpVtbl).GetErrorString)(this, dwError, ppString) }.get()
     }
 
-    /// The client tells the server its name (for the server's diagnostics; opccomn:
-    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+    /// The client tells the server its name, for the server's diagnostics (opccomn:
+    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
+    ///
+    /// # Parameters
+    /// - `szName`: the name.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL.
     ///
     /// # Safety
     /// `this` must be a valid IOPCCommon pointer, and the arguments valid as the IDL declares them.
@@ -1743,24 +2171,54 @@ impl Vtable for IOPCCommonVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCCommonImpl: ComClass {
     /// Sets the locale the server uses for this client's strings (error texts, and whatever else the server
-    /// localises). Returns S_OK, or E_INVALIDARG for a locale the server does not support (see
-    /// QueryAvailableLocaleIDs; opccomn: OpcCommonOptions::locales and OpcCommonOptions::accept_locale).
+    /// localises).
+    ///
+    /// # Parameters
+    /// - `dwLcid`: the locale: one QueryAvailableLocaleIDs lists (opccomn: OpcCommonOptions::locales,
+    ///   and OpcCommonOptions::accept_locale decides).
+    ///
+    /// # Returns
+    /// S_OK, or E_INVALIDARG for a locale the server does not support.
     fn SetLocaleID(this: &ComObject<Self>, dwLcid: LCID) -> FfiResult;
-    /// Returns the session's current locale in `*pdwLcid` (LOCALE_SYSTEM_DEFAULT until the client sets one).
-    /// E_INVALIDARG for a NULL `pdwLcid`.
+    /// The session's current locale.
+    ///
+    /// # Parameters
+    /// - `pdwLcid`: receives the locale (LOCALE_SYSTEM_DEFAULT until the client sets one).
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL `pdwLcid`.
     fn GetLocaleID(this: &ComObject<Self>, pdwLcid: ffi::Out<'_, LCID>) -> FfiResult;
-    /// Returns the locales SetLocaleID accepts: `*pdwCount` entries in `*pdwLcid`, an array the caller frees
-    /// with CoTaskMemFree (OpcTaskMemFree off Windows). On failure `*pdwCount` is 0 and `*pdwLcid` NULL.
+    /// The locales SetLocaleID accepts.
+    ///
+    /// # Parameters
+    /// - `pdwCount`: receives how many; 0 on failure.
+    /// - `pdwLcid`: receives an array of `*pdwCount` locales, which the caller frees with CoTaskMemFree
+    ///   (OpcTaskMemFree off Windows); NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a NULL argument.
     fn QueryAvailableLocaleIDs(
         this: &ComObject<Self>,
         pdwCount: ffi::Out<'_, DWORD>,
         pdwLcid: ffi::Out<'_, *mut LCID>,
     ) -> FfiResult;
-    /// Returns the text of an error code in the session's locale in `*ppString` (the caller frees it with
-    /// CoTaskMemFree). E_INVALIDARG, with `*ppString` NULL, for a code the server has no text for.
+    /// The text of an error code in the session's locale.
+    ///
+    /// # Parameters
+    /// - `dwError`: the error code.
+    /// - `ppString`: receives the text, which the caller frees with CoTaskMemFree; NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for a code the server has no text for.
     fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: ffi::Out<'_, LPWSTR>) -> FfiResult;
-    /// The client tells the server its name (for the server's diagnostics; opccomn:
-    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed). E_INVALIDARG for NULL.
+    /// The client tells the server its name, for the server's diagnostics (opccomn:
+    /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
+    ///
+    /// # Parameters
+    /// - `szName`: the name.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL.
     fn SetClientName(this: &ComObject<Self>, szName: ffi::WStr<'_>) -> FfiResult;
 }
 
@@ -1848,7 +2306,14 @@ impl IOPCServerList {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 6;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1857,7 +2322,10 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1866,7 +2334,10 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1875,9 +2346,18 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
-    /// require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
-    /// the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+    /// Enumerates the classes that implement any of the given categories and require no category outside
+    /// the others, each once.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require; one requiring any other is left out.
+    /// - `ppenumClsid`: receives an IEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1903,8 +2383,16 @@ impl IOPCServerList {
         .get()
     }
 
-    /// Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
-    /// REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+    /// A class's ProgID and user type name.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID, which the caller frees with CoTaskMemFree; NULL on failure.
+    /// - `ppszUserType`: receives its user type name, which the caller frees with CoTaskMemFree; NULL on
+    ///   failure.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -1918,8 +2406,15 @@ impl IOPCServerList {
         unsafe { ((*(*this).lpVtbl).GetClassDetails)(this, clsid, ppszProgID, ppszUserType) }.get()
     }
 
-    /// Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
-    /// is not registered, CO_E_CLASSSTRING when it cannot be one.
+    /// The CLSID registered for a ProgID on the browsed machine.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
+    /// one; E_INVALIDARG for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList pointer, and the arguments valid as the IDL declares them.
@@ -2015,9 +2510,18 @@ impl Vtable for IOPCServerListVtbl {}
 /// What an object implements to present IOPCServerList: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCServerListImpl: ComClass {
-    /// Enumerates the classes that implement any of the `cImplemented` categories in `rgcatidImpl` and
-    /// require no category outside the `cRequired` in `rgcatidReq` (a count of 0: no condition), each once;
-    /// the result is an IEnumGUID in `*ppenumClsid`. E_INVALIDARG for NULL arguments or counts over 4096.
+    /// Enumerates the classes that implement any of the given categories and require no category outside
+    /// the others, each once.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require; one requiring any other is left out.
+    /// - `ppenumClsid`: receives an IEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
     fn EnumClassesOfCategories(
         this: &ComObject<Self>,
         cImplemented: ULONG,
@@ -2026,16 +2530,31 @@ pub trait IOPCServerListImpl: ComClass {
         rgcatidReq: ffi::InArray<'_, CATID>,
         ppenumClsid: ffi::Out<'_, *mut IEnumGUID>,
     ) -> FfiResult;
-    /// Returns a class's ProgID and user type name (both freed by the caller with CoTaskMemFree).
-    /// REGDB_E_CLASSNOTREG for an unknown class; every out-parameter is NULL on failure.
+    /// A class's ProgID and user type name.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID, which the caller frees with CoTaskMemFree; NULL on failure.
+    /// - `ppszUserType`: receives its user type name, which the caller frees with CoTaskMemFree; NULL on
+    ///   failure.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
     fn GetClassDetails(
         this: &ComObject<Self>,
         clsid: &CLSID,
         ppszProgID: ffi::Out<'_, LPOLESTR>,
         ppszUserType: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult;
-    /// Returns the CLSID registered for a ProgID on the browsed machine. REGDB_E_CLASSNOTREG when the ProgID
-    /// is not registered, CO_E_CLASSSTRING when it cannot be one.
+    /// The CLSID registered for a ProgID on the browsed machine.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
+    /// S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
+    /// one; E_INVALIDARG for a NULL argument.
     fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;
 }
 
@@ -2131,7 +2650,14 @@ impl IOPCEnumGUID {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 7;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2140,7 +2666,10 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2149,7 +2678,10 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2158,8 +2690,15 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
-    /// when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` GUIDs that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2168,7 +2707,13 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).Next)(this, celt, rgelt, pceltFetched) }.get()
     }
 
-    /// Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+    /// Skips GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2179,6 +2724,9 @@ impl IOPCEnumGUID {
 
     /// Starts the enumeration again from the first GUID.
     ///
+    /// # Returns
+    /// S_OK.
+    ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
     pub unsafe fn Reset(this: *mut Self) -> HRESULT {
@@ -2186,7 +2734,13 @@ impl IOPCEnumGUID {
         unsafe { ((*(*this).lpVtbl).Reset)(this) }.get()
     }
 
-    /// A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+    /// A new enumerator over the same GUIDs at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     ///
     /// # Safety
     /// `this` must be a valid IOPCEnumGUID pointer, and the arguments valid as the IDL declares them.
@@ -2271,19 +2825,41 @@ impl Vtable for IOPCEnumGUIDVtbl {}
 /// What an object implements to present IOPCEnumGUID: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCEnumGUIDImpl: ComClass {
-    /// Copies up to `celt` GUIDs into `rgelt` and their number into `*pceltFetched` (which may be NULL only
-    /// when `celt` is 1). S_OK when `celt` were copied, S_FALSE when fewer remained.
+    /// Copies the next GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many to copy at most.
+    /// - `rgelt`: an array of `celt` GUIDs that receives them.
+    /// - `pceltFetched`: receives how many were copied; may be NULL only when `celt` is 1.
+    ///
+    /// # Returns
+    /// S_OK when `celt` were copied, S_FALSE when fewer remained.
     fn Next(
         this: &ComObject<Self>,
         celt: ULONG,
         rgelt: ffi::OutArray<'_, GUID>,
         pceltFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
-    /// Skips `celt` GUIDs: S_OK, or S_FALSE when fewer remained.
+    /// Skips GUIDs.
+    ///
+    /// # Parameters
+    /// - `celt`: how many.
+    ///
+    /// # Returns
+    /// S_OK, or S_FALSE when fewer remained.
     fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;
     /// Starts the enumeration again from the first GUID.
+    ///
+    /// # Returns
+    /// S_OK.
     fn Reset(this: &ComObject<Self>) -> FfiResult;
-    /// A new enumerator over the same GUIDs at the same position, in `*ppenum`.
+    /// A new enumerator over the same GUIDs at the same position.
+    ///
+    /// # Parameters
+    /// - `ppenum`: receives the new enumerator, or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_OUTOFMEMORY.
     fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IOPCEnumGUID>) -> FfiResult;
 }
 
@@ -2357,7 +2933,14 @@ impl IOPCServerList2 {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 6;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2366,7 +2949,10 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2375,7 +2961,10 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2384,7 +2973,17 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).Release)(this) }.get()
     }
 
-    /// As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+    /// As IOPCServerList::EnumClassesOfCategories, with an IOPCEnumGUID as the result.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require.
+    /// - `ppenumClsid`: receives an IOPCEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::EnumClassesOfCategories.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2410,8 +3009,18 @@ impl IOPCServerList2 {
         .get()
     }
 
-    /// As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
-    /// registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+    /// As IOPCServerList::GetClassDetails, with the version-independent ProgID.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszUserType`: receives its user type name (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszVerIndProgID`: receives its version-independent ProgID, the registry's
+    ///   `VersionIndependentProgID` (freed with CoTaskMemFree; opccomn returns an empty string for a
+    ///   class that has none); NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::GetClassDetails.
     ///
     /// # Safety
     /// `this` must be a valid IOPCServerList2 pointer, and the arguments valid as the IDL declares them.
@@ -2426,6 +3035,13 @@ impl IOPCServerList2 {
         unsafe { ((*(*this).lpVtbl).GetClassDetails)(this, clsid, ppszProgID, ppszUserType, ppszVerIndProgID) }.get()
     }
 
+    /// As IOPCServerList::CLSIDFromProgID.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
     /// As IOPCServerList::CLSIDFromProgID.
     ///
     /// # Safety
@@ -2524,7 +3140,17 @@ impl Vtable for IOPCServerList2Vtbl {}
 /// What an object implements to present IOPCServerList2: one method per IDL method (after
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IOPCServerList2Impl: ComClass {
-    /// As IOPCServerList::EnumClassesOfCategories, returning an IOPCEnumGUID in `*ppenumClsid`.
+    /// As IOPCServerList::EnumClassesOfCategories, with an IOPCEnumGUID as the result.
+    ///
+    /// # Parameters
+    /// - `cImplemented`: how many categories `rgcatidImpl` holds (0: no condition).
+    /// - `rgcatidImpl`: the categories of which a class must implement one.
+    /// - `cRequired`: how many categories `rgcatidReq` holds (0: no condition).
+    /// - `rgcatidReq`: the categories a class may require.
+    /// - `ppenumClsid`: receives an IOPCEnumGUID over the classes' CLSIDs, or NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::EnumClassesOfCategories.
     fn EnumClassesOfCategories(
         this: &ComObject<Self>,
         cImplemented: ULONG,
@@ -2533,8 +3159,18 @@ pub trait IOPCServerList2Impl: ComClass {
         rgcatidReq: ffi::InArray<'_, CATID>,
         ppenumClsid: ffi::Out<'_, *mut IOPCEnumGUID>,
     ) -> FfiResult;
-    /// As IOPCServerList::GetClassDetails, and the version-independent ProgID in `*ppszVerIndProgID` (the
-    /// registry's `VersionIndependentProgID`; opccomn returns an empty string for a class that has none).
+    /// As IOPCServerList::GetClassDetails, with the version-independent ProgID.
+    ///
+    /// # Parameters
+    /// - `clsid`: the class.
+    /// - `ppszProgID`: receives its ProgID (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszUserType`: receives its user type name (freed with CoTaskMemFree); NULL on failure.
+    /// - `ppszVerIndProgID`: receives its version-independent ProgID, the registry's
+    ///   `VersionIndependentProgID` (freed with CoTaskMemFree; opccomn returns an empty string for a
+    ///   class that has none); NULL on failure.
+    ///
+    /// # Returns
+    /// As IOPCServerList::GetClassDetails.
     fn GetClassDetails(
         this: &ComObject<Self>,
         clsid: &CLSID,
@@ -2542,6 +3178,13 @@ pub trait IOPCServerList2Impl: ComClass {
         ppszUserType: ffi::Out<'_, LPOLESTR>,
         ppszVerIndProgID: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult;
+    /// As IOPCServerList::CLSIDFromProgID.
+    ///
+    /// # Parameters
+    /// - `szProgId`: the ProgID.
+    /// - `clsid`: receives the CLSID.
+    ///
+    /// # Returns
     /// As IOPCServerList::CLSIDFromProgID.
     fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;
 }
@@ -2640,7 +3283,14 @@ impl IMarshal {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 9;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IMarshal pointer, and the arguments valid as the IDL declares them.
@@ -2649,7 +3299,10 @@ impl IMarshal {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IMarshal pointer, and the arguments valid as the IDL declares them.
@@ -2658,7 +3311,10 @@ impl IMarshal {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IMarshal pointer, and the arguments valid as the IDL declares them.
@@ -3062,7 +3718,14 @@ impl IGlobalInterfaceTable {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 6;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid IGlobalInterfaceTable pointer, and the arguments valid as the IDL declares them.
@@ -3071,7 +3734,10 @@ impl IGlobalInterfaceTable {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IGlobalInterfaceTable pointer, and the arguments valid as the IDL declares them.
@@ -3080,7 +3746,10 @@ impl IGlobalInterfaceTable {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid IGlobalInterfaceTable pointer, and the arguments valid as the IDL declares them.
@@ -3293,7 +3962,14 @@ impl ICatRegister {
     /// The number of methods, IUnknown's three included.
     pub const METHODS: u32 = 9;
 
-    /// Returns the object's interface `riid` in `*ppvObject` (AddRef'ed), or E_NOINTERFACE with NULL.
+    /// Asks the object for one of its interfaces.
+    ///
+    /// # Parameters
+    /// - `riid`: the interface wanted.
+    /// - `ppvObject`: receives the interface (AddRef'ed), or NULL on failure.
+    ///
+    /// # Returns
+    /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
     ///
     /// # Safety
     /// `this` must be a valid ICatRegister pointer, and the arguments valid as the IDL declares them.
@@ -3302,7 +3978,10 @@ impl ICatRegister {
         unsafe { ((*(*this).lpVtbl).QueryInterface)(this, riid, ppvObject) }.get()
     }
 
-    /// Adds a reference; returns the new count (for diagnostics only).
+    /// Adds a reference.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid ICatRegister pointer, and the arguments valid as the IDL declares them.
@@ -3311,7 +3990,10 @@ impl ICatRegister {
         unsafe { ((*(*this).lpVtbl).AddRef)(this) }.get()
     }
 
-    /// Releases a reference; the object goes with the last. Returns the new count (for diagnostics only).
+    /// Releases a reference; the object goes with the last.
+    ///
+    /// # Returns
+    /// The new count, for diagnostics only.
     ///
     /// # Safety
     /// `this` must be a valid ICatRegister pointer, and the arguments valid as the IDL declares them.

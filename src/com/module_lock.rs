@@ -14,8 +14,11 @@ use super::ffi::{self, Hr};
 use super::options::{read_sized, SizedStruct};
 use super::S_OK;
 
-/// One function of a module lock: called with the lock's `context`. May be called from any thread,
-/// concurrently; must not call into the library.
+/// One function of a module lock. May be called from any thread, concurrently; must not call into the
+/// library.
+///
+/// # Parameters
+/// - `context`: the lock's `context` (OpcModuleLock::context).
 pub type OpcModuleLockFn = Option<unsafe extern "C" fn(context: *mut c_void)>;
 
 /// The functions an EXE server's module lock consists of. Zero-initialise it, set `struct_size` to
@@ -93,12 +96,16 @@ pub(crate) fn set_module_lock(next: Option<ModuleLock>) {
 /// when it is made and `unlock` once it has been freed, so an EXE server that counts them exits only
 /// when the last of the objects it handed out, directly or not, is released (COM's rule for local
 /// servers). Objects made before the call are not counted; each object calls the `unlock` of the
-/// module lock that counted it, even when another was set since. NULL stops the counting for objects
-/// made from then on. Set it once, before registering the class objects; an in-process (DLL) server
-/// has no need of it.
+/// module lock that counted it, even when another was set since. Set it once, before registering the
+/// class objects; an in-process (DLL) server has no need of it. The library's EXE host
+/// (`OpcExeServerRun`) sets its own.
 ///
-/// Returns S_OK; E_INVALIDARG when `lock` is not NULL and `struct_size` is not the size of some
-/// version of `OpcModuleLock`, or `lock` or `unlock` is NULL.
+/// # Parameters
+/// - `lock`: the module lock, copied; NULL stops the counting for objects made from then on.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG when `lock` is not NULL and its `struct_size` is not the size of some version
+/// of `OpcModuleLock`, or its `lock` or `unlock` is NULL.
 ///
 /// # Safety
 /// `lock` must be NULL or point at `struct_size` readable bytes laid out as `OpcModuleLock`; its

@@ -24,20 +24,35 @@ use crate::locale::{LOCALE_SYSTEM_DEFAULT, SPECIAL_LOCALES};
 
 pub use crate::com::interfaces::{IOPCCommon, IOPCCommonVtbl};
 
-/// Called after a client set its name; `name` is valid only during the call. May be called from any
-/// thread; never called while the library holds a lock.
+/// Called after a client set its name (IOPCCommon::SetClientName). May be called from any thread;
+/// never called while the library holds a lock.
+///
+/// # Parameters
+/// - `context`: OpcCommonOptions::client_name_context.
+/// - `name`: the client's new name, valid only during the call.
 pub type OpcClientNameFn = Option<unsafe extern "C" fn(context: *mut c_void, name: LPCWSTR)>;
 
-/// Decides whether a session may use a locale: called by SetLocaleID with the locale and whether it is
-/// one the session declared (`listed` nonzero: in `locales`, or one of the four special locales).
-/// Return nonzero to accept it, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
-/// locale). May be called from any thread, concurrently; never while the library holds a lock.
+/// Decides whether a session may use a locale: called by SetLocaleID. May be called from any thread,
+/// concurrently; never while the library holds a lock.
+///
+/// # Parameters
+/// - `context`: OpcCommonOptions::accept_locale_context.
+/// - `locale`: the locale the client asks for, as it gave it.
+/// - `listed`: nonzero when the session declared it (in OpcCommonOptions::locales, or one of the four
+///   special locales).
+///
+/// # Returns
+/// Nonzero to accept the locale, 0 to refuse it (the client then gets E_INVALIDARG and keeps its
+/// locale).
 pub type OpcAcceptLocaleFn = Option<unsafe extern "C" fn(context: *mut c_void, locale: LCID, listed: i32) -> i32>;
 
-/// Called after a client changed the session's locale with SetLocaleID, with the new locale (as the
-/// client gave it, e.g. LOCALE_SYSTEM_DEFAULT). May be called from any thread; never called while the
-/// library holds a lock. When two clients' calls race, the calls may arrive in either order: read
-/// the current value with `OpcCommonGetLocale` if the order matters.
+/// Called after a client changed the session's locale with SetLocaleID. May be called from any
+/// thread; never called while the library holds a lock. When two clients' calls race, the calls may
+/// arrive in either order: read the current value with `OpcCommonGetLocale` if the order matters.
+///
+/// # Parameters
+/// - `context`: OpcCommonOptions::locale_changed_context.
+/// - `locale`: the new locale, as the client gave it (e.g. LOCALE_SYSTEM_DEFAULT).
 pub type OpcLocaleChangedFn = Option<unsafe extern "C" fn(context: *mut c_void, locale: LCID)>;
 
 /// How a server configures an IOPCCommon object. Zero-initialise it, set `struct_size` to
@@ -329,16 +344,21 @@ impl IOPCCommonImpl for OpcCommon {
 /// Creates an IOPCCommon object: one client session with its own locale (LOCALE_SYSTEM_DEFAULT at
 /// first) and client name.
 ///
-/// `options` may be NULL for the defaults (a Data Access server supporting the catalog's languages).
-/// With `outer` NULL, `riid` may be IID_IOPCCommon or IID_IUnknown. To aggregate the object into a
-/// server object, pass the server's controlling IUnknown as `outer` and IID_IUnknown as `riid`: the
-/// result is the inner, non-delegating IUnknown, which the server keeps, releases when it is
-/// destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
+/// To aggregate the object into a server object, pass the server's controlling IUnknown as `outer`
+/// and IID_IUnknown as `riid`: the result is the inner, non-delegating IUnknown, which the server
+/// keeps, releases when it is destroyed, and forwards QueryInterface(IID_IOPCCommon) to.
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a
-/// `riid` other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown
-/// `server_kind`, more than 4096 locales, or a count without an array); E_NOINTERFACE. `*ppv` is NULL
-/// on failure.
+/// # Parameters
+/// - `options`: the session's settings (OpcCommonOptions), or NULL for the defaults (a Data Access
+///   server supporting the catalog's languages).
+/// - `outer`: the controlling IUnknown of the server object that aggregates the session, or NULL.
+/// - `riid`: the interface wanted: IID_IOPCCommon or IID_IUnknown, only IID_IUnknown with an `outer`.
+/// - `ppv` (out): receives the interface, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a `riid`
+/// other than IID_IUnknown; E_INVALIDARG for bad options (wrong `struct_size`, unknown `server_kind`,
+/// more than 4096 locales, or a count without an array); E_NOINTERFACE.
 ///
 /// # Safety
 /// `options` must be NULL or valid as documented on OpcCommonOptions; `outer` NULL or a valid
@@ -368,18 +388,22 @@ pub unsafe extern "C" fn OpcCommonCreate(
 
 /// Gives a server the client name of one of its IOPCCommon sessions.
 ///
-/// `common` is any interface of the session: the IOPCCommon pointer, the inner IUnknown from
-/// `OpcCommonCreate`, or the server object that aggregates it. `*ppName` receives a new string (an
-/// empty one while the client has set no name; free it with `OpcTaskMemFree`), or NULL on failure.
-/// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+/// # Parameters
+/// - `common`: any interface of the session: the IOPCCommon pointer, the inner IUnknown from
+///   `OpcCommonCreate`, or the server object that aggregates it.
+/// - `name` (out): receives a new string, the name the client set (empty while it has set none;
+///   free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
 ///
 /// # Safety
-/// `common` must be NULL or a valid COM interface pointer; `ppName` NULL or writable.
+/// `common` must be NULL or a valid COM interface pointer; `name` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *mut LPWSTR) -> Hr {
-    ffi::boundary!(Opc, [ppName], {
+pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, name: *mut LPWSTR) -> Hr {
+    ffi::boundary!(Opc, [name], {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
-        let out = unsafe { ffi::out(ppName) }?;
+        let out = unsafe { ffi::out(name) }?;
         let common = ffi::in_ptr(common)?;
         // SAFETY: `common` is a valid COM pointer per the contract.
         let iface = unsafe { crate::com::unknown::query::<IOPCCommon>(common.as_ptr(), &IID_IOPCCommon) }
@@ -397,23 +421,28 @@ pub unsafe extern "C" fn OpcCommonGetClientName(common: *mut IUnknown, ppName: *
 
 /// Gives a server the current locale of one of its IOPCCommon sessions (what GetLocaleID returns).
 ///
-/// `common` is any interface of the session, as for `OpcCommonGetClientName`. Passing the IOPCCommon
-/// pointer itself is the cheap form: the library recognises its own object and reads the locale
-/// without a QueryInterface. For any other interface the library asks for IOPCCommon first (one
-/// QueryInterface and Release). A server that aggregates the session keeps the inner IUnknown from
-/// `OpcCommonCreate` and passes that, not an IOPCCommon pointer: every interface of an aggregated
-/// object but its inner IUnknown counts its references on the outer object, so a kept IOPCCommon
-/// pointer would keep the server object alive for ever. `locale_changed` tells a server of every change
-/// without a call. `*lcid` receives the locale, or 0 on failure.
-/// Returns E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
+/// Passing the IOPCCommon pointer itself is the cheap form: the library recognises its own object and
+/// reads the locale without a QueryInterface. For any other interface the library asks for IOPCCommon
+/// first (one QueryInterface and Release). A server that aggregates the session keeps the inner
+/// IUnknown from `OpcCommonCreate` and passes that, not an IOPCCommon pointer: every interface of an
+/// aggregated object but its inner IUnknown counts its references on the outer object, so a kept
+/// IOPCCommon pointer would keep the server object alive for ever. OpcCommonOptions::locale_changed
+/// tells a server of every change without a call.
+///
+/// # Parameters
+/// - `common`: any interface of the session, as for `OpcCommonGetClientName`.
+/// - `locale` (out): receives the locale, or 0 on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for NULL arguments or an object that is not an IOPCCommon of this library.
 ///
 /// # Safety
-/// `common` must be NULL or a valid COM interface pointer; `lcid` NULL or writable.
+/// `common` must be NULL or a valid COM interface pointer; `locale` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcCommonGetLocale(common: *mut IUnknown, lcid: *mut LCID) -> Hr {
-    ffi::boundary!(Opc, [lcid], {
+pub unsafe extern "C" fn OpcCommonGetLocale(common: *mut IUnknown, locale: *mut LCID) -> Hr {
+    ffi::boundary!(Opc, [locale], {
         // SAFETY: the caller vouches a non-NULL out-parameter is writable.
-        let out = unsafe { ffi::out(lcid) }?;
+        let out = unsafe { ffi::out(locale) }?;
         let common = ffi::in_ptr(common)?;
         // The cheap form: the session's own IOPCCommon pointer.
         let own = common.as_ptr().cast::<IOPCCommon>();

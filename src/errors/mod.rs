@@ -34,26 +34,40 @@ pub use catalog::OpcServerKind;
 use catalog::Spec;
 pub(crate) use catalog::CATALOG_LOCALES;
 
-/// A server's own texts for its vendor-specific codes, asked before the catalog.
+/// A server's own texts for its vendor-specific codes, asked before the catalog. May be called from
+/// any thread, concurrently.
 ///
-/// Called with the code and the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete
-/// locale, e.g. 0x0407). To answer, store a NUL-terminated string in `*text` and return S_OK; the
-/// library copies it into task memory before the callback is called again, so a static string or one
-/// the server keeps is fine. Any other return (S_FALSE to decline) lets the library look the code up
-/// itself. May be called from any thread, concurrently.
+/// # Parameters
+/// - `context`: OpcCommonOptions::vendor_error_context.
+/// - `code`: the error code the client asks about.
+/// - `locale`: the resolved locale (never LOCALE_SYSTEM_DEFAULT or the like: the concrete locale, e.g.
+///   0x0407).
+/// - `text` (out): where to store the answer, a NUL-terminated string; the library copies it into task
+///   memory before the callback is called again, so a static string or one the server keeps is fine.
+///
+/// # Returns
+/// S_OK with `*text` set to answer; any other code (S_FALSE to decline) lets the library look the
+/// code up itself.
 pub type OpcVendorErrorStringFn =
     Option<unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPCWSTR) -> HRESULT>;
 
 /// A server's own texts for its vendor-specific codes, handed over as task memory: the form for a
 /// server that formats its texts into a new buffer (no thread-local storage, no lifetime to keep).
+/// Called as `OpcVendorErrorStringFn`; may be called from any thread, concurrently.
 ///
-/// Called as `OpcVendorErrorStringFn`, with `*text` NULL on entry. To answer, store a NUL-terminated
-/// string allocated with `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows) in `*text` and return S_OK: the
-/// library takes ownership and hands that very string to the client. Any other return (S_FALSE to
-/// decline) lets the library look the code up itself. A string stored in `*text` is the library's
-/// whatever the return, and it frees it when it does not use it (also when it is longer than the
-/// library's string bound, 2^19 code units, which is then treated as declined). May be called from any
-/// thread, concurrently.
+/// # Parameters
+/// - `context`: OpcCommonOptions::vendor_error_context.
+/// - `code`: the error code the client asks about.
+/// - `locale`: the resolved locale (the concrete locale, e.g. 0x0407).
+/// - `text` (out): NULL on entry; where to store the answer, a NUL-terminated string allocated with
+///   `OpcTaskMemAlloc` (CoTaskMemAlloc on Windows). A string stored here is the library's whatever the
+///   return: it hands that very string to the client, or frees it when it does not use it (also when
+///   it is longer than the library's string bound, 2^19 code units, which is then treated as
+///   declined).
+///
+/// # Returns
+/// S_OK with `*text` set to answer; any other code (S_FALSE to decline) lets the library look the
+/// code up itself.
 pub type OpcVendorErrorTextFn =
     Option<unsafe extern "C" fn(context: *mut c_void, code: HRESULT, locale: LCID, text: *mut LPWSTR) -> HRESULT>;
 
@@ -168,85 +182,107 @@ fn export_text(code: HRESULT, locale: LCID, kind: u32) -> FfiResult<LPWSTR> {
     Ok(error_string(code, locale, kind, None)?)
 }
 
-/// Returns the text for an OPC, COM or system error code in the given locale, for servers that
-/// implement the locale-taking `GetErrorString` of their own interfaces (IOPCServer and others).
-/// Texts are those of a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
+/// The text of an OPC, COM or system error code in a locale, for servers that implement the
+/// locale-taking `GetErrorString` of their own interfaces (IOPCServer and others). Texts are those of
+/// a Data Access server where codes collide; `OpcGetErrorStringEx` chooses.
 ///
-/// `locale` may be a concrete LCID or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
-/// LOCALE_INVARIANT. `*ppString` receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree
-/// on Windows), or NULL on failure. Returns E_INVALIDARG for a NULL `ppString` or a code without a text.
+/// # Parameters
+/// - `code`: the error code.
+/// - `locale`: a concrete LCID, or LOCALE_SYSTEM_DEFAULT, LOCALE_USER_DEFAULT, LOCALE_NEUTRAL or
+///   LOCALE_INVARIANT.
+/// - `text` (out): receives a new string (free it with `OpcTaskMemFree`, or CoTaskMemFree on
+///   Windows), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `text` or a code without a text.
 ///
 /// # Safety
-/// `ppString` must be NULL or writable.
+/// `text` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, ppString: *mut LPWSTR) -> Hr {
-    ffi::boundary!(Opc, [ppString], {
-        // SAFETY: the caller vouches a non-NULL `ppString` is writable.
-        let out = unsafe { ffi::out(ppString) }?;
+pub unsafe extern "C" fn OpcGetErrorString(code: HRESULT, locale: LCID, text: *mut LPWSTR) -> Hr {
+    ffi::boundary!(Opc, [text], {
+        // SAFETY: the caller vouches a non-NULL `text` is writable.
+        let out = unsafe { ffi::out(text) }?;
         out.write(export_text(code, locale, OpcServerKind::DataAccess as u32)?);
         Ok(S_OK)
     })
 }
 
-/// `OpcGetErrorString` for a given kind of server (an `OpcServerKind` value): an Alarms & Events
-/// server passes OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized
-/// as an area name." rather than the Data Access text.
+/// `OpcGetErrorString` for a given kind of server: an Alarms & Events server passes
+/// OPC_SERVER_KIND_ALARMS_EVENTS so that C0040203 reads "The string was not recognized as an area
+/// name." rather than the Data Access text.
 ///
-/// Returns E_INVALIDARG, with `*ppString` NULL, for an unknown `kind`, a NULL `ppString` or a code
-/// without a text.
+/// # Parameters
+/// - `code`: the error code.
+/// - `locale`: as for `OpcGetErrorString`.
+/// - `kind`: the kind of server (an `OpcServerKind` value).
+/// - `text` (out): receives a new string (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for an unknown `kind`, a NULL `text` or a code without a text.
 ///
 /// # Safety
-/// `ppString` must be NULL or writable.
+/// `text` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: u32, ppString: *mut LPWSTR) -> Hr {
-    ffi::boundary!(Opc, [ppString], {
-        // SAFETY: the caller vouches a non-NULL `ppString` is writable.
-        let out = unsafe { ffi::out(ppString) }?;
+pub unsafe extern "C" fn OpcGetErrorStringEx(code: HRESULT, locale: LCID, kind: u32, text: *mut LPWSTR) -> Hr {
+    ffi::boundary!(Opc, [text], {
+        // SAFETY: the caller vouches a non-NULL `text` is writable.
+        let out = unsafe { ffi::out(text) }?;
         out.write(export_text(code, locale, kind)?);
         Ok(S_OK)
     })
 }
 
-/// The error codes the specification of a kind of server publishes (an `OpcServerKind` value): the
-/// codes whose text that kind of server answers with its own specification's text, in ascending
-/// order (as unsigned numbers: success codes first). For a client or a test tool that checks a server's GetErrorString against the published
-/// list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind, ...)`, its
-/// name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data Access 15.
+/// The error codes the specification of a kind of server publishes: the codes whose text that kind
+/// of server answers with its own specification's text, in ascending order (as unsigned numbers:
+/// success codes first). For a client or a test tool that checks a server's GetErrorString against
+/// the published list: each code's standard English text is `OpcGetErrorStringEx(code, 0x0409, kind,
+/// ...)`, its name `OpcErrorSymbol`. Data Access has 28 codes, Alarms & Events 8, Historical Data
+/// Access 15.
 ///
-/// `*ppCodes` receives a new array of `*pdwCount` codes (free it with `OpcTaskMemFree`).
-/// Returns S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument (`*pdwCount` 0 and `*ppCodes`
-/// NULL on failure).
+/// # Parameters
+/// - `kind`: the kind of server (an `OpcServerKind` value).
+/// - `count` (out): receives the number of codes, or 0 on failure.
+/// - `codes` (out): receives a new array of `*count` codes (free it with `OpcTaskMemFree`), or NULL
+///   on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for an unknown `kind` or a NULL argument.
 ///
 /// # Safety
-/// `pdwCount` and `ppCodes` must be NULL or writable.
+/// `count` and `codes` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcErrorCodesOfKind(kind: u32, pdwCount: *mut DWORD, ppCodes: *mut *mut HRESULT) -> Hr {
-    ffi::boundary!(Opc, [pdwCount, ppCodes], {
+pub unsafe extern "C" fn OpcErrorCodesOfKind(kind: u32, count: *mut DWORD, codes: *mut *mut HRESULT) -> Hr {
+    ffi::boundary!(Opc, [count, codes], {
         // SAFETY: the caller vouches non-NULL out-parameters are writable.
-        let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(ppCodes)?) };
+        let (count, array) = unsafe { (ffi::out(count)?, ffi::out(codes)?) };
         let kind = OpcServerKind::from_raw(kind).ok_or(E_INVALIDARG)?;
-        let codes: Vec<HRESULT> = catalog::codes_of(kind.spec()).map(|c| c as HRESULT).collect();
-        array.write(alloc_array(&codes)?);
-        count.write(codes.len() as DWORD);
+        let published: Vec<HRESULT> = catalog::codes_of(kind.spec()).map(|c| c as HRESULT).collect();
+        array.write(alloc_array(&published)?);
+        count.write(published.len() as DWORD);
         Ok(S_OK)
     })
 }
 
 /// The name of an error code as the header of its specification spells it (`OPC_E_INVALIDHANDLE`,
-/// `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of `kind` (C0040203 is
-/// `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events), into
-/// `*ppSymbol`, freed with `OpcTaskMemFree`.
+/// `CONNECT_E_NOCONNECTION`, `E_INVALIDARG`), for a server of a kind: C0040203 is
+/// `OPC_E_INVALID_PID` to Data Access and `OPC_E_INVALIDBRANCHNAME` to Alarms & Events.
 ///
-/// Returns S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL
-/// `ppSymbol` (`*ppSymbol` NULL on failure).
+/// # Parameters
+/// - `code`: the error code.
+/// - `kind`: the kind of server (an `OpcServerKind` value).
+/// - `symbol` (out): receives a new string (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for an unknown `kind`, a code the catalog does not have or a NULL `symbol`.
 ///
 /// # Safety
-/// `ppSymbol` must be NULL or writable.
+/// `symbol` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcErrorSymbol(code: HRESULT, kind: u32, ppSymbol: *mut LPWSTR) -> Hr {
-    ffi::boundary!(Opc, [ppSymbol], {
-        // SAFETY: the caller vouches a non-NULL `ppSymbol` is writable.
-        let out = unsafe { ffi::out(ppSymbol) }?;
+pub unsafe extern "C" fn OpcErrorSymbol(code: HRESULT, kind: u32, symbol: *mut LPWSTR) -> Hr {
+    ffi::boundary!(Opc, [symbol], {
+        // SAFETY: the caller vouches a non-NULL `symbol` is writable.
+        let out = unsafe { ffi::out(symbol) }?;
         let kind = OpcServerKind::from_raw(kind).ok_or(E_INVALIDARG)?;
         let found = catalog::lookup(code as u32, kind.spec()).ok_or(E_INVALIDARG)?;
         out.write(alloc_wstr_from_str(found.symbol())?);

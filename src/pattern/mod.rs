@@ -42,7 +42,7 @@ fn to_bool(b: bool) -> BOOL {
     }
 }
 
-/// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise (OPC Common, Appendix B).
+/// Whether a string matches a filter pattern (OPC Common, Appendix B: MatchPattern).
 ///
 /// The pattern syntax is that of Visual Basic's `Like` operator:
 /// `?` any one character; `*` zero or more characters; `#` one digit `0`-`9`;
@@ -55,12 +55,21 @@ fn to_bool(b: bool) -> BOOL {
 /// one character too). With `bCaseSensitive` FALSE, characters compare by Unicode simple case folding,
 /// in literals and in ranges alike (`[a-z]` matches `Q`, `é` matches `É`).
 ///
-/// Returns FALSE if either argument is NULL or if the pattern is malformed (an unclosed `[` or a
-/// reversed range such as `[Z-A]`; `OpcPatternCompileW` reports these as OPC_E_INVALIDFILTER). Never
-/// reads past either terminating NUL (strings have no length limit). Time is at most proportional to
-/// len(string) x len(pattern), and linear for typical filters. Patterns of up to 128 code units are
-/// read in place and allocate no memory; longer ones with a `*` are compiled first, as
-/// `OpcPatternCompileW` does. Thread-safe.
+/// Never reads past either terminating NUL (strings have no length limit). Time is at most
+/// proportional to len(string) x len(pattern), and linear for typical filters. Patterns of up to 128
+/// code units are read in place and allocate no memory; longer ones with a `*` are compiled first, as
+/// `OpcPatternCompileW` does. Thread-safe. The parameters have the specification's names.
+///
+/// # Parameters
+/// - `string`: the string to test, NUL-terminated UTF-16.
+/// - `pattern`: the filter pattern, NUL-terminated UTF-16.
+/// - `bCaseSensitive`: TRUE to compare characters as they are; FALSE to compare them by Unicode simple
+///   case folding.
+///
+/// # Returns
+/// TRUE (1) if `string` matches `pattern`; FALSE (0) if not, if either argument is NULL, or if the
+/// pattern is malformed (an unclosed `[` or a reversed range such as `[Z-A]`; `OpcPatternCompileW`
+/// reports these as OPC_E_INVALIDFILTER).
 ///
 /// # Safety
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated UTF-16 string.
@@ -98,13 +107,21 @@ unsafe fn match_long_pattern(string: LPCWSTR, pattern: LPCWSTR, case_sensitive: 
     }
 }
 
-/// Returns TRUE (1) if `string` matches `pattern`, FALSE (0) otherwise: `MatchPatternW` for narrow
-/// strings, with the same syntax and rules.
+/// `MatchPatternW` for narrow strings, with the same syntax and rules.
 ///
 /// Narrow strings are UTF-8, except on Windows where they are in the process's ANSI code page (as for
 /// every `...A` Win32 function). A byte that does not decode is one character of its own, matched only
 /// by itself, `?`, `*` or a list containing that same byte; it is never rejected and never causes a
 /// read past the terminating NUL.
+///
+/// # Parameters
+/// - `string`: the string to test, NUL-terminated.
+/// - `pattern`: the filter pattern, NUL-terminated.
+/// - `bCaseSensitive`: as for `MatchPatternW`.
+///
+/// # Returns
+/// TRUE (1) if `string` matches `pattern`; FALSE (0) if not, if either argument is NULL, or if the
+/// pattern is malformed.
 ///
 /// # Safety
 /// `string` and `pattern` must each be NULL or point at a NUL-terminated string.
@@ -134,106 +151,130 @@ fn deliver(compiled: Result<Program, Malformed>, out: ffi::Out<'_, *mut OpcPatte
     Ok(S_OK)
 }
 
-/// Compiles a filter pattern (same syntax as `MatchPatternW`) for repeated matching.
+/// Compiles a filter pattern (the syntax of `MatchPatternW`) once for matching many strings.
 ///
-/// `*ppPattern` receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
-/// `caseSensitive` FALSE makes matches compare by Unicode simple case folding.
+/// # Parameters
+/// - `pattern`: the filter pattern, NUL-terminated UTF-16.
+/// - `case_sensitive`: TRUE to compare characters as they are; FALSE to compare them by Unicode
+///   simple case folding.
+/// - `filter` (out): receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
 ///
-/// Returns S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such
-/// as `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
-/// `pattern` or `ppPattern`.
+/// # Returns
+/// S_OK; OPC_E_INVALIDFILTER for a malformed pattern (an unclosed `[` or a reversed range such as
+/// `[Z-A]`), which is what a browse call must return for a bad filter; E_INVALIDARG for a NULL
+/// `pattern` or `filter`.
 ///
 /// # Safety
-/// `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `ppPattern` must be NULL or
+/// `pattern` must be NULL or point at a NUL-terminated UTF-16 string; `filter` must be NULL or
 /// writable.
 #[no_mangle]
 pub unsafe extern "C" fn OpcPatternCompileW(
     pattern: LPCWSTR,
-    caseSensitive: BOOL,
-    ppPattern: *mut *mut OpcPattern,
+    case_sensitive: BOOL,
+    filter: *mut *mut OpcPattern,
 ) -> Hr {
-    ffi::boundary!(Opc, [ppPattern], {
-        // SAFETY: the caller vouches a non-NULL `ppPattern` is writable.
-        let out = unsafe { ffi::out(ppPattern) }?;
+    ffi::boundary!(Opc, [filter], {
+        // SAFETY: the caller vouches a non-NULL `filter` is writable.
+        let out = unsafe { ffi::out(filter) }?;
         // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated (no length limit).
         let pattern = unsafe { wstr_units(pattern, usize::MAX) }.ok_or(Fail::Null)?;
-        deliver(Program::compile(&Utf16(pattern), caseSensitive != 0), out)
+        deliver(Program::compile(&Utf16(pattern), case_sensitive != 0), out)
     })
 }
 
 /// `OpcPatternCompileW` for a narrow pattern (UTF-8; the ANSI code page on Windows). The compiled
 /// filter matches wide and narrow strings alike.
 ///
+/// # Parameters
+/// - `pattern`: the filter pattern, NUL-terminated.
+/// - `case_sensitive`: as for `OpcPatternCompileW`.
+/// - `filter` (out): receives the compiled filter (free it with `OpcPatternFree`), or NULL on failure.
+///
+/// # Returns
+/// As `OpcPatternCompileW`.
+///
 /// # Safety
-/// `pattern` must be NULL or point at a NUL-terminated string; `ppPattern` must be NULL or writable.
+/// `pattern` must be NULL or point at a NUL-terminated string; `filter` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcPatternCompileA(
-    pattern: LPCSTR,
-    caseSensitive: BOOL,
-    ppPattern: *mut *mut OpcPattern,
-) -> Hr {
-    ffi::boundary!(Opc, [ppPattern], {
-        // SAFETY: the caller vouches a non-NULL `ppPattern` is writable.
-        let out = unsafe { ffi::out(ppPattern) }?;
+pub unsafe extern "C" fn OpcPatternCompileA(pattern: LPCSTR, case_sensitive: BOOL, filter: *mut *mut OpcPattern) -> Hr {
+    ffi::boundary!(Opc, [filter], {
+        // SAFETY: the caller vouches a non-NULL `filter` is writable.
+        let out = unsafe { ffi::out(filter) }?;
         // SAFETY: the caller vouches `pattern` is NULL or NUL-terminated.
         let pattern = unsafe { narrow::cstr_bytes(pattern) }.ok_or(Fail::Null)?;
-        deliver(narrow::compile(pattern, caseSensitive != 0), out)
+        deliver(narrow::compile(pattern, case_sensitive != 0), out)
     })
 }
 
-/// Returns TRUE (1) if `string` matches the compiled filter, FALSE (0) if not or if either argument is
-/// NULL. Same results as `MatchPatternW` with the pattern and case mode the filter was compiled from.
-/// Allocates nothing; thread-safe.
+/// Whether a string matches a compiled filter: the result of `MatchPatternW` with the pattern and
+/// case mode the filter was compiled from. Allocates nothing; thread-safe.
+///
+/// # Parameters
+/// - `filter`: the compiled filter.
+/// - `string`: the string to test, NUL-terminated UTF-16.
+///
+/// # Returns
+/// TRUE (1) if `string` matches; FALSE (0) if not or if either argument is NULL.
 ///
 /// # Safety
-/// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
-/// or point at a NUL-terminated UTF-16 string.
+/// `filter` must be NULL or a filter from `OpcPatternCompileW` or `OpcPatternCompileA` not yet freed;
+/// `string` must be NULL or point at a NUL-terminated UTF-16 string.
 #[no_mangle]
-pub unsafe extern "C" fn OpcPatternMatchW(pattern: *const OpcPattern, string: LPCWSTR) -> Crossed<BOOL> {
+pub unsafe extern "C" fn OpcPatternMatchW(filter: *const OpcPattern, string: LPCWSTR) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
-        // SAFETY: the caller vouches `pattern` is NULL or a live filter.
-        let Some(pattern) = (unsafe { pattern.as_ref() }) else {
+        // SAFETY: the caller vouches `filter` is NULL or a live filter.
+        let Some(filter) = (unsafe { filter.as_ref() }) else {
             return FALSE;
         };
         if string.is_null() {
             return FALSE;
         }
         // SAFETY: the caller vouches `string` is NUL-terminated.
-        to_bool(unsafe { pattern.program.matches_cursor(WideCursor(string)) })
+        to_bool(unsafe { filter.program.matches_cursor(WideCursor(string)) })
     })
 }
 
 /// `OpcPatternMatchW` for a narrow string (UTF-8; the ANSI code page on Windows).
 ///
+/// # Parameters
+/// - `filter`: the compiled filter.
+/// - `string`: the string to test, NUL-terminated.
+///
+/// # Returns
+/// TRUE (1) if `string` matches; FALSE (0) if not or if either argument is NULL.
+///
 /// # Safety
-/// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` not yet freed; `string` must be NULL
-/// or point at a NUL-terminated string.
+/// `filter` must be NULL or a filter from `OpcPatternCompileW` or `OpcPatternCompileA` not yet freed;
+/// `string` must be NULL or point at a NUL-terminated string.
 #[no_mangle]
-pub unsafe extern "C" fn OpcPatternMatchA(pattern: *const OpcPattern, string: LPCSTR) -> Crossed<BOOL> {
+pub unsafe extern "C" fn OpcPatternMatchA(filter: *const OpcPattern, string: LPCSTR) -> Crossed<BOOL> {
     ffi::guard!(FALSE, {
-        // SAFETY: the caller vouches `pattern` is NULL or a live filter.
-        let Some(pattern) = (unsafe { pattern.as_ref() }) else {
+        // SAFETY: the caller vouches `filter` is NULL or a live filter.
+        let Some(filter) = (unsafe { filter.as_ref() }) else {
             return FALSE;
         };
         if string.is_null() {
             return FALSE;
         }
         // SAFETY: the caller vouches `string` is NUL-terminated.
-        to_bool(unsafe { narrow::matches(&pattern.program, string.cast()) })
+        to_bool(unsafe { narrow::matches(&filter.program, string.cast()) })
     })
 }
 
-/// Frees a filter from `OpcPatternCompileW`/`A`. NULL is allowed and ignored.
+/// Frees a compiled filter.
+///
+/// # Parameters
+/// - `filter`: a filter from `OpcPatternCompileW` or `OpcPatternCompileA`, or NULL (ignored).
 ///
 /// # Safety
-/// `pattern` must be NULL or a filter from `OpcPatternCompileW`/`A` that has not been freed, and no
-/// other thread may be using it.
+/// `filter` must be NULL or a filter from `OpcPatternCompileW` or `OpcPatternCompileA` that has not
+/// been freed, and no other thread may be using it.
 #[no_mangle]
-pub unsafe extern "C" fn OpcPatternFree(pattern: *mut OpcPattern) {
+pub unsafe extern "C" fn OpcPatternFree(filter: *mut OpcPattern) {
     ffi::guard!((), {
-        if !pattern.is_null() {
+        if !filter.is_null() {
             // SAFETY: the caller vouches it came from `Box::into_raw` in `deliver` and is freed once.
-            drop(unsafe { Box::from_raw(pattern) });
+            drop(unsafe { Box::from_raw(filter) });
         }
     })
 }

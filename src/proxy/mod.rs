@@ -345,16 +345,21 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
 }
 
 /// Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
-/// IOPCEnumGUID in `reg` (NULL: the system registry; on 64-bit Windows the view of the calling
-/// process, so a 32-bit opccomn.dll registers the 32-bit view). Writes `CLSID_OpcComnProxyStub` with
-/// this module as its `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}`
-/// with `NumMethods` and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another
-/// installed proxy/stub (the OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has
-/// `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
-/// exactly that. Registering twice is harmless.
+/// IOPCEnumGUID. Writes `CLSID_OpcComnProxyStub` with this module as its `InprocServer32`
+/// (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods` and
+/// `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub (the
+/// OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has `OPC_PROXY_STUB_TAKE_OVER`. Records
+/// what it adds or replaces, so `OpcUnregisterProxyStub` undoes exactly that. Registering twice is
+/// harmless.
 ///
-/// Returns S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with
-/// another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+/// # Parameters
+/// - `reg`: the registry to write, or NULL for the system registry (on 64-bit Windows the view of the
+///   calling process, so a 32-bit opccomn.dll registers the 32-bit view).
+/// - `flags`: 0 or `OPC_PROXY_STUB_TAKE_OVER`.
+///
+/// # Returns
+/// S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with another;
+/// E_INVALIDARG for unknown flags; registry errors as HRESULTs.
 ///
 /// # Safety
 /// `reg` must be NULL or a live registry handle.
@@ -377,10 +382,15 @@ pub unsafe extern "C" fn OpcRegisterProxyStub(reg: *const OpcRegistry, flags: u3
     })
 }
 
-/// Removes what `OpcRegisterProxyStub` added to `reg` (NULL: the system registry) and restores the
-/// `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
-/// are left as they are. Unregistering what is not registered succeeds. Returns S_OK or a registry
-/// error.
+/// Removes what `OpcRegisterProxyStub` added and restores the `ProxyStubClsid32` values it replaced;
+/// interfaces another proxy/stub registered itself for since are left as they are. Unregistering what
+/// is not registered succeeds.
+///
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+///
+/// # Returns
+/// S_OK, or a registry error as an HRESULT.
 ///
 /// # Safety
 /// `reg` must be NULL or a live registry handle.
@@ -412,12 +422,16 @@ fn parse_install_command(text: &str) -> Option<bool> {
 
 /// `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
 /// registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
-/// takes over from another installed proxy/stub; with `install` FALSE (`regsvr32 /u /i:ProxyStub`) it
-/// unregisters it. Words are case-insensitive and separated by commas or blanks. regsvr32 also calls
-/// DllRegisterServer / DllUnregisterServer unless given `/n`.
+/// takes over from another installed proxy/stub. Words are case-insensitive and separated by commas or
+/// blanks. regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
 ///
-/// Returns what the registration function returns; E_INVALIDARG for a NULL, empty or unknown command
-/// line.
+/// # Parameters
+/// - `install`: TRUE to register; FALSE to unregister (`regsvr32 /u /i:ProxyStub`).
+/// - `command_line`: what follows `/i:`.
+///
+/// # Returns
+/// What `OpcRegisterProxyStub` or `OpcUnregisterProxyStub` returns; E_INVALIDARG for a NULL, empty or
+/// unknown command line.
 ///
 /// # Safety
 /// `command_line` must be NULL or a NUL-terminated UTF-16 string.

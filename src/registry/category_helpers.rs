@@ -17,15 +17,21 @@ unsafe fn guid_arg(p: *const GUID) -> FfiResult<GUID> {
     unsafe { ffi::in_ref(p) }.copied()
 }
 
-/// Creates the component category `catid` with `description` in English (0x409), as the
-/// specification's CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. A NULL
-/// `description` uses the standard text of an OPC category. On Windows this goes through the Component
-/// Categories Manager (ICatRegister::RegisterCategories) when COM can create it on the calling thread;
-/// where COM is not initialised (a server registering before CoInitializeEx) the library writes the
-/// same value itself.
+/// Creates a component category with its English (0x409) description, as the specification's
+/// CreateComponentCategory helper: `Component Categories\{catid}`, value `409`. On Windows this goes
+/// through the Component Categories Manager (ICatRegister::RegisterCategories) when COM can create it
+/// on the calling thread; where COM is not initialised (a server registering before CoInitializeEx)
+/// the library writes the same value itself.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that
-/// is not an OPC one, or a description over 127 characters (the limit of CATEGORYINFO); registry errors.
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+/// - `catid`: the category.
+/// - `description`: its description, at most 127 characters (the limit of CATEGORYINFO); NULL for the
+///   standard text of an OPC category.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `catid`; E_INVALIDARG for a NULL description of a category that is
+/// not an OPC one, or a description over 127 characters; registry errors.
 ///
 /// # Safety
 /// `reg` NULL or a live handle; `catid` NULL or readable; `description` NULL or NUL-terminated.
@@ -54,12 +60,18 @@ pub unsafe extern "C" fn OpcCreateComponentCategory(
     })
 }
 
-/// Registers `clsid` as implementing the category `catid` (the specification's
-/// RegisterCLSIDInCategory): `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the
-/// Component Categories Manager when COM can create it on the calling thread, else (COM not
-/// initialised there) by creating the key itself.
+/// Registers a class as implementing a category (the specification's RegisterCLSIDInCategory):
+/// `CLSID\{clsid}\Implemented Categories\{catid}`. On Windows through the Component Categories
+/// Manager when COM can create it on the calling thread, else (COM not initialised there) by creating
+/// the key itself.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+/// - `clsid`: the class.
+/// - `catid`: the category it implements.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `clsid` or `catid`; registry errors.
 ///
 /// # Safety
 /// `reg` NULL or a live handle; `clsid` and `catid` NULL or readable.
@@ -80,11 +92,17 @@ pub unsafe extern "C" fn OpcRegisterClassInCategory(
     })
 }
 
-/// Removes `clsid` from the category `catid` (the specification's UnRegisterCLSIDInCategory): deletes
+/// Removes a class from a category (the specification's UnRegisterCLSIDInCategory): deletes
 /// `CLSID\{clsid}\Implemented Categories\{catid}`, through the Component Categories Manager or
 /// directly as `OpcRegisterClassInCategory` does. Succeeds when it was not registered.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL argument; registry errors.
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+/// - `clsid`: the class.
+/// - `catid`: the category.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `clsid` or `catid`; registry errors.
 ///
 /// # Safety
 /// As for `OpcRegisterClassInCategory`.
@@ -106,10 +124,14 @@ pub unsafe extern "C" fn OpcUnregisterClassInCategory(
 }
 
 /// The standard English description of an OPC component category (for example "OPC Data Access
-/// Servers Version 2.0" for CATID_OPCDAServer20) into `*description`, freed with `OpcTaskMemFree`.
+/// Servers Version 2.0" for CATID_OPCDAServer20).
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
-/// `*description` is NULL on failure.
+/// # Parameters
+/// - `catid`: the category.
+/// - `description` (out): receives a new string (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for a category that is not an OPC one.
 ///
 /// # Safety
 /// `catid` NULL or readable; `description` NULL or writable.

@@ -101,13 +101,18 @@ pub fn parse_command_line(line: &str) -> Result<OpcServerCommand, HRESULT> {
     })
 }
 
-/// Tells what an EXE server's command line asks for (pass `GetCommandLineW()`, with or without the
-/// program name): `/RegServer` or `-RegServer`, `/UnregServer` or `-UnregServer`, `-Embedding` or
-/// `/Embedding` (and `-Automation`), case-insensitive, as separate arguments. `*command` receives an
-/// `OpcServerCommand` value: register, unregister, embedding or none.
+/// Tells what an EXE server's command line asks for: `/RegServer` or `-RegServer`, `/UnregServer` or
+/// `-UnregServer`, `-Embedding` or `/Embedding` (and `-Automation`), case-insensitive, as separate
+/// arguments. `OpcExeServerRun` does this itself; this is for a `main` of your own.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and
-/// unregisters or is not valid UTF-16. `*command` is OPC_SERVER_COMMAND_NONE on failure.
+/// # Parameters
+/// - `command_line`: the command line, with or without the program name (`GetCommandLineW()`).
+/// - `command` (out): receives an `OpcServerCommand` value (register, unregister, embedding or none);
+///   OPC_SERVER_COMMAND_NONE on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG when the line both registers and unregisters or
+/// is not valid UTF-16.
 ///
 /// # Safety
 /// `command_line` NULL or NUL-terminated; `command` NULL or writable.

@@ -302,15 +302,20 @@ pub(crate) unsafe fn registries(reg: *const OpcRegistry) -> Arc<Registries> {
 /// Creates an empty registry held in memory, for tests and for preparing `.reg` files. Fill it with
 /// the registration functions or `OpcRegistryApply`; read it with `OpcRegistryExport`.
 ///
-/// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
+/// # Parameters
+/// - `reg` (out): receives the new registry's handle (free it with `OpcRegistryRelease`), or NULL on
+///   failure.
+///
+/// # Returns
+/// S_OK, or E_INVALIDARG for a NULL `reg`.
 ///
 /// # Safety
-/// `out` must be NULL or writable.
+/// `reg` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> Hr {
-    ffi::boundary!(Opc, [out], {
-        // SAFETY: the caller vouches a non-NULL `out` is writable.
-        let out = unsafe { ffi::out(out) }?;
+pub unsafe extern "C" fn OpcRegistryCreateMemory(reg: *mut *mut OpcRegistry) -> Hr {
+    ffi::boundary!(Opc, [reg], {
+        // SAFETY: the caller vouches a non-NULL `reg` is writable.
+        let out = unsafe { ffi::out(reg) }?;
         out.write(Box::into_raw(Box::new(OpcRegistry {
             inner: Arc::new(Registries::single(Arc::new(memory::MemoryRegistry::new()))),
         })));
@@ -324,15 +329,19 @@ pub unsafe extern "C" fn OpcRegistryCreateMemory(out: *mut *mut OpcRegistry) -> 
 /// `DllGetClassObject` or `OpcServerListCreate` use. Passing NULL to a function taking a registry means
 /// the same registry.
 ///
-/// Returns S_OK, or E_INVALIDARG for a NULL `out` (`*out` is NULL on failure).
+/// # Parameters
+/// - `reg` (out): receives the handle (free it with `OpcRegistryRelease`), or NULL on failure.
+///
+/// # Returns
+/// S_OK, or E_INVALIDARG for a NULL `reg`.
 ///
 /// # Safety
-/// `out` must be NULL or writable.
+/// `reg` must be NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> Hr {
-    ffi::boundary!(Opc, [out], {
-        // SAFETY: the caller vouches a non-NULL `out` is writable.
-        let out = unsafe { ffi::out(out) }?;
+pub unsafe extern "C" fn OpcRegistryOpenSystem(reg: *mut *mut OpcRegistry) -> Hr {
+    ffi::boundary!(Opc, [reg], {
+        // SAFETY: the caller vouches a non-NULL `reg` is writable.
+        let out = unsafe { ffi::out(reg) }?;
         out.write(Box::into_raw(Box::new(OpcRegistry {
             inner: Registries::system(),
         })));
@@ -340,7 +349,10 @@ pub unsafe extern "C" fn OpcRegistryOpenSystem(out: *mut *mut OpcRegistry) -> Hr
     })
 }
 
-/// Frees a registry handle. NULL is ignored. Objects created over the registry stay usable.
+/// Frees a registry handle. Objects created over the registry stay usable.
+///
+/// # Parameters
+/// - `reg`: the handle, or NULL (ignored).
 ///
 /// # Safety
 /// `reg` must be NULL or a live handle that is not used again.
@@ -354,12 +366,18 @@ pub unsafe extern "C" fn OpcRegistryRelease(reg: *mut OpcRegistry) {
     })
 }
 
-/// Reads the string value `name` (NULL or "" for the default value) of `key` (relative to
-/// HKEY_CLASSES_ROOT) into `*data`, a new string the caller frees with `OpcTaskMemFree`.
+/// Reads a string value.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid
-/// UTF-16; REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value
-/// is not a string. `*data` is NULL on failure.
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+/// - `key`: the key, relative to HKEY_CLASSES_ROOT (`CLSID\{...}`).
+/// - `name`: the value's name; NULL or "" for the key's default value.
+/// - `data` (out): receives a new string (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `key` or `data`; E_INVALIDARG for strings that are not valid UTF-16;
+/// REGDB_E_KEYMISSING when the key or value does not exist; REGDB_E_INVALIDVALUE when the value is not
+/// a string.
 ///
 /// # Safety
 /// `reg` NULL or a live handle; `key` and `name` NULL or NUL-terminated; `data` NULL or writable.

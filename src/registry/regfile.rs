@@ -313,14 +313,19 @@ pub fn apply(reg: &dyn Registry, text: &str) -> Result<(), HRESULT> {
     Ok(())
 }
 
-/// Exports the subtree at `key` (relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry,
-/// which for the system registry is all of HKEY_CLASSES_ROOT and slow) as the text of a `.reg` file,
-/// "Windows Registry Editor Version 5.00", into `*text` (free it with `OpcTaskMemFree`). On Windows the
-/// registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
+/// Exports a subtree as the text of a `.reg` file, "Windows Registry Editor Version 5.00". On Windows
+/// the registry view of the calling process is exported. Save it as UTF-16LE with a byte-order mark for
 /// regedit.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
-/// REGDB_E_KEYMISSING when `key` does not exist. `*text` is NULL on failure.
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+/// - `key`: the subtree's key, relative to HKEY_CLASSES_ROOT; NULL or "" for the whole registry (for
+///   the system registry all of HKEY_CLASSES_ROOT, which is slow).
+/// - `text` (out): receives the text (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for a key that is not valid UTF-16;
+/// REGDB_E_KEYMISSING when `key` does not exist.
 ///
 /// # Safety
 /// `reg` NULL or a live handle; `key` NULL or NUL-terminated; `text` NULL or writable.
@@ -336,12 +341,18 @@ pub unsafe extern "C" fn OpcRegistryExport(reg: *const OpcRegistry, key: LPCWSTR
     })
 }
 
-/// Applies the text of a `.reg` file (keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]`
-/// and `"name"=-`) to the registry. The whole text is checked first: a malformed file changes nothing.
+/// Applies the text of a `.reg` file to a registry. The whole text is checked first: a malformed file
+/// changes nothing.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
-/// HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which
-/// case the changes before it remain.
+/// # Parameters
+/// - `reg`: the registry, or NULL for the system registry.
+/// - `text`: the file's text: keys and values under HKEY_CLASSES_ROOT, deletions with `[-key]` and
+///   `"name"=-`.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `text`; E_INVALIDARG for malformed text or a root other than
+/// HKEY_CLASSES_ROOT; a registry error (for example E_ACCESSDENIED) when a write fails, in which case
+/// the changes before it remain.
 ///
 /// # Safety
 /// `reg` NULL or a live handle; `text` NULL or NUL-terminated.

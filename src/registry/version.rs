@@ -65,10 +65,14 @@ impl core::fmt::Display for OpcVersion {
     }
 }
 
-/// Parses a version `MM.mm.bb` (three decimal numbers of at most 65535, nothing else) into `*version`.
+/// Parses a version `MM.mm.bb`: three decimal numbers of at most 65535, nothing else.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text. `*version` is 0.0.0 on
-/// failure.
+/// # Parameters
+/// - `text`: the text.
+/// - `version` (out): receives the version; 0.0.0 on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL argument; E_INVALIDARG for any other text.
 ///
 /// # Safety
 /// `text` NULL or NUL-terminated; `version` NULL or writable.
@@ -82,9 +86,14 @@ pub unsafe extern "C" fn OpcVersionParse(text: LPCWSTR, version: *mut OpcVersion
     })
 }
 
-/// Formats `*version` as `MM.mm.bb` (for example `5.2.41`) into `*text`, freed with `OpcTaskMemFree`.
+/// Formats a version as `MM.mm.bb` (for example `5.2.41`).
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY. `*text` is NULL on failure.
+/// # Parameters
+/// - `version`: the version.
+/// - `text` (out): receives a new string (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL argument; E_OUTOFMEMORY.
 ///
 /// # Safety
 /// `version` NULL or readable; `text` NULL or writable.
@@ -98,10 +107,16 @@ pub unsafe extern "C" fn OpcVersionFormat(version: *const OpcVersion, text: *mut
     })
 }
 
-/// The `FILEVERSION` / `PRODUCTVERSION` of `*version` as the two words of `VS_FIXEDFILEINFO`:
-/// `*ms = MM << 16 | mm`, `*ls = 0 << 16 | bb` (the resource line `FILEVERSION MM,mm,0,bb`).
+/// The `FILEVERSION` / `PRODUCTVERSION` of a version as the two words of `VS_FIXEDFILEINFO` (the
+/// resource line `FILEVERSION MM,mm,0,bb`).
 ///
-/// Returns S_OK, or E_INVALIDARG for a NULL argument (the outputs that are not NULL are 0 then).
+/// # Parameters
+/// - `version`: the version.
+/// - `ms` (out): receives `MM << 16 | mm` (`dwFileVersionMS`); 0 on failure.
+/// - `ls` (out): receives `0 << 16 | bb` (`dwFileVersionLS`); 0 on failure.
+///
+/// # Returns
+/// S_OK, or E_INVALIDARG for a NULL argument.
 ///
 /// # Safety
 /// `version` NULL or readable; `ms` and `ls` NULL or writable.
@@ -117,11 +132,16 @@ pub unsafe extern "C" fn OpcVersionToFileVersion(version: *const OpcVersion, ms:
     })
 }
 
-/// The version of a `VS_FIXEDFILEINFO` (`dwFileVersionMS`, `dwFileVersionLS`) in the `MM,mm,0,bb`
-/// convention.
+/// The version of a `VS_FIXEDFILEINFO` in the `MM,mm,0,bb` convention.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file
-/// does not follow the convention). `*version` is 0.0.0 on failure.
+/// # Parameters
+/// - `ms`: `dwFileVersionMS`.
+/// - `ls`: `dwFileVersionLS`.
+/// - `version` (out): receives the version; 0.0.0 on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `version`; E_INVALIDARG when the third field is not 0 (the file does
+/// not follow the convention).
 ///
 /// # Safety
 /// `version` NULL or writable.
@@ -135,8 +155,15 @@ pub unsafe extern "C" fn OpcVersionFromFileVersion(ms: DWORD, ls: DWORD, version
     })
 }
 
-/// Compares two versions: negative when `a` is older than `b`, 0 when equal, positive when newer
-/// (major first, then minor, then build). A NULL argument counts as older than any version.
+/// Compares two versions: major first, then minor, then build. A NULL argument counts as older than
+/// any version.
+///
+/// # Parameters
+/// - `a`: one version.
+/// - `b`: the other.
+///
+/// # Returns
+/// Negative when `a` is older than `b`, 0 when they are equal, positive when `a` is newer.
 ///
 /// # Safety
 /// `a` and `b` NULL or readable.
@@ -153,9 +180,16 @@ pub unsafe extern "C" fn OpcVersionCompare(a: *const OpcVersion, b: *const OpcVe
     })
 }
 
-/// TRUE when `candidate` is strictly newer than `installed`, so an installer may replace the installed
-/// file with it (specification section 6.5); FALSE otherwise, and when `candidate` is NULL. A NULL
-/// `installed` (nothing installed) makes any candidate newer.
+/// Whether a file may replace the installed one (specification section 6.5): whether it is strictly
+/// newer.
+///
+/// # Parameters
+/// - `candidate`: the version of the file that would replace it.
+/// - `installed`: the version installed; NULL when nothing is installed.
+///
+/// # Returns
+/// TRUE when `candidate` is strictly newer than `installed` or `installed` is NULL (and `candidate`
+/// is not); FALSE otherwise, and when `candidate` is NULL.
 ///
 /// # Safety
 /// `candidate` and `installed` NULL or readable.

@@ -356,16 +356,20 @@ pub(crate) unsafe fn set_blanket(
 /// class objects, creating or receiving proxies), because COM sets process security once, implicitly
 /// at the first marshalling if nobody called CoInitializeSecurity.
 ///
-/// Returns S_OK; E_INVALIDARG for a `struct_size` other than `sizeof(OpcSecurityOptions)`, an
-/// unknown flag, a level out of range or below PKT_INTEGRITY without the flag, both `appid` and
-/// `access_sddl`, or an access list that is empty, is no valid SDDL, names no owner or group, or has
-/// a SACL (Windows' conversion error, as an HRESULT, where it gives one); RPC_E_TOO_LATE when process
-/// security is already set: by an earlier successful call of this function or
-/// `OpcInitializeClientSecurity` (the library answers that itself, without calling COM), or, on
-/// Windows, by the process itself or implicitly by COM (CoInitializeSecurity's answer); otherwise
-/// CoInitializeSecurity's result as it is (on Windows CO_E_NOTINITIALIZED before CoInitializeEx).
-/// Off Windows the options are checked as above (the access list with the library's SDDL subset, that
-/// of registration: `docs/guide/dcom-appid.md`), then the result is E_NOTIMPL.
+/// # Parameters
+/// - `options`: the settings (OpcSecurityOptions), or NULL for the defaults above.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a `struct_size` other than `sizeof(OpcSecurityOptions)`, an unknown flag, a
+/// level out of range or below PKT_INTEGRITY without the flag, both `appid` and `access_sddl`, or an
+/// access list that is empty, is no valid SDDL, names no owner or group, or has a SACL (Windows'
+/// conversion error, as an HRESULT, where it gives one); RPC_E_TOO_LATE when process security is
+/// already set: by an earlier successful call of this function or `OpcInitializeClientSecurity` (the
+/// library answers that itself, without calling COM), or, on Windows, by the process itself or
+/// implicitly by COM (CoInitializeSecurity's answer); otherwise CoInitializeSecurity's result as it is
+/// (on Windows CO_E_NOTINITIALIZED before CoInitializeEx). Off Windows the options are checked as
+/// above (the access list with the library's SDDL subset, that of registration:
+/// `docs/guide/dcom-appid.md`), then the result is E_NOTIMPL.
 ///
 /// # Safety
 /// `options` must be NULL or point at `options->struct_size` readable bytes; its `appid` NULL or
@@ -384,8 +388,11 @@ pub unsafe extern "C" fn OpcInitializeServerSecurity(options: *const OpcSecurity
 /// (IOPCShutdown::ShutdownRequest, data callbacks): a client that receives them from another machine
 /// needs PKT_INTEGRITY here too, and `access_sddl` (or `appid`) decides who may call it back.
 ///
-/// Returns what `OpcInitializeServerSecurity` returns; off Windows E_NOTIMPL after checking the
-/// options.
+/// # Parameters
+/// - `options`: the settings (OpcSecurityOptions), or NULL for the defaults.
+///
+/// # Returns
+/// What `OpcInitializeServerSecurity` returns; off Windows E_NOTIMPL after checking the options.
 ///
 /// # Safety
 /// As for `OpcInitializeServerSecurity`.
@@ -398,7 +405,7 @@ pub unsafe extern "C" fn OpcInitializeClientSecurity(options: *const OpcSecurity
 }
 
 /// Sets the authentication of one proxy (CoSetProxyBlanket), for clients that cannot set their
-/// process security: on `proxy` and on its IUnknown (queried, set, released), because QueryInterface,
+/// process security: on the proxy and on its IUnknown (queried, set, released), because QueryInterface,
 /// AddRef and Release travel through the IUnknown's own blanket. Authentication at
 /// RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or `options->authn_level` (never below PKT_INTEGRITY without
 /// `OPC_SECURITY_ALLOW_WEAKER_AUTHN`), impersonation RPC_C_IMP_LEVEL_IMPERSONATE or
@@ -407,8 +414,14 @@ pub unsafe extern "C" fn OpcInitializeClientSecurity(options: *const OpcSecurity
 /// COLE_DEFAULT_PRINCIPAL, COLE_DEFAULT_AUTHINFO, EOAC_DEFAULT). Each further interface the client
 /// queries from the object gets a new proxy with the process's blanket: set it on each.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `proxy`, bad options (as `OpcInitializeServerSecurity`), or
-/// an `appid` or `access_sddl`; E_NOINTERFACE when `proxy` is not a proxy (an in-process object has no
+/// # Parameters
+/// - `proxy`: the interface pointer (a proxy) to secure.
+/// - `options`: the settings (OpcSecurityOptions; its `appid` and `access_sddl` must be NULL), or NULL
+///   for the defaults.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `proxy`, bad options (as `OpcInitializeServerSecurity`), or an
+/// `appid` or `access_sddl`; E_NOINTERFACE when `proxy` is not a proxy (an in-process object has no
 /// IClientSecurity; nothing to secure, and nothing is changed); otherwise CoSetProxyBlanket's result
 /// for the interface or, when that succeeded, for its IUnknown (the interface's blanket then stays
 /// set), or QueryInterface's failure. Off Windows E_NOTIMPL after checking the arguments.

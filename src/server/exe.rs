@@ -118,6 +118,9 @@ impl HostCount {
 /// multithreaded apartment) while clients may still be connected: ask them to disconnect here
 /// (IOPCShutdown, `OpcShutdownNotifyBounded` with a timeout, so that a hung client cannot hold the
 /// stop). Not called when the server ends because its last client left.
+///
+/// # Parameters
+/// - `context`: OpcExeServerOptions::context.
 pub type OpcExeServerStopFn = Option<unsafe extern "C" fn(context: *mut c_void)>;
 
 /// How `OpcExeServerRun` runs an EXE server. Zero-initialise it, set `struct_size` to
@@ -188,19 +191,24 @@ unsafe impl SizedStruct for OpcExeServerOptions {
 ///   go. The host creates the named event itself, not set, with access for SYSTEM, the administrators
 ///   and the server's own account only; a name that already exists is refused.
 ///
-/// `command_line` NULL means the process's (GetCommandLineW; off Windows, none). The host returns without
-/// CoUninitialize: a client's last Release may still be on its way back on an RPC thread, and
-/// CoUninitialize would wait for it (under Wine possibly for ever); return from `main` (or call
-/// ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time.
+/// The host returns without CoUninitialize: a client's last Release may still be on its way back on an
+/// RPC thread, and CoUninitialize would wait for it (under Wine possibly for ever); return from `main`
+/// (or call ExitProcess) with `SUCCEEDED(hr) ? 0 : 1`. One host per process at a time. Off Windows it
+/// returns E_NOTIMPL after checking its arguments.
 ///
-/// Returns S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE
-/// after a stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for
-/// a NULL `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a
-/// command line that both registers and unregisters; E_UNEXPECTED when a host already runs in the
-/// process; HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named
-/// `stop_event_name` already exists (an event or any other kind: another instance of the server, or
-/// a name someone took first), before anything is served; the errors of CoInitializeEx,
-/// CoRegisterClassObject and of registration.
+/// # Parameters
+/// - `options`: the server's classes and how it is stopped (OpcExeServerOptions).
+/// - `command_line`: the command line, or NULL for the process's (GetCommandLineW; off Windows, none).
+///
+/// # Returns
+/// S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE after a
+/// stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for a NULL
+/// `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a command
+/// line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process;
+/// HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named `stop_event_name`
+/// already exists (an event or any other kind: another instance of the server, or a name someone took
+/// first), before anything is served; the errors of CoInitializeEx, CoRegisterClassObject and of
+/// registration.
 ///
 /// # Safety
 /// `options` NULL or valid as documented on OpcExeServerOptions (with its classes, kept so until the
@@ -266,7 +274,8 @@ unsafe fn read_options(options: *const OpcExeServerOptions) -> Result<OpcExeServ
 /// calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
 /// for example a service's control handler or the server's own user interface.
 ///
-/// Returns S_OK; S_FALSE when no host runs.
+/// # Returns
+/// S_OK; S_FALSE when no host runs.
 #[no_mangle]
 pub extern "C" fn OpcExeServerStop() -> Hr {
     ffi::guard!(E_UNEXPECTED, {

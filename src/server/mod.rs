@@ -35,11 +35,19 @@ use crate::com::{
 use crate::registry::register::{register, unregister, OpcServerRegistration, ServerDescription};
 use crate::registry::{registries, OpcRegistry, Registries};
 
-/// Makes an instance of a server's class for IClassFactory::CreateInstance: the object, aggregated
-/// into `outer` when `outer` is not NULL (only for a class with OPC_CLASS_AGGREGATABLE; `riid` is then
-/// IID_IUnknown and the result the inner, non-delegating IUnknown), its interface `riid` in `*ppv`.
-/// Return S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...). The library has
-/// already checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+/// Makes an instance of a server's class for IClassFactory::CreateInstance. The library has already
+/// checked `riid` and `ppv` and set `*ppv` to NULL. May be called from any thread.
+///
+/// # Parameters
+/// - `context`: OpcServerClass::context.
+/// - `outer`: the controlling IUnknown to aggregate the object into, or NULL (only for a class with
+///   OPC_CLASS_AGGREGATABLE; `riid` is then IID_IUnknown and the result the inner, non-delegating
+///   IUnknown).
+/// - `riid`: the interface the client asks for.
+/// - `ppv` (out): where to store the object's interface `riid`; left NULL on failure.
+///
+/// # Returns
+/// S_OK, or a failure with `*ppv` NULL (E_NOINTERFACE, E_OUTOFMEMORY...).
 pub type OpcCreateInstanceFn = Option<
     unsafe extern "C" fn(context: *mut c_void, outer: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT,
 >;
@@ -382,9 +390,15 @@ pub(crate) unsafe fn class_object(class: ServerClass, riid: REFIID, ppv: *mut *m
 /// on the server. For CoRegisterClassObject in an EXE that does not use OpcExeServerRun, or a
 /// DllGetClassObject of its own.
 ///
-/// Returns S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`,
-/// a NULL `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is
-/// IID_IClassFactory or IID_IUnknown. `*ppv` is NULL on failure.
+/// # Parameters
+/// - `cls`: the class (OpcServerClass).
+/// - `riid`: the interface wanted: IID_IClassFactory or IID_IUnknown.
+/// - `ppv` (out): receives the class object, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `cls`, `riid` or `ppv`; E_INVALIDARG for a wrong `struct_size`, a NULL
+/// `clsid` or `create`, or unknown `flags`; E_NOINTERFACE unless `riid` is IID_IClassFactory or
+/// IID_IUnknown.
 ///
 /// # Safety
 /// `cls` NULL or valid as documented on OpcServerClass (and kept so while the class object lives);
@@ -429,13 +443,20 @@ pub extern "C" fn OpcServerUnlock() {
     })
 }
 
-/// DllGetClassObject for a DLL server: the class object of the class in `classes` (a table of `count`)
-/// whose CLSID is `rclsid`, as OpcClassFactoryCreate makes it.
+/// DllGetClassObject for a DLL server: the class object of one class of a table, as
+/// OpcClassFactoryCreate makes it.
 ///
-/// Returns S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count
-/// of 0 or over 256, or a class OpcClassFactoryCreate refuses; CLASS_E_CLASSNOTAVAILABLE for a
-/// CLSID not in the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown. `*ppv` is
-/// NULL on failure.
+/// # Parameters
+/// - `classes`: the server's classes (OpcServerClass).
+/// - `count`: how many `classes` holds (1 to 256).
+/// - `rclsid`: the class COM asks for.
+/// - `riid`: the interface wanted: IID_IClassFactory or IID_IUnknown.
+/// - `ppv` (out): receives the class object, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `classes`, `rclsid`, `riid` or `ppv`; E_INVALIDARG for a count of 0 or
+/// over 256, or a class OpcClassFactoryCreate refuses; CLASS_E_CLASSNOTAVAILABLE for a CLSID not in
+/// the table; E_NOINTERFACE unless `riid` is IID_IClassFactory or IID_IUnknown.
 ///
 /// # Safety
 /// `classes` NULL or `count` classes valid as documented on OpcServerClass (kept so while the DLL is
@@ -462,10 +483,13 @@ pub unsafe extern "C" fn OpcModuleGetClassObject(
     })
 }
 
-/// DllCanUnloadNow for a DLL server: S_OK when nothing counts on the server (no OpcServerLock or
-/// LockServer lock is held), no object of the library is alive (the server's sessions, connection
-/// points and enumerators among them; with opccomn.dll shared between modules, every module's), and
-/// no proxy, stub or bounded shutdown notification of the library is at work, else S_FALSE.
+/// DllCanUnloadNow for a DLL server: whether COM may unload it.
+///
+/// # Returns
+/// S_OK when nothing counts on the server (no OpcServerLock or LockServer lock is held), no object of
+/// the library is alive (the server's sessions, connection points and enumerators among them; with
+/// opccomn.dll shared between modules, every module's), and no proxy, stub or bounded shutdown
+/// notification of the library is at work; else S_FALSE.
 #[no_mangle]
 pub extern "C" fn OpcModuleCanUnloadNow() -> Hr {
     ffi::guard!(S_FALSE, {
@@ -477,13 +501,19 @@ pub extern "C" fn OpcModuleCanUnloadNow() -> Hr {
     })
 }
 
-/// Registers every class of the table that has a `registration` (OpcRegisterServer for each, in
-/// order), in `reg` (NULL: the system registry): for DllRegisterServer, or `/RegServer`. A DLL that
-/// uses opccomn.dll must set `module_path` in its registrations (NULL would be opccomn.dll's path).
-/// When one fails, the classes registered before it are unregistered again.
+/// Registers every class of a table that has a `registration` (OpcRegisterServer for each, in order):
+/// for DllRegisterServer, or `/RegServer`. A DLL that uses opccomn.dll must set `module_path` in its
+/// registrations (NULL would be opccomn.dll's path). When one fails, the classes registered before it
+/// are unregistered again.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a
-/// registration whose CLSID is not its class's; the errors of OpcRegisterServer.
+/// # Parameters
+/// - `classes`: the server's classes (OpcServerClass).
+/// - `count`: how many `classes` holds (1 to 256).
+/// - `reg`: the registry, or NULL for the system registry.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `classes`, a count of 0 or over 256, a bad class, or a registration
+/// whose CLSID is not its class's; the errors of OpcRegisterServer.
 ///
 /// # Safety
 /// `classes` NULL or `count` classes valid as documented on OpcServerClass; `reg` NULL or a live handle.
@@ -497,12 +527,17 @@ pub unsafe extern "C" fn OpcModuleRegister(classes: *const OpcServerClass, count
     })
 }
 
-/// Unregisters every class of the table that has a `registration` (OpcUnregisterServer for each, in
-/// reverse order), from `reg` (NULL: the system registry): for DllUnregisterServer, or `/UnregServer`.
-/// Goes on after a class that fails and returns the first failure; a class that is not registered
-/// (REGDB_E_KEYMISSING) is no failure.
+/// Unregisters every class of a table that has a `registration` (OpcUnregisterServer for each, in
+/// reverse order): for DllUnregisterServer, or `/UnregServer`. Goes on after a class that fails and
+/// returns the first failure; a class that is not registered (REGDB_E_KEYMISSING) is no failure.
 ///
-/// Returns S_OK; the errors of OpcModuleRegister for a bad table; the errors of OpcUnregisterServer.
+/// # Parameters
+/// - `classes`: the server's classes, as given to OpcModuleRegister.
+/// - `count`: how many `classes` holds (1 to 256).
+/// - `reg`: the registry, or NULL for the system registry.
+///
+/// # Returns
+/// S_OK; the errors of OpcModuleRegister for a bad table; the errors of OpcUnregisterServer.
 ///
 /// # Safety
 /// As for OpcModuleRegister.

@@ -398,12 +398,17 @@ pub(crate) unsafe fn create(
 }
 
 /// Creates the OPC server browser object (CLSID_OPCServerList) in-process, over the system registry
-/// (see `OpcRegistryOpenSystem`), without going through COM activation. `riid` may be
-/// IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; with an `outer` object only IID_IUnknown
-/// (aggregation).
+/// (see `OpcRegistryOpenSystem`), without going through COM activation.
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION; E_NOINTERFACE. `*ppv` is
-/// NULL on failure.
+/// # Parameters
+/// - `outer`: the controlling IUnknown of an object that aggregates the browser, or NULL.
+/// - `riid`: the interface wanted: IID_IOPCServerList, IID_IOPCServerList2 or IID_IUnknown; only
+///   IID_IUnknown with an `outer`.
+/// - `ppv` (out): receives the interface, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `ppv` or `riid`; CLASS_E_NOAGGREGATION for an `outer` with a `riid`
+/// other than IID_IUnknown; E_NOINTERFACE.
 ///
 /// # Safety
 /// `outer` NULL or a valid IUnknown that outlives the object; `riid` NULL or readable; `ppv` NULL or
@@ -416,8 +421,18 @@ pub unsafe extern "C" fn OpcServerListCreate(outer: *mut IUnknown, riid: REFIID,
     })
 }
 
-/// As `OpcServerListCreate`, over the registry `reg` (for example one from `OpcRegistryCreateMemory`,
-/// to test a client's browsing against known contents). The object keeps the registry alive.
+/// As `OpcServerListCreate`, over a registry of the caller's (for example one from
+/// `OpcRegistryCreateMemory`, to test a client's browsing against known contents). The object keeps
+/// the registry alive.
+///
+/// # Parameters
+/// - `reg`: the registry to browse, or NULL for the system registry.
+/// - `outer`: as for `OpcServerListCreate`.
+/// - `riid`: as for `OpcServerListCreate`.
+/// - `ppv` (out): receives the interface, or NULL on failure.
+///
+/// # Returns
+/// As `OpcServerListCreate`.
 ///
 /// # Safety
 /// `reg` NULL (the system registry) or a live handle; the rest as for `OpcServerListCreate`.

@@ -12,11 +12,15 @@ use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::unknown::{query, Counted};
 use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, LPCWSTR, REFIID, S_OK, WCHAR};
 
-/// Called when the server asks the client to disconnect. `reason` is never NULL (a NUL string when
-/// the server gave no reason) and is valid only during the call. Runs on the thread that called
+/// Called when the server asks the client to disconnect. Runs on the thread that called
 /// ShutdownRequest (the sink is agile: on Windows it aggregates the free-threaded marshaler, so an
 /// in-process server in another apartment calls it directly); the library holds no lock, so the
 /// callback may unadvise the sink and release the server.
+///
+/// # Parameters
+/// - `context`: the `context` given to `OpcShutdownSinkCreate`.
+/// - `reason`: the server's reason, never NULL (a NUL string when the server gave none), valid only
+///   during the call.
 pub type OpcShutdownCallback = Option<unsafe extern "C" fn(context: *mut c_void, reason: LPCWSTR)>;
 
 /// The NUL string passed for a NULL reason (specification section 3.1.4).
@@ -76,13 +80,18 @@ impl IOPCShutdownImpl for ShutdownSink {
 /// Creates a shutdown sink for a client: an object with IUnknown and IOPCShutdown whose
 /// ShutdownRequest calls `callback(context, reason)` and returns S_OK.
 ///
-/// `riid` may be IID_IUnknown or IID_IOPCShutdown. Pass the sink to `OpcShutdownAdvise` (or to
-/// IConnectionPoint::Advise yourself); the server keeps its own reference until Unadvise, so the
-/// client may release its reference at any time. `context` must stay valid until the sink is
-/// destroyed (after the last Release: watch `OpcObjectCount` or unadvise first).
+/// Pass the sink to `OpcShutdownAdvise` (or to IConnectionPoint::Advise yourself); the server keeps its
+/// own reference until Unadvise, so the client may release its reference at any time.
 ///
-/// Returns S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`;
-/// E_NOINTERFACE for another `riid`. `*ppv` is NULL on failure.
+/// # Parameters
+/// - `callback`: what ShutdownRequest calls (OpcShutdownCallback).
+/// - `context`: passed to `callback`; must stay valid until the sink is destroyed (after the last
+///   Release: watch `OpcObjectCount` or unadvise first).
+/// - `riid`: the interface wanted: IID_IUnknown or IID_IOPCShutdown.
+/// - `ppv` (out): receives the interface, or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_POINTER for a NULL `ppv`, `riid` or `callback`; E_NOINTERFACE for another `riid`.
 ///
 /// # Safety
 /// `callback` must be NULL or callable with `context` from any thread; `riid` NULL or readable;
@@ -135,50 +144,56 @@ unsafe fn shutdown_point(server: *mut IUnknown) -> Result<Counted<IConnectionPoi
     unsafe { Counted::adopt(point) }.ok_or(E_POINTER)
 }
 
-/// Advises `sink` on the IOPCShutdown connection point of `server`: QueryInterface for
-/// IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
-///
-/// `*pdwCookie` receives the cookie for `OpcShutdownUnadvise` (0 on failure). The errors of the
-/// three steps are passed through, so a server without shutdown support gives E_NOINTERFACE (no
-/// IConnectionPointContainer) or CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise
-/// gives CONNECT_E_CANNOTCONNECT (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
-/// E_INVALIDARG for a NULL argument.
+/// Advises a client's shutdown sink on the IOPCShutdown connection point of a server: QueryInterface
+/// for IConnectionPointContainer, FindConnectionPoint(IID_IOPCShutdown), then Advise.
 ///
 /// Across machines the sink receives ShutdownRequest as a DCOM call from the server's machine: the
 /// client is then a DCOM server, and since Windows' DCOM hardening (KB5004442) the call arrives only
 /// when the client's process security is at RPC_C_AUTHN_LEVEL_PKT_INTEGRITY or above. Call
 /// `OpcInitializeClientSecurity` after CoInitializeEx and before creating the server.
 ///
+/// # Parameters
+/// - `server`: any interface of the server object.
+/// - `sink`: the client's sink, an object with IOPCShutdown (`OpcShutdownSinkCreate` makes one).
+/// - `cookie` (out): receives the cookie for `OpcShutdownUnadvise`, or 0 on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL argument; otherwise the errors of the three steps as they are, so a
+/// server without shutdown support gives E_NOINTERFACE (no IConnectionPointContainer) or
+/// CONNECT_E_NOCONNECTION (no IOPCShutdown connection point); Advise gives CONNECT_E_CANNOTCONNECT
+/// (the sink has no IOPCShutdown) or CONNECT_E_ADVISELIMIT.
+///
 /// # Safety
-/// `server` and `sink` must be NULL or valid COM interface pointers; `pdwCookie` NULL or writable.
+/// `server` and `sink` must be NULL or valid COM interface pointers; `cookie` NULL or writable.
 #[no_mangle]
-pub unsafe extern "C" fn OpcShutdownAdvise(server: *mut IUnknown, sink: *mut IUnknown, pdwCookie: *mut DWORD) -> Hr {
-    ffi::boundary!(Opc, [pdwCookie], {
-        // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
-        let (out, server, sink) = (
-            unsafe { ffi::out(pdwCookie) }?,
-            ffi::in_ptr(server)?,
-            ffi::in_ptr(sink)?,
-        );
+pub unsafe extern "C" fn OpcShutdownAdvise(server: *mut IUnknown, sink: *mut IUnknown, cookie: *mut DWORD) -> Hr {
+    ffi::boundary!(Opc, [cookie], {
+        // SAFETY: the caller vouches a non-NULL `cookie` is writable.
+        let (out, server, sink) = (unsafe { ffi::out(cookie) }?, ffi::in_ptr(server)?, ffi::in_ptr(sink)?);
         // SAFETY: valid per the caller.
         let point = unsafe { shutdown_point(server.as_ptr()) }?;
-        let mut cookie: DWORD = 0;
+        let mut given: DWORD = 0;
         // SAFETY: a counted IConnectionPoint pointer, released as `point` drops.
         let hr = unsafe {
             let p = point.as_ptr();
-            ((*(*p).lpVtbl).Advise)(p, sink.as_ptr(), &mut cookie).get()
+            ((*(*p).lpVtbl).Advise)(p, sink.as_ptr(), &mut given).get()
         };
         if hr >= 0 {
-            out.write(cookie);
+            out.write(given);
         }
         Ok(hr)
     })
 }
 
-/// Unadvises the shutdown sink `cookie` from `server` (the cookie `OpcShutdownAdvise` returned).
+/// Unadvises a client's shutdown sink from a server.
 ///
-/// Returns S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie
-/// gives CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
+/// # Parameters
+/// - `server`: any interface of the server object.
+/// - `cookie`: the cookie `OpcShutdownAdvise` returned.
+///
+/// # Returns
+/// S_OK, or the error of the step that failed, as for `OpcShutdownAdvise`; an unknown cookie gives
+/// CONNECT_E_NOCONNECTION. E_INVALIDARG for a NULL `server`.
 ///
 /// # Safety
 /// `server` must be NULL or a valid COM interface pointer.

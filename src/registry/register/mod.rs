@@ -74,20 +74,25 @@ use crate::com::ffi::{self, Hr};
 use crate::com::{HRESULT, LPWSTR, S_OK};
 use crate::registry::{registries, OpcRegistry, Registries};
 
-/// Registers a server as `server` describes it (see OpcServerRegistration), in `reg` (NULL: the system
-/// registry). Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
+/// Registers a server. Writes the CLSID, ProgID, version-independent ProgID and CurVer keys, `InprocServer32`
 /// (the DLL path, with `ThreadingModel`) or `LocalServer32` (the EXE path in quotes), the AppID, the
 /// categories (created with their standard descriptions when missing; on Windows through the Component
 /// Categories Manager when COM can create it on the calling thread, else, COM not being initialised
 /// there, as EXE servers registering before CoInitializeEx do, by writing the same keys) and, for Data
 /// Access 1.0 servers, `<ProgID>\OPC\Vendor`. Records what it added so `OpcUnregisterServer` removes exactly
 /// that. Registering again is harmless. Call it from DllRegisterServer, or when `OpcParseCommandLine`
-/// reports OPC_SERVER_COMMAND_REGISTER.
+/// reports OPC_SERVER_COMMAND_REGISTER (`OpcModuleRegister` and `OpcExeServerRun` call it for a
+/// server on the library's plumbing).
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a
-/// wrong `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256
-/// categories or a count without an array, strings that are not valid UTF-16; a registry error (for
-/// example E_ACCESSDENIED without administrator rights) when a write fails.
+/// # Parameters
+/// - `server`: what to register (OpcServerRegistration).
+/// - `reg`: the registry, or NULL for the system registry.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `server` or a required string that is NULL; E_INVALIDARG for a wrong
+/// `struct_size`, unknown `server_type` or `flags`, a malformed ProgID, more than 256 categories or a
+/// count without an array, strings that are not valid UTF-16; a registry error (for example
+/// E_ACCESSDENIED without administrator rights) when a write fails.
 ///
 /// # Safety
 /// `server` NULL or valid as documented on OpcServerRegistration; `reg` NULL or a live handle.
@@ -101,8 +106,7 @@ pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration,
     })
 }
 
-/// Unregisters a server registered with `OpcRegisterServer` (pass the same description): removes the
-/// values and keys that registration added and restores values it replaced, leaving everything that
+/// Unregisters a server registered with `OpcRegisterServer`: removes the values and keys that registration added and restores values it replaced, leaving everything that
 /// was there before and everything other products wrote. Only what still holds the data registration
 /// wrote is taken back: a value rewritten since (another server registered over this one, OpcEnum
 /// re-registered after a take-over) is left as it is, never set back to older data, and while the
@@ -113,8 +117,13 @@ pub unsafe extern "C" fn OpcRegisterServer(server: *const OpcServerRegistration,
 /// there before the first. Like registration it works with or without COM initialised on the calling
 /// thread.
 ///
-/// Returns S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of
-/// `OpcRegisterServer` for a bad description or a failing registry write.
+/// # Parameters
+/// - `server`: the description it was registered with.
+/// - `reg`: the registry, or NULL for the system registry.
+///
+/// # Returns
+/// S_OK; REGDB_E_KEYMISSING when the server is not registered; the errors of `OpcRegisterServer` for a
+/// bad description or a failing registry write.
 ///
 /// # Safety
 /// As for `OpcRegisterServer`.
@@ -135,14 +144,17 @@ pub(crate) fn export_registration(d: &ServerDescription) -> Result<String, HRESU
     crate::registry::regfile::export(&*regs.write, "")
 }
 
-/// Writes the registration `server` describes as the text of a `.reg` file ("Windows Registry Editor
-/// Version 5.00") into `*text` (free with `OpcTaskMemFree`), for installers that register servers by
-/// importing a file. It holds what `OpcRegisterServer` writes into an empty registry, including the
-/// record `OpcUnregisterServer` uses. Pass an explicit `module_path`: the default is this process's
-/// module.
+/// A server's registration as the text of a `.reg` file ("Windows Registry Editor Version 5.00"), for
+/// installers that register servers by importing a file. It holds what `OpcRegisterServer` writes into
+/// an empty registry, including the record `OpcUnregisterServer` uses.
 ///
-/// Returns S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
-/// `*text` is NULL on failure.
+/// # Parameters
+/// - `server`: what to register; give an explicit OpcServerRegistration::module_path (the default is
+///   this process's module).
+/// - `text` (out): receives the text (free it with `OpcTaskMemFree`), or NULL on failure.
+///
+/// # Returns
+/// S_OK; E_INVALIDARG for a NULL `text`; the errors of `OpcRegisterServer` for a bad description.
 ///
 /// # Safety
 /// `server` as for `OpcRegisterServer`; `text` NULL or writable.

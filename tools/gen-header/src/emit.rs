@@ -299,11 +299,30 @@ fn category_interface(e: &Entry) -> String {
          #else\n\
          /** The vtable of the category's interface form: IUnknown's methods only. */\n\
          typedef struct {n}Vtbl\n{{\n    BEGIN_INTERFACE\n\
-         \x20   /** IUnknown::QueryInterface. */\n\
-         \x20   HRESULT (STDMETHODCALLTYPE *QueryInterface)({n} *This, REFIID riid, void **ppvObject);\n\
-         \x20   /** IUnknown::AddRef. */\n\
+         \x20   /**\n\
+         \x20    * IUnknown::QueryInterface.\n\
+         \x20    *\n\
+         \x20    * # Parameters\n\
+         \x20    * - `riid`: the interface wanted.\n\
+         \x20    * - `ppvObject`: receives the interface, or NULL on failure.\n\
+         \x20    *\n\
+         \x20    * # Returns\n\
+         \x20    * S_OK; E_NOINTERFACE.\n\
+         \x20    */\n\
+         \x20   HRESULT (STDMETHODCALLTYPE *QueryInterface)({n} *This, /* [in] */ REFIID riid, /* [out] */ void **ppvObject);\n\
+         \x20   /**\n\
+         \x20    * IUnknown::AddRef.\n\
+         \x20    *\n\
+         \x20    * # Returns\n\
+         \x20    * The new count, for diagnostics only.\n\
+         \x20    */\n\
          \x20   ULONG (STDMETHODCALLTYPE *AddRef)({n} *This);\n\
-         \x20   /** IUnknown::Release. */\n\
+         \x20   /**\n\
+         \x20    * IUnknown::Release.\n\
+         \x20    *\n\
+         \x20    * # Returns\n\
+         \x20    * The new count, for diagnostics only.\n\
+         \x20    */\n\
          \x20   ULONG (STDMETHODCALLTYPE *Release)({n} *This);\n\
          \x20   END_INTERFACE\n}} {n}Vtbl;\n\
          /** The category {d} in the interface form of the Foundation's headers: no methods. */\n\

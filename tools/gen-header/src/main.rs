@@ -11,14 +11,19 @@
 //! - `c-tests/abi_i686.c`: compile-time checks (for i686-w64-mingw32-gcc) that every vtable entry is
 //!   `__stdcall` and every exported function and callback has the convention of its Rust definition.
 //!
-//! It also checks the rules of the FFI boundary that the compiler cannot (see `rustcheck`), and that
-//! docs/dev/architecture.md accounts for every `unsafe` outside `src/com/` (see `unsafety`;
-//! `gen-header --unsafe` prints the counts per file).
+//! It also checks the rules of the FFI boundary that the compiler cannot and the names of the C API's
+//! parameters (see `rustcheck`), the header's documentation as the C API reference needs it: every
+//! parameter and result documented, names linked, every declaration in an area (see `apidoc`,
+//! `groups`), and that docs/dev/architecture.md accounts for every `unsafe` outside `src/com/` (see
+//! `unsafety`; `gen-header --unsafe` prints the counts per file).
 //!
 //! `gen-header` writes the files; `gen-header --check` exits 1 when a committed file differs from what
-//! the sources generate now (CI runs this). Both exit 1 when the sources break the boundary's rules.
+//! the sources generate now (CI runs this). Both exit 1 when the sources break the boundary's rules,
+//! the naming rule or the documentation's.
 
+mod apidoc;
 mod emit;
+mod groups;
 mod guids;
 mod idl;
 mod rustcheck;
@@ -81,6 +86,9 @@ fn main() -> ExitCode {
         Ok(h) => h,
         Err(e) => {
             eprintln!("{e}");
+            for p in &sources.problems {
+                eprintln!("rules: {p}");
+            }
             return ExitCode::FAILURE;
         }
     };
@@ -108,9 +116,9 @@ fn main() -> ExitCode {
             println!("wrote {path}");
         }
     }
-    // What the compiler cannot check about the boundary.
+    // What the compiler cannot check about the boundary, and the names.
     for p in &sources.problems {
-        eprintln!("boundary: {p}");
+        eprintln!("rules: {p}");
     }
     // The unsafe code outside the COM core, against the documented table.
     let counts = unsafety::count(&root);
@@ -129,7 +137,7 @@ fn main() -> ExitCode {
     }
     if !sources.problems.is_empty() {
         eprintln!(
-            "{} breach(es) of the boundary's rules (tools/gen-header/src/rustcheck.rs)",
+            "{} breach(es) of the boundary's rules or the naming rule (tools/gen-header/src/rustcheck.rs)",
             sources.problems.len()
         );
         return ExitCode::FAILURE;
@@ -251,7 +259,17 @@ fn generate_header(
         out += &rewrite_function_line(line, sources)?;
         out.push('\n');
     }
-    Ok(out)
+    // The documentation as the reference reads it: sections to commands, names linked, areas.
+    let base_names: Vec<String> = base.iter().map(|i| i.name.clone()).collect();
+    let area = |name: &str, interface: Option<&str>| groups::of(name, interface, &sources.origins, &base_names, table);
+    apidoc::rewrite(&out, &area).map_err(|problems| {
+        let n = problems.len();
+        let mut text: String = problems.into_iter().map(|p| format!("docs: {p}\n")).collect();
+        text += &format!(
+            "{n} problem(s) with the header's documentation (tools/gen-header/src/apidoc.rs; docs/api-conventions.md)"
+        );
+        text
+    })
 }
 
 /// Before the functions: HRESULT macros in the Windows SDK's spelling, so a redefinition by opcerror.h

@@ -14,6 +14,13 @@
 //!   generated shim checks every argument and hands the method typed, checked values, so an object's
 //!   methods are safe code (the compiler refuses an `unsafe fn` for a safe trait method; this keeps a
 //!   generator that went back to raw pointers from passing unnoticed).
+//!
+//! It also checks the names of the C API's parameters (docs/api-conventions.md, "Names"): the
+//! functions the OPC specification defines (MatchPattern) have the specification's parameter names
+//! exactly; every other export, every callback type and every field of an `Opc...` structure is in
+//! snake_case. (Windows' own entry points, `Dll...`, are declared by Windows' headers, not this
+//! library's, and keep the names Rust gives them.) And it records where each item is defined, for the
+//! reference's areas (`groups`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -31,7 +38,10 @@ pub struct Sources {
     pub functions: BTreeMap<String, String>,
     /// Function pointer types (`pub type F = Option<unsafe extern "C" fn(...)>`): name → ABI.
     pub callbacks: BTreeMap<String, String>,
-    /// Breaches of the boundary's rules, one line each (`file: what`).
+    /// Items the header may declare (exports, `pub` types, structures, enums and constants): name →
+    /// the file that defines it, relative to the repository's root (the first, when several do).
+    pub origins: BTreeMap<String, String>,
+    /// Breaches of the boundary's rules and of the naming rule, one line each (`file: what`).
     pub problems: Vec<String>,
     /// How many extern functions were checked.
     pub checked: usize,
@@ -162,6 +172,66 @@ fn unsafe_methods(i: &syn::ItemImpl, traits: &[String], file: &str, out: &mut Ve
     }
 }
 
+/// The functions the OPC specification defines, with its parameter names (OPC Common 1.10, Appendix B:
+/// `BOOL MatchPattern(LPCTSTR string, LPCTSTR pattern, BOOL bCaseSensitive)`).
+pub const SPECIFICATION: &[(&str, &[&str])] = &[
+    ("MatchPatternW", &["string", "pattern", "bCaseSensitive"]),
+    ("MatchPatternA", &["string", "pattern", "bCaseSensitive"]),
+];
+
+/// `snake_case`: lower-case words and digits joined by single underscores.
+pub fn is_snake_case(name: &str) -> bool {
+    !name.is_empty()
+        && name.split('_').all(|w| !w.is_empty())
+        && name.starts_with(|c: char| c.is_ascii_lowercase())
+        && name
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+}
+
+fn pat_name(p: &syn::Pat) -> Option<String> {
+    match p {
+        syn::Pat::Ident(i) => Some(i.ident.to_string()),
+        _ => None,
+    }
+}
+
+/// The naming rule for one export's parameters.
+fn check_parameter_names(function: &str, names: &[String], file: &str, problems: &mut Vec<String>) {
+    if function.starts_with("Dll") {
+        return;
+    }
+    if let Some((_, spec)) = SPECIFICATION.iter().find(|(f, _)| *f == function) {
+        if names.iter().map(String::as_str).ne(spec.iter().copied()) {
+            problems.push(format!(
+                "{file}: {function}({}) must have the specification's parameter names ({})",
+                names.join(", "),
+                spec.join(", ")
+            ));
+        }
+        return;
+    }
+    for n in names {
+        if !is_snake_case(n) {
+            problems.push(format!(
+                "{file}: {function}: the parameter `{n}` must be snake_case (docs/api-conventions.md, Names)"
+            ));
+        }
+    }
+}
+
+fn is_pub(v: &syn::Visibility) -> bool {
+    matches!(v, syn::Visibility::Public(_))
+}
+
+fn has_repr_c(attrs: &[syn::Attribute]) -> bool {
+    attrs.iter().any(|a| {
+        a.path().is_ident("repr")
+            && a.parse_args_with(syn::punctuated::Punctuated::<syn::Path, syn::Token![,]>::parse_terminated)
+                .is_ok_and(|list| list.iter().any(|p| p.is_ident("C")))
+    })
+}
+
 fn visit_items(items: &[syn::Item], file: &str, traits: &[String], out: &mut Sources) {
     let generated = file == GENERATED;
     for item in items {
@@ -171,6 +241,19 @@ fn visit_items(items: &[syn::Item], file: &str, traits: &[String], out: &mut Sou
                 let abi = extern_abi(&f.sig.abi);
                 if let (true, Some(abi)) = (exported, &abi) {
                     out.functions.insert(f.sig.ident.to_string(), abi.clone());
+                    out.origins
+                        .entry(f.sig.ident.to_string())
+                        .or_insert_with(|| file.to_string());
+                    let names: Vec<String> = f
+                        .sig
+                        .inputs
+                        .iter()
+                        .filter_map(|a| match a {
+                            syn::FnArg::Typed(t) => pat_name(&t.pat),
+                            syn::FnArg::Receiver(_) => None,
+                        })
+                        .collect();
+                    check_parameter_names(&f.sig.ident.to_string(), &names, file, &mut out.problems);
                 }
                 if exported && abi.is_none() {
                     out.problems.push(format!(
@@ -226,8 +309,56 @@ fn visit_items(items: &[syn::Item], file: &str, traits: &[String], out: &mut Sou
                         .abi
                         .as_ref()
                         .map_or("Rust".into(), |a| a.name.as_ref().map_or("C".into(), |n| n.value()));
+                    if abi == "C" || abi == "system" {
+                        let names: Vec<String> = f
+                            .inputs
+                            .iter()
+                            .filter_map(|a| a.name.as_ref().map(|(n, _)| n.to_string()))
+                            .collect();
+                        if names.len() != f.inputs.len() && !generated {
+                            out.problems.push(format!(
+                                "{file}: the callback type {} must name its parameters (the header shows them)",
+                                t.ident
+                            ));
+                        }
+                        if !generated {
+                            check_parameter_names(&t.ident.to_string(), &names, file, &mut out.problems);
+                        }
+                    }
                     out.callbacks.insert(t.ident.to_string(), abi);
                 }
+                if is_pub(&t.vis) && !generated {
+                    out.origins
+                        .entry(t.ident.to_string())
+                        .or_insert_with(|| file.to_string());
+                }
+            }
+            syn::Item::Struct(s) if is_pub(&s.vis) && !generated => {
+                out.origins
+                    .entry(s.ident.to_string())
+                    .or_insert_with(|| file.to_string());
+                let name = s.ident.to_string();
+                if has_repr_c(&s.attrs) && name.starts_with("Opc") {
+                    for field in &s.fields {
+                        if let Some(f) = &field.ident {
+                            if !is_snake_case(&f.to_string()) {
+                                out.problems.push(format!(
+                                    "{file}: the field {name}::{f} must be snake_case (docs/api-conventions.md, Names)"
+                                ));
+                            }
+                        }
+                    }
+                }
+            }
+            syn::Item::Enum(e) if is_pub(&e.vis) && !generated => {
+                out.origins
+                    .entry(e.ident.to_string())
+                    .or_insert_with(|| file.to_string());
+            }
+            syn::Item::Const(c) if is_pub(&c.vis) && !generated => {
+                out.origins
+                    .entry(c.ident.to_string())
+                    .or_insert_with(|| file.to_string());
             }
             syn::Item::Mod(m) if !is_cfg_test(&m.attrs) => {
                 if let Some((_, items)) = &m.content {
@@ -256,6 +387,7 @@ pub fn read(root: &Path, traits: &[String]) -> Sources {
     let mut out = Sources {
         functions: BTreeMap::new(),
         callbacks: BTreeMap::new(),
+        origins: BTreeMap::new(),
         problems: Vec::new(),
         checked: 0,
     };
@@ -286,6 +418,7 @@ mod tests {
         let mut sources = Sources {
             functions: BTreeMap::new(),
             callbacks: BTreeMap::new(),
+            origins: BTreeMap::new(),
             problems: Vec::new(),
             checked: 0,
         };
@@ -392,6 +525,7 @@ mod tests {
         let mut sources = Sources {
             functions: BTreeMap::new(),
             callbacks: BTreeMap::new(),
+            origins: BTreeMap::new(),
             problems: Vec::new(),
             checked: 0,
         };
@@ -405,5 +539,59 @@ mod tests {
         assert_eq!(sources.functions["OpcX"], "C");
         assert_eq!(sources.callbacks["Cb"], "C");
         assert_eq!(sources.checked, 2);
+    }
+
+    #[test]
+    fn parameter_names_follow_the_naming_rule() {
+        let good = r#"
+            #[no_mangle] pub unsafe extern "C" fn OpcA(out_count: *mut u32, riid: REFIID, ppv: *mut *mut c_void) -> Hr { ffi::guard!(0, { 0 }) }
+            #[no_mangle] pub unsafe extern "C" fn MatchPatternW(string: LPCWSTR, pattern: LPCWSTR, bCaseSensitive: BOOL) -> Crossed<BOOL> { ffi::guard!(0, { 0 }) }
+            #[no_mangle] pub unsafe extern "system" fn DllInstall(bInstall: BOOL, pszCmdLine: LPCWSTR) -> Hr { ffi::guard!(0, { 0 }) }
+            pub type OpcCb = Option<unsafe extern "C" fn(context: *mut c_void, locale: LCID)>;
+            #[repr(C)] pub struct OpcOptions { pub struct_size: u32, pub locale_count: u32 }
+            #[repr(C)] pub struct CONNECTDATA { pub pUnk: *mut IUnknown, pub dwCookie: DWORD }
+        "#;
+        assert_eq!(problems(good), Vec::<String>::new());
+
+        let p = problems(
+            r#"#[no_mangle] pub unsafe extern "C" fn OpcA(ppName: *mut LPWSTR) -> Hr { ffi::guard!(0, { 0 }) }"#,
+        );
+        assert!(
+            p.len() == 1 && p[0].contains("OpcA: the parameter `ppName` must be snake_case"),
+            "{p:?}"
+        );
+
+        let p = problems(
+            r#"#[no_mangle] pub unsafe extern "C" fn MatchPatternA(string: LPCSTR, pattern: LPCSTR, case_sensitive: BOOL) -> Crossed<BOOL> { ffi::guard!(0, { 0 }) }"#,
+        );
+        assert!(
+            p.len() == 1 && p[0].contains("the specification's parameter names (string, pattern, bCaseSensitive)"),
+            "{p:?}"
+        );
+
+        let p = problems(r#"pub type OpcCb = Option<unsafe extern "C" fn(pContext: *mut c_void)>;"#);
+        assert!(
+            p.len() == 1 && p[0].contains("OpcCb: the parameter `pContext`"),
+            "{p:?}"
+        );
+
+        let p = problems(r#"pub type OpcCb = Option<unsafe extern "C" fn(*mut c_void)>;"#);
+        assert!(p.len() == 1 && p[0].contains("must name its parameters"), "{p:?}");
+
+        let p = problems("#[repr(C)] pub struct OpcOptions { pub struct_size: u32, pub dwFlags: u32 }");
+        assert!(
+            p.len() == 1 && p[0].contains("OpcOptions::dwFlags must be snake_case"),
+            "{p:?}"
+        );
+    }
+
+    #[test]
+    fn snake_case_is_lower_case_words_joined_by_one_underscore() {
+        for good in ["reg", "command_line", "timed_out", "da10_vendor", "ppv", "riid"] {
+            assert!(is_snake_case(good), "{good}");
+        }
+        for bad in ["ppName", "bCaseSensitive", "_x", "x_", "a__b", "", "Reg", "9lives"] {
+            assert!(!is_snake_case(bad), "{bad}");
+        }
     }
 }
