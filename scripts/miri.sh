@@ -4,9 +4,9 @@
 # (those that do are `#[cfg_attr(miri, ignore)]` with the reason, and fewer cases run under
 # `cfg(miri)`; see docs/dev/testing.md). Tree Borrows, the second opinion on aliasing, runs the tests
 # of the code that shares raw pointers between objects, interfaces and threads: the COM core and
-# every COM object (com, common, shutdown, proxy, serverlist, server, security, locale, errors) and the
-# thread stress test; the pattern matcher and the registry, whose unsafe code only reads the caller's
-# strings and structures, run under Stacked Borrows only. Any report of undefined behaviour, a leak, a
+# every COM object (com, common, shutdown, proxy, serverlist, module, server, security, locale,
+# errors) and the thread stress test; the pattern matcher and the registry, whose unsafe code only
+# reads the caller's strings and structures, run under Stacked Borrows only. Any report of undefined behaviour, a leak, a
 # failed or missing test fails the run. Prints, per model, how many tests ran and how long it took.
 #
 # Usage: scripts/miri.sh [stacked|tree]...     (both when none is given; test.sh runs both)
@@ -20,7 +20,7 @@ models=("$@")
 [ "${#models[@]}" -eq 0 ] && models=(stacked tree)
 declare -A flags=([stacked]="" [tree]="-Zmiri-tree-borrows")
 # Test-name filters per model (libtest: a test runs when its path contains one of them).
-declare -A filters=([stacked]="" [tree]="com:: common:: shutdown:: proxy:: serverlist:: server:: security:: locale:: errors:: stress_tests")
+declare -A filters=([stacked]="" [tree]="com:: common:: shutdown:: proxy:: serverlist:: module:: server:: security:: locale:: errors:: stress_tests")
 for m in "${models[@]}"; do
     [ -n "${flags[$m]+set}" ] || { echo "usage: scripts/miri.sh [stacked|tree]..." >&2; exit 2; }
 done

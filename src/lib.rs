@@ -10,7 +10,11 @@
 //! - `errors`: the error text catalog behind GetErrorString (chapter 5.1.4)
 //! - `shutdown`: the IOPCShutdown connection point for servers and a shutdown sink for clients (chapter 4)
 //! - `registry`: the registry abstraction and the registration helpers (chapter 6)
-//! - `serverlist`: the server browser OPCServerList and the COM server entry points (chapter 7)
+//! - `serverlist`: the server browser OPCServerList (chapter 7)
+//! - `server`: a server's COM plumbing (class objects, the server count, the `Dll*` module functions
+//!   over a class table, the EXE host), which servers built on the library use
+//! - `module`: opccomn's own class table (OPCServerList) and its `Dll*` entry points, over `server`'s
+//!   module functions
 //! - `security`: DCOM process security and proxy blankets, hardened for KB5004442
 //! - `proxy`: opccomn.dll as the proxy/stub of the five OPC Common interfaces, and its registration
 //!
@@ -28,6 +32,8 @@ pub mod registry;
 pub mod security;
 pub mod server;
 pub mod serverlist;
+// After `serverlist`: the header declares the modules' functions in this order.
+pub mod module;
 pub mod shutdown;
 
 #[cfg(test)]

@@ -97,27 +97,31 @@ pub(crate) trait EnumInterface: Send + Sync + Sized + 'static {
 macro_rules! enum_impl {
     ($trait:path, $kind:ty) => {
         impl $trait for $crate::com::enumerator::Enumerator<$kind> {
-            unsafe fn Next(
+            fn Next(
                 this: &$crate::com::object::ComObject<Self>,
                 celt: $crate::com::ULONG,
-                rgelt: *mut <<$kind as $crate::com::enumerator::EnumInterface>::Item as $crate::com::enumerator::Element>::Out,
-                pceltFetched: *mut $crate::com::ULONG,
+                rgelt: $crate::com::ffi::OutArray<
+                    '_,
+                    <<$kind as $crate::com::enumerator::EnumInterface>::Item as $crate::com::enumerator::Element>::Out,
+                >,
+                pceltFetched: Option<$crate::com::ffi::Out<'_, $crate::com::ULONG>>,
             ) -> $crate::com::ffi::FfiResult {
-                // SAFETY: forwarded from the generated shim's caller.
-                unsafe { $crate::com::enumerator::next(this, celt, rgelt, pceltFetched) }
+                $crate::com::enumerator::next(this, celt, rgelt, pceltFetched)
             }
-            fn Skip(this: &$crate::com::object::ComObject<Self>, celt: $crate::com::ULONG) -> $crate::com::ffi::FfiResult {
+            fn Skip(
+                this: &$crate::com::object::ComObject<Self>,
+                celt: $crate::com::ULONG,
+            ) -> $crate::com::ffi::FfiResult {
                 $crate::com::enumerator::skip(this, celt)
             }
             fn Reset(this: &$crate::com::object::ComObject<Self>) -> $crate::com::ffi::FfiResult {
                 $crate::com::enumerator::reset(this)
             }
-            unsafe fn Clone(
+            fn Clone(
                 this: &$crate::com::object::ComObject<Self>,
-                ppenum: *mut *mut <$kind as $crate::com::enumerator::EnumInterface>::Iface,
+                ppenum: $crate::com::ffi::Out<'_, *mut <$kind as $crate::com::enumerator::EnumInterface>::Iface>,
             ) -> $crate::com::ffi::FfiResult {
-                // SAFETY: forwarded from the generated shim's caller.
-                unsafe { $crate::com::enumerator::clone(this, ppenum) }
+                $crate::com::enumerator::clone(this, ppenum)
             }
         }
     };
@@ -173,33 +177,27 @@ fn all_or_false(count: usize, celt: ULONG) -> HRESULT {
     }
 }
 
-/// IEnumXXX::Next (the generated shim has reset `pceltFetched`).
-///
-/// # Safety
-/// COM's arguments: `rgelt` has room for `celt` elements (or for as many as are left), `pceltFetched`
-/// is NULL or writable.
-pub(crate) unsafe fn next<K: EnumInterface>(
+/// IEnumXXX::Next (the generated shim has reset `pceltFetched` and refused a NULL `rgelt` for a
+/// `celt` above 0).
+pub(crate) fn next<K: EnumInterface>(
     e: &ComObject<Enumerator<K>>,
     celt: ULONG,
-    rgelt: *mut <K::Item as Element>::Out,
-    pceltFetched: *mut ULONG,
+    mut rgelt: ffi::OutArray<'_, <K::Item as Element>::Out>,
+    pceltFetched: Option<ffi::Out<'_, ULONG>>,
 ) -> FfiResult {
-    // SAFETY: the caller vouches a non-NULL `pceltFetched` is writable.
-    let fetched = unsafe { ffi::out_opt(pceltFetched) };
     if celt == 0 {
         return Ok(S_OK);
     }
     // COM: the count may be omitted only when asking for one element.
-    if fetched.is_none() && celt > 1 {
+    if pceltFetched.is_none() && celt > 1 {
         return Err(Fail::Null);
     }
-    let rgelt = ffi::in_ptr(rgelt)?.as_ptr();
     let (start, count) = e.advance(celt);
     for (i, item) in e.items[start..start + count].iter().enumerate() {
-        // SAFETY: `i < count <= celt`; the caller provides room for the elements returned.
-        unsafe { rgelt.add(i).write(item.hand_out()) };
+        // `i < count <= celt`, the room the caller gave.
+        rgelt.write(i, item.hand_out());
     }
-    if let Some(fetched) = fetched {
+    if let Some(fetched) = pceltFetched {
         // `count <= celt` fits a ULONG.
         fetched.write(count as ULONG);
     }
@@ -219,14 +217,9 @@ pub(crate) fn reset<K: EnumInterface>(e: &ComObject<Enumerator<K>>) -> FfiResult
 }
 
 /// IEnumXXX::Clone: a new enumerator over the same snapshot, at the same position.
-///
-/// # Safety
-/// `ppenum` NULL or writable.
-pub(crate) unsafe fn clone<K: EnumInterface>(e: &ComObject<Enumerator<K>>, ppenum: *mut *mut K::Iface) -> FfiResult {
-    // SAFETY: the caller vouches a non-NULL `ppenum` is writable.
-    let out = unsafe { ffi::out(ppenum) }?;
+pub(crate) fn clone<K: EnumInterface>(e: &ComObject<Enumerator<K>>, ppenum: ffi::Out<'_, *mut K::Iface>) -> FfiResult {
     let position = *e.position();
-    out.write(Enumerator::<K>::create(e.items.clone(), position));
+    ppenum.write(Enumerator::<K>::create(e.items.clone(), position));
     Ok(S_OK)
 }
 

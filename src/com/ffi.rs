@@ -14,6 +14,11 @@
 //! in-array. A NULL argument gives [`Fail::Null`], which the boundary turns into the function's NULL
 //! code, so the rule is written once per function and cannot drift between functions of one kind.
 //!
+//! The generated shim of every interface method reads its arguments once with them and hands the
+//! object's (safe) trait method what they checked, typed and bound to the call: [`Out`], [`OutArray`],
+//! [`WStr`], [`InArray`], [`Iface`], [`Opaque`] (`src/com/interfaces.rs` says which IDL shape gets
+//! which).
+//!
 //! Both macros return a [`Crossed<T>`] ([`Hr`] for an HRESULT), which code outside this module cannot
 //! make from a value of its own, and every entry of a vtable the library fills returns one (the
 //! vtables, their shims and the trait an object implements per interface are generated from the IDL:
@@ -36,6 +41,7 @@
 //! answer it with E_INVALIDARG, as the OPC specifications do. Invalid content (over-long or invalid
 //! UTF-16 strings, huge counts) is E_INVALIDARG under both rules.
 
+use core::marker::PhantomData;
 use core::ptr::NonNull;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -331,14 +337,14 @@ macro_rules! ffi_guard {
 pub use crate::ffi_boundary as boundary;
 pub use crate::ffi_guard as guard;
 
-/// A checked, writable out-parameter. The boundary has already written its failure value; the body
-/// writes the result once it has succeeded.
-pub struct Out<T>(NonNull<T>);
+/// A checked, writable out-parameter, for the call it was passed to (`'a`). The boundary has already
+/// written its failure value; the body writes the result once it has succeeded.
+pub struct Out<'a, T>(NonNull<T>, PhantomData<&'a mut T>);
 
-impl<T> Out<T> {
+impl<T> Out<'_, T> {
     /// Stores the result.
     pub fn write(self, value: T) {
-        // SAFETY: `out` checked the pointer and its caller vouched it is writable.
+        // SAFETY: `out` checked the pointer and its caller vouched it is writable for the call.
         unsafe { self.0.as_ptr().write(value) }
     }
 
@@ -348,20 +354,204 @@ impl<T> Out<T> {
     }
 }
 
+impl<'a, T> Out<'a, *mut T> {
+    /// The same out-parameter, for a pointer to another type (a thin pointer either way): for a method
+    /// that hands out an object under an interface with another's layout (IOPCEnumGUID as IEnumGUID).
+    pub fn cast_pointee<U>(self) -> Out<'a, *mut U> {
+        Out(self.0.cast(), PhantomData)
+    }
+}
+
 /// An out-parameter: NULL gives [`Fail::Null`].
 ///
 /// # Safety
-/// `p` must be NULL or valid for writing one `T` for the rest of the call.
-pub unsafe fn out<T>(p: *mut T) -> FfiResult<Out<T>> {
-    NonNull::new(p).map(Out).ok_or(Fail::Null)
+/// `p` must be NULL or valid for writing one `T` for `'a` (the rest of the call).
+pub unsafe fn out<'a, T>(p: *mut T) -> FfiResult<Out<'a, T>> {
+    NonNull::new(p).map(|p| Out(p, PhantomData)).ok_or(Fail::Null)
 }
 
 /// An optional out-parameter: `None` for NULL.
 ///
 /// # Safety
 /// As for [`out`].
-pub unsafe fn out_opt<T>(p: *mut T) -> Option<Out<T>> {
-    NonNull::new(p).map(Out)
+pub unsafe fn out_opt<'a, T>(p: *mut T) -> Option<Out<'a, T>> {
+    NonNull::new(p).map(|p| Out(p, PhantomData))
+}
+
+/// An out-array (`[out, size_is(len)]`: an enumerator's `rgelt`), for the call it was passed to: room
+/// for `len` elements, written one by one (the method says how many it wrote). Never reset: its size
+/// may be zero.
+pub struct OutArray<'a, T> {
+    first: NonNull<T>,
+    len: usize,
+    call: PhantomData<&'a mut [T]>,
+}
+
+impl<T> OutArray<'_, T> {
+    /// The room the caller gave, in elements.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the caller gave no room.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Stores element `index`, which must be below [`len`](Self::len) (else it panics, which the
+    /// boundary turns into E_UNEXPECTED).
+    pub fn write(&mut self, index: usize, value: T) {
+        assert!(index < self.len, "an out-array has room for {} elements", self.len);
+        // SAFETY: `out_array`'s caller vouched for `len` writable elements; `index` is below it.
+        unsafe { self.first.as_ptr().add(index).write(value) }
+    }
+}
+
+/// An out-array of `len` elements: NULL gives [`Fail::Null`] unless `len` is 0 (then it may be NULL,
+/// and nothing is ever written).
+///
+/// # Safety
+/// A non-NULL `p` must be valid for writing `len` elements for `'a` (the rest of the call); a caller
+/// that gives less room must not be asked for more elements than it has room for (COM's enumerators
+/// write only the elements that exist).
+pub unsafe fn out_array<'a, T>(p: *mut T, len: u32) -> FfiResult<OutArray<'a, T>> {
+    let first = match NonNull::new(p) {
+        Some(first) => first,
+        None if len == 0 => NonNull::dangling(),
+        None => return Err(Fail::Null),
+    };
+    Ok(OutArray {
+        first,
+        len: len as usize,
+        call: PhantomData,
+    })
+}
+
+/// A string argument (`[in, string]`: `LPCWSTR`, `LPCOLESTR`), for the call it was passed to: not
+/// NULL, and NUL-terminated (or at least 2^19 + 1 units long). Its length is read only when asked
+/// ([`units`](Self::units)), so a method that only passes it on reads nothing.
+#[derive(Clone, Copy)]
+pub struct WStr<'a>(NonNull<WCHAR>, PhantomData<&'a [WCHAR]>);
+
+impl<'a> WStr<'a> {
+    /// The string as it was passed, NUL-terminated, for handing on.
+    pub fn as_ptr(self) -> *const WCHAR {
+        self.0.as_ptr()
+    }
+
+    /// Its code units without the NUL (invalid UTF-16 kept); E_INVALIDARG when it is longer than
+    /// 2^19 units (only that many are read).
+    pub fn units(self) -> FfiResult<&'a [WCHAR]> {
+        // SAFETY: `in_wstr`'s caller vouched for a NUL-terminated string valid for `'a`.
+        unsafe { wstr_units(self.0.as_ptr(), MAX_STRING_UNITS) }.ok_or(Fail::Code(E_INVALIDARG))
+    }
+}
+
+/// A string argument: NULL gives [`Fail::Null`].
+///
+/// # Safety
+/// `p` must be NULL or point at a NUL-terminated UTF-16 string (or at least 2^19 + 1 readable units)
+/// that stays readable for `'a` (the rest of the call).
+pub unsafe fn in_wstr<'a>(p: *const WCHAR) -> FfiResult<WStr<'a>> {
+    NonNull::new(p.cast_mut())
+        .map(|p| WStr(p, PhantomData))
+        .ok_or(Fail::Null)
+}
+
+/// A string argument that may be NULL: `None` for NULL.
+///
+/// # Safety
+/// As for [`in_wstr`].
+pub unsafe fn in_wstr_opt<'a>(p: *const WCHAR) -> Option<WStr<'a>> {
+    NonNull::new(p.cast_mut()).map(|p| WStr(p, PhantomData))
+}
+
+/// An in-array argument (`[in, size_is(count)]`), for the call it was passed to. It is read only when
+/// asked, against the method's own limit ([`read`](Self::read)): a method may give a count a meaning
+/// of its own (the server list takes `(ULONG)-1` as "any category") before it reads anything.
+#[derive(Clone, Copy)]
+pub struct InArray<'a, T> {
+    first: *const T,
+    count: u32,
+    call: PhantomData<&'a [T]>,
+}
+
+impl<'a, T> InArray<'a, T> {
+    /// The count the caller gave.
+    pub fn count(self) -> u32 {
+        self.count
+    }
+
+    /// The items, as [`in_array`] reads them: an empty slice for a count of 0, [`Fail::Null`] for a
+    /// NULL array with another count, E_INVALIDARG for more than `max` items.
+    pub fn read(self, max: usize) -> FfiResult<&'a [T]> {
+        // SAFETY: `in_array_arg`'s caller vouched for `count` readable items (or NULL) for `'a`.
+        unsafe { in_array(self.first, self.count, max) }
+    }
+}
+
+/// An in-array argument of `count` items.
+///
+/// # Safety
+/// `p` must be NULL or point at `count` readable, initialised items for `'a` (the rest of the call).
+pub unsafe fn in_array_arg<'a, T>(p: *const T, count: u32) -> InArray<'a, T> {
+    InArray {
+        first: p,
+        count,
+        call: PhantomData,
+    }
+}
+
+/// A pointer argument the library passes on without reading it (`[in] void *`, or an interface it
+/// never calls, as IMarshal's `IStream *`), for the call it was passed to; perhaps NULL.
+#[derive(Clone, Copy)]
+pub struct Opaque<'a>(*mut core::ffi::c_void, PhantomData<&'a ()>);
+
+impl Opaque<'_> {
+    /// The pointer as the caller passed it, for handing on.
+    pub fn as_ptr(self) -> *mut core::ffi::c_void {
+        self.0
+    }
+}
+
+/// A pointer argument passed on without being read: no check.
+pub fn opaque<'a, T>(p: *mut T) -> Opaque<'a> {
+    Opaque(p.cast(), PhantomData)
+}
+
+/// An interface pointer argument (`[in] IFoo *`), for the call it was passed to: not NULL, and a valid
+/// COM interface pointer of the caller's for `'a` (the caller holds its reference meanwhile).
+#[derive(Clone, Copy)]
+pub struct Iface<'a, I>(NonNull<I>, PhantomData<&'a I>);
+
+impl<I> Iface<'_, I> {
+    /// The interface pointer, for handing on (not AddRef'd).
+    pub fn as_ptr(self) -> *mut I {
+        self.0.as_ptr()
+    }
+
+    /// QueryInterface on the object, checked as a foreign object's answer requires
+    /// ([`query`](super::unknown::query)).
+    pub fn query<J>(self, iid: &super::types::GUID) -> Result<super::unknown::Counted<J>, HRESULT> {
+        // SAFETY: `in_iface`'s caller vouched for a valid interface pointer for the call.
+        unsafe { super::unknown::query(self.0.as_ptr().cast(), iid) }
+    }
+}
+
+/// An interface pointer argument: NULL gives [`Fail::Null`].
+///
+/// # Safety
+/// `p` must be NULL or a valid COM interface pointer for `'a` (the rest of the call).
+pub unsafe fn in_iface<'a, I>(p: *mut I) -> FfiResult<Iface<'a, I>> {
+    NonNull::new(p).map(|p| Iface(p, PhantomData)).ok_or(Fail::Null)
+}
+
+/// An interface pointer argument that may be NULL (`[in, unique]`): `None` for NULL.
+///
+/// # Safety
+/// As for [`in_iface`].
+pub unsafe fn in_iface_opt<'a, I>(p: *mut I) -> Option<Iface<'a, I>> {
+    NonNull::new(p).map(|p| Iface(p, PhantomData))
 }
 
 /// An in-reference (a GUID, an options struct, an object the function reads): NULL gives
@@ -501,6 +691,46 @@ mod tests {
         assert_eq!(hr, E_OUTOFMEMORY);
         assert_eq!(guard(7, || -> i32 { panic!("boom") }), 7);
         assert_eq!(guard(7, || 1), 1);
+    }
+
+    #[test]
+    fn the_typed_arguments_hold_what_the_shim_checked() {
+        let text = [0x61u16, 0xD800, 0];
+        let long = vec![0x61u16; MAX_STRING_UNITS + 2];
+        let items = [1u32, 2, 3];
+        let mut room = [0u32; 2];
+        // SAFETY: every pointer is NULL or a local valid for the test, as each reader requires.
+        unsafe {
+            // A string is checked for NULL at once and read when asked, bounded.
+            assert!(in_wstr(ptr::null()).is_err_and(|f| f == Fail::Null));
+            assert!(in_wstr_opt(ptr::null()).is_none());
+            let s = in_wstr(text.as_ptr()).unwrap();
+            assert_eq!((s.units().unwrap(), s.as_ptr()), (&text[..2], text.as_ptr()));
+            let s = in_wstr(long.as_ptr()).unwrap();
+            assert_eq!(s.units().err(), Some(Fail::Code(E_INVALIDARG)));
+            // An in-array is read against the method's limit, NULL refused only with a count.
+            assert_eq!(in_array_arg::<u32>(ptr::null(), 0).read(1).unwrap(), &[] as &[u32]);
+            assert_eq!(in_array_arg::<u32>(ptr::null(), 7).count(), 7);
+            assert_eq!(in_array_arg::<u32>(ptr::null(), 7).read(8).err(), Some(Fail::Null));
+            assert_eq!(
+                in_array_arg(items.as_ptr(), 3).read(2).err(),
+                Some(Fail::Code(E_INVALIDARG))
+            );
+            assert_eq!(in_array_arg(items.as_ptr(), 3).read(3).unwrap(), &items);
+            // An out-array: NULL only for no room; written within its room.
+            assert!(out_array::<u32>(ptr::null_mut(), 1).is_err_and(|f| f == Fail::Null));
+            assert!(out_array::<u32>(ptr::null_mut(), 0).unwrap().is_empty());
+            let mut a = out_array(room.as_mut_ptr(), 2).unwrap();
+            a.write(1, 9);
+            assert_eq!(a.len(), 2);
+            let beyond = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| a.write(2, 1)));
+            assert!(beyond.is_err(), "no write past the room");
+            assert_eq!(room, [0, 9]);
+            // Interface pointers and pointers passed on.
+            assert!(in_iface::<u32>(ptr::null_mut()).is_err_and(|f| f == Fail::Null));
+            assert!(in_iface_opt::<u32>(ptr::null_mut()).is_none());
+            assert!(opaque::<u32>(ptr::null_mut()).as_ptr().is_null());
+        }
     }
 
     #[test]

@@ -18,6 +18,13 @@
 //!   is one `ffi::boundary!` (HRESULT methods: the interface's NULL rule, the IDL's `[out]`
 //!   parameters reset on entry and on failure, panics caught) or `ffi::guard!` (the others)
 //!   around a call of the trait's method.
+//! - The trait's methods are safe: the shim checks every pointer argument once, under the
+//!   interface's NULL rule, and hands the method what it checked, typed from the IDL and valid
+//!   for the call only: `[out]` as [`ffi::Out`] (`Option` where COM allows NULL), `[out,
+//!   size_is]` as [`ffi::OutArray`], `REFIID`/`REFCLSID` as a reference, `[in, string]` as
+//!   [`ffi::WStr`], `[in, size_is]` as [`ffi::InArray`], an interface pointer as
+//!   [`ffi::Iface`] (`Option` for `[unique]`), `void *` as [`ffi::Opaque`], and an IUnknown
+//!   method's `This` as a [`ThisSlot`].
 //! - `IFoo::IID` and `IFoo::METHODS` (IUnknown's three included).
 
 #![allow(non_snake_case, clippy::too_many_arguments)]
@@ -25,7 +32,7 @@
 use core::ffi::c_void;
 
 use super::ffi::{self, Crossed, FfiResult, Foreign, Hr};
-use super::object::{ComClass, ComObject, Vtable};
+use super::object::{ComClass, ComObject, ThisSlot, Vtable};
 use super::types::{
     BOOL, CATEGORYINFO, CATID, CLSID, CONNECTDATA, DWORD, GUID, HRESULT, IID, LCID, LPCLSID, LPCOLESTR, LPCWSTR,
     LPOLESTR, LPWSTR, REFCLSID, REFIID, ULONG,
@@ -135,29 +142,17 @@ pub trait IUnknownImpl {
     ///
     /// # Returns
     /// S_OK; E_NOINTERFACE when the object has no such interface; E_POINTER for a NULL argument.
-    ///
-    /// # Safety
-    /// Called by the generated shim with `This`, a slot whose vtable was made with this
-    /// implementation, and the COM caller's arguments.
-    unsafe fn QueryInterface(This: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult;
+    fn QueryInterface(This: ThisSlot<'_>, riid: &IID, ppvObject: ffi::Out<'_, *mut c_void>) -> FfiResult;
     /// Adds a reference.
     ///
     /// # Returns
     /// The new count, for diagnostics only.
-    ///
-    /// # Safety
-    /// Called by the generated shim with `This`, a slot whose vtable was made with this
-    /// implementation, and the COM caller's arguments.
-    unsafe fn AddRef(This: *mut IUnknown) -> ULONG;
+    fn AddRef(This: ThisSlot<'_>) -> ULONG;
     /// Releases a reference; the object goes with the last.
     ///
     /// # Returns
     /// The new count, for diagnostics only.
-    ///
-    /// # Safety
-    /// Called by the generated shim with `This`, a slot whose vtable was made with this
-    /// implementation, and the COM caller's arguments.
-    unsafe fn Release(This: *mut IUnknown) -> ULONG;
+    fn Release(This: ThisSlot<'_>) -> ULONG;
 }
 
 unsafe extern "system" fn IUnknown_QueryInterface<U: IUnknownImpl, I>(
@@ -166,25 +161,30 @@ unsafe extern "system" fn IUnknown_QueryInterface<U: IUnknownImpl, I>(
     ppvObject: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppvObject], {
-        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the
-        // arguments are the COM caller's.
-        unsafe { <U as IUnknownImpl>::QueryInterface(This.cast(), riid, ppvObject) }
+        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for, so
+        // `This` is a slot of a live object of the library; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, ppvObject) = unsafe { (ThisSlot::new(This.cast()), ffi::in_ref(riid)?, ffi::out(ppvObject)?) };
+        <U as IUnknownImpl>::QueryInterface(this, riid, ppvObject)
     })
 }
 
 unsafe extern "system" fn IUnknown_AddRef<U: IUnknownImpl, I>(This: *mut I) -> Crossed<ULONG> {
     ffi::guard!(0, {
-        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the
-        // arguments are the COM caller's.
-        unsafe { <U as IUnknownImpl>::AddRef(This.cast()) }
+        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for, so
+        // `This` is a slot of a live object of the library.
+        let this = unsafe { ThisSlot::new(This.cast()) };
+        <U as IUnknownImpl>::AddRef(this)
     })
 }
 
 unsafe extern "system" fn IUnknown_Release<U: IUnknownImpl, I>(This: *mut I) -> Crossed<ULONG> {
     ffi::guard!(0, {
-        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the
-        // arguments are the COM caller's.
-        unsafe { <U as IUnknownImpl>::Release(This.cast()) }
+        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for, so
+        // `This` is a slot of a live object of the library.
+        let this = unsafe { ThisSlot::new(This.cast()) };
+        <U as IUnknownImpl>::Release(this)
     })
 }
 
@@ -380,11 +380,12 @@ pub trait IEnumGUIDImpl: ComClass {
     ///
     /// # Returns
     /// S_OK when `celt` were copied, S_FALSE when fewer remained.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> FfiResult;
+    fn Next(
+        this: &ComObject<Self>,
+        celt: ULONG,
+        rgelt: ffi::OutArray<'_, GUID>,
+        pceltFetched: Option<ffi::Out<'_, ULONG>>,
+    ) -> FfiResult;
     /// Skips elements.
     ///
     /// # Parameters
@@ -405,11 +406,7 @@ pub trait IEnumGUIDImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_OUTOFMEMORY.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppenum: *mut *mut IEnumGUID) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IEnumGUID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IEnumGUID_Next<T: IEnumGUIDImpl>(
@@ -419,33 +416,47 @@ unsafe extern "system" fn IEnumGUID_Next<T: IEnumGUIDImpl>(
     pceltFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pceltFetched], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Next(ComObject::<T>::from_interface(This), celt, rgelt, pceltFetched) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgelt, pceltFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(rgelt, celt)?,
+                ffi::out_opt(pceltFetched),
+            )
+        };
+        <T as IEnumGUIDImpl>::Next(this, celt, rgelt, pceltFetched)
     })
 }
 
 unsafe extern "system" fn IEnumGUID_Skip<T: IEnumGUIDImpl>(This: *mut IEnumGUID, celt: ULONG) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Skip(ComObject::<T>::from_interface(This), celt) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumGUIDImpl>::Skip(this, celt)
     })
 }
 
 unsafe extern "system" fn IEnumGUID_Reset<T: IEnumGUIDImpl>(This: *mut IEnumGUID) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumGUIDImpl>::Reset(this)
     })
 }
 
 unsafe extern "system" fn IEnumGUID_Clone<T: IEnumGUIDImpl>(This: *mut IEnumGUID, ppenum: *mut *mut IEnumGUID) -> Hr {
     ffi::boundary!(Com, [ppenum], {
-        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumGUIDImpl>::Clone(ComObject::<T>::from_interface(This), ppenum) }
+        // SAFETY: `IEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppenum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppenum)?) };
+        <T as IEnumGUIDImpl>::Clone(this, ppenum)
     })
 }
 
@@ -649,15 +660,11 @@ pub trait IEnumConnectionsImpl: ComClass {
     ///
     /// # Returns
     /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(
+    fn Next(
         this: &ComObject<Self>,
         cConnections: ULONG,
-        rgcd: *mut CONNECTDATA,
-        pcFetched: *mut ULONG,
+        rgcd: ffi::OutArray<'_, CONNECTDATA>,
+        pcFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
     /// Skips elements.
     ///
@@ -679,11 +686,7 @@ pub trait IEnumConnectionsImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_OUTOFMEMORY.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnections) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult;
 }
 
 unsafe extern "system" fn IEnumConnections_Next<T: IEnumConnectionsImpl>(
@@ -693,11 +696,18 @@ unsafe extern "system" fn IEnumConnections_Next<T: IEnumConnectionsImpl>(
     pcFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pcFetched], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IEnumConnectionsImpl>::Next(ComObject::<T>::from_interface(This), cConnections, rgcd, pcFetched)
-        }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcd, pcFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(rgcd, cConnections)?,
+                ffi::out_opt(pcFetched),
+            )
+        };
+        <T as IEnumConnectionsImpl>::Next(this, cConnections, rgcd, pcFetched)
     })
 }
 
@@ -706,17 +716,19 @@ unsafe extern "system" fn IEnumConnections_Skip<T: IEnumConnectionsImpl>(
     cConnections: ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionsImpl>::Skip(ComObject::<T>::from_interface(This), cConnections) }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionsImpl>::Skip(this, cConnections)
     })
 }
 
 unsafe extern "system" fn IEnumConnections_Reset<T: IEnumConnectionsImpl>(This: *mut IEnumConnections) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionsImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionsImpl>::Reset(this)
     })
 }
 
@@ -725,9 +737,12 @@ unsafe extern "system" fn IEnumConnections_Clone<T: IEnumConnectionsImpl>(
     ppEnum: *mut *mut IEnumConnections,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionsImpl>::Clone(ComObject::<T>::from_interface(This), ppEnum) }
+        // SAFETY: `IEnumConnectionsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IEnumConnectionsImpl>::Clone(this, ppEnum)
     })
 }
 
@@ -953,11 +968,7 @@ pub trait IConnectionPointImpl: ComClass {
     ///
     /// # Returns
     /// S_OK.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetConnectionInterface(this: &ComObject<Self>, pIID: *mut IID) -> FfiResult;
+    fn GetConnectionInterface(this: &ComObject<Self>, pIID: ffi::Out<'_, IID>) -> FfiResult;
     /// The container (the server object) this point belongs to.
     ///
     /// # Parameters
@@ -965,13 +976,9 @@ pub trait IConnectionPointImpl: ComClass {
     ///
     /// # Returns
     /// S_OK.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetConnectionPointContainer(
+    fn GetConnectionPointContainer(
         this: &ComObject<Self>,
-        ppCPC: *mut *mut IConnectionPointContainer,
+        ppCPC: ffi::Out<'_, *mut IConnectionPointContainer>,
     ) -> FfiResult;
     /// Connects a sink.
     ///
@@ -982,11 +989,7 @@ pub trait IConnectionPointImpl: ComClass {
     /// # Returns
     /// S_OK; CONNECT_E_CANNOTCONNECT when the sink lacks the outgoing interface; CONNECT_E_ADVISELIMIT
     /// when the point has all the sinks it takes.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Advise(this: &ComObject<Self>, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> FfiResult;
+    fn Advise(this: &ComObject<Self>, pUnkSink: ffi::Iface<'_, IUnknown>, pdwCookie: ffi::Out<'_, DWORD>) -> FfiResult;
     /// Disconnects a sink.
     ///
     /// # Parameters
@@ -1002,11 +1005,7 @@ pub trait IConnectionPointImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_OUTOFMEMORY.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumConnections(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnections) -> FfiResult;
+    fn EnumConnections(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult;
 }
 
 unsafe extern "system" fn IConnectionPoint_GetConnectionInterface<T: IConnectionPointImpl>(
@@ -1014,9 +1013,12 @@ unsafe extern "system" fn IConnectionPoint_GetConnectionInterface<T: IConnection
     pIID: *mut IID,
 ) -> Hr {
     ffi::boundary!(Com, [pIID], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::GetConnectionInterface(ComObject::<T>::from_interface(This), pIID) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pIID) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(pIID)?) };
+        <T as IConnectionPointImpl>::GetConnectionInterface(this, pIID)
     })
 }
 
@@ -1025,9 +1027,12 @@ unsafe extern "system" fn IConnectionPoint_GetConnectionPointContainer<T: IConne
     ppCPC: *mut *mut IConnectionPointContainer,
 ) -> Hr {
     ffi::boundary!(Com, [ppCPC], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::GetConnectionPointContainer(ComObject::<T>::from_interface(This), ppCPC) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppCPC) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppCPC)?) };
+        <T as IConnectionPointImpl>::GetConnectionPointContainer(this, ppCPC)
     })
 }
 
@@ -1037,9 +1042,18 @@ unsafe extern "system" fn IConnectionPoint_Advise<T: IConnectionPointImpl>(
     pdwCookie: *mut DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [pdwCookie], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::Advise(ComObject::<T>::from_interface(This), pUnkSink, pdwCookie) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pUnkSink, pdwCookie) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_iface(pUnkSink)?,
+                ffi::out(pdwCookie)?,
+            )
+        };
+        <T as IConnectionPointImpl>::Advise(this, pUnkSink, pdwCookie)
     })
 }
 
@@ -1048,9 +1062,10 @@ unsafe extern "system" fn IConnectionPoint_Unadvise<T: IConnectionPointImpl>(
     dwCookie: DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::Unadvise(ComObject::<T>::from_interface(This), dwCookie) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IConnectionPointImpl>::Unadvise(this, dwCookie)
     })
 }
 
@@ -1059,9 +1074,12 @@ unsafe extern "system" fn IConnectionPoint_EnumConnections<T: IConnectionPointIm
     ppEnum: *mut *mut IEnumConnections,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IConnectionPointImpl>::EnumConnections(ComObject::<T>::from_interface(This), ppEnum) }
+        // SAFETY: `IConnectionPointVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IConnectionPointImpl>::EnumConnections(this, ppEnum)
     })
 }
 
@@ -1273,15 +1291,11 @@ pub trait IEnumConnectionPointsImpl: ComClass {
     ///
     /// # Returns
     /// S_OK when `cConnections` were copied, S_FALSE when fewer remained.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(
+    fn Next(
         this: &ComObject<Self>,
         cConnections: ULONG,
-        ppCP: *mut *mut IConnectionPoint,
-        pcFetched: *mut ULONG,
+        ppCP: ffi::OutArray<'_, *mut IConnectionPoint>,
+        pcFetched: Option<ffi::Out<'_, ULONG>>,
     ) -> FfiResult;
     /// Skips elements.
     ///
@@ -1303,11 +1317,7 @@ pub trait IEnumConnectionPointsImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_OUTOFMEMORY.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult;
 }
 
 unsafe extern "system" fn IEnumConnectionPoints_Next<T: IEnumConnectionPointsImpl>(
@@ -1317,11 +1327,18 @@ unsafe extern "system" fn IEnumConnectionPoints_Next<T: IEnumConnectionPointsImp
     pcFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pcFetched], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IEnumConnectionPointsImpl>::Next(ComObject::<T>::from_interface(This), cConnections, ppCP, pcFetched)
-        }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppCP, pcFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(ppCP, cConnections)?,
+                ffi::out_opt(pcFetched),
+            )
+        };
+        <T as IEnumConnectionPointsImpl>::Next(this, cConnections, ppCP, pcFetched)
     })
 }
 
@@ -1330,9 +1347,10 @@ unsafe extern "system" fn IEnumConnectionPoints_Skip<T: IEnumConnectionPointsImp
     cConnections: ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionPointsImpl>::Skip(ComObject::<T>::from_interface(This), cConnections) }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionPointsImpl>::Skip(this, cConnections)
     })
 }
 
@@ -1340,9 +1358,10 @@ unsafe extern "system" fn IEnumConnectionPoints_Reset<T: IEnumConnectionPointsIm
     This: *mut IEnumConnectionPoints,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionPointsImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IEnumConnectionPointsImpl>::Reset(this)
     })
 }
 
@@ -1351,9 +1370,12 @@ unsafe extern "system" fn IEnumConnectionPoints_Clone<T: IEnumConnectionPointsIm
     ppEnum: *mut *mut IEnumConnectionPoints,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IEnumConnectionPointsImpl>::Clone(ComObject::<T>::from_interface(This), ppEnum) }
+        // SAFETY: `IEnumConnectionPointsVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IEnumConnectionPointsImpl>::Clone(this, ppEnum)
     })
 }
 
@@ -1521,11 +1543,7 @@ pub trait IConnectionPointContainerImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_OUTOFMEMORY.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult;
+    fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult;
     /// The connection point for an outgoing interface.
     ///
     /// # Parameters
@@ -1534,11 +1552,7 @@ pub trait IConnectionPointContainerImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; CONNECT_E_NOCONNECTION when the container has no point for `riid`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn FindConnectionPoint(this: &ComObject<Self>, riid: REFIID, ppCP: *mut *mut IConnectionPoint) -> FfiResult;
+    fn FindConnectionPoint(this: &ComObject<Self>, riid: &IID, ppCP: ffi::Out<'_, *mut IConnectionPoint>) -> FfiResult;
 }
 
 unsafe extern "system" fn IConnectionPointContainer_EnumConnectionPoints<T: IConnectionPointContainerImpl>(
@@ -1546,11 +1560,12 @@ unsafe extern "system" fn IConnectionPointContainer_EnumConnectionPoints<T: ICon
     ppEnum: *mut *mut IEnumConnectionPoints,
 ) -> Hr {
     ffi::boundary!(Com, [ppEnum], {
-        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IConnectionPointContainerImpl>::EnumConnectionPoints(ComObject::<T>::from_interface(This), ppEnum)
-        }
+        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots
+        // of `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is
+        // the COM caller's, NULL or valid for the call as the IDL declares it, which is what its
+        // reader requires.
+        let (this, ppEnum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppEnum)?) };
+        <T as IConnectionPointContainerImpl>::EnumConnectionPoints(this, ppEnum)
     })
 }
 
@@ -1560,11 +1575,18 @@ unsafe extern "system" fn IConnectionPointContainer_FindConnectionPoint<T: IConn
     ppCP: *mut *mut IConnectionPoint,
 ) -> Hr {
     ffi::boundary!(Com, [ppCP], {
-        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IConnectionPointContainerImpl>::FindConnectionPoint(ComObject::<T>::from_interface(This), riid, ppCP)
-        }
+        // SAFETY: `IConnectionPointContainerVtbl::new::<_, T>` installs this shim only in the slots
+        // of `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is
+        // the COM caller's, NULL or valid for the call as the IDL declares it, which is what its
+        // reader requires.
+        let (this, riid, ppCP) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_ref(riid)?,
+                ffi::out(ppCP)?,
+            )
+        };
+        <T as IConnectionPointContainerImpl>::FindConnectionPoint(this, riid, ppCP)
     })
 }
 
@@ -1738,15 +1760,11 @@ pub trait IClassFactoryImpl: ComClass {
     /// # Returns
     /// S_OK; CLASS_E_NOAGGREGATION when the class cannot be aggregated, or for a `pUnkOuter` with a
     /// `riid` other than IID_IUnknown; E_NOINTERFACE; the class's own errors.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CreateInstance(
+    fn CreateInstance(
         this: &ComObject<Self>,
-        pUnkOuter: *mut IUnknown,
-        riid: REFIID,
-        ppvObject: *mut *mut c_void,
+        pUnkOuter: Option<ffi::Iface<'_, IUnknown>>,
+        riid: &IID,
+        ppvObject: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
     /// Keeps the server running without an object, or ends that.
     ///
@@ -1765,19 +1783,28 @@ unsafe extern "system" fn IClassFactory_CreateInstance<T: IClassFactoryImpl>(
     ppvObject: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppvObject], {
-        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IClassFactoryImpl>::CreateInstance(ComObject::<T>::from_interface(This), pUnkOuter, riid, ppvObject)
-        }
+        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pUnkOuter, riid, ppvObject) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_iface_opt(pUnkOuter),
+                ffi::in_ref(riid)?,
+                ffi::out(ppvObject)?,
+            )
+        };
+        <T as IClassFactoryImpl>::CreateInstance(this, pUnkOuter, riid, ppvObject)
     })
 }
 
 unsafe extern "system" fn IClassFactory_LockServer<T: IClassFactoryImpl>(This: *mut IClassFactory, fLock: BOOL) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IClassFactoryImpl>::LockServer(ComObject::<T>::from_interface(This), fLock) }
+        // SAFETY: `IClassFactoryVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IClassFactoryImpl>::LockServer(this, fLock)
     })
 }
 
@@ -1914,11 +1941,7 @@ pub trait IOPCShutdownImpl: ComClass {
     ///
     /// # Returns
     /// S_OK.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn ShutdownRequest(this: &ComObject<Self>, szReason: LPCWSTR) -> FfiResult;
+    fn ShutdownRequest(this: &ComObject<Self>, szReason: Option<ffi::WStr<'_>>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCShutdown_ShutdownRequest<T: IOPCShutdownImpl>(
@@ -1926,9 +1949,12 @@ unsafe extern "system" fn IOPCShutdown_ShutdownRequest<T: IOPCShutdownImpl>(
     szReason: LPCWSTR,
 ) -> Hr {
     ffi::boundary!(Opc, [], {
-        // SAFETY: `IOPCShutdownVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCShutdownImpl>::ShutdownRequest(ComObject::<T>::from_interface(This), szReason) }
+        // SAFETY: `IOPCShutdownVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szReason) = unsafe { (ComObject::<T>::from_interface(This), ffi::in_wstr_opt(szReason)) };
+        <T as IOPCShutdownImpl>::ShutdownRequest(this, szReason)
     })
 }
 
@@ -2161,11 +2187,7 @@ pub trait IOPCCommonImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_INVALIDARG for a NULL `pdwLcid`.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult;
+    fn GetLocaleID(this: &ComObject<Self>, pdwLcid: ffi::Out<'_, LCID>) -> FfiResult;
     /// The locales SetLocaleID accepts.
     ///
     /// # Parameters
@@ -2175,14 +2197,10 @@ pub trait IOPCCommonImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_INVALIDARG for a NULL argument.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn QueryAvailableLocaleIDs(
+    fn QueryAvailableLocaleIDs(
         this: &ComObject<Self>,
-        pdwCount: *mut DWORD,
-        pdwLcid: *mut *mut LCID,
+        pdwCount: ffi::Out<'_, DWORD>,
+        pdwLcid: ffi::Out<'_, *mut LCID>,
     ) -> FfiResult;
     /// The text of an error code in the session's locale.
     ///
@@ -2192,11 +2210,7 @@ pub trait IOPCCommonImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_INVALIDARG for a code the server has no text for.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: *mut LPWSTR) -> FfiResult;
+    fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: ffi::Out<'_, LPWSTR>) -> FfiResult;
     /// The client tells the server its name, for the server's diagnostics (opccomn:
     /// OpcCommonGetClientName() and OpcCommonOptions::client_name_changed).
     ///
@@ -2205,26 +2219,26 @@ pub trait IOPCCommonImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_INVALIDARG for NULL.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn SetClientName(this: &ComObject<Self>, szName: LPCWSTR) -> FfiResult;
+    fn SetClientName(this: &ComObject<Self>, szName: ffi::WStr<'_>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCCommon_SetLocaleID<T: IOPCCommonImpl>(This: *mut IOPCCommon, dwLcid: LCID) -> Hr {
     ffi::boundary!(Opc, [], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::SetLocaleID(ComObject::<T>::from_interface(This), dwLcid) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IOPCCommonImpl>::SetLocaleID(this, dwLcid)
     })
 }
 
 unsafe extern "system" fn IOPCCommon_GetLocaleID<T: IOPCCommonImpl>(This: *mut IOPCCommon, pdwLcid: *mut LCID) -> Hr {
     ffi::boundary!(Opc, [pdwLcid], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::GetLocaleID(ComObject::<T>::from_interface(This), pdwLcid) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pdwLcid) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(pdwLcid)?) };
+        <T as IOPCCommonImpl>::GetLocaleID(this, pdwLcid)
     })
 }
 
@@ -2234,11 +2248,18 @@ unsafe extern "system" fn IOPCCommon_QueryAvailableLocaleIDs<T: IOPCCommonImpl>(
     pdwLcid: *mut *mut LCID,
 ) -> Hr {
     ffi::boundary!(Opc, [pdwCount, pdwLcid], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCCommonImpl>::QueryAvailableLocaleIDs(ComObject::<T>::from_interface(This), pdwCount, pdwLcid)
-        }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pdwCount, pdwLcid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out(pdwCount)?,
+                ffi::out(pdwLcid)?,
+            )
+        };
+        <T as IOPCCommonImpl>::QueryAvailableLocaleIDs(this, pdwCount, pdwLcid)
     })
 }
 
@@ -2248,17 +2269,23 @@ unsafe extern "system" fn IOPCCommon_GetErrorString<T: IOPCCommonImpl>(
     ppString: *mut LPWSTR,
 ) -> Hr {
     ffi::boundary!(Opc, [ppString], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::GetErrorString(ComObject::<T>::from_interface(This), dwError, ppString) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppString) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppString)?) };
+        <T as IOPCCommonImpl>::GetErrorString(this, dwError, ppString)
     })
 }
 
 unsafe extern "system" fn IOPCCommon_SetClientName<T: IOPCCommonImpl>(This: *mut IOPCCommon, szName: LPCWSTR) -> Hr {
     ffi::boundary!(Opc, [], {
-        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCCommonImpl>::SetClientName(ComObject::<T>::from_interface(This), szName) }
+        // SAFETY: `IOPCCommonVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szName) = unsafe { (ComObject::<T>::from_interface(This), ffi::in_wstr(szName)?) };
+        <T as IOPCCommonImpl>::SetClientName(this, szName)
     })
 }
 
@@ -2495,17 +2522,13 @@ pub trait IOPCServerListImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_INVALIDARG for NULL arguments or counts over 4096.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumClassesOfCategories(
+    fn EnumClassesOfCategories(
         this: &ComObject<Self>,
         cImplemented: ULONG,
-        rgcatidImpl: *mut CATID,
+        rgcatidImpl: ffi::InArray<'_, CATID>,
         cRequired: ULONG,
-        rgcatidReq: *mut CATID,
-        ppenumClsid: *mut *mut IEnumGUID,
+        rgcatidReq: ffi::InArray<'_, CATID>,
+        ppenumClsid: ffi::Out<'_, *mut IEnumGUID>,
     ) -> FfiResult;
     /// A class's ProgID and user type name.
     ///
@@ -2517,15 +2540,11 @@ pub trait IOPCServerListImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; REGDB_E_CLASSNOTREG for an unknown class; E_INVALIDARG for a NULL argument.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetClassDetails(
+    fn GetClassDetails(
         this: &ComObject<Self>,
-        clsid: REFCLSID,
-        ppszProgID: *mut LPOLESTR,
-        ppszUserType: *mut LPOLESTR,
+        clsid: &CLSID,
+        ppszProgID: ffi::Out<'_, LPOLESTR>,
+        ppszUserType: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult;
     /// The CLSID registered for a ProgID on the browsed machine.
     ///
@@ -2536,11 +2555,7 @@ pub trait IOPCServerListImpl: ComClass {
     /// # Returns
     /// S_OK; REGDB_E_CLASSNOTREG when the ProgID is not registered, CO_E_CLASSSTRING when it cannot be
     /// one; E_INVALIDARG for a NULL argument.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: LPCOLESTR, clsid: LPCLSID) -> FfiResult;
+    fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCServerList_EnumClassesOfCategories<T: IOPCServerListImpl>(
@@ -2552,18 +2567,26 @@ unsafe extern "system" fn IOPCServerList_EnumClassesOfCategories<T: IOPCServerLi
     ppenumClsid: *mut *mut IEnumGUID,
 ) -> Hr {
     ffi::boundary!(Opc, [ppenumClsid], {
-        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerListImpl>::EnumClassesOfCategories(
+        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcatidImpl, rgcatidReq, ppenumClsid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                cImplemented,
-                rgcatidImpl,
-                cRequired,
-                rgcatidReq,
-                ppenumClsid,
+                ffi::in_array_arg(rgcatidImpl, cImplemented),
+                ffi::in_array_arg(rgcatidReq, cRequired),
+                ffi::out(ppenumClsid)?,
             )
-        }
+        };
+        <T as IOPCServerListImpl>::EnumClassesOfCategories(
+            this,
+            cImplemented,
+            rgcatidImpl,
+            cRequired,
+            rgcatidReq,
+            ppenumClsid,
+        )
     })
 }
 
@@ -2574,16 +2597,19 @@ unsafe extern "system" fn IOPCServerList_GetClassDetails<T: IOPCServerListImpl>(
     ppszUserType: *mut LPOLESTR,
 ) -> Hr {
     ffi::boundary!(Opc, [ppszProgID, ppszUserType], {
-        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerListImpl>::GetClassDetails(
+        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, clsid, ppszProgID, ppszUserType) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                clsid,
-                ppszProgID,
-                ppszUserType,
+                ffi::in_ref(clsid)?,
+                ffi::out(ppszProgID)?,
+                ffi::out(ppszUserType)?,
             )
-        }
+        };
+        <T as IOPCServerListImpl>::GetClassDetails(this, clsid, ppszProgID, ppszUserType)
     })
 }
 
@@ -2593,9 +2619,18 @@ unsafe extern "system" fn IOPCServerList_CLSIDFromProgID<T: IOPCServerListImpl>(
     clsid: LPCLSID,
 ) -> Hr {
     ffi::boundary!(Opc, [clsid], {
-        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCServerListImpl>::CLSIDFromProgID(ComObject::<T>::from_interface(This), szProgId, clsid) }
+        // SAFETY: `IOPCServerListVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szProgId, clsid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_wstr(szProgId)?,
+                ffi::out(clsid)?,
+            )
+        };
+        <T as IOPCServerListImpl>::CLSIDFromProgID(this, szProgId, clsid)
     })
 }
 
@@ -2799,11 +2834,12 @@ pub trait IOPCEnumGUIDImpl: ComClass {
     ///
     /// # Returns
     /// S_OK when `celt` were copied, S_FALSE when fewer remained.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> FfiResult;
+    fn Next(
+        this: &ComObject<Self>,
+        celt: ULONG,
+        rgelt: ffi::OutArray<'_, GUID>,
+        pceltFetched: Option<ffi::Out<'_, ULONG>>,
+    ) -> FfiResult;
     /// Skips GUIDs.
     ///
     /// # Parameters
@@ -2824,11 +2860,7 @@ pub trait IOPCEnumGUIDImpl: ComClass {
     ///
     /// # Returns
     /// S_OK; E_OUTOFMEMORY.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn Clone(this: &ComObject<Self>, ppenum: *mut *mut IOPCEnumGUID) -> FfiResult;
+    fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IOPCEnumGUID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCEnumGUID_Next<T: IOPCEnumGUIDImpl>(
@@ -2838,25 +2870,36 @@ unsafe extern "system" fn IOPCEnumGUID_Next<T: IOPCEnumGUIDImpl>(
     pceltFetched: *mut ULONG,
 ) -> Hr {
     ffi::boundary!(Com, [pceltFetched], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Next(ComObject::<T>::from_interface(This), celt, rgelt, pceltFetched) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgelt, pceltFetched) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::out_array(rgelt, celt)?,
+                ffi::out_opt(pceltFetched),
+            )
+        };
+        <T as IOPCEnumGUIDImpl>::Next(this, celt, rgelt, pceltFetched)
     })
 }
 
 unsafe extern "system" fn IOPCEnumGUID_Skip<T: IOPCEnumGUIDImpl>(This: *mut IOPCEnumGUID, celt: ULONG) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Skip(ComObject::<T>::from_interface(This), celt) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IOPCEnumGUIDImpl>::Skip(this, celt)
     })
 }
 
 unsafe extern "system" fn IOPCEnumGUID_Reset<T: IOPCEnumGUIDImpl>(This: *mut IOPCEnumGUID) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Reset(ComObject::<T>::from_interface(This)) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IOPCEnumGUIDImpl>::Reset(this)
     })
 }
 
@@ -2865,9 +2908,12 @@ unsafe extern "system" fn IOPCEnumGUID_Clone<T: IOPCEnumGUIDImpl>(
     ppenum: *mut *mut IOPCEnumGUID,
 ) -> Hr {
     ffi::boundary!(Com, [ppenum], {
-        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCEnumGUIDImpl>::Clone(ComObject::<T>::from_interface(This), ppenum) }
+        // SAFETY: `IOPCEnumGUIDVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, ppenum) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(ppenum)?) };
+        <T as IOPCEnumGUIDImpl>::Clone(this, ppenum)
     })
 }
 
@@ -3105,17 +3151,13 @@ pub trait IOPCServerList2Impl: ComClass {
     ///
     /// # Returns
     /// As IOPCServerList::EnumClassesOfCategories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn EnumClassesOfCategories(
+    fn EnumClassesOfCategories(
         this: &ComObject<Self>,
         cImplemented: ULONG,
-        rgcatidImpl: *mut CATID,
+        rgcatidImpl: ffi::InArray<'_, CATID>,
         cRequired: ULONG,
-        rgcatidReq: *mut CATID,
-        ppenumClsid: *mut *mut IOPCEnumGUID,
+        rgcatidReq: ffi::InArray<'_, CATID>,
+        ppenumClsid: ffi::Out<'_, *mut IOPCEnumGUID>,
     ) -> FfiResult;
     /// As IOPCServerList::GetClassDetails, with the version-independent ProgID.
     ///
@@ -3129,16 +3171,12 @@ pub trait IOPCServerList2Impl: ComClass {
     ///
     /// # Returns
     /// As IOPCServerList::GetClassDetails.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetClassDetails(
+    fn GetClassDetails(
         this: &ComObject<Self>,
-        clsid: REFCLSID,
-        ppszProgID: *mut LPOLESTR,
-        ppszUserType: *mut LPOLESTR,
-        ppszVerIndProgID: *mut LPOLESTR,
+        clsid: &CLSID,
+        ppszProgID: ffi::Out<'_, LPOLESTR>,
+        ppszUserType: ffi::Out<'_, LPOLESTR>,
+        ppszVerIndProgID: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult;
     /// As IOPCServerList::CLSIDFromProgID.
     ///
@@ -3148,11 +3186,7 @@ pub trait IOPCServerList2Impl: ComClass {
     ///
     /// # Returns
     /// As IOPCServerList::CLSIDFromProgID.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: LPCOLESTR, clsid: LPCLSID) -> FfiResult;
+    fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;
 }
 
 unsafe extern "system" fn IOPCServerList2_EnumClassesOfCategories<T: IOPCServerList2Impl>(
@@ -3164,18 +3198,26 @@ unsafe extern "system" fn IOPCServerList2_EnumClassesOfCategories<T: IOPCServerL
     ppenumClsid: *mut *mut IOPCEnumGUID,
 ) -> Hr {
     ffi::boundary!(Opc, [ppenumClsid], {
-        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerList2Impl>::EnumClassesOfCategories(
+        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcatidImpl, rgcatidReq, ppenumClsid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                cImplemented,
-                rgcatidImpl,
-                cRequired,
-                rgcatidReq,
-                ppenumClsid,
+                ffi::in_array_arg(rgcatidImpl, cImplemented),
+                ffi::in_array_arg(rgcatidReq, cRequired),
+                ffi::out(ppenumClsid)?,
             )
-        }
+        };
+        <T as IOPCServerList2Impl>::EnumClassesOfCategories(
+            this,
+            cImplemented,
+            rgcatidImpl,
+            cRequired,
+            rgcatidReq,
+            ppenumClsid,
+        )
     })
 }
 
@@ -3187,17 +3229,20 @@ unsafe extern "system" fn IOPCServerList2_GetClassDetails<T: IOPCServerList2Impl
     ppszVerIndProgID: *mut LPOLESTR,
 ) -> Hr {
     ffi::boundary!(Opc, [ppszProgID, ppszUserType, ppszVerIndProgID], {
-        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IOPCServerList2Impl>::GetClassDetails(
+        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, clsid, ppszProgID, ppszUserType, ppszVerIndProgID) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                clsid,
-                ppszProgID,
-                ppszUserType,
-                ppszVerIndProgID,
+                ffi::in_ref(clsid)?,
+                ffi::out(ppszProgID)?,
+                ffi::out(ppszUserType)?,
+                ffi::out(ppszVerIndProgID)?,
             )
-        }
+        };
+        <T as IOPCServerList2Impl>::GetClassDetails(this, clsid, ppszProgID, ppszUserType, ppszVerIndProgID)
     })
 }
 
@@ -3207,9 +3252,18 @@ unsafe extern "system" fn IOPCServerList2_CLSIDFromProgID<T: IOPCServerList2Impl
     clsid: LPCLSID,
 ) -> Hr {
     ffi::boundary!(Opc, [clsid], {
-        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IOPCServerList2Impl>::CLSIDFromProgID(ComObject::<T>::from_interface(This), szProgId, clsid) }
+        // SAFETY: `IOPCServerList2Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, szProgId, clsid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_wstr(szProgId)?,
+                ffi::out(clsid)?,
+            )
+        };
+        <T as IOPCServerList2Impl>::CLSIDFromProgID(this, szProgId, clsid)
     })
 }
 
@@ -3482,64 +3536,44 @@ impl Vtable for IMarshalVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IMarshalImpl: ComClass {
     /// The CLSID of the object that unmarshals the interface.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetUnmarshalClass(
+    fn GetUnmarshalClass(
         this: &ComObject<Self>,
-        riid: REFIID,
-        pv: *mut c_void,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         dwDestContext: DWORD,
-        pvDestContext: *mut c_void,
+        pvDestContext: ffi::Opaque<'_>,
         mshlflags: DWORD,
-        pCid: *mut CLSID,
+        pCid: ffi::Out<'_, CLSID>,
     ) -> FfiResult;
     /// An upper bound of the size of the marshaled data.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetMarshalSizeMax(
+    fn GetMarshalSizeMax(
         this: &ComObject<Self>,
-        riid: REFIID,
-        pv: *mut c_void,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         dwDestContext: DWORD,
-        pvDestContext: *mut c_void,
+        pvDestContext: ffi::Opaque<'_>,
         mshlflags: DWORD,
-        pSize: *mut DWORD,
+        pSize: ffi::Out<'_, DWORD>,
     ) -> FfiResult;
     /// Writes the data that UnmarshalInterface needs into the stream.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn MarshalInterface(
+    fn MarshalInterface(
         this: &ComObject<Self>,
-        pStm: *mut c_void,
-        riid: REFIID,
-        pv: *mut c_void,
+        pStm: ffi::Opaque<'_>,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         dwDestContext: DWORD,
-        pvDestContext: *mut c_void,
+        pvDestContext: ffi::Opaque<'_>,
         mshlflags: DWORD,
     ) -> FfiResult;
     /// Reads the marshaled data and returns the interface.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnmarshalInterface(
+    fn UnmarshalInterface(
         this: &ComObject<Self>,
-        pStm: *mut c_void,
-        riid: REFIID,
-        ppv: *mut *mut c_void,
+        pStm: ffi::Opaque<'_>,
+        riid: &IID,
+        ppv: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
     /// Destroys marshaled data that will not be unmarshaled.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn ReleaseMarshalData(this: &ComObject<Self>, pStm: *mut c_void) -> FfiResult;
+    fn ReleaseMarshalData(this: &ComObject<Self>, pStm: ffi::Opaque<'_>) -> FfiResult;
     /// Disconnects the object's remote connections.
     fn DisconnectObject(this: &ComObject<Self>, dwReserved: DWORD) -> FfiResult;
 }
@@ -3554,19 +3588,20 @@ unsafe extern "system" fn IMarshal_GetUnmarshalClass<T: IMarshalImpl>(
     pCid: *mut CLSID,
 ) -> Hr {
     ffi::boundary!(Com, [pCid], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IMarshalImpl>::GetUnmarshalClass(
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, pv, pvDestContext, pCid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                riid,
-                pv,
-                dwDestContext,
-                pvDestContext,
-                mshlflags,
-                pCid,
+                ffi::in_ref(riid)?,
+                ffi::opaque(pv),
+                ffi::opaque(pvDestContext),
+                ffi::out(pCid)?,
             )
-        }
+        };
+        <T as IMarshalImpl>::GetUnmarshalClass(this, riid, pv, dwDestContext, pvDestContext, mshlflags, pCid)
     })
 }
 
@@ -3580,19 +3615,20 @@ unsafe extern "system" fn IMarshal_GetMarshalSizeMax<T: IMarshalImpl>(
     pSize: *mut DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [pSize], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IMarshalImpl>::GetMarshalSizeMax(
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, pv, pvDestContext, pSize) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                riid,
-                pv,
-                dwDestContext,
-                pvDestContext,
-                mshlflags,
-                pSize,
+                ffi::in_ref(riid)?,
+                ffi::opaque(pv),
+                ffi::opaque(pvDestContext),
+                ffi::out(pSize)?,
             )
-        }
+        };
+        <T as IMarshalImpl>::GetMarshalSizeMax(this, riid, pv, dwDestContext, pvDestContext, mshlflags, pSize)
     })
 }
 
@@ -3606,19 +3642,20 @@ unsafe extern "system" fn IMarshal_MarshalInterface<T: IMarshalImpl>(
     mshlflags: DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IMarshalImpl>::MarshalInterface(
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pStm, riid, pv, pvDestContext) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                pStm,
-                riid,
-                pv,
-                dwDestContext,
-                pvDestContext,
-                mshlflags,
+                ffi::opaque(pStm),
+                ffi::in_ref(riid)?,
+                ffi::opaque(pv),
+                ffi::opaque(pvDestContext),
             )
-        }
+        };
+        <T as IMarshalImpl>::MarshalInterface(this, pStm, riid, pv, dwDestContext, pvDestContext, mshlflags)
     })
 }
 
@@ -3629,25 +3666,39 @@ unsafe extern "system" fn IMarshal_UnmarshalInterface<T: IMarshalImpl>(
     ppv: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppv], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IMarshalImpl>::UnmarshalInterface(ComObject::<T>::from_interface(This), pStm, riid, ppv) }
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pStm, riid, ppv) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::opaque(pStm),
+                ffi::in_ref(riid)?,
+                ffi::out(ppv)?,
+            )
+        };
+        <T as IMarshalImpl>::UnmarshalInterface(this, pStm, riid, ppv)
     })
 }
 
 unsafe extern "system" fn IMarshal_ReleaseMarshalData<T: IMarshalImpl>(This: *mut IMarshal, pStm: *mut c_void) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IMarshalImpl>::ReleaseMarshalData(ComObject::<T>::from_interface(This), pStm) }
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pStm) = unsafe { (ComObject::<T>::from_interface(This), ffi::opaque(pStm)) };
+        <T as IMarshalImpl>::ReleaseMarshalData(this, pStm)
     })
 }
 
 unsafe extern "system" fn IMarshal_DisconnectObject<T: IMarshalImpl>(This: *mut IMarshal, dwReserved: DWORD) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe { <T as IMarshalImpl>::DisconnectObject(ComObject::<T>::from_interface(This), dwReserved) }
+        // SAFETY: `IMarshalVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IMarshalImpl>::DisconnectObject(this, dwReserved)
     })
 }
 
@@ -3827,28 +3878,20 @@ impl Vtable for IGlobalInterfaceTableVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait IGlobalInterfaceTableImpl: ComClass {
     /// Registers an interface and returns its cookie.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterInterfaceInGlobal(
+    fn RegisterInterfaceInGlobal(
         this: &ComObject<Self>,
-        pUnk: *mut IUnknown,
-        riid: REFIID,
-        pdwCookie: *mut DWORD,
+        pUnk: ffi::Iface<'_, IUnknown>,
+        riid: &IID,
+        pdwCookie: ffi::Out<'_, DWORD>,
     ) -> FfiResult;
     /// Revokes the registration with this cookie.
     fn RevokeInterfaceFromGlobal(this: &ComObject<Self>, dwCookie: DWORD) -> FfiResult;
     /// The interface registered under this cookie, valid in the calling apartment.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn GetInterfaceFromGlobal(
+    fn GetInterfaceFromGlobal(
         this: &ComObject<Self>,
         dwCookie: DWORD,
-        riid: REFIID,
-        ppv: *mut *mut c_void,
+        riid: &IID,
+        ppv: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult;
 }
 
@@ -3859,16 +3902,19 @@ unsafe extern "system" fn IGlobalInterfaceTable_RegisterInterfaceInGlobal<T: IGl
     pdwCookie: *mut DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [pdwCookie], {
-        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IGlobalInterfaceTableImpl>::RegisterInterfaceInGlobal(
+        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, pUnk, riid, pdwCookie) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                pUnk,
-                riid,
-                pdwCookie,
+                ffi::in_iface(pUnk)?,
+                ffi::in_ref(riid)?,
+                ffi::out(pdwCookie)?,
             )
-        }
+        };
+        <T as IGlobalInterfaceTableImpl>::RegisterInterfaceInGlobal(this, pUnk, riid, pdwCookie)
     })
 }
 
@@ -3877,11 +3923,10 @@ unsafe extern "system" fn IGlobalInterfaceTable_RevokeInterfaceFromGlobal<T: IGl
     dwCookie: DWORD,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IGlobalInterfaceTableImpl>::RevokeInterfaceFromGlobal(ComObject::<T>::from_interface(This), dwCookie)
-        }
+        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>.
+        let this = unsafe { ComObject::<T>::from_interface(This) };
+        <T as IGlobalInterfaceTableImpl>::RevokeInterfaceFromGlobal(this, dwCookie)
     })
 }
 
@@ -3892,16 +3937,12 @@ unsafe extern "system" fn IGlobalInterfaceTable_GetInterfaceFromGlobal<T: IGloba
     ppv: *mut *mut c_void,
 ) -> Hr {
     ffi::boundary!(Com, [ppv], {
-        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as IGlobalInterfaceTableImpl>::GetInterfaceFromGlobal(
-                ComObject::<T>::from_interface(This),
-                dwCookie,
-                riid,
-                ppv,
-            )
-        }
+        // SAFETY: `IGlobalInterfaceTableVtbl::new::<_, T>` installs this shim only in the slots of
+        // `T`'s objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the
+        // COM caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, riid, ppv) = unsafe { (ComObject::<T>::from_interface(This), ffi::in_ref(riid)?, ffi::out(ppv)?) };
+        <T as IGlobalInterfaceTableImpl>::GetInterfaceFromGlobal(this, dwCookie, riid, ppv)
     })
 }
 
@@ -4163,64 +4204,40 @@ impl Vtable for ICatRegisterVtbl {}
 /// IUnknown's), called by the generated shim with the object and the caller's arguments.
 pub trait ICatRegisterImpl: ComClass {
     /// Creates (or describes) the categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterCategories(
+    fn RegisterCategories(
         this: &ComObject<Self>,
         cCategories: ULONG,
-        rgCategoryInfo: *mut CATEGORYINFO,
+        rgCategoryInfo: ffi::InArray<'_, CATEGORYINFO>,
     ) -> FfiResult;
     /// Removes the categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnRegisterCategories(this: &ComObject<Self>, cCategories: ULONG, rgcatid: *mut CATID) -> FfiResult;
+    fn UnRegisterCategories(this: &ComObject<Self>, cCategories: ULONG, rgcatid: ffi::InArray<'_, CATID>) -> FfiResult;
     /// Records that the class implements the categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterClassImplCategories(
+    fn RegisterClassImplCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
     /// Removes the class's implemented categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnRegisterClassImplCategories(
+    fn UnRegisterClassImplCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
     /// Records that the class requires the categories of its clients.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn RegisterClassReqCategories(
+    fn RegisterClassReqCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
     /// Removes the class's required categories.
-    ///
-    /// # Safety
-    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it
-    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters).
-    unsafe fn UnRegisterClassReqCategories(
+    fn UnRegisterClassReqCategories(
         this: &ComObject<Self>,
-        rclsid: REFCLSID,
+        rclsid: &CLSID,
         cCategories: ULONG,
-        rgcatid: *mut CATID,
+        rgcatid: ffi::InArray<'_, CATID>,
     ) -> FfiResult;
 }
 
@@ -4230,15 +4247,17 @@ unsafe extern "system" fn ICatRegister_RegisterCategories<T: ICatRegisterImpl>(
     rgCategoryInfo: *mut CATEGORYINFO,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::RegisterCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgCategoryInfo) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                cCategories,
-                rgCategoryInfo,
+                ffi::in_array_arg(rgCategoryInfo, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::RegisterCategories(this, cCategories, rgCategoryInfo)
     })
 }
 
@@ -4248,11 +4267,17 @@ unsafe extern "system" fn ICatRegister_UnRegisterCategories<T: ICatRegisterImpl>
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::UnRegisterCategories(ComObject::<T>::from_interface(This), cCategories, rgcatid)
-        }
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rgcatid) = unsafe {
+            (
+                ComObject::<T>::from_interface(This),
+                ffi::in_array_arg(rgcatid, cCategories),
+            )
+        };
+        <T as ICatRegisterImpl>::UnRegisterCategories(this, cCategories, rgcatid)
     })
 }
 
@@ -4263,16 +4288,18 @@ unsafe extern "system" fn ICatRegister_RegisterClassImplCategories<T: ICatRegist
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::RegisterClassImplCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::RegisterClassImplCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
@@ -4283,16 +4310,18 @@ unsafe extern "system" fn ICatRegister_UnRegisterClassImplCategories<T: ICatRegi
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::UnRegisterClassImplCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::UnRegisterClassImplCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
@@ -4303,16 +4332,18 @@ unsafe extern "system" fn ICatRegister_RegisterClassReqCategories<T: ICatRegiste
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::RegisterClassReqCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::RegisterClassReqCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 
@@ -4323,16 +4354,18 @@ unsafe extern "system" fn ICatRegister_UnRegisterClassReqCategories<T: ICatRegis
     rgcatid: *mut CATID,
 ) -> Hr {
     ffi::boundary!(Com, [], {
-        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,
-        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.
-        unsafe {
-            <T as ICatRegisterImpl>::UnRegisterClassReqCategories(
+        // SAFETY: `ICatRegisterVtbl::new::<_, T>` installs this shim only in the slots of `T`'s
+        // objects, so `This` is a slot of a live ComObject<T>; every pointer argument is the COM
+        // caller's, NULL or valid for the call as the IDL declares it, which is what its reader
+        // requires.
+        let (this, rclsid, rgcatid) = unsafe {
+            (
                 ComObject::<T>::from_interface(This),
-                rclsid,
-                cCategories,
-                rgcatid,
+                ffi::in_ref(rclsid)?,
+                ffi::in_array_arg(rgcatid, cCategories),
             )
-        }
+        };
+        <T as ICatRegisterImpl>::UnRegisterClassReqCategories(this, rclsid, cCategories, rgcatid)
     })
 }
 

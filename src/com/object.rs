@@ -3,8 +3,13 @@
 //! A `ComObject<T>` is one heap block laid out as
 //!
 //! ```text
-//! ComHeader { inner: Slot (the non-delegating IUnknown), refs, outer, query, destroy } | T
+//! ComHeader { inner: Slot (the non-delegating IUnknown), refs, outer, class, module_lock } | T
 //! ```
+//!
+//! `class` points at the [`Class`] of `T`, a constant in static memory (`ComObject::<T>::CLASS`):
+//! the functions that find a slot of a `T` and free a `T`, and `T`'s type, by which
+//! [`ThisSlot::object`] tells the objects of a class from the others. What belongs to the class is
+//! kept with the class, not copied into every object.
 //!
 //! `T` holds one [`Slot`] per interface it implements. A slot is what C sees as the interface pointer:
 //! its first word is the vtable pointer, its second points back at the header, so every method shim
@@ -18,7 +23,7 @@
 //! **Pointers.** The back pointer every slot keeps is the raw pointer of the whole allocation (taken
 //! from `Box::into_raw` before anything else refers to the block), so it may reach the class state
 //! behind the header and free the block. Everything that goes beyond the header or frees it
-//! (`query`, `destroy`, the final Release, [`ComObject::from_interface`], [`ComRef`]) works from that
+//! (the class's `query` and `destroy`, the final Release, [`ComObject::from_interface`], [`ComRef`]) works from that
 //! `NonNull`, never by widening a `&ComHeader` or by freeing memory a live reference points into; a
 //! `&ComHeader` is only used for the header's own fields. Miri checks this under Stacked and Tree
 //! Borrows (`scripts/test.sh`).
@@ -29,7 +34,9 @@
 //! nothing, and the object is never freed: a leak, where wrapping would free a live object. (The
 //! standard library's `Arc` aborts the process instead, which a DLL hosted by an OPC client must not.)
 
+use core::any::TypeId;
 use core::ffi::c_void;
+use core::marker::PhantomData;
 use core::ptr::{self, NonNull};
 use core::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::mem::MaybeUninit;
@@ -40,7 +47,7 @@ use super::iids::IID_IUNKNOWN;
 use super::interfaces::{IUnknownImpl, IUnknownVtbl};
 use super::module_lock::ModuleLock;
 use super::types::{GUID, HRESULT, REFIID, ULONG};
-use super::unknown::{add_ref, IUnknown};
+use super::unknown::{add_ref, Counted, IUnknown};
 
 /// Number of library objects alive, for `DllCanUnloadNow` and leak checks.
 static LIVE_OBJECTS: AtomicUsize = AtomicUsize::new(0);
@@ -86,6 +93,18 @@ impl Slot {
     pub fn vtbl(&self) -> *const c_void {
         self.vtbl
     }
+
+    /// A new counted reference to this interface, as `I`: AddRef through the slot's own IUnknown, so
+    /// that it counts where the slot's references count (an aggregated object's on its outer object).
+    pub fn counted<I>(&self) -> Counted<I> {
+        let p = self.as_ptr();
+        // SAFETY: a slot of a live object (`self` is borrowed from it) is a valid interface pointer;
+        // the reference added is the one the result owns, and a slot pointer is never NULL.
+        unsafe {
+            add_ref(p.cast());
+            Counted::adopt(p.cast()).expect("slot pointers are never NULL")
+        }
+    }
 }
 
 /// A vtable generated from the IDL (`src/com/interfaces.rs`), whose entries all return
@@ -108,14 +127,26 @@ impl Binder {
     }
 }
 
+/// What the objects of one class share: `ComObject::<T>::CLASS`, a constant in static memory per
+/// class, which every object's header points at. (The compiler may keep more than one copy of a
+/// constant; nothing compares their addresses: objects are told apart by `type_id`.)
+pub struct Class {
+    /// The slot of the object for an IID (`ComClass::interface`), NULL for none.
+    query: unsafe fn(NonNull<ComHeader>, &GUID) -> *mut c_void,
+    /// Frees the object, after its last reference.
+    destroy: unsafe fn(NonNull<ComHeader>),
+    /// The class's type.
+    type_id: fn() -> TypeId,
+}
+
 /// Bookkeeping shared by all library objects; always at offset 0 of a `ComObject<T>`.
 #[repr(C)]
 pub struct ComHeader {
     inner: Slot,
     refs: AtomicU32,
     outer: *mut IUnknown,
-    query: unsafe fn(NonNull<ComHeader>, &GUID) -> *mut c_void,
-    destroy: unsafe fn(NonNull<ComHeader>),
+    /// The object's class (its `ComObject::<T>::CLASS`).
+    class: &'static Class,
     /// The EXE server's module lock that counted this object, unlocked once it is freed.
     module_lock: Option<ModuleLock>,
 }
@@ -136,6 +167,13 @@ impl ComHeader {
         }
     }
 
+    /// QueryInterface on the controlling unknown (the object's COM identity: the outer object when
+    /// aggregated), checked as a foreign object's answer requires ([`query`](super::unknown::query)).
+    pub fn query<I>(&self, iid: &GUID) -> Result<Counted<I>, HRESULT> {
+        // SAFETY: the controlling unknown is valid while the object lives, which `self` is part of.
+        unsafe { super::unknown::query(self.controlling_unknown(), iid) }
+    }
+
     /// True when the object was created as part of an outer (aggregating) object.
     pub fn is_aggregated(&self) -> bool {
         !self.outer.is_null()
@@ -146,38 +184,25 @@ impl ComHeader {
         self.inner.header
     }
 
-    /// Non-delegating QueryInterface.
+    /// Non-delegating QueryInterface: the object's interface `iid`, AddRef'd, or E_NOINTERFACE.
     ///
     /// # Safety
-    /// `this` must be the header of a live object; `riid` NULL or readable; `ppv` NULL or writable.
-    unsafe fn query_interface(this: NonNull<ComHeader>, riid: REFIID, ppv: *mut *mut c_void) -> HRESULT {
-        if ppv.is_null() {
-            return E_POINTER;
-        }
-        // SAFETY: checked non-NULL; the caller vouches it is writable.
-        unsafe { *ppv = ptr::null_mut() };
-        if riid.is_null() {
-            return E_POINTER;
-        }
-        // SAFETY: checked non-NULL; the caller vouches it is readable.
-        let iid = unsafe { &*riid };
+    /// `this` must be the header of a live object.
+    unsafe fn query_interface(this: NonNull<ComHeader>, iid: &GUID) -> Result<*mut c_void, HRESULT> {
         let found = if *iid == IID_IUNKNOWN {
             // SAFETY: the object is live.
             unsafe { this.as_ref() }.inner.as_ptr()
         } else {
-            // SAFETY: `query` was set for the object type this header belongs to; `this` reaches it.
-            unsafe { (this.as_ref().query)(this, iid) }
+            // SAFETY: `class` is the class of the object this header belongs to; `this` reaches it.
+            unsafe { (this.as_ref().class.query)(this, iid) }
         };
         if found.is_null() {
-            return E_NOINTERFACE;
+            return Err(E_NOINTERFACE);
         }
         // SAFETY: `found` is one of this object's interface pointers. AddRef through it, so that an
         // aggregated object's interfaces count on the outer object, as COM requires.
-        unsafe {
-            add_ref(found.cast());
-            *ppv = found;
-        }
-        S_OK
+        unsafe { add_ref(found.cast()) };
+        Ok(found)
     }
 
     /// Counts one more reference (see the module documentation for saturation).
@@ -218,10 +243,10 @@ impl ComHeader {
             // Synchronise with every earlier Release before destroying. An acquire load (rather than
             // a standalone acquire fence) also lets ThreadSanitizer see the ordering.
             let _ = refs.load(Ordering::Acquire);
-            // SAFETY: the last reference is gone; `destroy` frees the object through the pointer of
-            // its allocation, and no reference into the object is live here.
+            // SAFETY: the last reference is gone; the class's `destroy` frees the object through the
+            // pointer of its allocation, and no reference into the object is live here.
             unsafe {
-                let destroy = (*this.as_ptr()).destroy;
+                let destroy = (*this.as_ptr()).class.destroy;
                 destroy(this);
             }
             return 0;
@@ -261,6 +286,13 @@ impl<T> Drop for Unbuilt<T> {
 }
 
 impl<T: ComClass> ComObject<T> {
+    /// The class of `T`'s objects, which their headers point at.
+    pub const CLASS: &'static Class = &Class {
+        query: query_thunk::<T>,
+        destroy: destroy_thunk::<T>,
+        type_id: TypeId::of::<T>,
+    };
+
     /// Allocates an object with one reference (owned by the caller through its inner IUnknown).
     /// `build` receives a [`Binder`] for making the object's interface slots.
     #[allow(clippy::new_ret_no_self)] // the caller gets a counted reference, never the object by value
@@ -299,8 +331,7 @@ impl<T: ComClass> ComObject<T> {
                     inner: binder.slot(&INNER_VTBL),
                     refs: AtomicU32::new(1),
                     outer,
-                    query: query_thunk::<T>,
-                    destroy: destroy_thunk::<T>,
+                    class: Self::CLASS,
                     module_lock: if counted { ModuleLock::lock() } else { None },
                 },
                 state: value,
@@ -368,8 +399,15 @@ impl<T: ComClass> ComObject<T> {
             Ok(obj) => obj,
             Err(hr) => return hr,
         };
-        // SAFETY: the caller's pointers were checked above; `obj` keeps the object alive meanwhile.
-        unsafe { ComHeader::query_interface(obj.obj.cast(), riid, ppv) }
+        // SAFETY: `obj` keeps the object alive meanwhile; `riid` was checked above.
+        match unsafe { ComHeader::query_interface(obj.obj.cast(), &*riid) } {
+            Ok(found) => {
+                // SAFETY: checked non-NULL above; the caller vouches it is writable.
+                unsafe { *ppv = found };
+                S_OK
+            }
+            Err(hr) => hr,
+        }
         // `obj` drops here, releasing the construction reference.
     }
 
@@ -491,6 +529,63 @@ unsafe fn header_of<I>(this: *mut I) -> NonNull<ComHeader> {
     unsafe { (*(this as *const Slot)).header }
 }
 
+/// The slot an IUnknown method was called through (the `This` of [`IUnknownImpl`]), for that call: one
+/// of a live object's slots, made by the generated shim. Neither `Copy` nor `Clone`, and Release takes
+/// it by value: Release gives up the caller's reference, after which the object may be gone, so nothing
+/// borrowed from it can be used after the call that may free it.
+pub struct ThisSlot<'call> {
+    slot: NonNull<Slot>,
+    call: PhantomData<&'call Slot>,
+}
+
+impl ThisSlot<'_> {
+    /// The slot `this` points at.
+    ///
+    /// # Safety
+    /// `this` must be a slot of a live library object (one a [`Binder`] made, or an object's own
+    /// IUnknown) whose vtable was made with the IUnknown methods being called, and the caller's
+    /// reference must keep the object alive for `'call` (until it is given to Release).
+    pub unsafe fn new(this: *mut IUnknown) -> Self {
+        ThisSlot {
+            // SAFETY: a slot of a live object is never NULL.
+            slot: unsafe { NonNull::new_unchecked(this.cast()) },
+            call: PhantomData,
+        }
+    }
+
+    /// The slot as the interface pointer the caller called (not AddRef'd).
+    pub fn as_unknown(&self) -> *mut IUnknown {
+        self.slot.as_ptr().cast()
+    }
+
+    /// The object whose slot this is, if it is a `T`: its class's type is checked, so the answer is
+    /// right whatever vtable the slot presents.
+    pub fn object<T: ComClass>(&self) -> Option<&ComObject<T>> {
+        let header = self.header();
+        // SAFETY: the object is live for the call (`new`'s contract).
+        if (unsafe { header.as_ref() }.class.type_id)() != TypeId::of::<T>() {
+            return None;
+        }
+        // SAFETY: the object is a live ComObject<T> (its class says so), whose header is at offset 0;
+        // the reference is bound to `self`, which Release takes by value, so it ends before the
+        // object can go.
+        Some(unsafe { header.cast::<ComObject<T>>().as_ref() })
+    }
+
+    /// AddRef through the slot's own IUnknown (which counts where the slot's references count: on the
+    /// outer object of an aggregated object, for instance), for a reference the method hands out.
+    pub fn add_ref(&self) -> ULONG {
+        // SAFETY: the slot is live for the call (`new`'s contract).
+        unsafe { add_ref(self.as_unknown()) }
+    }
+
+    /// The object's allocation, from the slot's back pointer.
+    fn header(&self) -> NonNull<ComHeader> {
+        // SAFETY: the slot is live for the call (`new`'s contract).
+        unsafe { self.slot.as_ref() }.header
+    }
+}
+
 static INNER_VTBL: IUnknownVtbl = IUnknownVtbl::new::<Inner>();
 
 /// The IUnknown of an object itself (`header.inner`): its identity when it stands alone, and what an
@@ -498,20 +593,20 @@ static INNER_VTBL: IUnknownVtbl = IUnknownVtbl::new::<Inner>();
 pub struct Inner;
 
 impl IUnknownImpl for Inner {
-    unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult {
-        // SAFETY: `this` is the inner slot of a live object (only INNER_VTBL slots reach here); the
-        // non-delegating QueryInterface checks the caller's pointers.
-        Ok(unsafe { ComHeader::query_interface(header_of(this), riid, ppvObject) })
+    fn QueryInterface(this: ThisSlot<'_>, riid: &GUID, ppvObject: ffi::Out<'_, *mut c_void>) -> FfiResult {
+        // SAFETY: the object is live for the call (the shim's `ThisSlot`).
+        ppvObject.write(unsafe { ComHeader::query_interface(this.header(), riid) }?);
+        Ok(S_OK)
     }
 
-    unsafe fn AddRef(this: *mut IUnknown) -> ULONG {
+    fn AddRef(this: ThisSlot<'_>) -> ULONG {
         // SAFETY: as above.
-        unsafe { header_of(this).as_ref().add_ref() }
+        unsafe { this.header().as_ref() }.add_ref()
     }
 
-    unsafe fn Release(this: *mut IUnknown) -> ULONG {
-        // SAFETY: as above; the caller gives up its reference.
-        unsafe { ComHeader::release(header_of(this)) }
+    fn Release(this: ThisSlot<'_>) -> ULONG {
+        // SAFETY: as above; the caller gives up its reference, and `this` is not used after.
+        unsafe { ComHeader::release(this.header()) }
     }
 }
 
@@ -520,25 +615,23 @@ impl IUnknownImpl for Inner {
 pub struct Delegating;
 
 impl IUnknownImpl for Delegating {
-    unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppvObject: *mut *mut c_void) -> FfiResult {
-        // SAFETY: `this` is a slot of a live object; the controlling unknown is valid while it lives.
-        let header = unsafe { header_of(this) };
-        // SAFETY: the header of a live object.
+    fn QueryInterface(this: ThisSlot<'_>, riid: &GUID, ppvObject: ffi::Out<'_, *mut c_void>) -> FfiResult {
+        let header = this.header();
+        // SAFETY: the object is live for the call.
         let outer = unsafe { header.as_ref() }.outer;
         if outer.is_null() {
-            // SAFETY: the caller's pointers go to the non-delegating QueryInterface, which checks them.
-            return Ok(unsafe { ComHeader::query_interface(header, riid, ppvObject) });
+            // SAFETY: as above.
+            ppvObject.write(unsafe { ComHeader::query_interface(header, riid) }?);
+            return Ok(S_OK);
         }
-        // SAFETY: the caller's contract: `ppvObject` NULL or writable, `riid` NULL or readable.
-        let (out, riid) = unsafe { (ffi::out(ppvObject)?, ffi::in_ref(riid)?) };
-        // SAFETY: the outer unknown is valid while this object lives.
-        Ok(unsafe { super::unknown::query_interface(outer, riid, out.as_ptr()) })
+        // SAFETY: the outer unknown is valid while this object lives; `ppvObject` is writable.
+        Ok(unsafe { super::unknown::query_interface(outer, riid, ppvObject.as_ptr()) })
     }
 
-    unsafe fn AddRef(this: *mut IUnknown) -> ULONG {
-        // SAFETY: as for QueryInterface.
+    fn AddRef(this: ThisSlot<'_>) -> ULONG {
+        // SAFETY: the object is live for the call, and the outer object while it lives.
         unsafe {
-            let header = header_of(this).as_ref();
+            let header = this.header().as_ref();
             if header.outer.is_null() {
                 header.add_ref()
             } else {
@@ -547,10 +640,10 @@ impl IUnknownImpl for Delegating {
         }
     }
 
-    unsafe fn Release(this: *mut IUnknown) -> ULONG {
-        // SAFETY: as for QueryInterface; the caller gives up a reference.
+    fn Release(this: ThisSlot<'_>) -> ULONG {
+        // SAFETY: as for AddRef; the caller gives up a reference, and `this` is not used after.
         unsafe {
-            let header = header_of(this);
+            let header = this.header();
             let outer = header.as_ref().outer;
             if outer.is_null() {
                 ComHeader::release(header)
@@ -595,19 +688,17 @@ mod tests {
         fn SetLocaleID(_: &ComObject<Self>, _: u32) -> FfiResult {
             panic!("a bug inside a method")
         }
-        unsafe fn GetLocaleID(this: &ComObject<Self>, out: *mut u32) -> FfiResult {
-            // SAFETY: the caller passes NULL or a writable `out`.
-            let out = unsafe { ffi::out(out) }?;
+        fn GetLocaleID(this: &ComObject<Self>, out: ffi::Out<'_, u32>) -> FfiResult {
             out.write(this.value);
             Ok(S_OK)
         }
-        unsafe fn QueryAvailableLocaleIDs(_: &ComObject<Self>, _: *mut u32, _: *mut *mut u32) -> FfiResult {
+        fn QueryAvailableLocaleIDs(_: &ComObject<Self>, _: ffi::Out<'_, u32>, _: ffi::Out<'_, *mut u32>) -> FfiResult {
             Err(E_NOTIMPL.into())
         }
-        unsafe fn GetErrorString(_: &ComObject<Self>, _: HRESULT, _: *mut *mut u16) -> FfiResult {
+        fn GetErrorString(_: &ComObject<Self>, _: HRESULT, _: ffi::Out<'_, *mut u16>) -> FfiResult {
             Err(E_NOTIMPL.into())
         }
-        unsafe fn SetClientName(_: &ComObject<Self>, _: *const u16) -> FfiResult {
+        fn SetClientName(_: &ComObject<Self>, _: ffi::WStr<'_>) -> FfiResult {
             Err(E_NOTIMPL.into())
         }
     }
@@ -777,6 +868,42 @@ mod tests {
             assert_eq!((vt.Release)(t), 0);
         }
         assert!(died.load(Ordering::SeqCst));
+    }
+
+    #[test]
+    fn the_objects_of_a_class_point_at_its_class_which_tells_them_from_others() {
+        let died = Arc::new(AtomicBool::new(false));
+        let (a, b) = (create(&died), create(&Arc::new(AtomicBool::new(false))));
+        // SAFETY: `a` and `b` are live interface pointers until their last Release.
+        unsafe {
+            let (oa, ob) = (
+                ComObject::<TestObject>::from_interface(a),
+                ComObject::<TestObject>::from_interface(b),
+            );
+            // Each header points at the class's constant: its functions and its type.
+            assert_eq!((oa.header().class.type_id)(), TypeId::of::<TestObject>());
+            assert_eq!(
+                (ob.header().class.type_id)(),
+                (ComObject::<TestObject>::CLASS.type_id)()
+            );
+            // A slot of `a`, as an IUnknown method sees it: a TestObject, and nothing else.
+            {
+                let this = ThisSlot::new(a.cast());
+                assert!(this.object::<TestObject>().is_some_and(|o| o.value == 42));
+                assert!(this.object::<Other>().is_none());
+            }
+            assert_eq!(((*(*a).lpVtbl).Release)(a), 0);
+            assert_eq!(((*(*b).lpVtbl).Release)(b), 0);
+        }
+        assert!(died.load(Ordering::SeqCst));
+    }
+
+    /// Another class, for the type check.
+    struct Other;
+    impl ComClass for Other {
+        fn interface(&self, _: &GUID) -> Option<&Slot> {
+            None
+        }
     }
 
     #[test]

@@ -314,37 +314,29 @@ impl IOPCCommonImpl for OpcCommon {
         Ok(this.set_locale(lcid)?)
     }
 
-    unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL out-parameter is writable.
-        let out = unsafe { ffi::out(pdwLcid) }?;
-        out.write(this.locale.load(Ordering::Relaxed));
+    fn GetLocaleID(this: &ComObject<Self>, pdwLcid: ffi::Out<'_, LCID>) -> FfiResult {
+        pdwLcid.write(this.locale.load(Ordering::Relaxed));
         Ok(S_OK)
     }
 
-    unsafe fn QueryAvailableLocaleIDs(
+    fn QueryAvailableLocaleIDs(
         this: &ComObject<Self>,
-        pdwCount: *mut DWORD,
-        pdwLcid: *mut *mut LCID,
+        pdwCount: ffi::Out<'_, DWORD>,
+        pdwLcid: ffi::Out<'_, *mut LCID>,
     ) -> FfiResult {
-        // SAFETY: the caller vouches non-NULL out-parameters are writable.
-        let (count, array) = unsafe { (ffi::out(pdwCount)?, ffi::out(pdwLcid)?) };
         let available = &this.settings.available;
-        array.write(alloc_array(available)?);
-        count.write(available.len() as DWORD);
+        pdwLcid.write(alloc_array(available)?);
+        pdwCount.write(available.len() as DWORD);
         Ok(S_OK)
     }
 
-    unsafe fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: *mut LPWSTR) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL out-parameter is writable.
-        let out = unsafe { ffi::out(ppString) }?;
-        out.write(this.error_string(dwError)?);
+    fn GetErrorString(this: &ComObject<Self>, dwError: HRESULT, ppString: ffi::Out<'_, LPWSTR>) -> FfiResult {
+        ppString.write(this.error_string(dwError)?);
         Ok(S_OK)
     }
 
-    unsafe fn SetClientName(this: &ComObject<Self>, szName: LPCWSTR) -> FfiResult {
-        // SAFETY: the caller passes NULL or a NUL-terminated string.
-        let name = unsafe { ffi::in_units(szName) }?;
-        this.set_client_name(name);
+    fn SetClientName(this: &ComObject<Self>, szName: ffi::WStr<'_>) -> FfiResult {
+        this.set_client_name(szName.units()?);
         Ok(S_OK)
     }
 }

@@ -145,7 +145,7 @@ pub struct OpcPattern {
 }
 
 /// A compiled pattern as the caller's new filter, or OPC_E_INVALIDFILTER.
-fn deliver(compiled: Result<Program, Malformed>, out: ffi::Out<*mut OpcPattern>) -> FfiResult {
+fn deliver(compiled: Result<Program, Malformed>, out: ffi::Out<'_, *mut OpcPattern>) -> FfiResult {
     let program = compiled.map_err(|_| OPC_E_INVALIDFILTER)?;
     out.write(Box::into_raw(Box::new(OpcPattern { program })));
     Ok(S_OK)

@@ -30,7 +30,7 @@ use crate::com::object::{live_objects, ComClass, ComObject, Delegating, Slot};
 use crate::com::options::{read_sized, SizedStruct};
 use crate::com::{
     IUnknown, BOOL, CLASS_E_CLASSNOTAVAILABLE, CLASS_E_NOAGGREGATION, CLSID, E_INVALIDARG, E_UNEXPECTED, GUID, HRESULT,
-    REFCLSID, REFIID, S_FALSE, S_OK,
+    IID, REFCLSID, REFIID, S_FALSE, S_OK,
 };
 use crate::registry::register::{register, unregister, OpcServerRegistration, ServerDescription};
 use crate::registry::{registries, OpcRegistry, Registries};
@@ -325,15 +325,13 @@ impl ComClass for ClassObject {
 static CLASS_OBJECT_VTBL: IClassFactoryVtbl = IClassFactoryVtbl::new::<Delegating, ClassObject>();
 
 impl IClassFactoryImpl for ClassObject {
-    unsafe fn CreateInstance(
+    fn CreateInstance(
         this: &ComObject<Self>,
-        outer: *mut IUnknown,
-        riid: REFIID,
-        ppv: *mut *mut c_void,
+        outer: Option<ffi::Iface<'_, IUnknown>>,
+        riid: &IID,
+        ppv: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult {
-        // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
-        let (out, riid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?) };
-        if !outer.is_null() && (!this.class.aggregatable || *riid != IID_IUNKNOWN) {
+        if outer.is_some() && (!this.class.aggregatable || *riid != IID_IUNKNOWN) {
             return Err(CLASS_E_NOAGGREGATION.into());
         }
         if !server_enter() {
@@ -343,17 +341,18 @@ impl IClassFactoryImpl for ClassObject {
         // cannot end meanwhile.
         let _entered = Entered;
         let class = this.class;
+        let outer = outer.map_or(ptr::null_mut(), ffi::Iface::as_ptr);
         // SAFETY: the server's function, with its context, the caller's outer object and checked
-        // `riid` and `ppv` (already NULL).
-        let hr = unsafe { (class.create)(class.context, outer, riid, out.as_ptr()) };
-        // SAFETY: `out` is writable; read back what the server's function left there.
-        let made = unsafe { *out.as_ptr() };
+        // `riid` and `ppv` (already NULL), as OpcCreateInstanceFn documents.
+        let hr = unsafe { (class.create)(class.context, outer, riid, ppv.as_ptr()) };
         if hr < 0 {
             // A pointer left behind with a failure is neither used nor released (it may be garbage);
             // the boundary resets the out-parameter.
             return Err(hr.into());
         }
-        if made.is_null() {
+        // SAFETY: `ppv` is the caller's writable out-parameter, which the boundary set to NULL before
+        // the call; read back what the server's function left there.
+        if unsafe { *ppv.as_ptr() }.is_null() {
             // Success without an object: the server's function is broken.
             return Err(E_UNEXPECTED.into());
         }

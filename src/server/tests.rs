@@ -542,12 +542,8 @@ fn an_ending_host_refuses_instances_and_lock_server() {
         // The server list's class object answers the same.
         let mut list: *mut c_void = ptr::null_mut();
         assert_eq!(
-            crate::serverlist::server::OpcDllGetClassObject(
-                &crate::com::iids::CLSID_OPCServerList,
-                &IID_ICLASSFACTORY,
-                &mut list
-            )
-            .get(),
+            crate::module::OpcDllGetClassObject(&crate::com::iids::CLSID_OPCServerList, &IID_ICLASSFACTORY, &mut list)
+                .get(),
             S_OK
         );
         assert_eq!(IClassFactory::LockServer(list.cast(), 1), CO_E_SERVER_STOPPING);

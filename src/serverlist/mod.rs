@@ -1,6 +1,6 @@
 //! The OPC server browser (specification chapter 7; IOPCServerList2 from OPC Common 1.10): the class
-//! OPCServerList with IOPCServerList and IOPCServerList2, its enumerator, and the COM server plumbing
-//! (class factory, DllGetClassObject, DllRegisterServer...) that lets clients create it by CLSID.
+//! OPCServerList with IOPCServerList and IOPCServerList2 and its enumerator. Clients create it by CLSID
+//! through opccomn's class table (`crate::module`), served by the server plumbing (`crate::server`).
 //!
 //! The answers are computed from the registry (through the [`Registry`] abstraction), not from the
 //! system's ICatInformation, whose behaviour differs between Windows and Wine:
@@ -34,7 +34,6 @@
 //! without a ProgID.
 
 pub mod interfaces;
-pub mod server;
 
 use core::ffi::c_void;
 use core::ptr;
@@ -43,13 +42,12 @@ use std::sync::Arc;
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
 use crate::com::enumerator::{EnumInterface, Enumerator};
-use crate::com::ffi::{self, Fail, FfiResult, Hr};
+use crate::com::ffi::{self, FfiResult, Hr};
 use crate::com::iids::{IID_IOPCEnumGUID, IID_IOPCServerList, IID_IOPCServerList2, IID_IENUMGUID};
 use crate::com::interfaces::{IOPCEnumGUIDImpl, IOPCServerList2Impl, IOPCServerListImpl};
 use crate::com::object::{ComClass, ComObject, Delegating, Slot};
 use crate::com::{
-    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, GUID, HRESULT, LPCLSID, LPCOLESTR, LPOLESTR, REFCLSID, REFIID,
-    REGDB_E_CLASSNOTREG, S_OK, ULONG,
+    IUnknown, CATID, CLSID, CO_E_CLASSSTRING, GUID, HRESULT, LPOLESTR, REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
 };
 use crate::registry::categories::DA10;
 use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
@@ -241,39 +239,23 @@ pub(crate) fn clsid_from_prog_id(regs: &Registries, prog_id: &str) -> Result<CLS
 /// Reads a category list argument: `None` for "any" (a count of 0 or `(ULONG)-1`, which OPC clients
 /// pass for "no restriction"). NULL with another count gives the NULL rule's code; more than 4096
 /// categories E_INVALIDARG.
-///
-/// # Safety
-/// `p` must point at `count` readable CATIDs when `count` is neither 0 nor `(ULONG)-1`.
-unsafe fn category_list<'a>(count: ULONG, p: *const CATID) -> FfiResult<Option<&'a [CATID]>> {
-    if count == 0 || count == ANY_CATEGORY {
+fn category_list(list: ffi::InArray<'_, CATID>) -> FfiResult<Option<&[CATID]>> {
+    if list.count() == 0 || list.count() == ANY_CATEGORY {
         return Ok(None);
     }
-    // SAFETY: forwarded from the caller.
-    unsafe { ffi::in_array(p, count, MAX_CATEGORIES as usize) }.map(Some)
+    list.read(MAX_CATEGORIES as usize).map(Some)
 }
 
 /// EnumClassesOfCategories of both interfaces.
-///
-/// # Safety
-/// As the method: COM arguments, `this` one of our slots.
-unsafe fn enum_classes(
+fn enum_classes(
     list: &ServerList,
-    c_impl: ULONG,
-    rg_impl: *const CATID,
-    c_req: ULONG,
-    rg_req: *const CATID,
-    ppenum: *mut *mut IOPCEnumGUID,
+    implemented: ffi::InArray<'_, CATID>,
+    required: ffi::InArray<'_, CATID>,
+    ppenum: ffi::Out<'_, *mut IOPCEnumGUID>,
 ) -> FfiResult {
-    // SAFETY: forwarded from the caller.
-    let (out, implemented, required) = unsafe {
-        (
-            ffi::out(ppenum)?,
-            category_list(c_impl, rg_impl)?,
-            category_list(c_req, rg_req)?,
-        )
-    };
+    let (implemented, required) = (category_list(implemented)?, category_list(required)?);
     let classes = classes_of_categories(&list.regs, implemented, required);
-    out.write(Enumerator::<ClassEnum>::create(classes.into(), 0));
+    ppenum.write(Enumerator::<ClassEnum>::create(classes.into(), 0));
     Ok(S_OK)
 }
 
@@ -301,26 +283,14 @@ impl Drop for Allocated {
     }
 }
 
-/// GetClassDetails of both interfaces (`vi` NULL for IOPCServerList).
-///
-/// # Safety
-/// As the method: COM arguments, `this` one of our slots.
-unsafe fn get_class_details(
+/// GetClassDetails of both interfaces (`vi` `None` for IOPCServerList).
+fn get_class_details(
     list: &ServerList,
-    clsid: REFCLSID,
-    prog_id: *mut LPOLESTR,
-    user_type: *mut LPOLESTR,
-    vi: Option<*mut LPOLESTR>,
+    clsid: &CLSID,
+    prog_id: ffi::Out<'_, LPOLESTR>,
+    user_type: ffi::Out<'_, LPOLESTR>,
+    vi: Option<ffi::Out<'_, LPOLESTR>>,
 ) -> FfiResult {
-    // SAFETY: forwarded from the caller: out-parameters NULL or writable, `clsid` NULL or readable.
-    let (prog_id, user_type, vi, clsid) = unsafe {
-        (
-            ffi::out(prog_id)?,
-            ffi::out(user_type)?,
-            vi.map(|p| ffi::out(p)).transpose()?,
-            ffi::in_ref(clsid)?,
-        )
-    };
     let details = class_details(&list.regs, clsid, vi.is_some())?;
     let mut strings = Allocated(Vec::new());
     let p = strings.string(&details.prog_id)?;
@@ -339,82 +309,66 @@ unsafe fn get_class_details(
 }
 
 /// CLSIDFromProgID of both interfaces.
-///
-/// # Safety
-/// As the method: COM arguments, `this` one of our slots.
-unsafe fn clsid_from_prog_id_method(list: &ServerList, sz_prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
-    // SAFETY: forwarded from the caller: `clsid` NULL or writable, `sz_prog_id` NULL or
-    // NUL-terminated.
-    let (out, units) = unsafe { (ffi::out(clsid)?, ffi::in_units(sz_prog_id)) };
+fn clsid_from_prog_id_method(list: &ServerList, prog_id: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult {
     // An over-long string is not a ProgID: CO_E_CLASSSTRING, as for one that is not valid UTF-16.
-    let units = units.map_err(|fail| {
-        if fail == Fail::Null {
-            fail
-        } else {
-            Fail::Code(CO_E_CLASSSTRING)
-        }
-    })?;
+    let units = prog_id.units().map_err(|_| CO_E_CLASSSTRING)?;
     let prog_id = String::from_utf16(units).map_err(|_| CO_E_CLASSSTRING)?;
-    out.write(clsid_from_prog_id(&list.regs, &prog_id)?);
+    clsid.write(clsid_from_prog_id(&list.regs, &prog_id)?);
     Ok(S_OK)
 }
 
 impl IOPCServerListImpl for ServerList {
-    unsafe fn EnumClassesOfCategories(
+    fn EnumClassesOfCategories(
         this: &ComObject<Self>,
-        c_impl: ULONG,
-        rg_impl: *mut CATID,
-        c_req: ULONG,
-        rg_req: *mut CATID,
-        ppenum: *mut *mut IEnumGUID,
+        _c_impl: ULONG,
+        rg_impl: ffi::InArray<'_, CATID>,
+        _c_req: ULONG,
+        rg_req: ffi::InArray<'_, CATID>,
+        ppenum: ffi::Out<'_, *mut IEnumGUID>,
     ) -> FfiResult {
-        // SAFETY: forwarded; the enumerator answers for IEnumGUID with the same layout.
-        unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum.cast()) }
+        // The enumerator answers for IEnumGUID with the same layout.
+        let ppenum = ppenum.cast_pointee::<IOPCEnumGUID>();
+        enum_classes(this, rg_impl, rg_req, ppenum)
     }
 
-    unsafe fn GetClassDetails(
+    fn GetClassDetails(
         this: &ComObject<Self>,
-        clsid: REFCLSID,
-        prog_id: *mut LPOLESTR,
-        user_type: *mut LPOLESTR,
+        clsid: &CLSID,
+        prog_id: ffi::Out<'_, LPOLESTR>,
+        user_type: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult {
-        // SAFETY: forwarded.
-        unsafe { get_class_details(this, clsid, prog_id, user_type, None) }
+        get_class_details(this, clsid, prog_id, user_type, None)
     }
 
-    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
-        // SAFETY: forwarded.
-        unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+    fn CLSIDFromProgID(this: &ComObject<Self>, prog_id: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult {
+        clsid_from_prog_id_method(this, prog_id, clsid)
     }
 }
 
 impl IOPCServerList2Impl for ServerList {
-    unsafe fn EnumClassesOfCategories(
+    fn EnumClassesOfCategories(
         this: &ComObject<Self>,
-        c_impl: ULONG,
-        rg_impl: *mut CATID,
-        c_req: ULONG,
-        rg_req: *mut CATID,
-        ppenum: *mut *mut IOPCEnumGUID,
+        _c_impl: ULONG,
+        rg_impl: ffi::InArray<'_, CATID>,
+        _c_req: ULONG,
+        rg_req: ffi::InArray<'_, CATID>,
+        ppenum: ffi::Out<'_, *mut IOPCEnumGUID>,
     ) -> FfiResult {
-        // SAFETY: forwarded.
-        unsafe { enum_classes(this, c_impl, rg_impl, c_req, rg_req, ppenum) }
+        enum_classes(this, rg_impl, rg_req, ppenum)
     }
 
-    unsafe fn GetClassDetails(
+    fn GetClassDetails(
         this: &ComObject<Self>,
-        clsid: REFCLSID,
-        prog_id: *mut LPOLESTR,
-        user_type: *mut LPOLESTR,
-        vi: *mut LPOLESTR,
+        clsid: &CLSID,
+        prog_id: ffi::Out<'_, LPOLESTR>,
+        user_type: ffi::Out<'_, LPOLESTR>,
+        vi: ffi::Out<'_, LPOLESTR>,
     ) -> FfiResult {
-        // SAFETY: forwarded.
-        unsafe { get_class_details(this, clsid, prog_id, user_type, Some(vi)) }
+        get_class_details(this, clsid, prog_id, user_type, Some(vi))
     }
 
-    unsafe fn CLSIDFromProgID(this: &ComObject<Self>, prog_id: LPCOLESTR, clsid: LPCLSID) -> FfiResult {
-        // SAFETY: forwarded.
-        unsafe { clsid_from_prog_id_method(this, prog_id, clsid) }
+    fn CLSIDFromProgID(this: &ComObject<Self>, prog_id: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult {
+        clsid_from_prog_id_method(this, prog_id, clsid)
     }
 }
 

@@ -15,12 +15,12 @@ use core::ffi::c_void;
 use core::ptr;
 use std::sync::OnceLock;
 
-use crate::com::ffi::FfiResult;
+use crate::com::ffi::{self, FfiResult};
 use crate::com::interfaces::IMarshalImpl;
 use crate::com::object::{ComClass, ComObject};
 use crate::com::ole32::CoCreateFreeThreadedMarshaler;
 use crate::com::unknown::{query, Counted};
-use crate::com::{IUnknown, DWORD, E_POINTER, GUID, HRESULT, REFIID, S_OK};
+use crate::com::{IUnknown, CLSID, DWORD, E_POINTER, GUID, HRESULT, IID, S_OK};
 
 pub(crate) use crate::com::interfaces::IMarshal;
 
@@ -78,68 +78,71 @@ fn with_ftm<T: HasFtm>(obj: &ComObject<T>, f: impl FnOnce(*mut IMarshal) -> HRES
     }
 }
 
-// The free-threaded marshaler checks and writes the arguments itself; they go to it unchanged.
+// The free-threaded marshaler writes the out-parameters itself; the arguments go to it as the shim
+// checked them.
 impl<T: HasFtm> IMarshalImpl for T {
-    unsafe fn GetUnmarshalClass(
+    fn GetUnmarshalClass(
         this: &ComObject<Self>,
-        riid: REFIID,
-        pv: *mut c_void,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         ctx: DWORD,
-        pvctx: *mut c_void,
+        pvctx: ffi::Opaque<'_>,
         flags: DWORD,
-        clsid: *mut GUID,
+        clsid: ffi::Out<'_, CLSID>,
     ) -> FfiResult {
-        // SAFETY: `m` is the FTM's IMarshal; the arguments are the caller's.
+        // SAFETY: `m` is the FTM's IMarshal; the arguments are the caller's, checked by the shim.
         Ok(with_ftm(this, |m| unsafe {
-            IMarshal::GetUnmarshalClass(m, riid, pv, ctx, pvctx, flags, clsid)
+            IMarshal::GetUnmarshalClass(m, riid, pv.as_ptr(), ctx, pvctx.as_ptr(), flags, clsid.as_ptr())
         }))
     }
 
-    unsafe fn GetMarshalSizeMax(
+    fn GetMarshalSizeMax(
         this: &ComObject<Self>,
-        riid: REFIID,
-        pv: *mut c_void,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         ctx: DWORD,
-        pvctx: *mut c_void,
+        pvctx: ffi::Opaque<'_>,
         flags: DWORD,
-        size: *mut DWORD,
+        size: ffi::Out<'_, DWORD>,
     ) -> FfiResult {
         // SAFETY: as above.
         Ok(with_ftm(this, |m| unsafe {
-            IMarshal::GetMarshalSizeMax(m, riid, pv, ctx, pvctx, flags, size)
+            IMarshal::GetMarshalSizeMax(m, riid, pv.as_ptr(), ctx, pvctx.as_ptr(), flags, size.as_ptr())
         }))
     }
 
-    unsafe fn MarshalInterface(
+    fn MarshalInterface(
         this: &ComObject<Self>,
-        stream: *mut c_void,
-        riid: REFIID,
-        pv: *mut c_void,
+        stream: ffi::Opaque<'_>,
+        riid: &IID,
+        pv: ffi::Opaque<'_>,
         ctx: DWORD,
-        pvctx: *mut c_void,
+        pvctx: ffi::Opaque<'_>,
         flags: DWORD,
     ) -> FfiResult {
         // SAFETY: as above.
         Ok(with_ftm(this, |m| unsafe {
-            IMarshal::MarshalInterface(m, stream, riid, pv, ctx, pvctx, flags)
+            IMarshal::MarshalInterface(m, stream.as_ptr(), riid, pv.as_ptr(), ctx, pvctx.as_ptr(), flags)
         }))
     }
 
-    unsafe fn UnmarshalInterface(
+    fn UnmarshalInterface(
         this: &ComObject<Self>,
-        stream: *mut c_void,
-        riid: REFIID,
-        ppv: *mut *mut c_void,
+        stream: ffi::Opaque<'_>,
+        riid: &IID,
+        ppv: ffi::Out<'_, *mut c_void>,
     ) -> FfiResult {
         // SAFETY: as above.
         Ok(with_ftm(this, |m| unsafe {
-            IMarshal::UnmarshalInterface(m, stream, riid, ppv)
+            IMarshal::UnmarshalInterface(m, stream.as_ptr(), riid, ppv.as_ptr())
         }))
     }
 
-    unsafe fn ReleaseMarshalData(this: &ComObject<Self>, stream: *mut c_void) -> FfiResult {
+    fn ReleaseMarshalData(this: &ComObject<Self>, stream: ffi::Opaque<'_>) -> FfiResult {
         // SAFETY: as above.
-        Ok(with_ftm(this, |m| unsafe { IMarshal::ReleaseMarshalData(m, stream) }))
+        Ok(with_ftm(this, |m| unsafe {
+            IMarshal::ReleaseMarshalData(m, stream.as_ptr())
+        }))
     }
 
     fn DisconnectObject(this: &ComObject<Self>, reserved: DWORD) -> FfiResult {

@@ -66,10 +66,10 @@ static SINK_MARSHAL_VTBL: crate::com::interfaces::IMarshalVtbl =
 static SINK_VTBL: IOPCShutdownVtbl = IOPCShutdownVtbl::new::<Delegating, ShutdownSink>();
 
 impl IOPCShutdownImpl for ShutdownSink {
-    unsafe fn ShutdownRequest(this: &ComObject<Self>, reason: LPCWSTR) -> FfiResult {
+    fn ShutdownRequest(this: &ComObject<Self>, reason: Option<ffi::WStr<'_>>) -> FfiResult {
         // The specification requires S_OK whatever happens, a panic included.
         Ok(ffi::guard(S_OK, || {
-            let reason = if reason.is_null() { NUL_STRING.as_ptr() } else { reason };
+            let reason = reason.map_or(NUL_STRING.as_ptr(), ffi::WStr::as_ptr);
             // SAFETY: the client registered the callback for this; `reason` is a valid string.
             unsafe { (this.callback)(this.context, reason) };
             S_OK

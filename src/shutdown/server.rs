@@ -34,12 +34,12 @@ use crate::com::iids::{
 use crate::com::interfaces::{
     IConnectionPointContainerImpl, IConnectionPointImpl, IEnumConnectionPointsImpl, IEnumConnectionsImpl, IUnknownImpl,
 };
-use crate::com::object::{ComClass, ComObject, Delegating, Slot};
+use crate::com::object::{ComClass, ComObject, Delegating, Slot, ThisSlot};
 use crate::com::options::{read_sized, SizedStruct};
 use crate::com::unknown::{add_ref, query, release, Counted};
 use crate::com::{
     IUnknown, CONNECT_E_ADVISELIMIT, CONNECT_E_CANNOTCONNECT, CONNECT_E_NOCONNECTION, DWORD, E_INVALIDARG,
-    E_NOINTERFACE, GUID, HRESULT, IID, LPCWSTR, REFIID, S_OK,
+    E_NOINTERFACE, GUID, HRESULT, IID, LPCWSTR, S_OK,
 };
 
 /// How a server configures its shutdown connection point. Zero-initialise it, set `struct_size` to
@@ -213,16 +213,6 @@ impl OpcShutdown {
         self.connections.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
-    /// The container interface (not AddRef'd).
-    pub(crate) fn container_ptr(&self) -> *mut IConnectionPointContainer {
-        self.container.as_ptr().cast()
-    }
-
-    /// The connection point interface (not AddRef'd).
-    pub(crate) fn point_ptr(&self) -> *mut IConnectionPoint {
-        self.point.as_ptr().cast()
-    }
-
     /// Number of sinks advised now.
     #[cfg(test)]
     pub(crate) fn connection_count(&self) -> usize {
@@ -240,13 +230,10 @@ impl OpcShutdown {
     }
 
     /// IConnectionPoint::Advise after the argument checks.
-    ///
-    /// # Safety
-    /// `sink` must be a valid COM interface pointer.
-    unsafe fn advise(&self, sink: *mut IUnknown) -> Result<DWORD, HRESULT> {
-        // SAFETY: `sink` is valid per the caller.
-        let shutdown =
-            unsafe { query::<IOPCShutdown>(sink, &IID_IOPCShutdown) }.map_err(|_| CONNECT_E_CANNOTCONNECT)?;
+    fn advise(&self, sink: ffi::Iface<'_, IUnknown>) -> Result<DWORD, HRESULT> {
+        let shutdown = sink
+            .query::<IOPCShutdown>(&IID_IOPCShutdown)
+            .map_err(|_| CONNECT_E_CANNOTCONNECT)?;
         // Registering in the GIT may call into the sink, so it happens before the lock is taken.
         // SAFETY: a counted IOPCShutdown pointer of the calling apartment.
         let held = unsafe { SinkRef::adopt(shutdown) };
@@ -403,31 +390,20 @@ pub(crate) unsafe fn from_container<'a>(this: *mut IConnectionPointContainer) ->
 }
 
 impl IConnectionPointContainerImpl for OpcShutdown {
-    unsafe fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnectionPoints) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
-        let out = unsafe { ffi::out(ppEnum) }?;
-        let point = this.point_ptr();
+    fn EnumConnectionPoints(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnectionPoints>) -> FfiResult {
         // The snapshot's reference to the point counts on the server, which it keeps alive.
-        // SAFETY: `point` is a slot of the live, free-threaded object; the element takes over the
-        // reference added.
-        let item = unsafe {
-            add_ref(point.cast());
-            Listed::new(Counted::adopt(point).expect("slot pointers are never NULL"))
-        };
-        out.write(Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0));
+        // SAFETY: the point of the free-threaded object, usable on any thread.
+        let item = unsafe { Listed::new(this.point.counted::<IConnectionPoint>()) };
+        ppEnum.write(Enumerator::<ConnectionPointsEnum>::create(vec![item].into(), 0));
         Ok(S_OK)
     }
 
-    unsafe fn FindConnectionPoint(this: &ComObject<Self>, riid: REFIID, ppCP: *mut *mut IConnectionPoint) -> FfiResult {
-        // SAFETY: the caller's contract: `ppCP` NULL or writable, `riid` NULL or readable.
-        let (out, riid) = unsafe { (ffi::out(ppCP)?, ffi::in_ref(riid)?) };
+    fn FindConnectionPoint(this: &ComObject<Self>, riid: &IID, ppCP: ffi::Out<'_, *mut IConnectionPoint>) -> FfiResult {
         if *riid != IID_IOPCShutdown {
             return Err(CONNECT_E_NOCONNECTION.into());
         }
-        let point = this.point_ptr();
-        // SAFETY: a slot of the live object; the AddRef counts on the controlling unknown.
-        unsafe { add_ref(point.cast()) };
-        out.write(point);
+        // The caller's reference counts on the controlling unknown.
+        ppCP.write(this.point.counted::<IConnectionPoint>().into_raw().as_ptr());
         Ok(S_OK)
     }
 }
@@ -440,65 +416,52 @@ struct PointUnknown;
 
 impl PointUnknown {
     /// The named container of the object whose point `this` is, if any.
-    ///
-    /// # Safety
-    /// `this` must be the point slot of a live shutdown object.
-    unsafe fn named_container(this: *mut IUnknown) -> Option<*mut IUnknown> {
-        // SAFETY: per the caller; the reference is not used after this returns.
-        let obj = unsafe { ComObject::<OpcShutdown>::from_interface(this) };
+    fn named_container(this: &ThisSlot<'_>) -> Option<*mut IUnknown> {
+        let obj = this.object::<OpcShutdown>()?;
         obj.named_container.as_ref().map(|c| c.0.as_ptr())
     }
 }
 
 impl IUnknownImpl for PointUnknown {
-    unsafe fn QueryInterface(this: *mut IUnknown, riid: REFIID, ppv: *mut *mut c_void) -> FfiResult {
-        // SAFETY: the caller's contract: `ppv` NULL or writable, `riid` NULL or readable.
-        let (out, iid) = unsafe { (ffi::out(ppv)?, ffi::in_ref(riid)?) };
-        if *iid != IID_IUNKNOWN && *iid != IID_ICONNECTIONPOINT {
+    fn QueryInterface(this: ThisSlot<'_>, riid: &IID, ppv: ffi::Out<'_, *mut c_void>) -> FfiResult {
+        if *riid != IID_IUNKNOWN && *riid != IID_ICONNECTIONPOINT {
             return Err(E_NOINTERFACE.into());
         }
-        // SAFETY: `this` is the point slot of a live object.
-        unsafe { add_ref(this) };
-        out.write(this.cast());
+        // The caller's new reference, counted where every reference to the point counts.
+        this.add_ref();
+        ppv.write(this.as_unknown().cast());
         Ok(S_OK)
     }
 
-    unsafe fn AddRef(this: *mut IUnknown) -> u32 {
-        // SAFETY: `this` is the point slot of a live object; a named container outlives every
-        // reference to the point (they count on it).
-        unsafe {
-            match Self::named_container(this) {
-                Some(container) => add_ref(container),
-                None => Delegating::AddRef(this),
-            }
+    fn AddRef(this: ThisSlot<'_>) -> u32 {
+        match Self::named_container(&this) {
+            // SAFETY: a named container outlives every reference to the point (they count on it).
+            Some(container) => unsafe { add_ref(container) },
+            None => Delegating::AddRef(this),
         }
     }
 
-    unsafe fn Release(this: *mut IUnknown) -> u32 {
-        // SAFETY: as for AddRef; the caller gives up its reference. The container is read before
-        // the Release, which may end the server object and with it this one.
-        unsafe {
-            match Self::named_container(this) {
-                Some(container) => release(container),
-                None => Delegating::Release(this),
-            }
+    fn Release(this: ThisSlot<'_>) -> u32 {
+        // The container is read before the Release, which may end the server object and with it this
+        // one.
+        match Self::named_container(&this) {
+            // SAFETY: as for AddRef; the caller gives up its reference.
+            Some(container) => unsafe { release(container) },
+            None => Delegating::Release(this),
         }
     }
 }
 
 impl IConnectionPointImpl for OpcShutdown {
-    unsafe fn GetConnectionInterface(_this: &ComObject<Self>, pIID: *mut IID) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL `pIID` is writable.
-        unsafe { ffi::out(pIID) }?.write(IID_IOPCShutdown);
+    fn GetConnectionInterface(_this: &ComObject<Self>, pIID: ffi::Out<'_, IID>) -> FfiResult {
+        pIID.write(IID_IOPCShutdown);
         Ok(S_OK)
     }
 
-    unsafe fn GetConnectionPointContainer(
+    fn GetConnectionPointContainer(
         this: &ComObject<Self>,
-        ppCPC: *mut *mut IConnectionPointContainer,
+        ppCPC: ffi::Out<'_, *mut IConnectionPointContainer>,
     ) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL `ppCPC` is writable.
-        let out = unsafe { ffi::out(ppCPC) }?;
         if let Some(server) = &this.named_container {
             // The server object that forwards to this one: its own IConnectionPointContainer. Never
             // this object's container, which counts on this object only (see OpcShutdownOptions).
@@ -506,36 +469,31 @@ impl IConnectionPointImpl for OpcShutdown {
             // this call is made through counts on it).
             let found =
                 unsafe { query::<IConnectionPointContainer>(server.0.as_ptr(), &IID_ICONNECTIONPOINTCONTAINER) }?;
-            out.write(found.into_raw().as_ptr());
+            ppCPC.write(found.into_raw().as_ptr());
             return Ok(S_OK);
         }
         let header = this.header();
         if header.is_aggregated() {
             // The container is whatever the server object (the controlling unknown) answers for
             // IConnectionPointContainer: usually this object's container slot, forwarded.
-            // SAFETY: the outer unknown is valid while this object lives.
-            let found = unsafe {
-                query::<IConnectionPointContainer>(header.controlling_unknown(), &IID_ICONNECTIONPOINTCONTAINER)
-            };
-            if let Ok(found) = found {
+            if let Ok(found) = header.query::<IConnectionPointContainer>(&IID_ICONNECTIONPOINTCONTAINER) {
                 // The reference QueryInterface gave us goes to the caller.
-                out.write(found.into_raw().as_ptr());
+                ppCPC.write(found.into_raw().as_ptr());
                 return Ok(S_OK);
             }
         }
         // Our own container slot; its AddRef counts on the controlling unknown.
-        let container = this.container_ptr();
-        // SAFETY: a slot of the live object.
-        unsafe { add_ref(container.cast()) };
-        out.write(container);
+        ppCPC.write(
+            this.container
+                .counted::<IConnectionPointContainer>()
+                .into_raw()
+                .as_ptr(),
+        );
         Ok(S_OK)
     }
 
-    unsafe fn Advise(this: &ComObject<Self>, pUnkSink: *mut IUnknown, pdwCookie: *mut DWORD) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL `pdwCookie` is writable.
-        let (out, sink) = (unsafe { ffi::out(pdwCookie) }?, ffi::in_ptr(pUnkSink)?);
-        // SAFETY: the sink is a valid COM pointer.
-        out.write(unsafe { this.advise(sink.as_ptr()) }?);
+    fn Advise(this: &ComObject<Self>, pUnkSink: ffi::Iface<'_, IUnknown>, pdwCookie: ffi::Out<'_, DWORD>) -> FfiResult {
+        pdwCookie.write(this.advise(pUnkSink)?);
         Ok(S_OK)
     }
 
@@ -543,10 +501,8 @@ impl IConnectionPointImpl for OpcShutdown {
         Ok(this.unadvise(dwCookie))
     }
 
-    unsafe fn EnumConnections(this: &ComObject<Self>, ppEnum: *mut *mut IEnumConnections) -> FfiResult {
-        // SAFETY: the caller vouches a non-NULL `ppEnum` is writable.
-        let out = unsafe { ffi::out(ppEnum) }?;
-        out.write(this.enum_connections()?);
+    fn EnumConnections(this: &ComObject<Self>, ppEnum: ffi::Out<'_, *mut IEnumConnections>) -> FfiResult {
+        ppEnum.write(this.enum_connections()?);
         Ok(S_OK)
     }
 }

@@ -1061,7 +1061,7 @@ fn a_blocked_sink_times_out_and_its_late_return_is_harmless() {
     // Returns while the blocked sink is still inside ShutdownRequest: the test lets it go only after.
     let (hr, notified, failed, timed_out) = server.notify_bounded(reason.as_ptr(), &options);
     let worker_running = super::bounded::workers_running() >= 1;
-    let unload = crate::serverlist::server::OpcDllCanUnloadNow().get();
+    let unload = crate::module::OpcDllCanUnloadNow().get();
     // Everything the caller had goes away before the late call returns.
     drop(reason);
     drop(point);

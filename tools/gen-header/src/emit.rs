@@ -45,6 +45,11 @@ impl<'a> Catalog<'a> {
         self.by_name.contains_key(name)
     }
 
+    /// The interface of this name.
+    pub fn get(&self, name: &str) -> Option<&'a Interface> {
+        self.by_name.get(name).copied()
+    }
+
     /// The methods of `i` with those of its bases first, each with the interface that declares it.
     pub fn vtable(&self, i: &'a Interface) -> Vec<(&'a str, &'a Method)> {
         let mut chain = vec![i];

@@ -22,6 +22,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("src/security/", "security"),
     ("src/server/", "plumbing"),
     ("src/serverlist/", "browser"),
+    // opccomn's own class table and entry points: the browser's class object and registration.
+    ("src/module.rs", "browser"),
     ("src/shutdown/", "shutdown"),
 ];
 

@@ -12,9 +12,10 @@
 //!   `__stdcall` and every exported function and callback has the convention of its Rust definition.
 //!
 //! It also checks the rules of the FFI boundary that the compiler cannot and the names of the C API's
-//! parameters (see `rustcheck`), and the header's documentation as the C API reference needs it:
-//! every parameter and result documented, names linked, every declaration in an area (see `apidoc`,
-//! `groups`).
+//! parameters (see `rustcheck`), the header's documentation as the C API reference needs it: every
+//! parameter and result documented, names linked, every declaration in an area (see `apidoc`,
+//! `groups`), and that docs/dev/architecture.md accounts for every `unsafe` outside `src/com/` (see
+//! `unsafety`; `gen-header --unsafe` prints the counts per file).
 //!
 //! `gen-header` writes the files; `gen-header --check` exits 1 when a committed file differs from what
 //! the sources generate now (CI runs this). Both exit 1 when the sources break the boundary's rules,
@@ -27,11 +28,16 @@ mod guids;
 mod idl;
 mod rustcheck;
 mod rustgen;
+mod unsafety;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 const HEADER: &str = "include/opccomn/opccomn.h";
+
+/// The document with the table of the `unsafe` outside `src/com/`, and the line before the table.
+const UNSAFE_DOC: &str = "docs/dev/architecture.md";
+const UNSAFE_TABLE: &str = "<!-- the unsafe outside src/com/, checked by gen-header -->";
 
 fn main() -> ExitCode {
     let check = std::env::args().skip(1).any(|a| a == "--check");
@@ -68,7 +74,13 @@ fn main() -> ExitCode {
     )
     .unwrap_or_else(|e| panic!("{e}"));
 
-    let sources = rustcheck::read(&root);
+    let traits: Vec<String> = opc
+        .iter()
+        .chain(&base)
+        .chain(&internal)
+        .map(|i| format!("{}Impl", i.name))
+        .collect();
+    let sources = rustcheck::read(&root, &traits);
 
     let header = match generate_header(&root, &opc, &base, &table, &catalog, &sources) {
         Ok(h) => h,
@@ -107,6 +119,21 @@ fn main() -> ExitCode {
     // What the compiler cannot check about the boundary, and the names.
     for p in &sources.problems {
         eprintln!("rules: {p}");
+    }
+    // The unsafe code outside the COM core, against the documented table.
+    let counts = unsafety::count(&root);
+    if std::env::args().any(|a| a == "--unsafe") {
+        for (file, c) in &counts {
+            println!("{file:45} blocks {:3}  fns {:3}  impls {:3}", c.blocks, c.fns, c.impls);
+        }
+    }
+    let unsafe_problems = unsafety::check(&read(UNSAFE_DOC), UNSAFE_TABLE, &counts);
+    for p in &unsafe_problems {
+        eprintln!("unsafe: {p}");
+    }
+    if !unsafe_problems.is_empty() {
+        eprintln!("{UNSAFE_DOC}: the table of the unsafe outside src/com/ differs from the sources (`cargo run -p gen-header -- --unsafe` counts them): update it, with the reason for what is new");
+        return ExitCode::FAILURE;
     }
     if !sources.problems.is_empty() {
         eprintln!(

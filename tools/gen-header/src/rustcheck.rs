@@ -9,7 +9,11 @@
 //!   handed to C) has one `ffi::boundary!(...)` or `ffi::guard!(...)` as its whole body, and returns
 //!   `ffi::Hr` / `ffi::Crossed<T>` or nothing, so no code of it runs outside the panic guard;
 //! - nothing implements `Vtable` (what `Binder::slot` accepts) or casts a pointer to a `...Vtbl`
-//!   type, either of which could put a function that skipped the boundary into a vtable.
+//!   type, either of which could put a function that skipped the boundary into a vtable;
+//! - outside `src/com/`, no method of a generated interface trait (`IFooImpl`) is an `unsafe fn`: the
+//!   generated shim checks every argument and hands the method typed, checked values, so an object's
+//!   methods are safe code (the compiler refuses an `unsafe fn` for a safe trait method; this keeps a
+//!   generator that went back to raw pointers from passing unnoticed).
 //!
 //! It also checks the names of the C API's parameters (docs/api-conventions.md, "Names"): the
 //! functions the OPC specification defines (MatchPattern) have the specification's parameter names
@@ -25,6 +29,9 @@ use syn::visit::Visit;
 
 /// The generated module: it is where the vtables are made.
 const GENERATED: &str = "src/com/interfaces.rs";
+
+/// The COM core, whose framework may implement the IUnknown methods of its slots itself.
+const CORE: &str = "src/com/";
 
 pub struct Sources {
     /// `#[no_mangle]` / `#[export_name]` functions: symbol → ABI ("C" or "system").
@@ -142,6 +149,29 @@ impl<'ast> Visit<'ast> for Casts<'_> {
     }
 }
 
+/// The methods of an implementation of a generated interface trait that are `unsafe fn`.
+fn unsafe_methods(i: &syn::ItemImpl, traits: &[String], file: &str, out: &mut Vec<String>) {
+    let Some(name) = i
+        .trait_
+        .as_ref()
+        .and_then(|(_, path, _)| path.segments.last())
+        .map(|s| s.ident.to_string())
+        .filter(|n| traits.contains(n))
+    else {
+        return;
+    };
+    for item in &i.items {
+        if let syn::ImplItem::Fn(f) = item {
+            if f.sig.unsafety.is_some() {
+                out.push(format!(
+                    "{file}: {name}::{} is an unsafe fn: the generated shim checks the arguments, the method is safe code",
+                    f.sig.ident
+                ));
+            }
+        }
+    }
+}
+
 /// The functions the OPC specification defines, with its parameter names (OPC Common 1.10, Appendix B:
 /// `BOOL MatchPattern(LPCTSTR string, LPCTSTR pattern, BOOL bCaseSensitive)`).
 pub const SPECIFICATION: &[(&str, &[&str])] = &[
@@ -202,7 +232,7 @@ fn has_repr_c(attrs: &[syn::Attribute]) -> bool {
     })
 }
 
-fn visit_items(items: &[syn::Item], file: &str, out: &mut Sources) {
+fn visit_items(items: &[syn::Item], file: &str, traits: &[String], out: &mut Sources) {
     let generated = file == GENERATED;
     for item in items {
         match item {
@@ -257,6 +287,9 @@ fn visit_items(items: &[syn::Item], file: &str, out: &mut Sources) {
                     out.problems.push(format!(
                         "{file}: implements Vtable; only the generated vtables of src/com/interfaces.rs may"
                     ));
+                }
+                if !file.starts_with(CORE) {
+                    unsafe_methods(i, traits, file, &mut out.problems);
                 }
             }
             syn::Item::Type(t) => {
@@ -329,7 +362,7 @@ fn visit_items(items: &[syn::Item], file: &str, out: &mut Sources) {
             }
             syn::Item::Mod(m) if !is_cfg_test(&m.attrs) => {
                 if let Some((_, items)) = &m.content {
-                    visit_items(items, file, out);
+                    visit_items(items, file, traits, out);
                 }
             }
             _ => {}
@@ -347,8 +380,8 @@ fn visit_items(items: &[syn::Item], file: &str, out: &mut Sources) {
     }
 }
 
-/// Reads every Rust source of the library.
-pub fn read(root: &Path) -> Sources {
+/// Reads every Rust source of the library; `traits` are the generated interface traits (`IFooImpl`).
+pub fn read(root: &Path, traits: &[String]) -> Sources {
     let mut files = Vec::new();
     rust_files(&root.join("src"), &mut files);
     let mut out = Sources {
@@ -366,7 +399,7 @@ pub fn read(root: &Path) -> Sources {
         }
         let text = std::fs::read_to_string(&path).expect("read a Rust source");
         let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        visit_items(&file.items, &rel, &mut out);
+        visit_items(&file.items, &rel, traits, &mut out);
     }
     if out.checked < 40 {
         out.problems.push(format!(
@@ -381,7 +414,7 @@ pub fn read(root: &Path) -> Sources {
 mod tests {
     use super::*;
 
-    fn problems(rust: &str) -> Vec<String> {
+    fn problems_in(file: &str, rust: &str) -> Vec<String> {
         let mut sources = Sources {
             functions: BTreeMap::new(),
             callbacks: BTreeMap::new(),
@@ -389,8 +422,13 @@ mod tests {
             problems: Vec::new(),
             checked: 0,
         };
-        visit_items(&syn::parse_file(rust).unwrap().items, "src/t.rs", &mut sources);
+        let traits = ["IUnknownImpl".to_string(), "IOPCCommonImpl".to_string()];
+        visit_items(&syn::parse_file(rust).unwrap().items, file, &traits, &mut sources);
         sources.problems
+    }
+
+    fn problems(rust: &str) -> Vec<String> {
+        problems_in("src/t.rs", rust)
     }
 
     #[test]
@@ -454,6 +492,35 @@ mod tests {
     }
 
     #[test]
+    fn interface_methods_outside_the_core_are_safe_code() {
+        let safe = r#"
+            impl IOPCCommonImpl for Session {
+                fn GetLocaleID(this: &ComObject<Self>, out: ffi::Out<'_, LCID>) -> FfiResult { Ok(S_OK) }
+            }
+            impl Cursor for Utf16 { unsafe fn at(self, i: usize) -> u32 { 0 } }
+        "#;
+        assert_eq!(problems(safe), Vec::<String>::new());
+
+        let raw = r#"
+            impl IOPCCommonImpl for Session {
+                unsafe fn GetLocaleID(this: &ComObject<Self>, out: *mut LCID) -> FfiResult { Ok(S_OK) }
+            }
+        "#;
+        let p = problems(raw);
+        assert!(
+            p.len() == 1 && p[0].contains("IOPCCommonImpl::GetLocaleID is an unsafe fn"),
+            "{p:?}"
+        );
+        let p = problems_in("src/shutdown/server.rs", &format!("mod inner {{ {raw} }}"));
+        assert!(p.len() == 1 && p[0].starts_with("src/shutdown/server.rs:"), "{p:?}");
+
+        // The core's framework may (its IUnknown implementations work on raw slots).
+        let core = "impl IUnknownImpl for Inner { unsafe fn AddRef(this: *mut IUnknown) -> ULONG { 1 } }";
+        assert_eq!(problems_in("src/com/object.rs", core), Vec::<String>::new());
+        assert_eq!(problems_in("src/t.rs", core).len(), 1);
+    }
+
+    #[test]
     fn exports_and_callbacks_are_listed_with_their_conventions() {
         let mut sources = Sources {
             functions: BTreeMap::new(),
@@ -467,7 +534,7 @@ mod tests {
             #[unsafe(no_mangle)] pub unsafe extern "C" fn OpcX() -> Hr { ffi::guard!(0, { 0 }) }
             pub type Cb = Option<unsafe extern "C" fn(context: *mut c_void)>;
         "#;
-        visit_items(&syn::parse_file(text).unwrap().items, "src/t.rs", &mut sources);
+        visit_items(&syn::parse_file(text).unwrap().items, "src/t.rs", &[], &mut sources);
         assert_eq!(sources.functions["DllCanUnloadNow"], "system");
         assert_eq!(sources.functions["OpcX"], "C");
         assert_eq!(sources.callbacks["Cb"], "C");

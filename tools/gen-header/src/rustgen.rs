@@ -64,8 +64,14 @@ const POINTER_ALIASES: &[&str] = &[
 const OPAQUE: &[&str] = &["IStream"];
 
 struct Ty {
+    /// The C type as Rust writes it: what the vtables and the call wrappers take.
     rust: String,
-    pointer: bool,
+    /// The type's name without pointers (`GUID`, `LCID`, `IEnumGUID`, `c_void`, `LPCOLESTR`).
+    base: String,
+    /// Pointer levels written with `*` (and `[]`); the pointer aliases (`REFIID`, `LPCWSTR`...) are 0.
+    stars: usize,
+    /// Whether the type is `void` or an interface the library passes on without calling (`IStream`).
+    opaque: bool,
 }
 
 fn rust_type(catalog: &Catalog, iface: &str, p: &Param) -> Result<Ty, String> {
@@ -79,7 +85,8 @@ fn rust_type(catalog: &Catalog, iface: &str, p: &Param) -> Result<Ty, String> {
         .rfind(|w| **w != "const")
         .ok_or_else(|| format!("{iface}: parameter {} has no type", p.name))?;
     let stars = p.ty.matches('*').count() + usize::from(p.array);
-    let name = if *base == "void" || OPAQUE.contains(base) {
+    let opaque = *base == "void" || OPAQUE.contains(base);
+    let name = if opaque {
         "c_void".to_string()
     } else if PLAIN_TYPES.contains(base) || catalog.contains(base) {
         base.to_string()
@@ -89,15 +96,183 @@ fn rust_type(catalog: &Catalog, iface: &str, p: &Param) -> Result<Ty, String> {
             p.name
         ));
     };
-    let mut rust = name;
+    let mut rust = name.clone();
     for level in 0..stars {
         let kind = if level == 0 && constant { "*const" } else { "*mut" };
         rust = format!("{kind} {rust}");
     }
     Ok(Ty {
         rust,
-        pointer: stars > 0 || POINTER_ALIASES.contains(base),
+        base: name,
+        stars,
+        opaque,
     })
+}
+
+/// What the generated shim makes of a parameter before it calls the trait: the reader of `ffi` that
+/// checks it once (a NULL where the interface's rule forbids one gives the rule's code), and the type
+/// the trait method takes, which holds what was checked for the call only.
+#[derive(Debug, PartialEq)]
+enum Arg {
+    /// Passed as it is: an integer, a BOOL, an LCID.
+    Value,
+    /// `[in] void *` or an interface the library never calls (`IStream *`): `ffi::Opaque`, a pointer
+    /// (perhaps NULL) the method can only pass on.
+    Opaque,
+    /// `[out] T *p`: `ffi::Out<T>` (the boundary reset it); `optional`: `Option<ffi::Out<T>>`.
+    Out { elem: String, optional: bool },
+    /// `[out, size_is(len)] T *p`: `ffi::OutArray<T>`, room for `len` elements, never reset.
+    OutArray { elem: String, len: String },
+    /// `[in] REFIID` / `REFCLSID`: a reference to the GUID.
+    Guid { elem: String },
+    /// `[in, string]` (`LPCWSTR`, `LPCOLESTR`): `ffi::WStr`, read when the method asks;
+    /// `optional`: `Option<ffi::WStr>`.
+    Str { optional: bool },
+    /// `[in, size_is(count)] T a[]`: `ffi::InArray<T>`, read when the method asks, against its limit.
+    InArray { elem: String, count: String },
+    /// `[in] IFoo *p`: `ffi::Iface<IFoo>`, a valid interface pointer for the call; `optional`
+    /// (`[unique]`): `Option<ffi::Iface<IFoo>>`.
+    Iface { iface: String, optional: bool },
+}
+
+/// Pointer parameters the library accepts NULL for although the IDL does not say so (a pointer
+/// parameter without `[unique]` is `[ref]`, never NULL, in MIDL's terms): (interface, method,
+/// parameter, why). Everything else NULL gets the interface's NULL code from the shim.
+const MAY_BE_NULL: &[(&str, &str, &str, &str)] = &[(
+    "IOPCShutdown",
+    "ShutdownRequest",
+    "szReason",
+    "the server gave no reason: the sink passes a NUL string on (specification 3.1.4)",
+)];
+
+/// The first argument of `size_is(...)`, if any (`size_is(,*pdwCount)` sizes what the parameter
+/// points at, not the parameter: none).
+fn size_is(p: &Param) -> Option<String> {
+    attribute_items(&p.attributes).iter().find_map(|i| {
+        i.strip_prefix("size_is(")
+            .map(|rest| {
+                rest.trim_end_matches(')')
+                    .split(',')
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .to_string()
+            })
+            .filter(|n| !n.is_empty())
+    })
+}
+
+/// `ty` with one pointer level fewer: the type a pointer parameter points at.
+fn pointee(iface: &str, p: &Param, ty: &Ty) -> Result<String, String> {
+    if let Some(rest) = ty
+        .rust
+        .strip_prefix("*mut ")
+        .or_else(|| ty.rust.strip_prefix("*const "))
+    {
+        return Ok(rest.to_string());
+    }
+    match ty.base.as_str() {
+        "LPCLSID" => Ok("CLSID".to_string()),
+        other => Err(format!(
+            "{iface}: parameter {} of type {other} points at nothing the generator knows",
+            p.name
+        )),
+    }
+}
+
+fn classify(catalog: &Catalog, iface: &str, enumerator: bool, m: &Method, p: &Param, ty: &Ty) -> Result<Arg, String> {
+    let items = attribute_items(&p.attributes);
+    let has = |a: &str| items.iter().any(|i| i == a);
+    let optional = has("unique")
+        || MAY_BE_NULL
+            .iter()
+            .any(|(i, mm, pp, _)| *i == iface && *mm == m.name && *pp == p.name);
+    let alias_pointer = POINTER_ALIASES.contains(&ty.base.as_str());
+    if ty.stars == 0 && !alias_pointer {
+        return Ok(Arg::Value);
+    }
+    if has("out") {
+        if let Some(len) = size_is(p) {
+            return Ok(Arg::OutArray {
+                elem: pointee(iface, p, ty)?,
+                len,
+            });
+        }
+        // COM's enumerator contract: Next's count of fetched elements may be NULL (when one is asked for).
+        let fetched = enumerator && m.name == "Next" && m.params.last().is_some_and(|last| last.name == p.name);
+        return Ok(Arg::Out {
+            elem: pointee(iface, p, ty)?,
+            optional: optional || fetched,
+        });
+    }
+    if !has("in") {
+        return Err(format!(
+            "{iface}::{}: parameter {} is neither [in] nor [out]",
+            m.name, p.name
+        ));
+    }
+    match ty.base.as_str() {
+        "REFIID" | "REFCLSID" if !optional => {
+            return Ok(Arg::Guid {
+                elem: if ty.base == "REFIID" { "IID" } else { "CLSID" }.to_string(),
+            })
+        }
+        "LPCWSTR" | "LPCOLESTR" if ty.stars == 0 => return Ok(Arg::Str { optional }),
+        _ => {}
+    }
+    if let Some(count) = size_is(p) {
+        return Ok(Arg::InArray {
+            elem: pointee(iface, p, ty)?,
+            count,
+        });
+    }
+    if ty.opaque && ty.stars == 1 {
+        return Ok(Arg::Opaque);
+    }
+    if ty.stars == 1 && catalog.contains(&ty.base) {
+        return Ok(Arg::Iface {
+            iface: ty.base.clone(),
+            optional,
+        });
+    }
+    Err(format!(
+        "{iface}::{}: parameter {} ({}) is a pointer the generator has no reader for",
+        m.name, p.name, p.ty
+    ))
+}
+
+impl Arg {
+    /// The type the trait method takes.
+    fn trait_type(&self, raw: &str) -> String {
+        let opt = |optional: bool, t: String| if optional { format!("Option<{t}>") } else { t };
+        match self {
+            Arg::Value => raw.to_string(),
+            Arg::Opaque => "ffi::Opaque<'_>".to_string(),
+            Arg::Out { elem, optional } => opt(*optional, format!("ffi::Out<'_, {elem}>")),
+            Arg::OutArray { elem, .. } => format!("ffi::OutArray<'_, {elem}>"),
+            Arg::Guid { elem } => format!("&{elem}"),
+            Arg::Str { optional } => opt(*optional, "ffi::WStr<'_>".to_string()),
+            Arg::InArray { elem, .. } => format!("ffi::InArray<'_, {elem}>"),
+            Arg::Iface { iface, optional } => opt(*optional, format!("ffi::Iface<'_, {iface}>")),
+        }
+    }
+
+    /// The shim's expression that checks the raw argument `name` and makes the trait's argument.
+    fn reader(&self, name: &str) -> String {
+        match self {
+            Arg::Value => name.to_string(),
+            Arg::Opaque => format!("ffi::opaque({name})"),
+            Arg::Out { optional: false, .. } => format!("ffi::out({name})?"),
+            Arg::Out { optional: true, .. } => format!("ffi::out_opt({name})"),
+            Arg::OutArray { len, .. } => format!("ffi::out_array({name}, {len})?"),
+            Arg::Guid { .. } => format!("ffi::in_ref({name})?"),
+            Arg::Str { optional: false } => format!("ffi::in_wstr({name})?"),
+            Arg::Str { optional: true } => format!("ffi::in_wstr_opt({name})"),
+            Arg::InArray { count, .. } => format!("ffi::in_array_arg({name}, {count})"),
+            Arg::Iface { optional: false, .. } => format!("ffi::in_iface({name})?"),
+            Arg::Iface { optional: true, .. } => format!("ffi::in_iface_opt({name})"),
+        }
+    }
 }
 
 /// The attribute items of a parameter, split at the top level commas.
@@ -142,6 +317,24 @@ fn is_enumerator(i: &Interface) -> bool {
     names == ["Next", "Skip", "Reset", "Clone"]
 }
 
+/// `text` as `//` comment lines of at most 100 columns after `indent`.
+fn comment(text: &str, indent: &str) -> String {
+    let mut s = String::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        if !line.is_empty() && line.len() + 1 + word.len() > 100 - indent.len() - 3 {
+            let _ = writeln!(s, "{indent}// {line}");
+            line.clear();
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    let _ = writeln!(s, "{indent}// {line}");
+    s
+}
+
 fn doc(lines: &[String], indent: &str) -> String {
     let mut s = String::new();
     for l in lines {
@@ -157,19 +350,24 @@ fn doc(lines: &[String], indent: &str) -> String {
 struct Sig {
     /// `name: type` of each parameter after `This`.
     params: Vec<(String, Ty)>,
+    /// What the shim makes of each parameter for the trait.
+    args: Vec<Arg>,
     ret: &'static str,
     /// The parameters the boundary resets.
     outs: Vec<String>,
 }
 
-fn signature(catalog: &Catalog, iface: &str, m: &Method) -> Result<Sig, String> {
+fn signature(catalog: &Catalog, iface: &str, enumerator: bool, m: &Method) -> Result<Sig, String> {
     let mut params = Vec::new();
+    let mut args = Vec::new();
     let mut outs = Vec::new();
     for p in &m.params {
         if resets(p) {
             outs.push(p.name.clone());
         }
-        params.push((p.name.clone(), rust_type(catalog, iface, p)?));
+        let ty = rust_type(catalog, iface, p)?;
+        args.push(classify(catalog, iface, enumerator, m, p, &ty)?);
+        params.push((p.name.clone(), ty));
     }
     let ret = match m.ret.as_str() {
         "HRESULT" => "HRESULT",
@@ -181,7 +379,12 @@ fn signature(catalog: &Catalog, iface: &str, m: &Method) -> Result<Sig, String> 
             ))
         }
     };
-    Ok(Sig { params, ret, outs })
+    Ok(Sig {
+        params,
+        args,
+        ret,
+        outs,
+    })
 }
 
 fn guid_literal(uuid: &str) -> String {
@@ -202,6 +405,15 @@ fn arg_list(sig: &Sig) -> String {
 
 fn param_list(sig: &Sig) -> String {
     sig.params.iter().map(|(n, t)| format!(", {n}: {}", t.rust)).collect()
+}
+
+/// The trait method's parameters after `this`: the typed arguments.
+fn trait_param_list(sig: &Sig) -> String {
+    sig.params
+        .iter()
+        .zip(&sig.args)
+        .map(|((n, t), a)| format!(", {n}: {}", a.trait_type(&t.rust)))
+        .collect()
 }
 
 /// The generated module.
@@ -226,14 +438,21 @@ pub fn module(catalog: &Catalog, files: &[File]) -> Result<String, String> {
          //!   is one `ffi::boundary!` (HRESULT methods: the interface's NULL rule, the IDL's `[out]`\n\
          //!   parameters reset on entry and on failure, panics caught) or `ffi::guard!` (the others)\n\
          //!   around a call of the trait's method.\n\
+         //! - The trait's methods are safe: the shim checks every pointer argument once, under the\n\
+         //!   interface's NULL rule, and hands the method what it checked, typed from the IDL and valid\n\
+         //!   for the call only: `[out]` as [`ffi::Out`] (`Option` where COM allows NULL), `[out,\n\
+         //!   size_is]` as [`ffi::OutArray`], `REFIID`/`REFCLSID` as a reference, `[in, string]` as\n\
+         //!   [`ffi::WStr`], `[in, size_is]` as [`ffi::InArray`], an interface pointer as\n\
+         //!   [`ffi::Iface`] (`Option` for `[unique]`), `void *` as [`ffi::Opaque`], and an IUnknown\n\
+         //!   method's `This` as a [`ThisSlot`].\n\
          //! - `IFoo::IID` and `IFoo::METHODS` (IUnknown's three included).\n\n\
          #![allow(non_snake_case, clippy::too_many_arguments)]\n\n\
          use core::ffi::c_void;\n\n\
          use super::ffi::{self, Crossed, FfiResult, Foreign, Hr};\n\
-         use super::object::{ComClass, ComObject, Vtable};\n",
+         use super::object::{ComClass, ComObject, ThisSlot, Vtable};\n",
     );
     // The types the module names.
-    let mut used: Vec<&str> = vec!["GUID", "HRESULT", "ULONG", "REFIID"];
+    let mut used: Vec<&str> = vec!["CLSID", "GUID", "HRESULT", "IID", "ULONG", "REFIID"];
     for f in files {
         for i in f.interfaces {
             for m in &i.methods {
@@ -296,7 +515,8 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
     let vtable = catalog.vtable(i);
     let mut sigs = Vec::new();
     for (owner, m) in &vtable {
-        sigs.push((*owner, *m, signature(catalog, owner, m)?));
+        let enumerator = catalog.get(owner).is_some_and(is_enumerator);
+        sigs.push((*owner, *m, signature(catalog, owner, enumerator, m)?));
     }
     let mut s = String::new();
     let _ = writeln!(s, "\n// ---- {name} ({path}) ----\n");
@@ -416,35 +636,14 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
         if *owner != *name {
             continue;
         }
-        let unsafe_ = is_root || sig.params.iter().any(|(_, t)| t.pointer);
         s += &doc(&m.doc, "    ");
-        if unsafe_ {
-            let _ = writeln!(s, "    ///\n    /// # Safety");
-            if is_root {
-                let _ = writeln!(
-                    s,
-                    "    /// Called by the generated shim with `This`, a slot whose vtable was made with this\n    /// implementation, and the COM caller's arguments."
-                );
-            } else {
-                let _ = writeln!(
-                    s,
-                    "    /// Called by the generated shim with the COM caller's arguments, each as the IDL declares it\n    /// (a pointer NULL or valid; the shim has already reset the `[out]` parameters)."
-                );
-            }
-        }
         let this = if is_root {
-            format!("This: *mut {name}")
+            "This: ThisSlot<'_>".to_string()
         } else {
             "this: &ComObject<Self>".to_string()
         };
         let ret = if sig.ret == "HRESULT" { "FfiResult" } else { sig.ret };
-        let _ = writeln!(
-            s,
-            "    {}fn {}({this}{}) -> {ret};",
-            if unsafe_ { "unsafe " } else { "" },
-            m.name,
-            param_list(sig)
-        );
+        let _ = writeln!(s, "    fn {}({this}{}) -> {ret};", m.name, trait_param_list(sig));
     }
     s += "}\n\n";
 
@@ -453,21 +652,19 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
         if *owner != *name {
             continue;
         }
-        let (head, this_ty, call) = if is_root {
+        let (head, this_ty, this_arg, call) = if is_root {
             (
                 format!("<U: {name}Impl, I>"),
                 "*mut I".to_string(),
-                format!("<U as {name}Impl>::{}(This.cast(){})", m.name, arg_list(sig)),
+                "ThisSlot::new(This.cast())".to_string(),
+                format!("<U as {name}Impl>::{}", m.name),
             )
         } else {
             (
                 format!("<T: {name}Impl>"),
                 format!("*mut {name}"),
-                format!(
-                    "<T as {name}Impl>::{}(ComObject::<T>::from_interface(This){})",
-                    m.name,
-                    arg_list(sig)
-                ),
+                "ComObject::<T>::from_interface(This)".to_string(),
+                format!("<T as {name}Impl>::{}", m.name),
             )
         };
         let ret = if sig.ret == "HRESULT" {
@@ -481,23 +678,58 @@ fn interface(catalog: &Catalog, path: &str, i: &Interface, root: &Interface, rul
             m.name,
             param_list(sig)
         );
-        let safety = if is_root {
-            "        // SAFETY: `new::<U>` installs this shim only in vtables of slots that `U` answers for; the\n        // arguments are the COM caller's.\n"
+        let slot = if is_root {
+            "`new::<U>` installs this shim only in vtables of slots that `U` answers for, so `This` is a slot \
+             of a live object of the library"
                 .to_string()
         } else {
             format!(
-                "        // SAFETY: `{name}Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects,\n        // so `This` is a slot of a live ComObject<T>; the arguments are the COM caller's.\n"
+                "`{name}Vtbl::new::<_, T>` installs this shim only in the slots of `T`'s objects, so `This` is a \
+                 slot of a live ComObject<T>"
+            )
+        };
+        let checked: Vec<(&str, String)> = sig
+            .params
+            .iter()
+            .zip(&sig.args)
+            .filter(|(_, a)| **a != Arg::Value)
+            .map(|((n, _), a)| (n.as_str(), a.reader(n)))
+            .collect();
+        let safety = if checked.is_empty() {
+            comment(&format!("SAFETY: {slot}."), "        ")
+        } else {
+            comment(
+                &format!(
+                    "SAFETY: {slot}; every pointer argument is the COM caller's, NULL or valid for the call as \
+                     the IDL declares it, which is what its reader requires."
+                ),
+                "        ",
+            )
+        };
+        let mut names = vec!["this".to_string()];
+        let mut readers = vec![this_arg];
+        for (n, r) in &checked {
+            names.push((*n).to_string());
+            readers.push(r.clone());
+        }
+        let args: String = sig.params.iter().map(|(n, _)| format!(", {n}")).collect();
+        let bind = if names.len() == 1 {
+            format!("        let this = unsafe {{ {} }};\n", readers[0])
+        } else {
+            format!(
+                "        let ({}) = unsafe {{ ({}) }};\n",
+                names.join(", "),
+                readers.join(", ")
             )
         };
         if sig.ret == "HRESULT" {
             let _ = writeln!(s, "    ffi::boundary!({rule}, [{}], {{", sig.outs.join(", "));
-            s += &safety;
-            let _ = writeln!(s, "        unsafe {{ {call} }}\n    }})\n}}\n");
         } else {
             let _ = writeln!(s, "    ffi::guard!(0, {{");
-            s += &safety;
-            let _ = writeln!(s, "        unsafe {{ {call} }}\n    }})\n}}\n");
         }
+        s += &safety;
+        s += &bind;
+        let _ = writeln!(s, "        {call}(this{args})\n    }})\n}}\n");
     }
     Ok(s)
 }
@@ -560,9 +792,18 @@ mod tests {
         assert!(m.contains(
             "    /// Sets the locale.\n    fn SetLocaleID(this: &ComObject<Self>, dwLcid: LCID) -> FfiResult;"
         ));
+        // Typed, checked arguments: no method is an unsafe fn.
         assert!(m.contains(
-            "unsafe fn QueryAvailableLocaleIDs(this: &ComObject<Self>, pdwCount: *mut DWORD, pdwLcid: *mut *mut LCID) -> FfiResult;"
-        ));
+            "    fn QueryAvailableLocaleIDs(this: &ComObject<Self>, pdwCount: ffi::Out<'_, DWORD>, pdwLcid: ffi::Out<'_, *mut LCID>) -> FfiResult;"
+        ), "{m}");
+        for block in m.split("pub trait ").skip(1) {
+            let body = &block[..block.find("}\n\n").unwrap()];
+            assert!(!body.contains("unsafe fn"), "a trait method is unsafe: {body}");
+        }
+        // The shim checks them once, in the IDL's order, and calls the safe method.
+        assert!(m.contains(
+            "let (this, pdwCount, pdwLcid) = unsafe { (ComObject::<T>::from_interface(This), ffi::out(pdwCount)?, ffi::out(pdwLcid)?) };\n        <T as IOPCCommonImpl>::QueryAvailableLocaleIDs(this, pdwCount, pdwLcid)\n"
+        ), "{m}");
         // The OPC rule; the `[out]` parameters reset, the pointer to an array (`size_is(,...)`) included.
         assert!(m.contains("ffi::boundary!(Opc, [pdwCount, pdwLcid], {"), "{m}");
         assert!(m.contains("pub SetLocaleID: unsafe extern \"system\" fn(This: *mut IOPCCommon, dwLcid: LCID) -> Hr,"));
@@ -586,6 +827,72 @@ mod tests {
         assert!(m.contains("fn IEnumGUID_Next<T: IEnumGUIDImpl>(This: *mut IEnumGUID, celt: ULONG, rgelt: *mut GUID, pceltFetched: *mut ULONG) -> Hr {\n    ffi::boundary!(Com, [pceltFetched], {"), "{m}");
         assert!(m.contains("ffi::boundary!(Com, [ppenum], {"));
         assert!(m.contains("fn Skip(this: &ComObject<Self>, celt: ULONG) -> FfiResult;"));
+        // `rgelt` is room for `celt` elements; the fetched count may be NULL (COM's enumerator rule).
+        assert!(m.contains(
+            "    fn Next(this: &ComObject<Self>, celt: ULONG, rgelt: ffi::OutArray<'_, GUID>, pceltFetched: Option<ffi::Out<'_, ULONG>>) -> FfiResult;"
+        ), "{m}");
+        assert!(m.contains("ffi::out_array(rgelt, celt)?, ffi::out_opt(pceltFetched)"));
+        assert!(m.contains("fn Clone(this: &ComObject<Self>, ppenum: ffi::Out<'_, *mut IEnumGUID>) -> FfiResult;"));
+        // IUnknown's methods take the slot they were called through.
+        assert!(m.contains(
+            "    fn QueryInterface(This: ThisSlot<'_>, riid: &IID, ppvObject: ffi::Out<'_, *mut c_void>) -> FfiResult;"
+        ), "{m}");
+        assert!(m.contains("    fn Release(This: ThisSlot<'_>) -> ULONG;"));
+        assert!(
+            m.contains("let this = unsafe { ThisSlot::new(This.cast()) };\n        <U as IUnknownImpl>::Release(this)")
+        );
+    }
+
+    #[test]
+    fn strings_arrays_guids_and_interface_pointers_are_typed() {
+        let methods = OPC.replace(
+            "HRESULT SetLocaleID([in] LCID dwLcid);",
+            "HRESULT SetLocaleID([in] LCID dwLcid);\n\
+             HRESULT SetClientName([in, string] LPCWSTR szName);\n\
+             HRESULT CLSIDFromProgID([in] LPCOLESTR szProgId, [out] LPCLSID clsid);\n\
+             HRESULT Enum([in] ULONG c, [in, size_is(c)] CATID rg[], [in] REFCLSID clsid, [out] IEnumGUID **pp);\n\
+             HRESULT Make([in, unique] IUnknown *pOuter, [in] IUnknown *pSink, [in] REFIID riid, [out, iid_is(riid)] void **ppv);\n\
+             HRESULT Pass([in, unique] void *pv);",
+        );
+        let m = generate(&methods).unwrap();
+        assert!(
+            m.contains("fn SetClientName(this: &ComObject<Self>, szName: ffi::WStr<'_>) -> FfiResult;"),
+            "{m}"
+        );
+        assert!(m.contains("ffi::in_wstr(szName)?"));
+        assert!(m.contains("fn CLSIDFromProgID(this: &ComObject<Self>, szProgId: ffi::WStr<'_>, clsid: ffi::Out<'_, CLSID>) -> FfiResult;"));
+        assert!(m.contains(
+            "fn Enum(this: &ComObject<Self>, c: ULONG, rg: ffi::InArray<'_, CATID>, clsid: &CLSID, pp: ffi::Out<'_, *mut IEnumGUID>) -> FfiResult;"
+        ), "{m}");
+        // An in-array is read by the method, against its own limit: the shim does not check it.
+        assert!(m.contains("ffi::in_array_arg(rg, c), ffi::in_ref(clsid)?, ffi::out(pp)?"));
+        assert!(m.contains(
+            "fn Make(this: &ComObject<Self>, pOuter: Option<ffi::Iface<'_, IUnknown>>, pSink: ffi::Iface<'_, IUnknown>, riid: &IID, ppv: ffi::Out<'_, *mut c_void>) -> FfiResult;"
+        ), "{m}");
+        assert!(m.contains("ffi::in_iface_opt(pOuter), ffi::in_iface(pSink)?, ffi::in_ref(riid)?, ffi::out(ppv)?"));
+        // A pointer the library only passes on.
+        assert!(m.contains("fn Pass(this: &ComObject<Self>, pv: ffi::Opaque<'_>) -> FfiResult;"));
+        assert!(m.contains("(ComObject::<T>::from_interface(This), ffi::opaque(pv))"));
+        assert!(m.contains("fn SetLocaleID(this: &ComObject<Self>, dwLcid: LCID) -> FfiResult;"));
+    }
+
+    #[test]
+    fn the_shutdown_reason_may_be_null_and_unknown_pointers_are_errors() {
+        let shutdown = r#"
+            [object, uuid(F31DFDE1-07B6-11d2-B2D8-0060083BA1FB)]
+            interface IOPCShutdown : IUnknown {
+                HRESULT ShutdownRequest([in, string] LPCWSTR szReason);
+            }
+        "#;
+        let m = generate(shutdown).unwrap();
+        assert!(
+            m.contains("fn ShutdownRequest(this: &ComObject<Self>, szReason: Option<ffi::WStr<'_>>) -> FfiResult;"),
+            "{m}"
+        );
+        assert!(m.contains("ffi::in_wstr_opt(szReason)"));
+        let bad = OPC.replace("[in] LCID dwLcid", "[in] LCID *pdwLcid");
+        let e = generate(&bad).unwrap_err();
+        assert!(e.contains("no reader"), "{e}");
     }
 
     #[test]
@@ -595,7 +902,7 @@ mod tests {
             "HRESULT SetLocaleID([in] LCID dwLcid);\n HRESULT GetLocaleID([out] LCID *pdwLcid);",
         );
         let m = generate(&added).unwrap();
-        assert!(m.contains("unsafe fn GetLocaleID(this: &ComObject<Self>, pdwLcid: *mut LCID) -> FfiResult;"));
+        assert!(m.contains("    fn GetLocaleID(this: &ComObject<Self>, pdwLcid: ffi::Out<'_, LCID>) -> FfiResult;"));
         assert!(m.contains("GetLocaleID: IOPCCommon_GetLocaleID::<T>,"));
         assert!(m.contains("pub const METHODS: u32 = 6;"));
     }
