@@ -19,6 +19,7 @@
 mod emit;
 mod guids;
 mod idl;
+mod ndr;
 mod rustcheck;
 mod rustgen;
 
@@ -79,6 +80,9 @@ fn main() -> ExitCode {
         ("src/c/opccomn_guids.c", guids::c_data(&opc, &base, &table)),
         ("c-tests/abi_i686.c", abi_check),
     ];
+    // The proxy/stub's NDR layouts and interface table (src/ndr/).
+    let layouts = ndr::outputs(&read, &|text| rustfmt(&root, text)).unwrap_or_else(|e| panic!("{e}"));
+    let outputs: Vec<(&str, String)> = outputs.into_iter().chain(layouts).collect();
     let mut stale = 0;
     for (path, text) in &outputs {
         let full = root.join(path);
