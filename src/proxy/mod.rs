@@ -64,11 +64,12 @@ pub mod layouts;
 #[path = "generated/test_layouts.rs"]
 pub mod test_layouts;
 
+/// The checks of the served interfaces by their names, for the tests and the fuzz targets (the C
+/// boundary below calls `ndr` with the number the C side passes).
 #[cfg(feature = "fuzzing")]
 pub mod wire;
-#[cfg(not(feature = "fuzzing"))]
-#[cfg_attr(not(opccomn_proxy_stub), allow(dead_code))]
-pub(crate) mod wire;
+#[cfg(all(test, not(feature = "fuzzing")))]
+mod wire;
 
 #[cfg(opccomn_proxy_stub)]
 extern "C" {

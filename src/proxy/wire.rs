@@ -1,5 +1,6 @@
 //! The proxy/stub's checks of the NDR bytes of the interfaces it serves, made before the runtime's NDR
-//! engine reads them.
+//! engine reads them, by the interfaces' names (the tests and the fuzz targets call these; the C
+//! boundary in `super` calls [`super::ndr`] with the interface's number).
 //!
 //! The tables `widl` generates carry no correlation checks (no `/robust` correlation descriptors),
 //! and Wine's NDR engine would not enforce them if they did (`NdrCorrelationInitialize` and
@@ -17,7 +18,6 @@
 
 pub use super::layouts::Interface;
 use super::ndr;
-#[cfg_attr(not(any(test, feature = "fuzzing")), allow(unused_imports))]
 pub use super::ndr::{Context, Dialect, BAD_STUB_DATA, INVALID_BOUND, PROCNUM_OUT_OF_RANGE};
 use crate::com::HRESULT;
 

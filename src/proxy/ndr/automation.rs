@@ -18,9 +18,8 @@
 //!   Windows and Wine write it); `vt` is one of the types an OPC value can have: VT_EMPTY, VT_NULL,
 //!   VT_I1, VT_UI1, VT_I2, VT_UI2, VT_BOOL, VT_I4, VT_UI4, VT_INT, VT_UINT, VT_R4, VT_ERROR, VT_I8,
 //!   VT_UI8, VT_R8, VT_CY, VT_DATE, VT_DECIMAL, VT_BSTR, or VT_ARRAY of one of the types a SAFEARRAY
-//!   carries below. Refused: objects (VT_UNKNOWN, VT_DISPATCH), records, VT_BYREF, VT_VECTOR, and
-//!   VT_I8 / VT_UI8 for Wine's oleaut32, which reads no value for them. `clSize` and the reserved
-//!   words are not read by either runtime and not checked.
+//!   carries below. Refused: objects (VT_UNKNOWN, VT_DISPATCH), records, VT_BYREF, VT_VECTOR.
+//!   `clSize` and the reserved words are not read by either runtime and not checked.
 //! - SAFEARRAY (`wireSAFEARRAY`): the conformance equals `cDims`, 1 <= `cDims` <= [`MAX_DIMS`]; the
 //!   union's type (`SF_I1`, `SF_I2`, `SF_I4`, `SF_I8`, `SF_BSTR` or `SF_VARIANT`; no interfaces or
 //!   records) agrees with the VARIANT's element type and with the VARTYPE in the high word of
@@ -173,7 +172,6 @@ impl Walk<'_> {
             VT_I1 | VT_UI1 => (1, 1),
             VT_I2 | VT_UI2 | VT_BOOL => (2, 2),
             VT_I4 | VT_UI4 | VT_INT | VT_UINT | VT_R4 | VT_ERROR => (4, 4),
-            VT_I8 | VT_UI8 if self.dialect == Dialect::Wine => return Err(BAD_STUB_DATA),
             VT_I8 | VT_UI8 | VT_R8 | VT_CY | VT_DATE => (8, 8),
             VT_DECIMAL => (8, 16),
             VT_BSTR => {

@@ -48,7 +48,8 @@ pub const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
 pub const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
 
 /// The bound of every array whose count a peer chooses, unless the IDL's bounds say otherwise:
-/// 65,536 elements.
+/// 65,536 elements (tools/gen-header writes each array's bound into its layout).
+#[cfg(any(test, feature = "fuzzing"))]
 pub const DEFAULT_BOUND: u32 = 65_536;
 
 /// How deep VARIANTs may nest: a VARIANT holding a SAFEARRAY of VARIANTs is two levels.
@@ -81,9 +82,7 @@ type Check = Result<(), HRESULT>;
 ///   at 8 (Wine's `NdrUserMarshalUnmarshall`);
 /// - a SAFEARRAY of BSTRs or VARIANTs: referent IDs, then the elements (NDR), or the elements only
 ///   (Wine's oleaut32); a SAFEARRAY without data: no conformance (NDR) or a conformance still
-///   (Wine);
-/// - a VARIANT of VT_I8 or VT_UI8: 8 bytes (NDR), none (Wine's oleaut32 reads and writes no value:
-///   refused).
+///   (Wine).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Dialect {
     /// Windows' rpcrt4 and oleaut32.
@@ -99,6 +98,7 @@ pub struct Context(pub [u32; CONTEXT_WORDS]);
 
 impl Context {
     /// A context of these words (the rest 0).
+    #[cfg(any(test, feature = "fuzzing"))]
     pub fn of(words: &[u32]) -> Context {
         let mut c = Context::default();
         for (to, from) in c.0.iter_mut().zip(words) {

@@ -29,7 +29,14 @@ fn request(iface: T, name: &str, m: &Msg, dialect: Dialect) -> Result<Context, H
 }
 
 fn reply(iface: T, name: &str, ctx: &Context, m: &Msg, dialect: Dialect) -> Check {
-    check_reply(iface.layout(), index(iface, name), ctx, m.aligned().bytes(), LOCAL, dialect)
+    check_reply(
+        iface.layout(),
+        index(iface, name),
+        ctx,
+        m.aligned().bytes(),
+        LOCAL,
+        dialect,
+    )
 }
 
 /// The message passes, and every proper prefix of it is refused.
@@ -37,7 +44,11 @@ fn whole(check: impl Fn(&[u8]) -> Check, m: &Msg) {
     let buf = m.aligned();
     assert_eq!(check(buf.bytes()), Ok(()), "{:02x?}", buf.bytes());
     for len in 0..buf.bytes().len() {
-        assert!(check(&buf.bytes()[..len]).is_err(), "a prefix of {len} bytes passed: {:02x?}", buf.bytes());
+        assert!(
+            check(&buf.bytes()[..len]).is_err(),
+            "a prefix of {len} bytes passed: {:02x?}",
+            buf.bytes()
+        );
     }
 }
 

@@ -580,7 +580,11 @@ fn corpus() -> Vec<(Interface, u32, u32, Vec<u8>)> {
             3,
             Msg::default().u32(2).u32(2).guids(2).u32(1).u32(1).guids(1),
         ),
-        (Interface::IOPCServerList2, 3, Msg::default().u32(0).u32(0).u32(1).u32(1).guids(1)),
+        (
+            Interface::IOPCServerList2,
+            3,
+            Msg::default().u32(0).u32(0).u32(1).u32(1).guids(1),
+        ),
         (Interface::IOPCServerList, 4, Msg::default().guids(1)),
         (Interface::IOPCServerList2, 5, Msg::default().string("OPC.Sim.1")),
         (Interface::IOPCEnumGUID, 3, Msg::default().u32(10)),
@@ -590,17 +594,37 @@ fn corpus() -> Vec<(Interface, u32, u32, Vec<u8>)> {
         out.push((i, m, 0, msg.0));
     }
     let replies: Vec<(Interface, u32, u32, Msg)> = vec![
-        (Interface::IOPCEnumGUID, 3, 4, Msg::default().u32(4).u32(0).u32(2).guids(2).u32(2).u32(1)),
-        (Interface::IOPCEnumGUID, 3, 0, Msg::default().u32(0).u32(0).u32(0).u32(0).u32(1)),
+        (
+            Interface::IOPCEnumGUID,
+            3,
+            4,
+            Msg::default().u32(4).u32(0).u32(2).guids(2).u32(2).u32(1),
+        ),
+        (
+            Interface::IOPCEnumGUID,
+            3,
+            0,
+            Msg::default().u32(0).u32(0).u32(0).u32(0).u32(1),
+        ),
         (
             Interface::IOPCCommon,
             5,
             0,
             Msg::default().u32(2).u32(0x20000).u32(2).u32(0x409).u32(0x407).u32(0),
         ),
-        (Interface::IOPCCommon, 5, 0, Msg::default().u32(0).u32(0).u32(0x80004005)),
+        (
+            Interface::IOPCCommon,
+            5,
+            0,
+            Msg::default().u32(0).u32(0).u32(0x80004005),
+        ),
         (Interface::IOPCCommon, 4, 0, Msg::default().u32(0x409).u32(0)),
-        (Interface::IOPCCommon, 6, 0, Msg::default().u32(0x20000).string("text").u32(0)),
+        (
+            Interface::IOPCCommon,
+            6,
+            0,
+            Msg::default().u32(0x20000).string("text").u32(0),
+        ),
         (
             Interface::IOPCServerList2,
             4,
@@ -613,7 +637,12 @@ fn corpus() -> Vec<(Interface, u32, u32, Vec<u8>)> {
                 .u32(0)
                 .u32(0),
         ),
-        (Interface::IOPCServerList, 4, 0, Msg::default().u32(0).u32(0x20004).string("x").u32(0)),
+        (
+            Interface::IOPCServerList,
+            4,
+            0,
+            Msg::default().u32(0).u32(0x20004).string("x").u32(0),
+        ),
         (Interface::IOPCServerList, 5, 0, Msg::default().guids(1).u32(0)),
         (Interface::IOPCShutdown, 3, 0, Msg::default().u32(0)),
     ];
@@ -686,7 +715,17 @@ fn the_generated_checks_answer_as_the_hand_written_ones() {
                     0 => m[at] = next() as u8,
                     1 => {
                         let at = at & !3;
-                        let words = [0, 1, 2, *celt, MAX_ELEMENTS, MAX_ELEMENTS + 1, u32::MAX, m.len() as u32, 0x574F_454D];
+                        let words = [
+                            0,
+                            1,
+                            2,
+                            *celt,
+                            MAX_ELEMENTS,
+                            MAX_ELEMENTS + 1,
+                            u32::MAX,
+                            m.len() as u32,
+                            0x574F_454D,
+                        ];
                         let w = words[(next() as usize) % words.len()].to_le_bytes();
                         for (i, b) in w.iter().enumerate() {
                             if let Some(x) = m.get_mut(at + i) {

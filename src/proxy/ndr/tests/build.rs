@@ -69,12 +69,12 @@ pub(crate) const VT_ARRAY: u16 = 0x2000;
 /// The union type of a SAFEARRAY of `vt` (MS-OAUT 2.2.8).
 pub(crate) fn sf_type(vt: u16) -> u32 {
     match vt {
-        16 | 17 => 16,               // VT_I1, VT_UI1: SF_I1
-        2 | 18 | 11 => 2,            // VT_I2, VT_UI2, VT_BOOL: SF_I2
+        16 | 17 => 16,                  // VT_I1, VT_UI1: SF_I1
+        2 | 18 | 11 => 2,               // VT_I2, VT_UI2, VT_BOOL: SF_I2
         3 | 19 | 22 | 23 | 4 | 10 => 3, // VT_I4, VT_UI4, VT_INT, VT_UINT, VT_R4, VT_ERROR: SF_I4
-        20 | 21 | 5 | 6 | 7 => 20,   // VT_I8, VT_UI8, VT_R8, VT_CY, VT_DATE: SF_I8
-        8 => 8,                      // SF_BSTR
-        12 => 12,                    // SF_VARIANT
+        20 | 21 | 5 | 6 | 7 => 20,      // VT_I8, VT_UI8, VT_R8, VT_CY, VT_DATE: SF_I8
+        8 => 8,                         // SF_BSTR
+        12 => 12,                       // SF_VARIANT
         _ => 0,
     }
 }
@@ -186,7 +186,12 @@ impl Msg {
     /// A wireVARIANTStr (MS-OAUT 2.2.29.1) and what its arm points to.
     pub(crate) fn variant(self, v: &V, dialect: Dialect) -> Self {
         let (vt, switch) = vt_of(v);
-        let m = self.align(8).u32(0xC1).u32(0).u16(vt).u16(0).u16(0).u16(0).u32(switch);
+        // A DECIMAL overlays the whole VARIANT: its scale, sign and high word are the reserved words.
+        let reserved = match v {
+            V::Decimal(d) => [d[2], d[3], d[4], d[5], d[6], d[7]],
+            _ => [0; 6],
+        };
+        let m = self.align(8).u32(0xC1).u32(0).u16(vt).raw(&reserved).u32(switch);
         match v {
             V::Empty | V::Null => m,
             V::I1(x) => m.u8(*x as u8),
@@ -288,5 +293,12 @@ pub(crate) fn vt_of(v: &V) -> (u16, u32) {
         V::Array(sa) => VT_ARRAY | sa.as_ref().map_or(3, |s| s.vt),
         V::Raw(vt, switch, _) => return (*vt, *switch),
     };
-    (vt, if vt & VT_ARRAY != 0 { u32::from(vt & 0xF000) } else { u32::from(vt) })
+    (
+        vt,
+        if vt & VT_ARRAY != 0 {
+            u32::from(vt & 0xF000)
+        } else {
+            u32::from(vt)
+        },
+    )
 }
