@@ -255,7 +255,7 @@ fn method_exists(interface: Iface, method: u32) -> Check {
 }
 
 /// Checks a request for `method` (its vtable index) of `interface` before the stub unmarshals it.
-pub(crate) fn check_request(interface: Iface, method: u32, buf: &[u8], drep: u32) -> Check {
+pub fn check_request(interface: Iface, method: u32, buf: &[u8], drep: u32) -> Check {
     method_exists(interface, method)?;
     local_data_representation(drep)?;
     let mut r = Reader::new(buf);
@@ -285,7 +285,7 @@ pub(crate) fn check_request(interface: Iface, method: u32, buf: &[u8], drep: u32
 
 /// What a reply check needs to know of the request the proxy sent: `IOPCEnumGUID::Next`'s `celt`
 /// (the size of the caller's buffer); 0 for every other method. `request` is the proxy's own request.
-pub(crate) fn reply_context(interface: Iface, method: u32, request: &[u8]) -> u32 {
+pub fn reply_context(interface: Iface, method: u32, request: &[u8]) -> u32 {
     match (interface, method) {
         (Iface::IOPCEnumGUID, 3) => Reader::new(request).u32().unwrap_or(0),
         _ => 0,
@@ -295,14 +295,7 @@ pub(crate) fn reply_context(interface: Iface, method: u32, request: &[u8]) -> u3
 /// Checks a reply to `method` of `interface` before the proxy unmarshals it into the caller's memory.
 /// `context` is [`reply_context`] of the request; `reader` the layout of interface pointers the
 /// process's runtime reads (the one thing a message cannot say).
-pub(crate) fn check_reply(
-    interface: Iface,
-    method: u32,
-    context: u32,
-    buf: &[u8],
-    drep: u32,
-    reader: IpLayout,
-) -> Check {
+pub fn check_reply(interface: Iface, method: u32, context: u32, buf: &[u8], drep: u32, reader: IpLayout) -> Check {
     method_exists(interface, method)?;
     local_data_representation(drep)?;
     let mut r = Reader::new(buf);

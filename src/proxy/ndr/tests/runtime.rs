@@ -165,7 +165,10 @@ fn marshalled_variant(var: &mut Variant) -> Vec<u8> {
     let mut flags = FLAGS;
     // SAFETY: a valid VARIANT; the buffer is what VARIANT_UserSize asks for.
     let size = unsafe { VARIANT_UserSize(&mut flags, 8, var) };
-    framed(size, |at| unsafe { VARIANT_UserMarshal(&mut flags, at, var) })
+    framed(size, |at| {
+        // SAFETY: `at` has room for the size VARIANT_UserSize gave.
+        unsafe { VARIANT_UserMarshal(&mut flags, at, var) }
+    })
 }
 
 fn under_wine() -> bool {
@@ -256,14 +259,15 @@ fn variants_as_the_runtime_marshals_them() {
         // And the runtime's unmarshaller reads them back as that value: marshalled again, the same
         // bytes (the arm's referent ID aside: Wine writes a pointer's low bits there).
         if wine {
-            let mut copy = built.aligned();
+            let copy = built.aligned();
             let at = copy.bytes().as_ptr() as usize;
             let mut back = Variant {
                 bytes: [0; 8 + 2 * core::mem::size_of::<usize>()],
             };
             let mut flags = FLAGS;
             let body = copy.bytes()[8..].as_ptr() as *mut u8;
-            // SAFETY: the buffer holds a whole VARIANT (the checks passed it); `back` is empty.
+            // SAFETY: the buffer holds a whole VARIANT (the checks passed it), which the unmarshaller
+            // only reads; `back` is empty.
             let end = unsafe { VARIANT_UserUnmarshal(&mut flags, body, &mut back) };
             let variant_end = Msg::default().u32(USER).variant(&v, Dialect::Wine).0.len();
             assert_eq!(end as usize - at, variant_end, "{v:?}");
@@ -276,7 +280,6 @@ fn variants_as_the_runtime_marshals_them() {
             assert_eq!(again, original, "{v:?}");
             // SAFETY: what the unmarshaller allocated.
             unsafe { VariantClear(&mut back) };
-            let _ = &mut copy;
         }
         // SAFETY: what `variant` allocated.
         unsafe { VariantClear(&mut var) };
@@ -290,7 +293,10 @@ fn bstrs_and_safearrays_as_the_runtime_marshals_them() {
         let mut flags = FLAGS;
         // SAFETY: a BSTR or NULL; the buffer is what BSTR_UserSize asks for.
         let size = unsafe { BSTR_UserSize(&mut flags, 8, &mut b) };
-        let real = framed(size, |at| unsafe { BSTR_UserMarshal(&mut flags, at, &mut b) });
+        let real = framed(size, |at| {
+            // SAFETY: `at` has room for the size BSTR_UserSize gave.
+            unsafe { BSTR_UserMarshal(&mut flags, at, &mut b) }
+        });
         whole_request(T::INdrAutomation, "Bstrs", &Msg(real.clone()), Dialect::Wine);
         let built = Msg::default().user(Dialect::Wine, 4, |m| m.blob(text));
         assert_eq!(built.0.len(), real.len());
@@ -303,7 +309,10 @@ fn bstrs_and_safearrays_as_the_runtime_marshals_them() {
         let mut flags = FLAGS;
         // SAFETY: a SAFEARRAY; the buffer is what LPSAFEARRAY_UserSize asks for.
         let size = unsafe { LPSAFEARRAY_UserSize(&mut flags, 8, &mut psa) };
-        let real = framed(size, |at| unsafe { LPSAFEARRAY_UserMarshal(&mut flags, at, &mut psa) });
+        let real = framed(size, |at| {
+            // SAFETY: `at` has room for the size LPSAFEARRAY_UserSize gave.
+            unsafe { LPSAFEARRAY_UserMarshal(&mut flags, at, &mut psa) }
+        });
         whole_request(T::INdrAutomation, "Arrays", &Msg(real.clone()), Dialect::Wine);
         let built = Msg::default().user(Dialect::Wine, 4, |m| m.safearray(Some(&sa), Dialect::Wine));
         assert_eq!(built.0.len(), real.len(), "{sa:?}");

@@ -151,7 +151,7 @@ impl Writer<'_> {
                 self.statics.used.insert("Extent");
                 self.statics.used.insert("Corr");
                 let plain = self.plain(&a.elem);
-                let plain = if plain % u32::from(self.align(&a.elem)) == 0 {
+                let plain = if plain.is_multiple_of(u32::from(self.align(&a.elem))) {
                     plain
                 } else {
                     0

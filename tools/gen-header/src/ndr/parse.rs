@@ -288,15 +288,13 @@ impl Parser<'_> {
         loop {
             let name = self.word()?;
             let mut args = Vec::new();
-            if self.eat('(') {
-                if !self.eat(')') {
-                    loop {
-                        args.push(self.argument()?);
-                        if self.eat(')') {
-                            break;
-                        }
-                        self.expect(',')?;
+            if self.eat('(') && !self.eat(')') {
+                loop {
+                    args.push(self.argument()?);
+                    if self.eat(')') {
+                        break;
                     }
+                    self.expect(',')?;
                 }
             }
             out.push(Attr { name, args });

@@ -853,7 +853,7 @@ impl Builder<'_> {
             let a = u32::from(self.align(n));
             size = size.div_ceil(a) * a + s;
         }
-        if size % u32::from(align) == 0 {
+        if size.is_multiple_of(u32::from(align)) {
             size
         } else {
             0
@@ -870,7 +870,8 @@ impl Builder<'_> {
             Node::Array(a) => match (a.size, &a.length) {
                 (Extent::Fixed(count), None) => {
                     let s = self.plain(&a.elem)?;
-                    (s % u32::from(self.align(&a.elem)) == 0).then_some(s.checked_mul(count)?)
+                    s.is_multiple_of(u32::from(self.align(&a.elem)))
+                        .then_some(s.checked_mul(count)?)
                 }
                 _ => None,
             },
