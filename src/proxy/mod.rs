@@ -74,7 +74,7 @@ mod wire;
 #[cfg(opccomn_proxy_stub)]
 extern "C" {
     // src/proxy/opccomn_ps.c: NdrDllGetClassObject / NdrDllCanUnloadNow over the generated tables, with
-    // the checks of `wire` in front of the runtime's NDR engine.
+    // the checks of `ndr` in front of the runtime's NDR engine.
     fn OpcProxyStubGetClassObject(
         rclsid: *const GUID,
         riid: *const GUID,

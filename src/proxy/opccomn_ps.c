@@ -6,7 +6,8 @@
  * NdrClientCall2 / NdrStubCall2 interpret, as they interpret the format strings of MIDL's /Oicf
  * proxies. This file adds what MIDL's dlldata.c would (the factory and its two entry points, under
  * opccomn's names, because DllGetClassObject / DllCanUnloadNow are opccomn's own; src/proxy/mod.rs
- * dispatches to these) and the checks the runtime does not make (src/proxy/wire.rs):
+ * dispatches to these) and the checks the runtime does not make (src/proxy/ndr, reading the layouts
+ * tools/gen-header generates from the IDL):
  *
  * - every stub's IRpcStubBuffer::Invoke is OpcStubBuffer_Invoke, which has the request checked before
  *   the runtime's CStdStubBuffer_Invoke unmarshals it and calls the server;
@@ -89,7 +90,7 @@ static int interface_index(REFIID riid)
 
 /* Whether this process's rpcrt4 reads interface pointers in Wine's layout (a byte count, then the
  * OBJREF) rather than NDR's (MInterfacePointer, as Windows' rpcrt4 reads it). A reply says which layout
- * it is in (src/proxy/wire.rs tells them apart), not which runtime will read it: that is asked of the
+ * it is in (src/proxy/ndr/objref.rs tells them apart), not which runtime will read it: that is asked of the
  * process, once: Wine's ntdll exports wine_get_version. A reply in the layout this runtime does not
  * read is refused. */
 static ULONG reads_wine_layout(void)

@@ -8,6 +8,9 @@
 //!   shims, the trait per interface, the proxy/stub's table; see `rustgen`), formatted by rustfmt.
 //! - The identifiers: `src/com/guids.rs` (Rust constants and the DLL's data exports) and
 //!   `src/c/opccomn_guids.c` (the same data for per-symbol objects) from the IDL and idl/opcguids.txt.
+//! - `src/proxy/generated/layouts.rs` and `interfaces.h`: the proxy/stub's checks, each method's NDR
+//!   layout with the interfaces' numbering, from `idl/opccomn.idl` and `idl/ndr-bounds.txt`, and
+//!   `test_layouts.rs` from the test IDL of the layout language (see `ndr`).
 //! - `c-tests/abi_i686.c`: compile-time checks (for i686-w64-mingw32-gcc) that every vtable entry is
 //!   `__stdcall` and every exported function and callback has the convention of its Rust definition.
 //!
