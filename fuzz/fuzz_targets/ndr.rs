@@ -11,10 +11,14 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use opccomn::proxy::ndr::{check_reply, check_request, Context, Dialect, BAD_STUB_DATA, INVALID_BOUND, PROCNUM_OUT_OF_RANGE};
+use opccomn::proxy::ndr::{check_reply, check_request, Context, Dialect};
 use opccomn::proxy::test_layouts::Interface;
 
 const LOCAL: u32 = 0x10;
+/// HRESULT_FROM_WIN32 of RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND and RPC_S_PROCNUM_OUT_OF_RANGE.
+const BAD_STUB_DATA: i32 = 0x800706F7_u32 as i32;
+const INVALID_BOUND: i32 = 0x800706C6_u32 as i32;
+const PROCNUM_OUT_OF_RANGE: i32 = 0x800706D1_u32 as i32;
 
 fn defined(r: Result<(), i32>) {
     if let Err(hr) = r {
@@ -35,7 +39,7 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 19 {
         return;
     }
-    let iface = Interface::ALL[usize::from(data[0]) % Interface::ALL.len()].layout();
+    let iface = Interface::all()[usize::from(data[0]) % Interface::all().len()].layout();
     let method = 3 + u32::from(data[1] % 8);
     let dialect = if data[2] & 1 != 0 { Dialect::Wine } else { Dialect::Ndr };
     let is_reply = data[2] & 2 != 0;

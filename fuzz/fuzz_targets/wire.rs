@@ -64,7 +64,7 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 4 {
         return;
     }
-    let iface = Interface::from_index(u32::from(data[0]) % Interface::ALL.len() as u32).unwrap();
+    let iface = Interface::from_index(u32::from(data[0]) % Interface::all().len() as u32).unwrap();
     let method = u32::from(data[1] % 8);
     let reader = if data[2] & 1 != 0 {
         IpLayout::Wine

@@ -18,13 +18,14 @@
 
 pub use super::layouts::Interface;
 use super::ndr;
-pub use super::ndr::{Context, Dialect, BAD_STUB_DATA, INVALID_BOUND, PROCNUM_OUT_OF_RANGE};
+pub use super::ndr::{Context, Dialect};
+pub(crate) use super::ndr::{BAD_STUB_DATA, INVALID_BOUND, PROCNUM_OUT_OF_RANGE};
 use crate::com::HRESULT;
 
 /// The bound of every array of the OPC Common interfaces whose count a peer chooses (GUIDs asked of
 /// `IOPCEnumGUID::Next`, categories given to `EnumClassesOfCategories`, locales returned by
 /// `QueryAvailableLocaleIDs`; `idl/ndr-bounds.txt`).
-pub const MAX_ELEMENTS: u32 = ndr::DEFAULT_BOUND;
+pub(crate) const MAX_ELEMENTS: u32 = ndr::DEFAULT_BOUND;
 
 /// `NDR_LOCAL_DATA_REPRESENTATION`, as the proxy's own requests are.
 const LOCAL: u32 = 0x10;

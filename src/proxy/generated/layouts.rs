@@ -20,6 +20,8 @@ use crate::com::GUID;
 use crate::proxy::ndr::layout::{Array, Corr, Extent, Iid, Interface as Layout, Method, Param, Pointer, Save, Ty};
 
 /// The interfaces, numbered from 0 in the order of the IDL (the number the C side passes).
+///
+/// cbindgen:ignore
 #[allow(non_camel_case_types)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interface {
@@ -30,19 +32,26 @@ pub enum Interface {
     IOPCServerList2 = 4,
 }
 
+/// How many there are.
+pub(crate) const COUNT: usize = 5;
+
+const ALL: [Interface; COUNT] = [
+    Interface::IOPCShutdown,
+    Interface::IOPCCommon,
+    Interface::IOPCServerList,
+    Interface::IOPCEnumGUID,
+    Interface::IOPCServerList2,
+];
+
 impl Interface {
     /// Every interface, by number.
-    pub const ALL: [Interface; 5] = [
-        Interface::IOPCShutdown,
-        Interface::IOPCCommon,
-        Interface::IOPCServerList,
-        Interface::IOPCEnumGUID,
-        Interface::IOPCServerList2,
-    ];
+    pub fn all() -> &'static [Interface] {
+        &ALL
+    }
 
     /// The interface numbered `n`.
     pub fn from_index(n: u32) -> Option<Interface> {
-        Interface::ALL.get(n as usize).copied()
+        ALL.get(n as usize).copied()
     }
 
     /// Its layout.
@@ -52,7 +61,7 @@ impl Interface {
 }
 
 /// The interfaces' layouts, by number.
-pub static INTERFACES: [Layout; 5] = [
+pub(crate) static INTERFACES: [Layout; COUNT] = [
     Layout {
         name: "IOPCShutdown",
         iid: [
@@ -97,7 +106,7 @@ pub static INTERFACES: [Layout; 5] = [
 
 /// The interfaces as registered under `Interface\{iid}`: IID, name, `NumMethods` (IUnknown's three
 /// included).
-pub const PROXY_STUB_INTERFACES: [(GUID, &str, u32); 5] = [
+pub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32); COUNT] = [
     (GUID::from_u128(0xF31DFDE107B611D2B2D80060083BA1FB), "IOPCShutdown", 4),
     (GUID::from_u128(0xF31DFDE207B611D2B2D80060083BA1FB), "IOPCCommon", 8),
     (GUID::from_u128(0x13486D50482111D2A4943CB306C10000), "IOPCServerList", 6),

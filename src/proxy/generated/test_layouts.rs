@@ -28,6 +28,8 @@ use crate::proxy::ndr::layout::{
 };
 
 /// The interfaces, numbered from 0 in the order of the IDL (the number the C side passes).
+///
+/// cbindgen:ignore
 #[allow(non_camel_case_types)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interface {
@@ -39,20 +41,27 @@ pub enum Interface {
     INdrDerived = 5,
 }
 
+/// How many there are.
+pub(crate) const COUNT: usize = 6;
+
+const ALL: [Interface; COUNT] = [
+    Interface::INdrBase,
+    Interface::INdrArrays,
+    Interface::INdrStructs,
+    Interface::INdrAutomation,
+    Interface::INdrInterfaces,
+    Interface::INdrDerived,
+];
+
 impl Interface {
     /// Every interface, by number.
-    pub const ALL: [Interface; 6] = [
-        Interface::INdrBase,
-        Interface::INdrArrays,
-        Interface::INdrStructs,
-        Interface::INdrAutomation,
-        Interface::INdrInterfaces,
-        Interface::INdrDerived,
-    ];
+    pub fn all() -> &'static [Interface] {
+        &ALL
+    }
 
     /// The interface numbered `n`.
     pub fn from_index(n: u32) -> Option<Interface> {
-        Interface::ALL.get(n as usize).copied()
+        ALL.get(n as usize).copied()
     }
 
     /// Its layout.
@@ -62,7 +71,7 @@ impl Interface {
 }
 
 /// The interfaces' layouts, by number.
-pub static INTERFACES: [Layout; 6] = [
+pub(crate) static INTERFACES: [Layout; COUNT] = [
     Layout {
         name: "INdrBase",
         iid: [
@@ -115,7 +124,7 @@ pub static INTERFACES: [Layout; 6] = [
 
 /// The interfaces as registered under `Interface\{iid}`: IID, name, `NumMethods` (IUnknown's three
 /// included).
-pub const PROXY_STUB_INTERFACES: [(GUID, &str, u32); 6] = [
+pub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32); COUNT] = [
     (GUID::from_u128(0x6E0C1B1000004E449C00000000000001), "INdrBase", 6),
     (GUID::from_u128(0x6E0C1B1000004E449C00000000000002), "INdrArrays", 12),
     (GUID::from_u128(0x6E0C1B1000004E449C00000000000003), "INdrStructs", 7),
@@ -972,6 +981,7 @@ static STRUCT_FILETIME: Struct = Struct {
     ],
     deferred: false,
     plain: 8,
+    size: 8,
 };
 
 static STRUCT_NESTED: Struct = Struct {
@@ -984,6 +994,7 @@ static STRUCT_NESTED: Struct = Struct {
     ],
     deferred: true,
     plain: 0,
+    size: 12,
 };
 
 static STRUCT_PADDED: Struct = Struct {
@@ -995,6 +1006,7 @@ static STRUCT_PADDED: Struct = Struct {
     ],
     deferred: false,
     plain: 0,
+    size: 5,
 };
 
 static STRUCT_PLAIN: Struct = Struct {
@@ -1008,6 +1020,7 @@ static STRUCT_PLAIN: Struct = Struct {
     ],
     deferred: false,
     plain: 24,
+    size: 24,
 };
 
 static STRUCT_RECORD: Struct = Struct {
@@ -1024,6 +1037,7 @@ static STRUCT_RECORD: Struct = Struct {
     ],
     deferred: true,
     plain: 0,
+    size: 48,
 };
 
 static STRUCT_TAGGED: Struct = Struct {
@@ -1035,6 +1049,7 @@ static STRUCT_TAGGED: Struct = Struct {
     ],
     deferred: true,
     plain: 0,
+    size: 0,
 };
 
 static STRUCT_TIMED: Struct = Struct {
@@ -1048,6 +1063,7 @@ static STRUCT_TIMED: Struct = Struct {
     ],
     deferred: false,
     plain: 0,
+    size: 24,
 };
 
 static ARRAY_0: Array = Array {

@@ -34,11 +34,11 @@ use super::layout::Ty;
 use super::{Check, Dialect, Walk, BAD_STUB_DATA, INVALID_BOUND, MAX_VARIANT_DEPTH};
 
 /// The most dimensions a SAFEARRAY may have (SAFEARRAY allows 65,535; an OPC value has one or two).
-pub const MAX_DIMS: u32 = 32;
+pub(crate) const MAX_DIMS: u32 = 32;
 /// The most cells a SAFEARRAY may have, and the most elements in any of its dimensions. Every cell is
 /// on the wire (at least one byte each), so this bounds no allocation the bytes do not back; it keeps
 /// the counts far from the 32-bit products the runtimes compute.
-pub const MAX_CELLS: u32 = 1 << 24;
+pub(crate) const MAX_CELLS: u32 = 1 << 24;
 
 // VARTYPEs (wtypes.h).
 const VT_EMPTY: u16 = 0;

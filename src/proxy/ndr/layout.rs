@@ -87,6 +87,9 @@ pub struct Struct {
     /// The structure's size on the wire when it is a block of base types and GUIDs with no padding
     /// at its end and no value to check (an array of them is skipped in one step); 0 otherwise.
     pub plain: u32,
+    /// Its flat part's size when that is fixed (no union, no varying array), from its aligned start;
+    /// 0 otherwise. The second walk over a construct skips it when it has no pointees.
+    pub size: u32,
 }
 
 /// A non-encapsulated union: the discriminant (`switch_size` bytes, which must equal the value
@@ -184,6 +187,8 @@ pub struct Method {
 }
 
 /// An interface as the proxy/stub serves it.
+///
+/// cbindgen:ignore
 #[derive(Debug)]
 pub struct Interface {
     pub name: &'static str,

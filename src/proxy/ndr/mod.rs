@@ -38,35 +38,35 @@ mod automation;
 pub(crate) mod objref;
 
 use crate::com::HRESULT;
-use layout::{Array, Corr, Extent, Method, Param, Save, Struct, Ty, Union};
+use layout::{Array, Corr, Extent, Method, Param, Pointer, Save, Struct, Ty, Union};
 
 /// `HRESULT_FROM_WIN32(RPC_X_BAD_STUB_DATA)`: the bytes do not match the method's layout.
-pub const BAD_STUB_DATA: HRESULT = 0x800706F7_u32 as HRESULT;
+pub(crate) const BAD_STUB_DATA: HRESULT = 0x800706F7_u32 as HRESULT;
 /// `HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND)`: a count beyond its bound.
-pub const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
+pub(crate) const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
 /// `HRESULT_FROM_WIN32(RPC_S_PROCNUM_OUT_OF_RANGE)`: the interface has no such method.
-pub const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
+pub(crate) const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
 
 /// The bound of every array whose count a peer chooses, unless the IDL's bounds say otherwise:
 /// 65,536 elements (tools/gen-header writes each array's bound into its layout).
 #[cfg(any(test, feature = "fuzzing"))]
-pub const DEFAULT_BOUND: u32 = 65_536;
+pub(crate) const DEFAULT_BOUND: u32 = 65_536;
 
 /// How deep VARIANTs may nest: a VARIANT holding a SAFEARRAY of VARIANTs is two levels.
-pub const MAX_VARIANT_DEPTH: u32 = 4;
+pub(crate) const MAX_VARIANT_DEPTH: u32 = 4;
 
 /// `NDR_LOCAL_DATA_REPRESENTATION`: little-endian integers, ASCII, IEEE floating point.
 const LOCAL_DATA_REPRESENTATION: u32 = 0x10;
 
 /// Values kept while a message is read (the generator assigns at most this many per method).
-pub const MAX_SLOTS: usize = 16;
+pub(crate) const MAX_SLOTS: usize = 16;
 /// Fields a structure may have (the generator refuses more).
-pub const MAX_FIELDS: usize = 32;
+pub(crate) const MAX_FIELDS: usize = 32;
 /// Comparisons with a value that comes later in the message, waiting at once (distinct ones).
 const MAX_PENDING: usize = 8;
 
 /// Words of [`Context`] (the generator refuses a method whose reply needs more).
-pub const CONTEXT_WORDS: usize = 8;
+pub(crate) const CONTEXT_WORDS: usize = 8;
 
 type Check = Result<(), HRESULT>;
 
@@ -93,6 +93,8 @@ pub enum Dialect {
 
 /// What a reply check needs to know of its request: the values of the `[in]` parameters the reply's
 /// counts and `iid_is` name ([`layout::Method::context`]), in order; a GUID takes four words.
+///
+/// cbindgen:ignore
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Context(pub [u32; CONTEXT_WORDS]);
 
@@ -238,9 +240,9 @@ impl<'a> Walk<'a> {
         Ok(())
     }
 
-    /// Pads `at` to a multiple of `n` (1, 2, 4 or 8), relative to the message's start.
+    /// Pads `at` to a multiple of `n` (1, 2, 4 or 8: a power of two), relative to the message's start.
     fn align(&self, at: &mut usize, n: usize) -> Check {
-        let pad = (n - *at % n) % n;
+        let pad = at.wrapping_neg() & n.wrapping_sub(1);
         self.skip(at, pad)
     }
 
@@ -498,20 +500,27 @@ impl<'a> Walk<'a> {
                 }
                 Ok(())
             }
-            Ty::Pointer(p) => {
-                let id = self.u32(at)?;
-                if p.unique && id == 0 {
-                    return self.null(p.target, frame, pass);
-                }
-                if pass == Pass::Deferred {
-                    self.top(p.target, frame)?;
-                }
-                Ok(())
-            }
+            Ty::Pointer(p) => self.pointer(p, at, frame, pass),
             Ty::Struct(s) => self.structure(s, at, pass),
             Ty::Array(a) => self.array(a, at, frame, pass),
             Ty::Union(u) => self.union(u, at, frame, pass),
         }
+    }
+
+    /// An embedded pointer: its referent ID at `at`; its pointee, in [`Pass::Deferred`], at the
+    /// message's cursor.
+    fn pointer(&mut self, p: &Pointer, at: &mut usize, frame: Option<&Frame>, pass: Pass) -> Check {
+        let id = self.u32(at)?;
+        if p.unique && id == 0 {
+            if let (Ty::Array(_), Pass::Flat) = (p.target, pass) {
+                return self.null(p.target, frame, pass);
+            }
+            return Ok(());
+        }
+        if pass == Pass::Deferred {
+            self.top(p.target, frame)?;
+        }
+        Ok(())
     }
 
     fn structure(&mut self, s: &Struct, at: &mut usize, pass: Pass) -> Check {
@@ -519,13 +528,22 @@ impl<'a> Walk<'a> {
         if s.plain != 0 {
             return self.skip(at, s.plain as usize);
         }
+        // Walked again for pointees it does not have: its size, checked the first time.
+        if pass == Pass::Deferred && !s.deferred && s.size != 0 {
+            return self.skip(at, s.size as usize);
+        }
         let mut frame = Frame {
             fields: [0; MAX_FIELDS],
         };
         for (i, &f) in s.fields.iter().enumerate() {
+            // The common fields here, the rest through `flat`.
             let v = match f {
                 Ty::Base(n) if n <= 4 => self.uint(at, usize::from(n))?,
                 Ty::Enum16 => self.enum16(at)?,
+                Ty::Pointer(p) => {
+                    self.pointer(p, at, Some(&frame), pass)?;
+                    continue;
+                }
                 other => {
                     self.flat(other, at, Some(&frame), pass)?;
                     continue;

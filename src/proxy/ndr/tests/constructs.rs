@@ -1006,7 +1006,7 @@ fn arbitrary_bytes_are_answered() {
                 _ => m.u8(next() as u8),
             };
         }
-        let iface = T::ALL[(next() as usize) % T::ALL.len()];
+        let iface = T::all()[(next() as usize) % T::all().len()];
         let method = 3 + (next() % 8) as u32;
         let ctx = Context::of(&[(next() % 4) as u32, 0x4242_4242]);
         for d in BOTH {

@@ -197,12 +197,13 @@ pub fn rust(model: &Model, sources: &str, purpose: &str) -> String {
         }
         let _ = writeln!(
             structs,
-            "static STRUCT_{}: Struct = Struct {{\n    name: {:?},\n    align: {},\n    fields: &[\n{fields}    ],\n    deferred: {},\n    plain: {},\n}};\n",
+            "static STRUCT_{}: Struct = Struct {{\n    name: {:?},\n    align: {},\n    fields: &[\n{fields}    ],\n    deferred: {},\n    plain: {},\n    size: {},\n}};\n",
             s.name.to_uppercase(),
             s.name,
             s.align,
             s.deferred,
-            s.plain
+            s.plain,
+            s.size
         );
     }
     if !model.structs.is_empty() {
@@ -281,6 +282,7 @@ pub fn rust(model: &Model, sources: &str, purpose: &str) -> String {
     let _ = writeln!(
         out,
         "/// The interfaces, numbered from 0 in the order of the IDL (the number the C side passes).\n\
+         ///\n/// cbindgen:ignore\n\
          #[allow(non_camel_case_types)]\n#[derive(Clone, Copy, Debug, PartialEq, Eq)]\npub enum Interface {{"
     );
     for (n, i) in model.interfaces.iter().enumerate() {
@@ -295,14 +297,16 @@ pub fn rust(model: &Model, sources: &str, purpose: &str) -> String {
         .collect();
     let _ = writeln!(
         out,
-        "impl Interface {{\n    /// Every interface, by number.\n    pub const ALL: [Interface; {count}] = [{}];\n\n\
-         \x20   /// The interface numbered `n`.\n    pub fn from_index(n: u32) -> Option<Interface> {{\n        Interface::ALL.get(n as usize).copied()\n    }}\n\n\
+        "/// How many there are.\npub(crate) const COUNT: usize = {count};\n\n\
+         const ALL: [Interface; COUNT] = [{}];\n\n\
+         impl Interface {{\n    /// Every interface, by number.\n    pub fn all() -> &'static [Interface] {{\n        &ALL\n    }}\n\n\
+         \x20   /// The interface numbered `n`.\n    pub fn from_index(n: u32) -> Option<Interface> {{\n        ALL.get(n as usize).copied()\n    }}\n\n\
          \x20   /// Its layout.\n    pub fn layout(self) -> &'static Layout {{\n        &INTERFACES[self as usize]\n    }}\n}}\n",
         all.join(", ")
     );
     let _ = writeln!(
         out,
-        "/// The interfaces' layouts, by number.\npub static INTERFACES: [Layout; {count}] = ["
+        "/// The interfaces' layouts, by number.\npub(crate) static INTERFACES: [Layout; COUNT] = ["
     );
     for i in &model.interfaces {
         let _ = writeln!(
@@ -316,7 +320,7 @@ pub fn rust(model: &Model, sources: &str, purpose: &str) -> String {
     }
     let _ = writeln!(
         out,
-        "];\n\n/// The interfaces as registered under `Interface\\{{iid}}`: IID, name, `NumMethods` (IUnknown's three\n/// included).\npub const PROXY_STUB_INTERFACES: [(GUID, &str, u32); {count}] = ["
+        "];\n\n/// The interfaces as registered under `Interface\\{{iid}}`: IID, name, `NumMethods` (IUnknown's three\n/// included).\npub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32); COUNT] = ["
     );
     for i in &model.interfaces {
         let hex: String = i.uuid.chars().filter(|c| *c != '-').collect();

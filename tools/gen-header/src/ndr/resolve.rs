@@ -86,6 +86,8 @@ pub struct StructDef {
     pub fields: Vec<(String, Node)>,
     pub deferred: bool,
     pub plain: u32,
+    /// The flat part's size when fixed; 0 otherwise.
+    pub size: u32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -767,6 +769,7 @@ impl Builder<'_> {
                     ],
                     deferred: false,
                     plain: 8,
+                    size: 8,
                 },
             );
             return Ok(());
@@ -832,6 +835,7 @@ impl Builder<'_> {
         let align = out.iter().map(|(_, n)| self.align(n)).max().unwrap_or(1);
         let deferred = out.iter().any(|(_, n)| self.deferred(n));
         let plain = self.plain_struct(&out, align);
+        let size = self.flat_size(&out).unwrap_or(0);
         self.structs.insert(
             name.to_string(),
             StructDef {
@@ -840,9 +844,45 @@ impl Builder<'_> {
                 fields: out,
                 deferred,
                 plain,
+                size,
             },
         );
         Ok(())
+    }
+
+    /// The size of a flat part of these fields from an aligned start, when it is fixed.
+    fn flat_size(&self, fields: &[(String, Node)]) -> Option<u32> {
+        let mut size = 0u32;
+        for (_, n) in fields {
+            let s = self.fixed(n)?;
+            let a = u32::from(self.align(n));
+            size = size.div_ceil(a) * a + s;
+        }
+        Some(size)
+    }
+
+    /// The size of a value in a flat part, when it is fixed.
+    fn fixed(&self, n: &Node) -> Option<u32> {
+        match n {
+            Node::Base(s) => Some(u32::from(*s)),
+            Node::Enum16 => Some(2),
+            Node::Guid => Some(16),
+            Node::Pointer(..) | Node::Bstr | Node::Variant | Node::SafeArray => Some(4),
+            Node::Empty => Some(0),
+            Node::Struct(name) => self.structs.get(name).map(|s| s.size).filter(|s| *s != 0),
+            Node::Array(a) => match (a.size, &a.length) {
+                (Extent::Fixed(count), None) => {
+                    let s = self.fixed(&a.elem)?;
+                    let a = u32::from(self.align(&a.elem));
+                    let stride = s.div_ceil(a) * a;
+                    count
+                        .checked_sub(1)
+                        .map_or(Some(0), |n| n.checked_mul(stride)?.checked_add(s))
+                }
+                _ => None,
+            },
+            _ => None,
+        }
     }
 
     /// The NDR size of a structure of plain fields with no padding at its end; 0 otherwise.
