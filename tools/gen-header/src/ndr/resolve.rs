@@ -428,6 +428,23 @@ impl<'a> Env<'a> {
     }
 }
 
+/// Whether an interface pointer sits in an array or union (where it would be embedded): only a
+/// parameter, or the pointee of a parameter's pointers, can be one.
+fn interface_in_construct(n: &Node, inside: bool) -> bool {
+    match n {
+        Node::Interface(..) => inside,
+        Node::Pointer(_, t) => interface_in_construct(t, inside),
+        Node::Array(a) => interface_in_construct(&a.elem, true),
+        Node::Union(u) => u
+            .arms
+            .iter()
+            .map(|(_, a)| a)
+            .chain(&u.default)
+            .any(|a| interface_in_construct(a, true)),
+        _ => false,
+    }
+}
+
 /// A correlation argument: `name` or `*name`.
 fn corr_name(arg: &str) -> Result<(bool, String), Error> {
     let arg = arg.trim();
@@ -629,6 +646,9 @@ impl Builder<'_> {
         }
         if !top && matches!(node, Node::Interface(..)) {
             return Err(format!("{key}: interface pointers inside structures are not supported"));
+        }
+        if interface_in_construct(&node, false) {
+            return Err(format!("{key}: arrays of interface pointers are not supported"));
         }
         Ok(node)
     }
@@ -1103,6 +1123,22 @@ impl Builder<'_> {
         for name in named.keys() {
             if !slots.contains_key(name) {
                 return Err(format!("{key}: `{name}` names no parameter"));
+            }
+        }
+        // The IID an interface pointer names is read before it.
+        for (i, p) in m.params.iter().enumerate() {
+            for arg in p.attrs.args("iid_is").unwrap_or_default() {
+                let (_, name) = corr_name(arg)?;
+                if m.params
+                    .iter()
+                    .position(|q| q.decl.name == name)
+                    .is_some_and(|j| j >= i)
+                {
+                    return Err(format!(
+                        "{key}.{}: [iid_is({name})] names a later parameter",
+                        p.decl.name
+                    ));
+                }
             }
         }
         let scope = Scope::Params(&slots);

@@ -252,6 +252,8 @@ fn what_the_language_cannot_say_is_refused_with_a_reason() {
         ("typedef struct tagS { struct tagS *next; } S;", "HRESULT M([in] S *s);", "recursive"),
         ("typedef union tagU { [case(1)] DWORD a; } U;", "HRESULT M([in] DWORD k, [in, switch_is(k)] U *u);", "[switch_type]"),
         ("", "HRESULT M([in] REFIID a, [in] REFIID b, [in] REFIID c, [out, iid_is(a)] IUnknown **x, [out, iid_is(b)] IUnknown **y, [out, iid_is(c)] IUnknown **z);", "more than 8 words"),
+        ("", "HRESULT M([in] DWORD n, [in, size_is(n)] IUnknown **pp);", "arrays of interface pointers"),
+        ("", "HRESULT M([out, iid_is(riid)] IUnknown **pp, [in] REFIID riid);", "names a later parameter"),
     ];
     for (decls, m, expected) in cases {
         let e = one(decls, m).map(|_| ()).unwrap_err();
