@@ -20,7 +20,9 @@
 //!   ([`automation`]), nested at most [`MAX_VARIANT_DEPTH`] deep;
 //! - interface pointers: an OBJREF of the declared or `iid_is` interface, in the layout the reading
 //!   runtime reads ([`objref`]);
-//! - the data representation is the local one (little-endian, ASCII, IEEE); nothing is converted.
+//! - the data representation is the local one (little-endian, ASCII, IEEE); nothing is converted;
+//! - a message with something aligned to 8 starts at an 8-byte address (the NDR engine aligns to the
+//!   address, the checks from the message's start: only then are they the same).
 //!
 //! It reads with a cursor that never passes the end of the message, allocates nothing, and recurses
 //! only as deep as the layout's types nest (the generator refuses recursive types) and, for VARIANTs
@@ -146,7 +148,7 @@ pub fn check_request(
         w.param(p)?;
         if let Save::Int(slot) = p.save {
             for &(s, bound) in m.bounds {
-                if s == slot && w.slots[usize::from(slot)] > bound {
+                if s == slot && w.slots.get(usize::from(slot)).is_some_and(|&v| v > bound) {
                     return Err(INVALID_BOUND);
                 }
             }

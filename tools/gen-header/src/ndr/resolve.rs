@@ -812,6 +812,9 @@ impl Builder<'_> {
         if fields.len() > MAX_FIELDS {
             return Err(format!("structure {name}: more than {MAX_FIELDS} fields"));
         }
+        if fields.is_empty() {
+            return Err(format!("structure {name} has no field"));
+        }
         let index: HashMap<String, u8> = fields
             .iter()
             .enumerate()

@@ -253,6 +253,7 @@ fn what_the_language_cannot_say_is_refused_with_a_reason() {
         ("typedef union tagU { [case(1)] DWORD a; } U;", "HRESULT M([in] DWORD k, [in, switch_is(k)] U *u);", "[switch_type]"),
         ("", "HRESULT M([in] REFIID a, [in] REFIID b, [in] REFIID c, [out, iid_is(a)] IUnknown **x, [out, iid_is(b)] IUnknown **y, [out, iid_is(c)] IUnknown **z);", "more than 8 words"),
         ("", "HRESULT M([in] DWORD n, [in, size_is(n)] IUnknown **pp);", "arrays of interface pointers"),
+        ("typedef struct tagE { } E;", "HRESULT M([in] E *e);", "has no field"),
         ("", "HRESULT M([out, iid_is(riid)] IUnknown **pp, [in] REFIID riid);", "names a later parameter"),
     ];
     for (decls, m, expected) in cases {
