@@ -299,3 +299,91 @@ fn guid_text_to_ndr_bytes() {
     assert!(resolve::guid_bytes("F31DFDE2-07B6-11d2-B2D8").is_none());
     let _ = BTreeMap::<u8, u8>::new();
 }
+
+/// Declarations in the shape of Data Access 2.05a / 3.0's (structures with strings, blobs, VARIANTs
+/// and nested arrays; `[unique]` in-pointers; `iid_is` after `[out]` parameters; `[in, out]` strings;
+/// counts of several `[out]` arrays) resolve, with the counts, contexts and bounds they need.
+#[test]
+fn data_access_shaped_declarations_resolve() {
+    let decls = r#"
+        typedef DWORD OPCHANDLE;
+        typedef enum tagOPCDATASOURCE { OPC_DS_CACHE = 1, OPC_DS_DEVICE } OPCDATASOURCE;
+        typedef struct tagOPCITEMDEF { [string] LPWSTR szAccessPath; [string] LPWSTR szItemID; BOOL bActive;
+            OPCHANDLE hClient; DWORD dwBlobSize; [size_is(dwBlobSize)] BYTE *pBlob; VARTYPE vtRequestedDataType;
+            WORD wReserved; } OPCITEMDEF;
+        typedef struct tagOPCITEMRESULT { OPCHANDLE hServer; VARTYPE vtCanonicalDataType; WORD wReserved;
+            DWORD dwAccessRights; DWORD dwBlobSize; [size_is(dwBlobSize)] BYTE *pBlob; } OPCITEMRESULT;
+        typedef struct tagOPCITEMSTATE { OPCHANDLE hClient; FILETIME ftTimeStamp; WORD wQuality; WORD wReserved;
+            VARIANT vDataValue; } OPCITEMSTATE;
+        typedef struct tagOPCITEMPROPERTY { VARTYPE vtDataType; WORD wReserved; DWORD dwPropertyID;
+            [string] LPWSTR szItemID; [string] LPWSTR szDescription; VARIANT vValue; HRESULT hrErrorID;
+            DWORD dwReserved; } OPCITEMPROPERTY;
+        typedef struct tagOPCITEMPROPERTIES { HRESULT hrErrorID; DWORD dwNumProperties;
+            [size_is(dwNumProperties)] OPCITEMPROPERTY *pItemProperties; DWORD dwReserved; } OPCITEMPROPERTIES;
+        typedef struct tagOPCBROWSEELEMENT { [string] LPWSTR szName; [string] LPWSTR szItemID; DWORD dwFlagValue;
+            DWORD dwReserved; OPCITEMPROPERTIES ItemProperties; } OPCBROWSEELEMENT;
+    "#;
+    let methods = r#"
+        HRESULT AddGroup([in, string] LPCWSTR szName, [in] BOOL bActive, [in] DWORD dwRequestedUpdateRate,
+            [in] OPCHANDLE hClientGroup, [unique, in] LONG *pTimeBias, [in, unique] FLOAT *pPercentDeadband,
+            [in] DWORD dwLCID, [out] OPCHANDLE *phServerGroup, [out] DWORD *pRevisedUpdateRate,
+            [in] REFIID riid, [out, iid_is(riid)] LPUNKNOWN *ppUnk);
+        HRESULT AddItems([in] DWORD dwCount, [in, size_is(dwCount)] OPCITEMDEF *pItemArray,
+            [out, size_is(, dwCount)] OPCITEMRESULT **ppAddResults, [out, size_is(, dwCount)] HRESULT **ppErrors);
+        HRESULT Read([in] OPCDATASOURCE dwSource, [in] DWORD dwCount, [in, size_is(dwCount)] OPCHANDLE *phServer,
+            [out, size_is(, dwCount)] OPCITEMSTATE **ppItemValues, [out, size_is(, dwCount)] HRESULT **ppErrors);
+        HRESULT Write([in] DWORD dwCount, [in, size_is(dwCount)] OPCHANDLE *phServer,
+            [in, size_is(dwCount)] VARIANT *pItemValues, [out, size_is(, dwCount)] HRESULT **ppErrors);
+        HRESULT QueryAvailableProperties([in] LPWSTR szItemID, [out] DWORD *pdwCount,
+            [out, size_is(, *pdwCount)] DWORD **ppPropertyIDs, [out, size_is(, *pdwCount)] LPWSTR **ppDescriptions,
+            [out, size_is(, *pdwCount)] VARTYPE **ppvtDataTypes);
+        HRESULT Browse([in, string] LPWSTR szItemID, [in, out, string] LPWSTR *pszContinuationPoint,
+            [in] DWORD dwMaxElementsReturned, [in] DWORD dwPropertyCount,
+            [in, size_is(dwPropertyCount)] DWORD *pdwPropertyIDs, [out] BOOL *pbMoreElements,
+            [out] DWORD *pdwCount, [out, size_is(, *pdwCount)] OPCBROWSEELEMENT **ppBrowseElements);
+        HRESULT BrowseOPCItemIDs([in, string] LPCWSTR szFilterCriteria, [in] VARTYPE vtDataTypeFilter,
+            [out] LPENUMSTRING *ppIEnumString);
+    "#;
+    let m = one(decls, methods).unwrap();
+    let add = method(&m, "ITest", "AddGroup");
+    assert_eq!(
+        add.context,
+        [Save::Guid(0)],
+        "the reply's interface is the request's riid"
+    );
+    assert!(matches!(&add.request[4].node, Node::Pointer(true, b) if **b == Node::Base(4)));
+    let items = method(&m, "ITest", "AddItems");
+    assert_eq!(items.context, [Save::Int(0)]);
+    assert_eq!(items.bounds, [(0, resolve::DEFAULT_BOUND)]);
+    assert!(m.structs["OPCITEMDEF"].deferred && m.structs["OPCITEMSTATE"].deferred);
+    assert_eq!(
+        m.structs["OPCITEMSTATE"].size, 20,
+        "hClient, FILETIME, two WORDs, the VARIANT's prefix"
+    );
+    let read = method(&m, "ITest", "Read");
+    assert!(read.reply_align8, "a VARIANT");
+    assert_eq!(read.request[0].node, Node::Enum16);
+    let q = method(&m, "ITest", "QueryAvailableProperties");
+    assert!(q.context.is_empty());
+    assert!(q.reply[1..4]
+        .iter()
+        .all(|p| array(&p.node).size == Extent::Conformant(Corr::Slot(0))));
+    let b = method(&m, "ITest", "Browse");
+    assert_eq!(b.request[1].node, b.reply[0].node, "an [in, out] string both ways");
+    assert_eq!(
+        m.structs["OPCITEMPROPERTIES"].fields[2].1,
+        Node::Pointer(
+            true,
+            Box::new(Node::Array(Box::new(resolve::ArrayNode {
+                elem: Node::Struct("OPCITEMPROPERTY".into()),
+                size: Extent::Conformant(Corr::Field(1)),
+                length: None,
+                bound: resolve::DEFAULT_BOUND,
+            })))
+        )
+    );
+    let e = method(&m, "ITest", "BrowseOPCItemIDs");
+    assert!(
+        matches!(&e.reply[0].node, Node::Pointer(false, i) if matches!(&**i, Node::Interface(n, Some(_), _) if n == "IEnumString"))
+    );
+}
