@@ -1,6 +1,7 @@
 //! For Windows targets, the proxy/stub of the OPC Common interfaces: compiles
 //! `src/proxy/opccomn_ps.c` (with the NDR tables `tools/gen-proxy.py` generated from
-//! `idl/opccomn.idl` into `src/proxy/generated/`) into a static library, links it, rpcrt4 (the NDR
+//! `idl/opccomn.idl` into `src/proxy/generated/`, and the interface table `tools/gen-header` generated
+//! beside them) into a static library, links it, rpcrt4 (the NDR
 //! engine that interprets the tables) and uuid, and sets `cfg(opccomn_proxy_stub)` for src/proxy. With
 //! mingw the tools are `<triple>-gcc` and `<triple>-ar` (or OPCCOMN_CC / OPCCOMN_AR), with MSVC `cl`
 //! and `lib` (or OPCCOMN_CL / OPCCOMN_LIB), see [`crate::toolchain`].
@@ -15,6 +16,7 @@ pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
     let src = manifest_dir.join("src/proxy");
     for file in [
         "opccomn_ps.c",
+        "generated/interfaces.h",
         "generated/opccomn_idl.h",
         "generated/opccomn_p_win64.c",
         "generated/opccomn_p_win32.c",

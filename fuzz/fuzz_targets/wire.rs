@@ -6,6 +6,9 @@
 //! names the method's interface, in the layout the reading runtime expects; only a NULL pointer
 //! passes for both runtimes.
 //!
+//! The checks are generated from the IDL (src/proxy/generated/layouts.rs read by src/proxy/ndr); every
+//! answer must also be the one the hand-written checks they replaced give (proxy::wire::reference).
+//!
 //! Input: byte 0 the interface (mod 5), byte 1 the method (mod 8), byte 2 the runtime reading
 //! interface pointers (bit 0: Wine's), byte 3 `Next`'s `celt`; the message is the rest.
 #![no_main]
@@ -13,7 +16,7 @@
 use libfuzzer_sys::fuzz_target;
 use opccomn::com::guids::{IID_IEnumGUID, IID_IOPCEnumGUID};
 use opccomn::com::GUID;
-use opccomn::proxy::wire::{check_reply, check_request, reply_context, Interface, IpLayout};
+use opccomn::proxy::wire::{check_reply, check_request, reference, reply_context, Context, Dialect as IpLayout, Interface};
 
 const LOCAL: u32 = 0x10;
 /// HRESULT_FROM_WIN32 of RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND and RPC_S_PROCNUM_OUT_OF_RANGE.
@@ -61,7 +64,7 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 4 {
         return;
     }
-    let iface = Interface::from_index(u32::from(data[0]) % 5).unwrap();
+    let iface = Interface::from_index(u32::from(data[0]) % Interface::all().len() as u32).unwrap();
     let method = u32::from(data[1] % 8);
     let reader = if data[2] & 1 != 0 {
         IpLayout::Wine
@@ -71,16 +74,26 @@ fuzz_target!(|data: &[u8]| {
     let celt = u32::from(data[3]);
     let msg = &data[4..];
 
-    defined(check_request(iface, method, msg, LOCAL));
-    let _ = reply_context(iface, method, msg);
-    let checked = check_reply(iface, method, celt, msg, LOCAL, reader);
+    let request = check_request(iface, method, msg, LOCAL, reader);
+    defined(request);
+    assert_eq!(request, reference::check_request(iface, method, msg, LOCAL), "as the hand-written check");
+    let context = reply_context(iface, method, msg, reader);
+    if request.is_ok() {
+        assert_eq!(context, Context::of(&[reference::reply_context(iface, method, msg)]));
+    }
+    let checked = check_reply(iface, method, &Context::of(&[celt]), msg, LOCAL, reader);
     defined(checked);
+    assert_eq!(
+        checked,
+        reference::check_reply(iface, method, celt, msg, LOCAL, reader),
+        "as the hand-written check"
+    );
     if checked.is_err() {
         return;
     }
     let declared = match (iface, method) {
-        (Interface::ServerList, 3) => Some(IID_IEnumGUID),
-        (Interface::ServerList2, 3) | (Interface::EnumGuid, 6) => Some(IID_IOPCEnumGUID),
+        (Interface::IOPCServerList, 3) => Some(IID_IEnumGUID),
+        (Interface::IOPCServerList2, 3) | (Interface::IOPCEnumGUID, 6) => Some(IID_IOPCEnumGUID),
         _ => None,
     };
     if let Some(iid) = declared {
@@ -97,12 +110,12 @@ fuzz_target!(|data: &[u8]| {
             assert_eq!(u32_at(msg, at), MEOW);
             assert_eq!(msg[at + 8..at + 24], guid_bytes(&iid)[..], "the declared interface");
             assert!(
-                check_reply(iface, method, celt, msg, LOCAL, other).is_err(),
+                check_reply(iface, method, &Context::of(&[celt]), msg, LOCAL, other).is_err(),
                 "one layout only"
             );
         }
     }
-    if (iface, method) == (Interface::EnumGuid, 3) {
+    if (iface, method) == (Interface::IOPCEnumGUID, 3) {
         // Next: conformance = celt, offset 0, actual <= celt, the GUIDs, *pceltFetched, the HRESULT.
         let actual = u32_at(msg, 8);
         assert_eq!((u32_at(msg, 0), u32_at(msg, 4)), (celt, 0));

@@ -38,25 +38,45 @@ use crate::registry::{class_key, parse_guid, registries, OpcRegistry, RegValue, 
 /// previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
 pub const OPC_PROXY_STUB_TAKE_OVER: u32 = 1;
 
-/// The interfaces of idl/opccomn.idl, generated from it with their method counts.
-static INTERFACES: [(IID, &str, u32); 5] = crate::com::interfaces::OPC_COMMON_INTERFACES;
+/// The interfaces the proxy/stub serves, generated from the IDL with its layouts.
+static INTERFACES: [(IID, &str, u32); layouts::COUNT] = layouts::PROXY_STUB_INTERFACES;
 
 /// The interfaces the proxy/stub serves: IID, name, `NumMethods` (IUnknown's three included).
-fn interfaces() -> [(&'static IID, &'static str, u32); 5] {
+fn interfaces() -> [(&'static IID, &'static str, u32); layouts::COUNT] {
     INTERFACES.each_ref().map(|(iid, name, methods)| (iid, *name, *methods))
 }
 
-// Used by the proxy/stub (Windows, mingw); everywhere else only its tests and the fuzz target run it.
+// The checks: used by the proxy/stub (Windows, mingw); everywhere else only their tests and the fuzz
+// targets run them. `ndr` is the interpreter, `layouts` what tools/gen-header generates from the IDL,
+// `wire` the checks of the served interfaces.
 #[cfg(feature = "fuzzing")]
-pub mod wire;
+pub mod ndr;
 #[cfg(not(feature = "fuzzing"))]
 #[cfg_attr(not(opccomn_proxy_stub), allow(dead_code))]
-pub(crate) mod wire;
+pub(crate) mod ndr;
+
+#[path = "generated/layouts.rs"]
+#[cfg_attr(not(opccomn_proxy_stub), allow(dead_code))]
+pub mod layouts;
+
+/// Layouts of idl/testdata/ndr-constructs.idl, which uses every construct of the layout language
+/// (nothing registers its interfaces: their table goes unused).
+#[cfg(any(test, feature = "fuzzing"))]
+#[path = "generated/test_layouts.rs"]
+#[allow(dead_code)]
+pub mod test_layouts;
+
+/// The checks of the served interfaces by their names, for the tests and the fuzz targets (the C
+/// boundary below calls `ndr` with the number the C side passes).
+#[cfg(feature = "fuzzing")]
+pub mod wire;
+#[cfg(all(test, not(feature = "fuzzing")))]
+mod wire;
 
 #[cfg(opccomn_proxy_stub)]
 extern "C" {
     // src/proxy/opccomn_ps.c: NdrDllGetClassObject / NdrDllCanUnloadNow over the generated tables, with
-    // the checks of `wire` in front of the runtime's NDR engine.
+    // the checks of `ndr` in front of the runtime's NDR engine.
     fn OpcProxyStubGetClassObject(
         rclsid: *const GUID,
         riid: *const GUID,
@@ -70,21 +90,19 @@ extern "C" {
 #[cfg(opccomn_proxy_stub)]
 #[repr(C)]
 struct Checks {
-    request: unsafe extern "C" fn(u32, u32, *const u8, u32, u32) -> Hr,
-    reply_context: unsafe extern "C" fn(u32, u32, *const u8, u32) -> ffi::Crossed<u32>,
-    reply: unsafe extern "C" fn(u32, u32, u32, *const u8, u32, u32, u32) -> Hr,
+    request: unsafe extern "C" fn(u32, u32, *const u8, u32, u32, u32, *mut u32) -> Hr,
+    reply: unsafe extern "C" fn(u32, u32, *const u32, *const u8, u32, u32, u32) -> Hr,
 }
 
 #[cfg(opccomn_proxy_stub)]
 static CHECKS: Checks = Checks {
     request: check_request,
-    reply_context,
     reply: check_reply,
 };
 
 /// The bytes of a message: `len` bytes at `buf`; None for NULL with a length, and for a buffer that is
 /// not 4-byte aligned (the NDR engine aligns to the address, the checks to the message's start; a
-/// channel's buffers are always aligned).
+/// channel's buffers are always aligned; a method that aligns to 8 needs 8, which the checks see).
 ///
 /// # Safety
 /// `buf` NULL or readable for `len` bytes for `'a`.
@@ -100,68 +118,89 @@ unsafe fn message<'a>(buf: *const u8, len: u32) -> Option<&'a [u8]> {
     Some(unsafe { core::slice::from_raw_parts(buf, len as usize) })
 }
 
-/// [`wire::check_request`] for the stubs' `Invoke`.
+/// The runtime that reads this process's messages: Wine's (`wine_reader` nonzero) or Windows'.
+#[cfg(opccomn_proxy_stub)]
+fn dialect(wine_reader: u32) -> ndr::Dialect {
+    if wine_reader != 0 {
+        ndr::Dialect::Wine
+    } else {
+        ndr::Dialect::Ndr
+    }
+}
+
+/// [`ndr::check_request`] for the stubs' `Invoke` and the checked channel: the request for `method`
+/// of interface number `iface`; when `context` is not NULL, what the reply check will need of it goes
+/// to its [`ndr::CONTEXT_WORDS`] words (zeros when the request is refused). `wine_reader`: nonzero when
+/// this process's rpcrt4 is Wine's ([`ndr::Dialect`]).
 ///
 /// # Safety
-/// `buf` NULL or readable for `len` bytes.
+/// `buf` NULL or readable for `len` bytes; `context` NULL or writable for `ndr::CONTEXT_WORDS` words.
 #[cfg(opccomn_proxy_stub)]
-unsafe extern "C" fn check_request(iface: u32, method: u32, buf: *const u8, len: u32, drep: u32) -> Hr {
-    ffi::guard!(wire::BAD_STUB_DATA, {
+unsafe extern "C" fn check_request(
+    iface: u32,
+    method: u32,
+    buf: *const u8,
+    len: u32,
+    drep: u32,
+    wine_reader: u32,
+    context: *mut u32,
+) -> Hr {
+    ffi::guard!(ndr::BAD_STUB_DATA, {
         // SAFETY: forwarded from the caller.
-        match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {
-            (Some(iface), Some(bytes)) => match wire::check_request(iface, method, bytes, drep) {
-                Ok(()) => S_OK,
-                Err(hr) => hr,
-            },
-            _ => wire::BAD_STUB_DATA,
+        let result = match (layouts::Interface::from_index(iface), unsafe { message(buf, len) }) {
+            (Some(iface), Some(bytes)) => ndr::check_request(iface.layout(), method, bytes, drep, dialect(wine_reader)),
+            _ => Err(ndr::BAD_STUB_DATA),
+        };
+        if !context.is_null() {
+            let words = result.unwrap_or_default().0;
+            // SAFETY: writable for CONTEXT_WORDS words, as the caller vouches.
+            unsafe { core::ptr::copy_nonoverlapping(words.as_ptr(), context, words.len()) };
+        }
+        match result {
+            Ok(_) => S_OK,
+            Err(hr) => hr,
         }
     })
 }
 
-/// [`wire::reply_context`] for the checked channel, from the proxy's own request.
+/// [`ndr::check_reply`] for the checked channel: the reply to `method` of interface number `iface`,
+/// with the context [`check_request`] wrote for its request.
 ///
 /// # Safety
-/// `buf` NULL or readable for `len` bytes.
-#[cfg(opccomn_proxy_stub)]
-unsafe extern "C" fn reply_context(iface: u32, method: u32, buf: *const u8, len: u32) -> ffi::Crossed<u32> {
-    ffi::guard!(0, {
-        // SAFETY: forwarded from the caller.
-        match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {
-            (Some(iface), Some(bytes)) => wire::reply_context(iface, method, bytes),
-            _ => 0,
-        }
-    })
-}
-
-/// [`wire::check_reply`] for the checked channel. `wine_reader`: nonzero when this process's rpcrt4
-/// is Wine's, which reads interface pointers in [`wire::IpLayout::Wine`]; otherwise they are read as
-/// NDR lays them out ([`wire::IpLayout::Ndr`]).
-///
-/// # Safety
-/// `buf` NULL or readable for `len` bytes.
+/// `context` readable for `ndr::CONTEXT_WORDS` words; `buf` NULL or readable for `len` bytes.
 #[cfg(opccomn_proxy_stub)]
 unsafe extern "C" fn check_reply(
     iface: u32,
     method: u32,
-    context: u32,
+    context: *const u32,
     buf: *const u8,
     len: u32,
     drep: u32,
     wine_reader: u32,
 ) -> Hr {
-    ffi::guard!(wire::BAD_STUB_DATA, {
-        let layout = if wine_reader != 0 {
-            wire::IpLayout::Wine
-        } else {
-            wire::IpLayout::Ndr
-        };
+    ffi::guard!(ndr::BAD_STUB_DATA, {
+        if context.is_null() {
+            return ndr::BAD_STUB_DATA;
+        }
+        let mut words = [0u32; ndr::CONTEXT_WORDS];
+        // SAFETY: readable for CONTEXT_WORDS words, as the caller vouches.
+        unsafe { core::ptr::copy_nonoverlapping(context, words.as_mut_ptr(), words.len()) };
         // SAFETY: forwarded from the caller.
-        match (wire::Interface::from_index(iface), unsafe { message(buf, len) }) {
-            (Some(iface), Some(bytes)) => match wire::check_reply(iface, method, context, bytes, drep, layout) {
-                Ok(()) => S_OK,
-                Err(hr) => hr,
-            },
-            _ => wire::BAD_STUB_DATA,
+        match (layouts::Interface::from_index(iface), unsafe { message(buf, len) }) {
+            (Some(iface), Some(bytes)) => {
+                match ndr::check_reply(
+                    iface.layout(),
+                    method,
+                    &ndr::Context(words),
+                    bytes,
+                    drep,
+                    dialect(wine_reader),
+                ) {
+                    Ok(()) => S_OK,
+                    Err(hr) => hr,
+                }
+            }
+            _ => ndr::BAD_STUB_DATA,
         }
     })
 }

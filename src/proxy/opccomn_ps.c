@@ -6,7 +6,8 @@
  * NdrClientCall2 / NdrStubCall2 interpret, as they interpret the format strings of MIDL's /Oicf
  * proxies. This file adds what MIDL's dlldata.c would (the factory and its two entry points, under
  * opccomn's names, because DllGetClassObject / DllCanUnloadNow are opccomn's own; src/proxy/mod.rs
- * dispatches to these) and the checks the runtime does not make (src/proxy/wire.rs):
+ * dispatches to these) and the checks the runtime does not make (src/proxy/ndr, reading the layouts
+ * tools/gen-header generates from the IDL):
  *
  * - every stub's IRpcStubBuffer::Invoke is OpcStubBuffer_Invoke, which has the request checked before
  *   the runtime's CStdStubBuffer_Invoke unmarshals it and calls the server;
@@ -35,15 +36,19 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 #endif
 #undef CStdStubBuffer_Invoke
 
-/* The checks, written in Rust (src/proxy/wire.rs, through src/proxy/mod.rs). Interfaces are numbered
- * 0 IOPCShutdown, 1 IOPCCommon, 2 IOPCServerList, 3 IOPCEnumGUID, 4 IOPCServerList2; methods by their
- * vtable index. Failures are HRESULTs (RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND, ...). `wine_reader`:
- * nonzero when this process's runtime reads interface pointers in Wine's layout. */
+/* The interfaces by number, as the checks number them (generated from the IDL with the checks' layouts). */
+#include "generated/interfaces.h"
+
+/* The checks, in Rust (src/proxy/ndr reading the layouts tools/gen-header generates from the IDL, through
+ * src/proxy/mod.rs). Interfaces by their number in opc_ps_interfaces, methods by their vtable index.
+ * Failures are HRESULTs (RPC_X_BAD_STUB_DATA, RPC_S_INVALID_BOUND, ...). `wine_reader`: nonzero when this
+ * process's runtime is Wine's, which reads some constructs differently (interface pointers among them).
+ * `request` writes what the reply check will need of the request into `context` when it is not NULL. */
 typedef struct OpcProxyStubChecks {
-    HRESULT (*request)(ULONG iface, ULONG method, const unsigned char *buf, ULONG len, ULONG drep);
-    ULONG (*reply_context)(ULONG iface, ULONG method, const unsigned char *buf, ULONG len);
-    HRESULT (*reply)(ULONG iface, ULONG method, ULONG context, const unsigned char *buf, ULONG len, ULONG drep,
-                     ULONG wine_reader);
+    HRESULT (*request)(ULONG iface, ULONG method, const unsigned char *buf, ULONG len, ULONG drep, ULONG wine_reader,
+                       ULONG context[OPC_PS_CONTEXT_WORDS]);
+    HRESULT (*reply)(ULONG iface, ULONG method, const ULONG context[OPC_PS_CONTEXT_WORDS], const unsigned char *buf,
+                     ULONG len, ULONG drep, ULONG wine_reader);
 } OpcProxyStubChecks;
 
 static const OpcProxyStubChecks *volatile checks;
@@ -77,17 +82,15 @@ ULONG STDMETHODCALLTYPE CStdStubBuffer_Release(IRpcStubBuffer *This)
 
 static int interface_index(REFIID riid)
 {
-    if (IsEqualIID(riid, &IID_IOPCShutdown)) return 0;
-    if (IsEqualIID(riid, &IID_IOPCCommon)) return 1;
-    if (IsEqualIID(riid, &IID_IOPCServerList)) return 2;
-    if (IsEqualIID(riid, &IID_IOPCEnumGUID)) return 3;
-    if (IsEqualIID(riid, &IID_IOPCServerList2)) return 4;
+    int i;
+    for (i = 0; i < OPC_PS_INTERFACE_COUNT; i++)
+        if (IsEqualIID(riid, opc_ps_interfaces[i])) return i;
     return -1;
 }
 
 /* Whether this process's rpcrt4 reads interface pointers in Wine's layout (a byte count, then the
  * OBJREF) rather than NDR's (MInterfacePointer, as Windows' rpcrt4 reads it). A reply says which layout
- * it is in (src/proxy/wire.rs tells them apart), not which runtime will read it: that is asked of the
+ * it is in (src/proxy/ndr/objref.rs tells them apart), not which runtime will read it: that is asked of the
  * process, once: Wine's ntdll exports wine_get_version. A reply in the layout this runtime does not
  * read is refused. */
 static ULONG reads_wine_layout(void)
@@ -110,7 +113,8 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
     HRESULT hr;
 
     if (!msg || index < 0 || !c) return BAD_STUB_DATA;
-    hr = c->request((ULONG)index, method_of(msg), msg->Buffer, msg->cbBuffer, msg->dataRepresentation);
+    hr = c->request((ULONG)index, method_of(msg), msg->Buffer, msg->cbBuffer, msg->dataRepresentation,
+                    reads_wine_layout(), NULL);
     if (FAILED(hr)) return hr;
     return CStdStubBuffer_Invoke(This, msg, channel);
 }
@@ -171,15 +175,16 @@ static HRESULT STDMETHODCALLTYPE channel_SendReceive(IRpcChannelBuffer *iface, R
 {
     checked_channel *This = channel_impl(iface);
     const OpcProxyStubChecks *c = checks;
-    ULONG method = method_of(msg), context;
+    ULONG method = method_of(msg), context[OPC_PS_CONTEXT_WORDS];
     HRESULT hr, check;
 
     if (!c) return BAD_STUB_DATA;
     /* The proxy sends nothing opccomn's stub would refuse (a count beyond the bound), whoever the peer
-     * is; the proxy then frees its request buffer through FreeBuffer as after any failed call. */
-    hr = c->request(This->index, method, msg->Buffer, msg->cbBuffer, NDR_LOCAL_DATA_REPRESENTATION);
+     * is; the proxy then frees its request buffer through FreeBuffer as after any failed call. The
+     * check keeps what the reply check needs of the request (Next's celt). */
+    hr = c->request(This->index, method, msg->Buffer, msg->cbBuffer, NDR_LOCAL_DATA_REPRESENTATION,
+                    reads_wine_layout(), context);
     if (FAILED(hr)) return hr;
-    context = c->reply_context(This->index, method, msg->Buffer, msg->cbBuffer);
     hr = IRpcChannelBuffer_SendReceive(This->inner, msg, status);
     if (hr == (HRESULT)RPC_S_CALL_FAILED)
         /* The proxy reads the fault code from the buffer. */

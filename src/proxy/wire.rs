@@ -1,437 +1,69 @@
-//! The proxy/stub's own checks of the NDR bytes, made before the runtime's NDR engine reads them.
+//! The proxy/stub's checks of the NDR bytes of the interfaces it serves, made before the runtime's NDR
+//! engine reads them, by the interfaces' names (the tests and the fuzz targets call these; the C
+//! boundary in `super` calls [`super::ndr`] with the interface's number).
 //!
 //! The tables `widl` generates carry no correlation checks (no `/robust` correlation descriptors),
 //! and Wine's NDR engine would not enforce them if they did (`NdrCorrelationInitialize` and
 //! `NdrCorrelationPass` are stubs in Wine 8): a count on the wire that sizes an array was believed
 //! as sent. So opccomn checks every request before the stub unmarshals it and every reply before the
 //! proxy unmarshals it (`src/proxy/opccomn_ps.c` calls these functions from its `Invoke` and channel
-//! wrappers): each count that sizes an array agrees with the array's conformance and variance, the
-//! bytes are all there, strings end in NUL, the data representation is the local one (little-endian
-//! integers, ASCII characters, IEEE floating point; nothing is converted), and the counts a caller
-//! chooses are bounded by [`MAX_ELEMENTS`]. What is refused never reaches the NDR engine or the
-//! server: the call fails with `RPC_X_BAD_STUB_DATA`, `RPC_S_INVALID_BOUND` (a count beyond the bound,
-//! as MIDL's `[range]` reports it) or `RPC_S_PROCNUM_OUT_OF_RANGE` (no such method), as HRESULTs.
+//! wrappers). The checks are not written per method: `tools/gen-header` generates each method's
+//! layout from the IDL (`src/proxy/generated/layouts.rs`, in the language of
+//! [`super::ndr::layout`]) and [`super::ndr`] reads a message against it; that module says what is
+//! enforced. What is refused never reaches the NDR engine or the server: the call fails with
+//! `RPC_X_BAD_STUB_DATA`, `RPC_S_INVALID_BOUND` (a count beyond its bound, as MIDL's `[range]`
+//! reports it) or `RPC_S_PROCNUM_OUT_OF_RANGE` (no such method), as HRESULTs.
 //!
-//! The layouts are NDR 2.0 as MIDL and widl marshal the five interfaces of `idl/opccomn.idl`; a
-//! message may carry bytes after what is read (the runtime sizes buffers generously).
-//!
-//! Interface pointers (`EnumClassesOfCategories`, `Clone`: the only ones, all in replies) come in
-//! one of two layouts ([`IpLayout`]): NDR's, as MS-DCOM 2.2.14 defines `PMInterfacePointer` and
-//! Windows' rpcrt4 writes and reads it (a unique pointer's referent ID, then `MInterfacePointer`: its
-//! conformance, `ulCntData` equal to it, and that many bytes of OBJREF), or Wine's (a byte count,
-//! then the OBJREF). The message says which it is in: a NULL pointer is a zero in both; otherwise the
-//! OBJREF's signature `MEOW` (MS-DCOM 2.2.18) follows the first 32 bits in Wine's layout and the
-//! first 96 in NDR's, and no message is well-formed in both (see `Reader::interface_pointer`). Either
-//! way the count must lie inside the message and the OBJREF inside the count, with the signature, one
-//! of the four flavours, the IID the method declares (what MS-DCOM 3.2.4.1.2 has a client refuse)
-//! and its flavour's fixed part and string bindings inside the count. What a message cannot say is
-//! which runtime will read it: that is the process's, and a reply in the other runtime's layout is
-//! refused, as that runtime would misread it (Wine's rpcrt4 would take a referent ID for a byte count,
-//! Windows' the signature for a conformance).
+//! A message may carry bytes after what is read (the runtime sizes buffers generously).
 
-use crate::com::guids::{IID_IEnumGUID, IID_IOPCEnumGUID};
-use crate::com::{GUID, HRESULT};
+pub use super::layouts::Interface;
+use super::ndr;
+pub use super::ndr::{Context, Dialect};
+pub(crate) use super::ndr::{BAD_STUB_DATA, INVALID_BOUND, PROCNUM_OUT_OF_RANGE};
+use crate::com::HRESULT;
 
-/// The most elements any array of the five interfaces may carry: GUIDs asked of
-/// `IOPCEnumGUID::Next` (1 MiB of GUIDs), categories given to `EnumClassesOfCategories`, locales
-/// returned by `QueryAvailableLocaleIDs`. A request beyond it is refused before anything is allocated.
-pub(crate) const MAX_ELEMENTS: u32 = 65_536;
+/// The bound of every array of the OPC Common interfaces whose count a peer chooses (GUIDs asked of
+/// `IOPCEnumGUID::Next`, categories given to `EnumClassesOfCategories`, locales returned by
+/// `QueryAvailableLocaleIDs`; `idl/ndr-bounds.txt`).
+pub(crate) const MAX_ELEMENTS: u32 = ndr::DEFAULT_BOUND;
 
-/// `HRESULT_FROM_WIN32(RPC_X_BAD_STUB_DATA)`: the bytes do not match the method's layout.
-pub(crate) const BAD_STUB_DATA: HRESULT = 0x800706F7_u32 as HRESULT;
-/// `HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND)`: a count beyond [`MAX_ELEMENTS`].
-pub(crate) const INVALID_BOUND: HRESULT = 0x800706C6_u32 as HRESULT;
-/// `HRESULT_FROM_WIN32(RPC_S_PROCNUM_OUT_OF_RANGE)`: the interface has no such method.
-pub(crate) const PROCNUM_OUT_OF_RANGE: HRESULT = 0x800706D1_u32 as HRESULT;
-
-/// `NDR_LOCAL_DATA_REPRESENTATION`: little-endian integers, ASCII, IEEE floating point.
-const LOCAL_DATA_REPRESENTATION: u32 = 0x10;
-
-/// The five interfaces, numbered as `src/proxy/opccomn_ps.c` numbers them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Interface {
-    Shutdown,
-    Common,
-    ServerList,
-    EnumGuid,
-    ServerList2,
-}
-
-impl Interface {
-    /// The interface numbered `n` (0 IOPCShutdown, 1 IOPCCommon, 2 IOPCServerList, 3 IOPCEnumGUID,
-    /// 4 IOPCServerList2).
-    pub fn from_index(n: u32) -> Option<Interface> {
-        Some(match n {
-            0 => Interface::Shutdown,
-            1 => Interface::Common,
-            2 => Interface::ServerList,
-            3 => Interface::EnumGuid,
-            4 => Interface::ServerList2,
-            _ => return None,
-        })
-    }
-
-    /// Methods in the vtable, IUnknown's three included.
-    fn methods(self) -> u32 {
-        match self {
-            Interface::Shutdown => 4,
-            Interface::Common => 8,
-            Interface::ServerList | Interface::ServerList2 => 6,
-            Interface::EnumGuid => 7,
-        }
-    }
-}
-
-/// How a runtime lays out a marshalled interface pointer (`[out] I **`) in NDR.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum IpLayout {
-    /// NDR's, as MS-DCOM 2.2.14 defines `PMInterfacePointer` (C706 chapter 14) and Windows' rpcrt4
-    /// writes and reads it: a unique pointer's referent ID (0: NULL), then `MInterfacePointer`, a
-    /// conformant structure: its conformance, `ulCntData` (equal to it) and `ulCntData` bytes of OBJREF.
-    Ndr,
-    /// Wine's rpcrt4 (`dlls/rpcrt4/ndr_ole.c`): a 32-bit byte count (0: NULL), then that many bytes of
-    /// OBJREF; no referent ID, no conformance.
-    Wine,
-}
-
-/// `OBJREF.signature`, "MEOW" (MS-DCOM 2.2.18).
-const OBJREF_SIGNATURE: u32 = 0x574F_454D;
-/// `OBJREF_EXTENDED.Signature1` (MS-DCOM 2.2.18.7).
-const OBJREF_EXTENDED_SIGNATURE: u32 = 0x4E53_5956;
-/// `OBJREF.flags`: the four flavours (MS-DCOM 2.2.18).
-const OBJREF_STANDARD: u32 = 1;
-const OBJREF_HANDLER: u32 = 2;
-const OBJREF_CUSTOM: u32 = 4;
-const OBJREF_EXTENDED: u32 = 8;
-/// `STDOBJREF`: flags, cPublicRefs, OXID, OID, IPID (MS-DCOM 2.2.18.1).
-const STDOBJREF_SIZE: usize = 40;
-
-/// A GUID as NDR and an OBJREF carry it: `Data1` to `Data3` little-endian, then `Data4`.
-fn guid_bytes(g: &GUID) -> [u8; 16] {
-    let mut b = [0; 16];
-    b[..4].copy_from_slice(&g.Data1.to_le_bytes());
-    b[4..6].copy_from_slice(&g.Data2.to_le_bytes());
-    b[6..8].copy_from_slice(&g.Data3.to_le_bytes());
-    b[8..].copy_from_slice(&g.Data4);
-    b
-}
-
-/// Reads NDR 2.0 little-endian data, never past the end.
-struct Reader<'a> {
-    buf: &'a [u8],
-    pos: usize,
-}
+/// `NDR_LOCAL_DATA_REPRESENTATION`, as the proxy's own requests are.
+const LOCAL: u32 = 0x10;
 
 type Check = Result<(), HRESULT>;
 
-impl<'a> Reader<'a> {
-    fn new(buf: &'a [u8]) -> Self {
-        Reader { buf, pos: 0 }
-    }
-
-    fn skip(&mut self, n: usize) -> Check {
-        let end = self.pos.checked_add(n).ok_or(BAD_STUB_DATA)?;
-        if end > self.buf.len() {
-            return Err(BAD_STUB_DATA);
-        }
-        self.pos = end;
-        Ok(())
-    }
-
-    fn align4(&mut self) -> Check {
-        let pad = (4 - self.pos % 4) % 4;
-        self.skip(pad)
-    }
-
-    fn u32(&mut self) -> Result<u32, HRESULT> {
-        self.align4()?;
-        let at = self.pos;
-        self.skip(4)?;
-        let b = &self.buf[at..at + 4];
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    /// `n` GUIDs (NDR aligns a GUID to 4).
-    fn guids(&mut self, n: u32) -> Check {
-        self.align4()?;
-        self.skip((n as usize).checked_mul(16).ok_or(BAD_STUB_DATA)?)
-    }
-
-    /// A count chosen by the caller: at most [`MAX_ELEMENTS`].
-    fn bounded(n: u32) -> Result<u32, HRESULT> {
-        if n > MAX_ELEMENTS {
-            Err(INVALID_BOUND)
-        } else {
-            Ok(n)
-        }
-    }
-
-    /// `[in, size_is(count)] GUID array[]`: its conformance, equal to `count`, and the GUIDs.
-    fn guid_array(&mut self, count: u32) -> Check {
-        let count = Self::bounded(count)?;
-        if self.u32()? != count {
-            return Err(BAD_STUB_DATA);
-        }
-        self.guids(count)
-    }
-
-    /// A `[string]` wide string (conformant and varying): maximum count = actual count >= 1, offset 0,
-    /// every unit present, the last one NUL. MIDL and widl marshal a string so; anything else would let
-    /// the maximum size an allocation the bytes do not back.
-    fn string(&mut self) -> Check {
-        let max = self.u32()?;
-        let offset = self.u32()?;
-        let actual = self.u32()?;
-        if max != actual || offset != 0 || actual == 0 {
-            return Err(BAD_STUB_DATA);
-        }
-        let bytes = (actual as usize).checked_mul(2).ok_or(BAD_STUB_DATA)?;
-        let at = self.pos;
-        self.skip(bytes)?;
-        if self.buf[at + bytes - 2..at + bytes] != [0, 0] {
-            return Err(BAD_STUB_DATA);
-        }
-        Ok(())
-    }
-
-    /// `[out, string] LPWSTR *`: a unique pointer, then the string when not NULL.
-    fn unique_string(&mut self) -> Check {
-        if self.u32()? != 0 {
-            self.string()?;
-        }
-        Ok(())
-    }
-
-    /// The next 32 bits, not consumed; None at the end.
-    fn peek_u32(&self) -> Option<u32> {
-        let mut ahead = Reader {
-            buf: self.buf,
-            pos: self.pos,
-        };
-        ahead.u32().ok()
-    }
-
-    /// `n` bytes.
-    fn take(&mut self, n: usize) -> Result<&'a [u8], HRESULT> {
-        let at = self.pos;
-        self.skip(n)?;
-        Ok(&self.buf[at..at + n])
-    }
-
-    /// A little-endian 16-bit value, unaligned (inside an OBJREF, which is bytes to NDR).
-    fn u16_unaligned(&mut self) -> Result<u16, HRESULT> {
-        let b = self.take(2)?;
-        Ok(u16::from_le_bytes([b[0], b[1]]))
-    }
-
-    /// A little-endian 32-bit value, unaligned.
-    fn u32_unaligned(&mut self) -> Result<u32, HRESULT> {
-        let b = self.take(4)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    /// `[out] I **` whose OBJREF must carry `iid`, in the layout of the message, which must be `reader`'s.
-    ///
-    /// NULL is a zero in both layouts. Otherwise the layout is the message's: Wine's when the OBJREF
-    /// signature follows the first 32 bits, NDR's when not. No message is well-formed in both: NDR's
-    /// would need a conformance equal to the signature (0x574F454D), so `ulCntData` equal to it too,
-    /// which read as Wine's OBJREF is its flavour, none of the four.
-    fn interface_pointer(&mut self, reader: IpLayout, iid: &GUID) -> Check {
-        let first = self.u32()?;
-        if first == 0 {
-            return Ok(());
-        }
-        let (layout, count) = if self.peek_u32() == Some(OBJREF_SIGNATURE) {
-            (IpLayout::Wine, first)
-        } else {
-            // The referent ID (any value but 0), then MInterfacePointer: conformance, ulCntData.
-            let max = self.u32()?;
-            if self.u32()? != max {
-                return Err(BAD_STUB_DATA);
-            }
-            (IpLayout::Ndr, max)
-        };
-        objref(self.take(count as usize)?, iid)?;
-        if layout != reader {
-            return Err(BAD_STUB_DATA);
-        }
-        Ok(())
-    }
-
-    /// A DUALSTRINGARRAY (MS-DCOM 2.2.19.1): `wNumEntries` 16-bit units after the header, the security
-    /// bindings' offset among them. (Wine writes an empty one: 0 and 0.)
-    fn dual_string_array(&mut self) -> Check {
-        let entries = self.u16_unaligned()?;
-        let security_offset = self.u16_unaligned()?;
-        if security_offset > entries {
-            return Err(BAD_STUB_DATA);
-        }
-        self.skip(usize::from(entries) * 2)
-    }
-
-    /// The HRESULT every reply ends with.
-    fn hresult(&mut self) -> Check {
-        self.u32().map(|_| ())
-    }
-}
-
-/// The OBJREF of an interface pointer, exactly `bytes` (MS-DCOM 2.2.18): the signature, one of the
-/// four flavours, the IID the method declares (what MS-DCOM 3.2.4.1.2 has a client refuse; Wine's
-/// rpcrt4 unmarshals with IID_NULL, so would hand the caller an object of whatever interface the
-/// OBJREF names), and the flavour's fixed part and string bindings inside `bytes`. The rest (OXID,
-/// IPID, bindings, a custom marshaller's data) is COM's to read, within `bytes`.
-fn objref(bytes: &[u8], iid: &GUID) -> Check {
-    let mut r = Reader::new(bytes);
-    if r.u32_unaligned()? != OBJREF_SIGNATURE {
-        return Err(BAD_STUB_DATA);
-    }
-    let flags = r.u32_unaligned()?;
-    if r.take(16)? != guid_bytes(iid) {
-        return Err(BAD_STUB_DATA);
-    }
-    match flags {
-        OBJREF_STANDARD => {
-            r.skip(STDOBJREF_SIZE)?;
-            r.dual_string_array()
-        }
-        // The handler's CLSID between them.
-        OBJREF_HANDLER => {
-            r.skip(STDOBJREF_SIZE + 16)?;
-            r.dual_string_array()
-        }
-        // The marshaller's CLSID, cbExtension, reserved; its data is the rest.
-        OBJREF_CUSTOM => r.skip(16 + 4 + 4),
-        OBJREF_EXTENDED => {
-            r.skip(STDOBJREF_SIZE)?;
-            if r.u32_unaligned()? != OBJREF_EXTENDED_SIGNATURE {
-                return Err(BAD_STUB_DATA);
-            }
-            r.dual_string_array()
-        }
-        _ => Err(BAD_STUB_DATA),
-    }
-}
-
-fn local_data_representation(drep: u32) -> Check {
-    if drep & 0xFFFF == LOCAL_DATA_REPRESENTATION {
-        Ok(())
-    } else {
-        Err(BAD_STUB_DATA)
-    }
-}
-
-fn method_exists(interface: Interface, method: u32) -> Check {
-    if (3..interface.methods()).contains(&method) {
-        Ok(())
-    } else {
-        Err(PROCNUM_OUT_OF_RANGE)
-    }
-}
-
 /// Checks a request for `method` (its vtable index) of `interface` before the stub unmarshals it.
-pub fn check_request(interface: Interface, method: u32, buf: &[u8], drep: u32) -> Check {
-    method_exists(interface, method)?;
-    local_data_representation(drep)?;
-    let mut r = Reader::new(buf);
-    match (interface, method) {
-        // ShutdownRequest(szReason), SetClientName(szName)
-        (Interface::Shutdown, 3) | (Interface::Common, 7) => r.string(),
-        // SetLocaleID(dwLcid), GetErrorString(dwError, ...), Skip(celt)
-        (Interface::Common, 3 | 6) | (Interface::EnumGuid, 4) => r.u32().map(|_| ()),
-        // GetLocaleID, QueryAvailableLocaleIDs, Reset, Clone: nothing in.
-        (Interface::Common, 4 | 5) | (Interface::EnumGuid, 5 | 6) => Ok(()),
-        // EnumClassesOfCategories(cImplemented, rgcatidImpl, cRequired, rgcatidReq, ...)
-        (Interface::ServerList | Interface::ServerList2, 3) => {
-            let implemented = r.u32()?;
-            r.guid_array(implemented)?;
-            let required = r.u32()?;
-            r.guid_array(required)
-        }
-        // GetClassDetails(clsid, ...)
-        (Interface::ServerList | Interface::ServerList2, 4) => r.guids(1),
-        // CLSIDFromProgID(szProgId, ...)
-        (Interface::ServerList | Interface::ServerList2, 5) => r.string(),
-        // Next(celt, ...): the stub allocates celt GUIDs before the server runs.
-        (Interface::EnumGuid, 3) => Reader::bounded(r.u32()?).map(|_| ()),
-        _ => Err(PROCNUM_OUT_OF_RANGE),
-    }
+/// `dialect`: the runtime that reads it (this process's).
+pub fn check_request(interface: Interface, method: u32, buf: &[u8], drep: u32, dialect: Dialect) -> Check {
+    ndr::check_request(interface.layout(), method, buf, drep, dialect).map(|_| ())
 }
 
-/// What a reply check needs to know of the request the proxy sent: `IOPCEnumGUID::Next`'s `celt`
-/// (the size of the caller's buffer); 0 for every other method. `request` is the proxy's own request.
-pub fn reply_context(interface: Interface, method: u32, request: &[u8]) -> u32 {
-    match (interface, method) {
-        (Interface::EnumGuid, 3) => Reader::new(request).u32().unwrap_or(0),
-        _ => 0,
-    }
+/// What a reply check needs to know of the request the proxy sent (`request`, the proxy's own):
+/// `IOPCEnumGUID::Next`'s `celt` (the size of the caller's buffer); nothing for the other methods
+/// (and for a request the checks refuse).
+pub fn reply_context(interface: Interface, method: u32, request: &[u8], dialect: Dialect) -> Context {
+    ndr::check_request(interface.layout(), method, request, LOCAL, dialect).unwrap_or_default()
 }
 
 /// Checks a reply to `method` of `interface` before the proxy unmarshals it into the caller's memory.
-/// `context` is [`reply_context`] of the request; `reader` the layout of interface pointers the
-/// process's runtime reads (the one thing a message cannot say).
-pub fn check_reply(interface: Interface, method: u32, context: u32, buf: &[u8], drep: u32, reader: IpLayout) -> Check {
-    method_exists(interface, method)?;
-    local_data_representation(drep)?;
-    let mut r = Reader::new(buf);
-    match (interface, method) {
-        // HRESULT only.
-        (Interface::Shutdown, 3) | (Interface::Common, 3 | 7) | (Interface::EnumGuid, 4 | 5) => {}
-        // GetLocaleID(*pdwLcid)
-        (Interface::Common, 4) => {
-            r.u32()?;
-        }
-        // QueryAvailableLocaleIDs(*pdwCount, *pdwLcid): the count sizes the array the caller walks.
-        (Interface::Common, 5) => {
-            let count = r.u32()?;
-            if r.u32()? != 0 {
-                let count = Reader::bounded(count)?;
-                if r.u32()? != count {
-                    return Err(BAD_STUB_DATA);
-                }
-                r.skip(count as usize * 4)?;
-            } else if count != 0 {
-                // A count with no array would have the caller walk NULL.
-                return Err(BAD_STUB_DATA);
-            }
-        }
-        // GetErrorString(*ppString)
-        (Interface::Common, 6) => r.unique_string()?,
-        // EnumClassesOfCategories(*ppenumClsid): IEnumGUID in IOPCServerList, IOPCEnumGUID in IOPCServerList2.
-        (Interface::ServerList, 3) => r.interface_pointer(reader, &IID_IEnumGUID)?,
-        (Interface::ServerList2, 3) => r.interface_pointer(reader, &IID_IOPCEnumGUID)?,
-        // Clone(*ppenum)
-        (Interface::EnumGuid, 6) => r.interface_pointer(reader, &IID_IOPCEnumGUID)?,
-        // GetClassDetails: ProgID, user type (and, in IOPCServerList2, the version-independent ProgID).
-        (Interface::ServerList, 4) => {
-            r.unique_string()?;
-            r.unique_string()?;
-        }
-        (Interface::ServerList2, 4) => {
-            r.unique_string()?;
-            r.unique_string()?;
-            r.unique_string()?;
-        }
-        // CLSIDFromProgID(*clsid)
-        (Interface::ServerList | Interface::ServerList2, 5) => r.guids(1)?,
-        // Next(rgelt[celt], *pceltFetched): conformance = the caller's celt, offset 0, actual count =
-        // *pceltFetched <= celt, and the GUIDs all present. Nothing more may land in the caller's buffer.
-        (Interface::EnumGuid, 3) => {
-            let celt = context;
-            let max = r.u32()?;
-            let offset = r.u32()?;
-            let actual = r.u32()?;
-            if max != celt || offset != 0 || actual > max {
-                return Err(BAD_STUB_DATA);
-            }
-            r.guids(actual)?;
-            if r.u32()? != actual {
-                return Err(BAD_STUB_DATA);
-            }
-        }
-        _ => return Err(PROCNUM_OUT_OF_RANGE),
-    }
-    r.hresult()
+/// `context` is [`reply_context`] of the request; `dialect` the runtime that reads it (this
+/// process's: it decides, among other things, the layout of interface pointers, the one thing a
+/// message cannot say).
+pub fn check_reply(
+    interface: Interface,
+    method: u32,
+    context: &Context,
+    buf: &[u8],
+    drep: u32,
+    dialect: Dialect,
+) -> Check {
+    ndr::check_reply(interface.layout(), method, context, buf, drep, dialect)
 }
+
+#[cfg(feature = "fuzzing")]
+pub mod reference;
+#[cfg(all(test, not(feature = "fuzzing")))]
+mod reference;
 
 #[cfg(test)]
 mod tests;

@@ -8,6 +8,9 @@
 //!   shims, the trait per interface, the proxy/stub's table; see `rustgen`), formatted by rustfmt.
 //! - The identifiers: `src/com/guids.rs` (Rust constants and the DLL's data exports) and
 //!   `src/c/opccomn_guids.c` (the same data for per-symbol objects) from the IDL and idl/opcguids.txt.
+//! - `src/proxy/generated/layouts.rs` and `interfaces.h`: the proxy/stub's checks, each method's NDR
+//!   layout with the interfaces' numbering, from `idl/opccomn.idl` and `idl/ndr-bounds.txt`, and
+//!   `test_layouts.rs` from the test IDL of the layout language (see `ndr`).
 //! - `c-tests/abi_i686.c`: compile-time checks (for i686-w64-mingw32-gcc) that every vtable entry is
 //!   `__stdcall` and every exported function and callback has the convention of its Rust definition.
 //!
@@ -26,6 +29,7 @@ mod emit;
 mod groups;
 mod guids;
 mod idl;
+mod ndr;
 mod rustcheck;
 mod rustgen;
 mod unsafety;
@@ -100,6 +104,9 @@ fn main() -> ExitCode {
         ("src/c/opccomn_guids.c", guids::c_data(&opc, &base, &table)),
         ("c-tests/abi_i686.c", abi_check),
     ];
+    // The proxy/stub's NDR layouts and interface table (src/ndr/).
+    let layouts = ndr::outputs(&read, &|text| rustfmt(&root, text)).unwrap_or_else(|e| panic!("{e}"));
+    let outputs: Vec<(&str, String)> = outputs.into_iter().chain(layouts).collect();
     let mut stale = 0;
     for (path, text) in &outputs {
         let full = root.join(path);

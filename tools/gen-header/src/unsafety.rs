@@ -93,14 +93,35 @@ fn count_tokens(tokens: &[TokenTree], count: &mut Count) {
     }
 }
 
-/// The non-test modules a file declares with `mod name;`.
-fn child_modules(tokens: &[TokenTree]) -> Vec<String> {
-    let mut out = Vec::new();
-    for w in tokens.windows(3) {
-        if let [TokenTree::Ident(m), TokenTree::Ident(name), TokenTree::Punct(semi)] = w {
-            if m == "mod" && semi.as_char() == ';' && !out.contains(&name.to_string()) {
-                out.push(name.to_string());
+/// The non-test modules a file declares with `mod name;`, each with the file a `#[path = "..."]`
+/// attribute before it names (relative to the directory of the file's child modules).
+fn child_modules(tokens: &[TokenTree]) -> Vec<(String, Option<String>)> {
+    let mut out: Vec<(String, Option<String>)> = Vec::new();
+    let mut path = None;
+    for (i, t) in tokens.iter().enumerate() {
+        match t {
+            TokenTree::Group(g) if g.delimiter() == Delimiter::Bracket => {
+                let inner: Vec<TokenTree> = g.stream().into_iter().collect();
+                if let [TokenTree::Ident(name), TokenTree::Punct(eq), TokenTree::Literal(lit)] = inner.as_slice() {
+                    if name == "path" && eq.as_char() == '=' {
+                        path = Some(lit.to_string().trim_matches('"').to_string());
+                    }
+                }
             }
+            TokenTree::Group(_) => path = None,
+            TokenTree::Punct(p) if p.as_char() == ';' => path = None,
+            TokenTree::Ident(m) if m == "mod" => {
+                if let (Some(TokenTree::Ident(name)), Some(TokenTree::Punct(semi))) =
+                    (tokens.get(i + 1), tokens.get(i + 2))
+                {
+                    let name = name.to_string();
+                    if semi.as_char() == ';' && !out.iter().any(|(n, _)| *n == name) {
+                        out.push((name, path.take()));
+                    }
+                }
+                path = None;
+            }
+            _ => {}
         }
     }
     out
@@ -115,7 +136,16 @@ fn visit(root: &Path, rel: &str, children_dir: &str, out: &mut BTreeMap<String, 
     if count != Count::default() {
         out.insert(rel.to_string(), count);
     }
-    for name in child_modules(&tokens) {
+    for (name, path) in child_modules(&tokens) {
+        if let Some(path) = path {
+            let file = format!("{children_dir}{path}");
+            if !root.join(&file).exists() {
+                panic!("{rel}: module {name} not found at {file}");
+            }
+            // A file named by `#[path]` declares no modules of its own here (generated code).
+            visit(root, &file, "", out);
+            continue;
+        }
         let flat = format!("{children_dir}{name}.rs");
         let nested = format!("{children_dir}{name}/mod.rs");
         let (file, dir) = if root.join(&flat).exists() {
