@@ -28,7 +28,7 @@ build="$root/build"
 # ---- The stages, in the order they run: name, group, description ----------------------------------
 # Group: linux (needs nothing but the Linux tools), wine (the Windows tools and Wine), wine32 (32-bit
 # Wine as well).
-stage_table='lint|linux|format, clippy (Linux and Windows targets), drift of every generated file
+stage_table='lint|linux|format, clippy (Linux and Windows targets), drift of every generated file, the IDL against the OPC interface tables
 rust-linux|linux|Rust tests (Linux)
 c-asan|linux|C tests (Linux, AddressSanitizer + UBSan) and the exported symbols
 c-valgrind|linux|C tests (Linux, valgrind --leak-check=full, no sanitizer)
@@ -223,13 +223,16 @@ stage_lint() {
     # checks catching each kind of breach).
     cargo clippy -q -p gen-header --all-targets -- -D warnings
     cargo test -q -p gen-header
-    # The proxy/stub's NDR tables are generated from idl/opccomn.idl (widl and the system IDLs come
-    # with the Windows tools).
+    # The proxy/stub's NDR tables are generated from idl/opccomn.idl, opcda.idl, opc_ae.idl and
+    # opchda.idl (widl and the system IDLs come with the Windows tools).
     if [ -z "${disabled[wine]+set}" ]; then
         python3 tools/gen-proxy.py --check
     else
         echo "lint: the proxy/stub tables' drift check needs the Windows tools (widl) and was NOT run (--no-wine)"
     fi
+    # The IDL's interfaces (IIDs, methods, parameters) and the generated vtables against the
+    # Foundation's published tables.
+    python3 tools/check-idl-tables.py
 }
 
 stage_rust_linux() {
