@@ -17,8 +17,9 @@ the same output) or the program named by $WIDL; system IDL files come from libwi
 (/usr/include/wine/wine/windows, or $WIDL_INCLUDE).
 
 The corrections. widl before 9.x writes a wrong type offset for pointers to strings and arrays of
-strings that carry the [string] attribute (MIDL's output for the same declarations, compared
-parameter by parameter with tools/compare-ndr.py, shows where each must point: docs/dev/proxy-tables.md):
+strings that carry the [string] attribute (rules 1 to 3; MIDL's output for the same declarations,
+compared parameter by parameter with tools/compare-ndr.py, shows where each must point), and a wrong
+correlation for a nested structure's array on Win32 (rule 4): docs/dev/proxy-tables.md.
 
 1. `[out, string] LPWSTR *` and `[in, out, string] LPWSTR *` (GetErrorString's ppString,
    GetClassDetails' strings: LPOLESTR is `[string] OLECHAR *`; IOPCBrowse::Browse's
@@ -34,13 +35,22 @@ parameter by parameter with tools/compare-ndr.py, shows where each must point: d
    the array that describes them (`FC_BOGUS_ARRAY`; on x86 `FC_CARRAY` with a pointer layout), at
    its conformance descriptor, which the runtime then reads as a type (the call fails or misreads
    the request).
+4. On Win32 only, a structure nested in another (OPCBROWSEELEMENT's OPCITEMPROPERTIES): widl
+   flattens the nested structure's pointers into the outer structure's pointer layout, and with them
+   the array the nested structure counts by one of its fields (dwNumProperties), whose offset then
+   still counts from the nested structure while the runtime reads it from the start of the outer
+   one (a pointer's value is read as the count, and the stub faults; MIDL makes such structures
+   FC_BOGUS_STRUCTs instead). The script points each such flattened pointer at a copy of the array
+   that reads its count at the field's offset in the outer structure.
 
 The script moves exactly those references (rules 1 and 2: an out or in-out parameter whose
 server-allocated slot names the pointer under an adjacent FC_RP that leads to it; rule 3: a
-reference that lands 4 bytes into an array), and checks afterwards that every parameter and
-every reference inside the type format string names the start of a type, and that every out-parameter with a server-allocated slot
-that is not a simple reference ("srv size=N" without "simple ref") names an `FC_RP`. With a widl
-that is already right nothing is moved and the output is the same.
+reference that lands 4 bytes into an array; rule 4: copies appended to the type format string),
+and checks afterwards that every parameter and every reference inside the type format string names
+the start of a type, that every flattened pointer's array is counted by a field of the structure
+that holds it, and that every out-parameter with a server-allocated slot that is not a simple
+reference ("srv size=N" without "simple ref") names an `FC_RP`. With a widl that is already right
+nothing is moved and the output is the same.
 
 The first line of each file (widl's version banner) is normalised so that widl 7.0 and 8.0 produce the
 same committed text.
@@ -158,9 +168,183 @@ def server_allocated(flags):
     return "out" in flags.split(", ") and "srv size=" in flags and "simple ref" not in flags
 
 
-def correct(text, name):
-    """Applies the three corrections; returns (text, number of references moved)."""
+# ---- Rule 4: pointer layouts that flatten a nested structure's pointers ----
+
+SIZES = {0x01: 1, 0x02: 1, 0x03: 1, 0x04: 1, 0x05: 2, 0x06: 2, 0x07: 2, 0x08: 4, 0x09: 4, 0x0A: 4, 0x0B: 8,
+         0x0C: 8, 0x0D: 4, 0x0E: 4, 0x10: 4}
+
+
+def pointer_layout(types, o):
+    """The FC_PP pointer layout at `o`: [(memory offset, offset of the pointer's description)] and
+    where it ends."""
+    entries = []
+    d = types.data
+    o += 2
+    while d[o] != 0x5B:
+        if d[o] == 0x46:  # FC_NO_REPEAT, FC_PAD, memory offset, buffer offset, pointer
+            entries.append((types.s16(o + 2), o + 6))
+            o += 10
+        elif d[o] in (0x47, 0x48):  # FC_FIXED_REPEAT (+ iterations) / FC_VARIABLE_REPEAT
+            o += 4 if d[o] == 0x47 else 2
+            count = int.from_bytes(d[o + 4:o + 6], "little")
+            o += 6
+            for _ in range(count):
+                entries.append((types.s16(o), o + 4))
+                o += 8
+        else:
+            sys.exit("gen-proxy: unknown pointer layout entry 0x%02x at type offset %d" % (d[o], o))
+    return entries, o + 1
+
+
+def struct_members(types, start):
+    """The members of the FC_STRUCT / FC_PSTRUCT at `start`: [(memory offset, size, start of the
+    embedded structure or None)]."""
+    d = types.data
+    o = start + 4
+    if d[start] == 0x16 and d[o] == 0x4B:
+        o = pointer_layout(types, o)[1]
+    members, offset = [], 0
+    while d[o] != 0x5B:
+        c = d[o]
+        if c == 0x5C:
+            o += 1
+        elif c in (0x37, 0x38, 0x39):  # FC_ALIGNM2, 4, 8
+            align = {0x37: 2, 0x38: 4, 0x39: 8}[c]
+            offset = (offset + align - 1) // align * align
+            o += 1
+        elif 0x3D <= c <= 0x43:  # FC_STRUCTPAD1 to 7
+            offset += c - 0x3C
+            o += 1
+        elif c == 0x4C:
+            target = o + 2 + types.s16(o + 2)
+            if d[target] not in (0x15, 0x16):
+                return None  # not a layout this rule reads
+            size = int.from_bytes(d[target + 2:target + 4], "little")
+            members.append((offset, size, target))
+            offset += size
+            o += 4
+        else:
+            size = SIZES.get(c, 4)
+            members.append((offset, size, None))
+            offset += size
+            o += 1
+    return members
+
+
+def flattened_pointers(types):
+    """Every pointer of a pointer layout that lands inside a nested structure, with an array as
+    pointee whose count is a field: (offset of the pointer's description, the array, the field's
+    offset, the nested structure's offset B and size)."""
+    d = types.data
+    for start in sorted(types.starts):
+        if d[start] == 0x16 and d[start + 4] == 0x4B:  # FC_PSTRUCT with a pointer layout
+            entries = pointer_layout(types, start + 4)[0]
+            struct = start
+        elif d[start] == 0x1B and d[start + 8] == 0x4B:  # FC_CARRAY with a pointer layout
+            entries, end = pointer_layout(types, start + 8)
+            if d[end] != 0x4C:
+                continue  # an array of pointers: no structure
+            struct = end + 2 + types.s16(end + 2)
+            if d[struct] not in (0x15, 0x16):
+                continue
+        else:
+            continue
+        members = struct_members(types, struct)
+        if members is None:
+            continue
+        for memory, pointer in entries:
+            if d[pointer] not in POINTERS or d[pointer + 1] & 0x08:
+                continue
+            array = pointer + 2 + types.s16(pointer + 2)
+            if d[array] not in ARRAYS or d[array + 4] == 0xFF or d[array + 4] & 0xF0 not in (0x00, 0x10):
+                continue
+            field = types.s16(array + 6)
+            for offset, size, nested in members:
+                if nested is not None and offset <= memory < offset + size:
+                    yield pointer, array, field, offset, size
+
+
+def copy_array(types, array, field):
+    """A copy of the FC_BOGUS_ARRAY at `array` with its count read at field offset `field`, as the
+    lines of a type format string placed at offset `at` (a function of `at`), and its size."""
+    d = types.data
+    if d[array] != 0x21:
+        sys.exit("gen-proxy: rule 4 copies FC_BOGUS_ARRAY only, not 0x%02x at %d" % (d[array], array))
+    element = array + 12
+    if d[element] == 0x4C or (d[element] in POINTERS and not d[element + 1] & 0x08):
+        target = element + 2 + types.s16(element + 2)
+    else:
+        sys.exit("gen-proxy: rule 4 cannot copy the element of the array at %d" % array)
+    end = element + 4
+    while d[end] != 0x5B:
+        end += 1
+
+    def lines(at):
+        out = [
+            "/* %d (the array at %d, its count read at field offset %d) */" % (at, array, field),
+            "        0x21,	/* FC_BOGUS_ARRAY */",
+            "        0x%x,	/* %d */" % (d[array + 1], d[array + 1]),
+            "        NdrFcShort(0x%x),	/* %d */" % (int.from_bytes(d[array + 2:array + 4], "little"),
+                                                   int.from_bytes(d[array + 2:array + 4], "little")),
+            "        0x%x,	/* Corr desc: field%s */" % (d[array + 4], " pointer" if d[array + 4] & 0x10 else ""),
+            "        0x%x,	/* operator */" % d[array + 5],
+            "        NdrFcShort(0x%x),	/* offset = %d */" % (field & 0xFFFF, field),
+            "        NdrFcLong(0x%08x),	/* variance */" % int.from_bytes(d[array + 8:array + 12], "little"),
+            "        0x%x, 0x%x," % (d[element], d[element + 1]),
+            "        NdrFcShort(0x%x),	/* Offset= %d (%d) */" % ((target - (at + 14)) & 0xFFFF, target - (at + 14), target),
+        ]
+        out += ["        0x%x," % b for b in d[element + 4:end + 1]]
+        return out
+
+    return lines, end + 1 - array
+
+
+def nest_conformance(text, name):
+    """Rule 4; returns (text, number of pointers retargeted)."""
+    lines = text.split("\n")
+    types = TypeString(lines)
+    copies = {}  # (array, field) -> offset of the copy
+    appended = []
+    size = len(types.data) - 1  # without the closing 0x0
     moved = 0
+    for pointer, array, field, nested, nested_size in list(flattened_pointers(types)):
+        if nested <= field < nested + nested_size:
+            continue  # the count lies in the nested structure: right
+        if not 0 <= field < nested_size:
+            sys.exit("gen-proxy: %s: the array at %d counts a field outside its structure" % (name, array))
+        key = (array, field + nested)
+        if key not in copies:
+            make, length = copy_array(types, array, field + nested)
+            copies[key] = size
+            appended += make(size)
+            size += length
+        i = next(i for i, o in types.offset_of.items() if o == pointer + 2)
+        relative = copies[key] - (pointer + 2)
+        lines[i], n = re.subn(
+            r"NdrFcShort\(0x[0-9a-f]+\),(\s*)/\* Offset= -?\d+ \(\d+\) \*/",
+            lambda m: "NdrFcShort(0x%x),%s/* Offset= %d (%d) */" % (relative & 0xFFFF, m.group(1), relative, copies[key]),
+            lines[i],
+        )
+        if n != 1:
+            sys.exit("gen-proxy: %s: cannot retarget the pointer at type offset %d" % (name, pointer))
+        moved += 1
+    if appended:
+        end = max(types.offset_of) + 1  # the line after the closing 0x0's
+        closing = end - 1
+        if lines[closing].strip() != "0x0":
+            sys.exit("gen-proxy: %s: the type format string does not end as expected" % name)
+        lines[closing:closing] = appended
+        text = "\n".join(lines)
+        text, n = re.subn(r"#define TYPE_FORMAT_STRING_SIZE \d+", "#define TYPE_FORMAT_STRING_SIZE %d" % (size + 1), text)
+        if n != 1:
+            sys.exit("gen-proxy: %s: no TYPE_FORMAT_STRING_SIZE" % name)
+        return text, moved
+    return "\n".join(lines), moved
+
+
+def correct(text, name):
+    """Applies the four corrections; returns (text, number of references moved)."""
+    text, moved = nest_conformance(text, name)
     # Rule 3 in the type format string: pointers that land inside an array.
     lines = text.split("\n")
     types = TypeString(lines)
@@ -209,8 +393,13 @@ def correct(text, name):
 
 
 def verify(text, name):
-    """Every parameter and pointer names the start of a type; server-allocated out slots an FC_RP."""
+    """Every parameter and pointer names the start of a type; server-allocated out slots an FC_RP;
+    every flattened pointer's count lies in its own nested structure."""
     types = TypeString(text.split("\n"))
+    for pointer, array, field, nested, nested_size in flattened_pointers(types):
+        if not nested <= field < nested + nested_size:
+            sys.exit("gen-proxy: %s: the pointer at type offset %d counts its array at field offset %d, outside "
+                     "the structure at %d that holds it" % (name, pointer, field, nested))
     for _, field, target in types.references():
         if target not in types.starts:
             sys.exit("gen-proxy: %s: the reference at type offset %d names %d, not a type" % (name, field, target))

@@ -19,7 +19,7 @@
 
 #include "opcda_idl.h"
 
-#define TYPE_FORMAT_STRING_SIZE 3945
+#define TYPE_FORMAT_STRING_SIZE 3963
 #define PROC_FORMAT_STRING_SIZE 3637
 
 typedef struct _MIDL_TYPE_FORMAT_STRING
@@ -6509,7 +6509,7 @@ static const MIDL_TYPE_FORMAT_STRING __MIDL_TypeFormatString =
         NdrFcShort(0x18),	/* Memory offset = 24 */
         NdrFcShort(0x18),	/* Buffer offset = 24 */
         0x12, 0x0,		/* FC_UP */
-        NdrFcShort(0xff5c),	/* Offset= -164 (3198) */
+        NdrFcShort(0x246),	/* Offset= 582 (3944) */
         0x5b,	/* FC_END */
         0x8,	/* FC_LONG */
         0x8,	/* FC_LONG */
@@ -6550,7 +6550,7 @@ static const MIDL_TYPE_FORMAT_STRING __MIDL_TypeFormatString =
         NdrFcShort(0x18),	/* Memory offset = 24 */
         NdrFcShort(0x18),	/* Buffer offset = 24 */
         0x12, 0x0,		/* FC_UP */
-        NdrFcShort(0xff28),	/* Offset= -216 (3198) */
+        NdrFcShort(0x212),	/* Offset= 530 (3944) */
         0x5b,	/* FC_END */
         0x4c,	/* FC_EMBEDDED_COMPLEX */
         0x0,
@@ -6982,6 +6982,18 @@ static const MIDL_TYPE_FORMAT_STRING __MIDL_TypeFormatString =
         0x11, 0x8,	/* FC_RP [simple_pointer] */
         0x09,	/* FC_ULONG */
         0x5c,	/* FC_PAD */
+/* 3944 (the array at 3198, its count read at field offset 20) */
+        0x21,	/* FC_BOGUS_ARRAY */
+        0x7,	/* 7 */
+        NdrFcShort(0x0),	/* 0 */
+        0x19,	/* Corr desc: field pointer */
+        0x0,	/* operator */
+        NdrFcShort(0x14),	/* offset = 20 */
+        NdrFcLong(0xffffffff),	/* variance */
+        0x4c, 0x0,
+        NdrFcShort(0xfcec),	/* Offset= -788 (3170) */
+        0x5c,
+        0x5b,
         0x0
     }
 };
