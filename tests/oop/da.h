@@ -9,7 +9,6 @@
 #include "oop.h" /* test_util.h, process_running() */
 
 #include <initguid.h>
-#include <math.h>
 #include <ocidl.h>
 
 #include "opcda_idl.h"

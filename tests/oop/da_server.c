@@ -765,7 +765,15 @@ static HRESULT STDMETHODCALLTYPE props_query(IOPCItemProperties *This, LPWSTR it
     *ids = (DWORD *)task_alloc_zero(DA_PROPERTY_COUNT * sizeof **ids);
     *descriptions = (LPWSTR *)task_alloc_zero(DA_PROPERTY_COUNT * sizeof **descriptions);
     *types = (VARTYPE *)task_alloc_zero(DA_PROPERTY_COUNT * sizeof **types);
-    if (!*ids || !*descriptions || !*types) return E_OUTOFMEMORY; /* (a test server: no cleanup) */
+    if (!*ids || !*descriptions || !*types) {
+        CoTaskMemFree(*ids);
+        CoTaskMemFree(*descriptions);
+        CoTaskMemFree(*types);
+        *ids = NULL;
+        *descriptions = NULL;
+        *types = NULL;
+        return E_OUTOFMEMORY;
+    }
     for (k = 0; k < DA_PROPERTY_COUNT; k++) {
         (*ids)[k] = DA_PROPERTY_IDS[k];
         (*descriptions)[k] = da_task_string(property_description(DA_PROPERTY_IDS[k]));
@@ -788,7 +796,13 @@ static HRESULT STDMETHODCALLTYPE props_get(IOPCItemProperties *This, LPWSTR item
     if (count == 0 || !ids) return E_INVALIDARG;
     *values = (VARIANT *)task_alloc_zero(count * sizeof **values);
     *errors = (HRESULT *)task_alloc_zero(count * sizeof **errors);
-    if (!*values || !*errors) return E_OUTOFMEMORY;
+    if (!*values || !*errors) {
+        CoTaskMemFree(*values);
+        CoTaskMemFree(*errors);
+        *values = NULL;
+        *errors = NULL;
+        return E_OUTOFMEMORY;
+    }
     for (k = 0; k < count; k++) {
         (*errors)[k] = property_value(i, ids[k], &(*values)[k]);
         if ((*errors)[k] != S_OK) hr = S_FALSE;
@@ -809,7 +823,13 @@ static HRESULT STDMETHODCALLTYPE props_lookup(IOPCItemProperties *This, LPWSTR i
     if (count == 0 || !ids) return E_INVALIDARG;
     *new_ids = (LPWSTR *)task_alloc_zero(count * sizeof **new_ids);
     *errors = (HRESULT *)task_alloc_zero(count * sizeof **errors);
-    if (!*new_ids || !*errors) return E_OUTOFMEMORY;
+    if (!*new_ids || !*errors) {
+        CoTaskMemFree(*new_ids);
+        CoTaskMemFree(*errors);
+        *new_ids = NULL;
+        *errors = NULL;
+        return E_OUTOFMEMORY;
+    }
     for (k = 0; k < count; k++) {
         (*new_ids)[k] = property_item_id(i, ids[k]);
         (*errors)[k] = (*new_ids)[k] ? S_OK : OPC_E_INVALID_PID_;
