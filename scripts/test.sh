@@ -28,7 +28,7 @@ build="$root/build"
 # ---- The stages, in the order they run: name, group, description ----------------------------------
 # Group: linux (needs nothing but the Linux tools), wine (the Windows tools and Wine), wine32 (32-bit
 # Wine as well).
-stage_table='lint|linux|format, clippy (Linux and Windows targets), drift of every generated file
+stage_table='lint|linux|format, clippy (Linux and Windows targets), drift of every generated file, the IDL against the OPC interface tables
 rust-linux|linux|Rust tests (Linux)
 c-asan|linux|C tests (Linux, AddressSanitizer + UBSan) and the exported symbols
 c-valgrind|linux|C tests (Linux, valgrind --leak-check=full, no sanitizer)
@@ -179,7 +179,7 @@ run_x86_c_tests() {
             { echo "$t (x86, $dir) printed no result line" >&2; return 1; }
     done
     # The cross-process tests (tests/oop) of the same build: one result line per ctest entry.
-    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration|reconnect): [0-9]+ passed, 0 failed' \
+    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration|reconnect|da_tables): [0-9]+ passed, 0 failed' \
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
         { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }
@@ -223,13 +223,21 @@ stage_lint() {
     # checks catching each kind of breach).
     cargo clippy -q -p gen-header --all-targets -- -D warnings
     cargo test -q -p gen-header
-    # The proxy/stub's NDR tables are generated from idl/opccomn.idl (widl and the system IDLs come
-    # with the Windows tools).
+    # The proxy/stub's NDR tables are generated from idl/opccomn.idl, opcda.idl, opc_ae.idl and
+    # opchda.idl (widl and the system IDLs come with the Windows tools).
     if [ -z "${disabled[wine]+set}" ]; then
         python3 tools/gen-proxy.py --check
     else
         echo "lint: the proxy/stub tables' drift check needs the Windows tools (widl) and was NOT run (--no-wine)"
     fi
+    # The IDL's interfaces (IIDs, methods, parameters) and the generated vtables against the
+    # Foundation's published tables; the Win64 and Win32 tables of each IDL file describe the same wire.
+    python3 tools/check-idl-tables.py
+    local idl
+    for idl in opccomn opcda opc_ae opchda; do
+        python3 tools/compare-ndr.py --ignore-offsets "src/proxy/generated/${idl}_p_win64.c" \
+            "src/proxy/generated/${idl}_p_win32.c"
+    done
 }
 
 stage_rust_linux() {

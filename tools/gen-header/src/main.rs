@@ -4,6 +4,9 @@
 //!   sources through cbindgen (`cbindgen.toml`).
 //! - The interfaces come from `idl/opccomn.idl` (the five OPC Common interfaces) and `idl/combase.idl`
 //!   (the standard COM interfaces, declared only off Windows), written in MIDL's shape (see `emit`).
+//!   `idl/opcda.idl`, `idl/opc_ae.idl` and `idl/opchda.idl` are not read: they are the source of the
+//!   proxy/stub tables only (`IDL_FILES` says which file is for what, and every file of `idl/` must be
+//!   listed there).
 //! - `src/com/interfaces.rs`: the Rust side of the same interfaces and of `idl/internal.idl` (vtables,
 //!   shims, the trait per interface, the proxy/stub's table; see `rustgen`), formatted by rustfmt.
 //! - The identifiers: `src/com/guids.rs` (Rust constants and the DLL's data exports) and
@@ -43,11 +46,58 @@ const HEADER: &str = "include/opccomn/opccomn.h";
 const UNSAFE_DOC: &str = "docs/dev/architecture.md";
 const UNSAFE_TABLE: &str = "<!-- the unsafe outside src/com/, checked by gen-header -->";
 
+/// What an IDL file of `idl/` is for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum IdlUse {
+    /// Read here: the header, the Rust interfaces and the identifier tables.
+    Header,
+    /// Read here for the Rust side only (`src/com/interfaces.rs`), not part of the header.
+    RustOnly,
+    /// Not read here: the source of the NDR tables (`tools/gen-proxy.py`) and nothing else. The
+    /// Data Access, A&E and HDA interfaces stay out of the header: programs declare them by the
+    /// Foundation's `opcda.h`, `opc_ae.h` and `opchda.h`, beside which this header must compile
+    /// (docs/header.md), and a second declaration of them here could only disagree with those.
+    ProxyTablesOnly,
+}
+
+/// Every IDL file of `idl/` and what it is for; a file missing here fails the run, so that a new one
+/// is put in the header, or kept out of it, on purpose.
+const IDL_FILES: &[(&str, IdlUse)] = &[
+    ("idl/combase.idl", IdlUse::Header),
+    ("idl/opccomn.idl", IdlUse::Header),
+    ("idl/internal.idl", IdlUse::RustOnly),
+    ("idl/opcda.idl", IdlUse::ProxyTablesOnly),
+    ("idl/opc_ae.idl", IdlUse::ProxyTablesOnly),
+    ("idl/opchda.idl", IdlUse::ProxyTablesOnly),
+];
+
+/// The `.idl` files of `dir` (the repository's `idl/`) that `IDL_FILES` does not list.
+fn unlisted_idl_files(dir: &Path) -> Vec<String> {
+    let mut unlisted: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|entry| entry.ok()?.file_name().into_string().ok())
+        .filter(|name| name.ends_with(".idl"))
+        .map(|name| format!("idl/{name}"))
+        .filter(|path| !IDL_FILES.iter().any(|(listed, _)| listed == path))
+        .collect();
+    unlisted.sort();
+    unlisted
+}
+
 fn main() -> ExitCode {
     let check = std::env::args().skip(1).any(|a| a == "--check");
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let root = root.canonicalize().expect("crate root");
 
+    let unlisted = unlisted_idl_files(&root.join("idl"));
+    if !unlisted.is_empty() {
+        eprintln!(
+            "{}: not in IDL_FILES (tools/gen-header/src/main.rs): say whether the header declares its \
+             interfaces or only the proxy/stub tables are made from it",
+            unlisted.join(", ")
+        );
+        return ExitCode::FAILURE;
+    }
     let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
     let opc = idl::parse("idl/opccomn.idl", &read("idl/opccomn.idl")).unwrap_or_else(|e| panic!("{e}"));
     let base = idl::parse("idl/combase.idl", &read("idl/combase.idl")).unwrap_or_else(|e| panic!("{e}"));
@@ -476,7 +526,69 @@ fn rustfmt(root: &Path, text: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::split_version;
+    use super::{split_version, unlisted_idl_files, IdlUse, HEADER, IDL_FILES};
+    use std::path::PathBuf;
+
+    fn root() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+    }
+
+    #[test]
+    fn every_idl_file_says_what_it_is_for() {
+        assert_eq!(unlisted_idl_files(&root().join("idl")), Vec::<String>::new());
+        for (path, _) in IDL_FILES {
+            assert!(root().join(path).is_file(), "{path} is listed but missing");
+        }
+    }
+
+    #[test]
+    fn an_idl_file_nobody_listed_is_found() {
+        let dir = std::env::temp_dir().join(format!("gen-header-idl-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("opccomn.idl"), "").unwrap();
+        std::fs::write(dir.join("opcbatch.idl"), "").unwrap();
+        std::fs::write(dir.join("notes.txt"), "").unwrap();
+        let unlisted = unlisted_idl_files(&dir);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(unlisted, vec!["idl/opcbatch.idl".to_string()]);
+    }
+
+    /// The interfaces of the files kept out of the header are not declared by it (the header made
+    /// from the other files, as committed).
+    #[test]
+    fn the_header_declares_no_interface_of_the_proxy_only_files() {
+        let header = std::fs::read_to_string(root().join(HEADER)).unwrap();
+        let mut seen = 0;
+        for (path, what) in IDL_FILES {
+            if *what != IdlUse::ProxyTablesOnly {
+                continue;
+            }
+            let text = std::fs::read_to_string(root().join(path)).unwrap();
+            // Declarations only: without the `//` comments (these files have no other kind).
+            let text: String = text
+                .lines()
+                .map(|l| l.split("//").next().unwrap_or(""))
+                .collect::<Vec<_>>()
+                .join("\n");
+            let mut words = text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'));
+            while let Some(word) = words.next() {
+                if word != "interface" {
+                    continue;
+                }
+                let Some(name) = words.find(|w| !w.is_empty()) else {
+                    break;
+                };
+                seen += 1;
+                for declared in [format!("__{name}_FWD_DEFINED__"), format!("IID_{name}")] {
+                    let whole_word = header.match_indices(&declared).any(|(at, _)| {
+                        !header[at + declared.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '_')
+                    });
+                    assert!(!whole_word, "{HEADER} declares {name} of {path}");
+                }
+            }
+        }
+        assert!(seen >= 35, "only {seen} interfaces found in the proxy-only IDL files");
+    }
 
     #[test]
     fn a_version_splits_into_its_numbers_and_its_prerelease() {

@@ -1,0 +1,153 @@
+/* Shared by the cross-process test of the Data Access tables (test_da_tables.c, the client) and its
+ * EXE server (da_server.c): the classes, the items the server serves with their values, and the
+ * registration of opc_classic_widl_ps.dll (classic_widl_ps.c) as this process's proxy/stub for the
+ * Data Access interfaces. Windows only; the types and IIDs come from the header widl generates from
+ * idl/opcda.idl (opcda_idl.h; this file defines the IIDs, so one translation unit per program). */
+#ifndef OPCCOMN_DA_H
+#define OPCCOMN_DA_H
+
+#include "oop.h" /* test_util.h, process_running() */
+
+#include <initguid.h>
+#include <ocidl.h>
+
+#include "opcda_idl.h"
+
+/* The test DA server (da_server.c, LocalServer32) and the proxy/stub DLL's CLSID (classic_widl_ps.c). */
+static const CLSID CLSID_DaTestServer = {0xC3000000, 0x5EED, 0x4000, {0x80, 0, 0, 0, 0, 0, 0xDA, 0x02}};
+static const CLSID CLSID_ClassicWidlProxyStub = {0xC3000000, 0x5EED, 0x4000, {0x80, 0, 0, 0, 0, 0, 0xDA, 0x01}};
+
+/* The Data Access interfaces the DLL serves in these two processes. */
+static const IID *const DA_IIDS[] = {
+    &IID_IOPCServer, &IID_IOPCServerPublicGroups, &IID_IOPCBrowseServerAddressSpace, &IID_IOPCGroupStateMgt,
+    &IID_IOPCPublicGroupStateMgt, &IID_IOPCSyncIO, &IID_IOPCAsyncIO, &IID_IOPCItemMgt, &IID_IEnumOPCItemAttributes,
+    &IID_IOPCDataCallback, &IID_IOPCAsyncIO2, &IID_IOPCItemProperties, &IID_IOPCItemDeadbandMgt,
+    &IID_IOPCItemSamplingMgt, &IID_IOPCBrowse, &IID_IOPCItemIO, &IID_IOPCSyncIO2, &IID_IOPCAsyncIO3,
+    &IID_IOPCGroupStateMgt2};
+#define DA_IID_COUNT (sizeof DA_IIDS / sizeof DA_IIDS[0])
+
+typedef HRESULT(STDAPICALLTYPE *DaGetClassObjectFn)(REFCLSID, REFIID, void **);
+typedef LONG(WINAPI *DaRefsFn)(void);
+
+/* Makes COM use opc_classic_widl_ps.dll for the Data Access interfaces in this process (the
+ * multithreaded apartment). */
+static HRESULT use_classic_proxy_stub(void) {
+    HMODULE dll = LoadLibraryW(L"opc_classic_widl_ps.dll");
+    DaGetClassObjectFn get;
+    IUnknown *factory = NULL;
+    DWORD cookie;
+    HRESULT hr;
+    size_t i;
+    if (!dll) return HRESULT_FROM_WIN32(GetLastError());
+    get = (DaGetClassObjectFn)(void (*)(void))GetProcAddress(dll, "DllGetClassObject");
+    if (!get) return E_NOINTERFACE;
+    hr = get(&CLSID_ClassicWidlProxyStub, &IID_IUnknown, (void **)&factory);
+    if (FAILED(hr)) return hr;
+    hr = CoRegisterClassObject(&CLSID_ClassicWidlProxyStub, factory, CLSCTX_INPROC_SERVER, REGCLS_MULTIPLEUSE,
+                               &cookie);
+    factory->lpVtbl->Release(factory);
+    for (i = 0; SUCCEEDED(hr) && i < DA_IID_COUNT; i++) hr = CoRegisterPSClsid(DA_IIDS[i], &CLSID_ClassicWidlProxyStub);
+    return hr;
+}
+
+/* The live proxies and stubs of opc_classic_widl_ps.dll in this process (each holds a reference on
+ * its factory, the factory one of its own); -1 when it is not loaded. */
+static LONG classic_proxy_stub_refs(void) {
+    HMODULE dll = GetModuleHandleW(L"opc_classic_widl_ps.dll");
+    DaRefsFn refs;
+    if (!dll) return -1;
+    refs = (DaRefsFn)(void (*)(void))GetProcAddress(dll, "ClassicProxyStubRefs");
+    return refs ? refs() : -1;
+}
+
+/* ---- What the server serves ---- */
+
+#define DA_GROUP_NAME "Gruppe \xc3\xa4\xc3\xb6\xc3\xbc 1"
+#define DA_VENDOR_INFO "opccomn DA test server \xe2\x82\xac"
+#define DA_ERROR_CODE ((HRESULT)0xC0040007L) /* OPC_E_UNKNOWNITEMID */
+#define DA_ERROR_TEXT "The item ID is not defined in the server address space."
+#define OPC_E_INVALIDHANDLE_ ((HRESULT)0xC0040001L)
+#define OPC_E_UNKNOWNITEMID_ ((HRESULT)0xC0040007L)
+#define OPC_QUALITY_GOOD_ 0xC0
+#define OPC_READABLE_ 1
+#define OPC_WRITEABLE_ 2
+#define DA_ITEMS 4
+
+/* The items: ID, canonical type, and the client handle the test gives each. */
+static const char *const DA_ITEM_IDS[DA_ITEMS] = {"Plant.Tank1.Level (I4)", "Plant.Tank1.Temp (R8)",
+                                                  "Plant.Tank1.Name (BSTR) \xe2\x82\xac", "Plant.Tank1.Profile (R8[])"};
+static const VARTYPE DA_ITEM_TYPES[DA_ITEMS] = {VT_I4, VT_R8, VT_BSTR, VT_ARRAY | VT_R8};
+#define DA_CLIENT_HANDLE(i) ((OPCHANDLE)(1000 + (i)))
+#define DA_BLOB_SIZE 5
+static const BYTE DA_BLOB[DA_BLOB_SIZE] = {1, 2, 3, 0xFE, 0xFF};
+#define DA_PROFILE_COUNT 3
+static const double DA_PROFILE[DA_PROFILE_COUNT] = {1.5, -2.0, 1e300};
+#define DA_TEXT "Tank \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac \xf0\x9f\x98\x80"
+#define DA_I4 12345
+#define DA_R8 3.25
+
+/* The item properties the browse calls return (IOPCBrowse, IOPCItemProperties). */
+#define DA_PROPERTY_COUNT 2
+static const DWORD DA_PROPERTY_IDS[DA_PROPERTY_COUNT] = {1, 101}; /* data type, description */
+
+/* A FILETIME the server stamps every value with: 2026-12-04 12:00:00 UTC, plus i seconds. */
+static FILETIME da_time(unsigned i) {
+    ULARGE_INTEGER t;
+    FILETIME f;
+    t.QuadPart = 134095536000000000ULL + (ULONGLONG)i * 10000000ULL;
+    f.dwLowDateTime = t.LowPart;
+    f.dwHighDateTime = t.HighPart;
+    return f;
+}
+
+static int same_time(FILETIME a, FILETIME b) {
+    return a.dwLowDateTime == b.dwLowDateTime && a.dwHighDateTime == b.dwHighDateTime;
+}
+
+/* A SAFEARRAY of doubles, or NULL. */
+static SAFEARRAY *da_doubles(const double *values, ULONG count) {
+    SAFEARRAY *a = SafeArrayCreateVector(VT_R8, 0, count);
+    double *data = NULL;
+    ULONG i;
+    if (!a) return NULL;
+    if (FAILED(SafeArrayAccessData(a, (void **)&data))) {
+        SafeArrayDestroy(a);
+        return NULL;
+    }
+    for (i = 0; i < count; i++) data[i] = values[i];
+    SafeArrayUnaccessData(a);
+    return a;
+}
+
+/* Whether `v` is a one-dimensional VT_ARRAY | VT_R8 holding `values`. */
+static int is_doubles(const VARIANT *v, const double *values, ULONG count) {
+    double *data = NULL;
+    LONG lower = -1, upper = -1;
+    int same;
+    ULONG i;
+    if (V_VT(v) != (VT_ARRAY | VT_R8) || !V_ARRAY(v) || SafeArrayGetDim(V_ARRAY(v)) != 1) return 0;
+    if (FAILED(SafeArrayGetLBound(V_ARRAY(v), 1, &lower)) || FAILED(SafeArrayGetUBound(V_ARRAY(v), 1, &upper)))
+        return 0;
+    if (lower != 0 || upper != (LONG)count - 1) return 0;
+    if (FAILED(SafeArrayAccessData(V_ARRAY(v), (void **)&data))) return 0;
+    same = 1;
+    for (i = 0; i < count; i++) same &= data[i] == values[i];
+    SafeArrayUnaccessData(V_ARRAY(v));
+    return same;
+}
+
+/* A copy of UTF-8 text as a BSTR. */
+static BSTR da_bstr(const char *utf8) {
+    return SysAllocString(W(utf8));
+}
+
+/* A copy of UTF-8 text in task memory (what the NDR engine frees on the server side). */
+static LPWSTR da_task_string(const char *utf8) {
+    const WCHAR *w = W(utf8);
+    size_t n = wlen(w);
+    LPWSTR copy = (LPWSTR)CoTaskMemAlloc((n + 1) * sizeof(WCHAR));
+    if (copy) memcpy(copy, w, (n + 1) * sizeof(WCHAR));
+    return copy;
+}
+
+#endif
