@@ -24,13 +24,39 @@ check="$bin/opccomn-check.exe"
 report="python3 $root/tests/conformance/check_report.py"
 passed=0
 
+# Whatever this script registers in the shared Wine prefix is taken back when it ends, passed or
+# failed, so that a failure here does not become a failure of the stages after it (whose tests
+# compare the registry with what it was). Each step ignores what is not registered.
+cleanup() {
+    [ -d "$bin" ] || return 0
+    (cd "$bin" && wine opccomn_browser.exe /UnregServer >/dev/null 2>&1) || true
+    (cd "$bin" && wine regsvr32 /u /s /n /i:ProxyStub opccomn.dll >/dev/null 2>&1) || true
+    (cd "$bin" && wine regsvr32 /u /s opccomn.dll >/dev/null 2>&1) || true
+    if [ "$example" != - ]; then
+        (cd "$example" && wine regsvr32 /u /s opccomn_example_inproc.dll >/dev/null 2>&1) || true
+        (cd "$example" && wine opccomn_example_server.exe /UnregServer >/dev/null 2>&1) || true
+    fi
+}
+trap cleanup EXIT
+
 # run_checker NAME FORMAT ARGS...: runs the checker, report in $out/NAME.FORMAT, exit code in $rc.
+#
+# Wine's own marshaling of IEnumConnections (a system interface: neither the server nor opccomn
+# marshals it) returns, on a loaded machine, about one call in twenty, an undefined code from Next
+# although the reply carried the connection (a trace of the client shows the CONNECTDATA read with
+# the right cookie, then Next returning values such as 0x00780078 or 0x5839779A). The checker reports
+# that as shutdown.enum-connections failed with "0 connection(s)"; such a run, and only such a run,
+# is made again, at most twice, and said so.
 run_checker() {
-    local name=$1 format=$2
+    local name=$1 format=$2 attempt
     shift 2
-    rc=0
-    (cd "$bin" && timeout 120 wine "$check" "$@" --format "$format" </dev/null >"$out/$name.$format" 2>"$out/$name.$format.log") || rc=$?
-    tr -d '\r' <"$out/$name.$format" >"$out/$name.$format.tmp" && mv "$out/$name.$format.tmp" "$out/$name.$format"
+    for attempt in 1 2 3; do
+        rc=0
+        (cd "$bin" && timeout 120 wine "$check" "$@" --format "$format" </dev/null >"$out/$name.$format" 2>"$out/$name.$format.log") || rc=$?
+        tr -d '\r' <"$out/$name.$format" >"$out/$name.$format.tmp" && mv "$out/$name.$format.tmp" "$out/$name.$format"
+        [ "$attempt" -lt 3 ] && grep -q '0 connection(s), not that one (Next: ' "$out/$name.$format" || break
+        echo "!!!! $name ($format): IEnumConnections::Next through Wine's proxy gave an undefined code (see docs/dev/testing.md): run again" >&2
+    done
     if [ "$rc" -ne 0 ] && [ "$rc" -ne 1 ]; then
         echo "opccomn-check $* exited $rc" >&2
         cat "$out/$name.$format.log" >&2
