@@ -6,7 +6,9 @@
  *                                 through CLSID_OPCServerList out of process (IOPCServerList2 and
  *                                 IOPCEnumGUID marshalled), expects the fake server and its ProgID, and
  *                                 expects the proxy/stub loaded into this process to be PROXY_DLL (a
- *                                 full path); removes the fake server and waits for the browser to exit
+ *                                 full path); removes the fake server and waits for the browser to
+ *                                 exit (not with nowait: a second client can then reach the same
+ *                                 browser; two clients activating it at once may start two under Wine)
  *   msi_client absent             CLSID_OPCServerList is not registered (REGDB_E_CLASSNOTREG)
  *
  * Exit code 0 when every check passed. */
@@ -68,7 +70,7 @@ static const WCHAR *loaded(const WCHAR *path) {
     return got;
 }
 
-static int browse(const WCHAR *proxy_dll) {
+static int browse(const WCHAR *proxy_dll, int wait_for_exit) {
     const int wide = sizeof(void *) == 8;
     const WCHAR *fake_key = wide ? FAKE_KEY_64 : FAKE_KEY_32;
     const CLSID *fake = wide ? &FAKE_64 : &FAKE_32;
@@ -113,8 +115,10 @@ static int browse(const WCHAR *proxy_dll) {
     delete_tree(fake_key);
     CoUninitialize();
     /* The browser exits after its last client (about 6 s): the files can go once it has. */
-    for (k = 0; k < 300 && browser_running(); k++) Sleep(100);
-    CHECK(!browser_running());
+    if (wait_for_exit) {
+        for (k = 0; k < 300 && browser_running(); k++) Sleep(100);
+        CHECK(!browser_running());
+    }
     return test_summary("msi_client browse");
 }
 
@@ -131,8 +135,10 @@ int main(void) {
     int argc = 0;
     LPWSTR *argv = CommandLineToArgvW(GetCommandLineW(), &argc);
     (void)W; /* test_check.h's, unused here */
-    if (argv && argc == 3 && wcscmp(argv[1], L"browse") == 0) return browse(argv[2]);
+    if (argv && argc == 3 && wcscmp(argv[1], L"browse") == 0) return browse(argv[2], 1);
+    if (argv && argc == 4 && wcscmp(argv[1], L"browse") == 0 && wcscmp(argv[3], L"nowait") == 0)
+        return browse(argv[2], 0);
     if (argv && argc == 2 && wcscmp(argv[1], L"absent") == 0) return absent();
-    fprintf(stderr, "usage: msi_client browse PROXY_DLL | absent\n");
+    fprintf(stderr, "usage: msi_client browse PROXY_DLL [nowait] | absent\n");
     return 2;
 }
