@@ -114,19 +114,16 @@ foundation() {   # foundation /u or "": the Foundation-style proxy/stub, both bi
 }
 
 # ================= x64: a 64-bit prefix with 32-bit support =================
+# A prefix of its own, made anew when a run was interrupted (the MSIs are rebuilt with new product
+# codes each run, so what an earlier run left installed cannot be removed by them).
+[ -f "$work/wineprefix/clean" ] || rm -rf "$work/wineprefix"
 . "$root/scripts/wine-env.sh" "$work"
+rm -f "$WINEPREFIX/clean"
 mkdir -p "$WINEPREFIX/drive_c/foundation/x64" "$WINEPREFIX/drive_c/foundation/x86"
 cp "$foundation64" "$WINEPREFIX/drive_c/foundation/x64/opccomn_widl_ps.dll"
 cp "$foundation86" "$WINEPREFIX/drive_c/foundation/x86/opccomn_widl_ps.dll"
 dll64='C:\Program Files\Common Files\opccomn\opccomn.dll'
 dll86='C:\Program Files (x86)\Common Files\opccomn\opccomn.dll'
-# What an interrupted earlier run may have left.
-for package in "$run/vendorA.msi" "$run/vendorB.msi" "$run/earlier/opccomn-0.0.1-x64.msi" "$msi64"; do
-    msi /x "$package" || true
-done
-opcenum_remove
-wine regsvr32 /s /u 'C:\foundation\x64\opccomn_widl_ps.dll' >/dev/null 2>&1 || true
-wine regsvr32 /s /u 'C:\foundation\x86\opccomn_widl_ps.dll' >/dev/null 2>&1 || true
 wine "$run/msi_client64.exe" absent >/dev/null || fail "the prefix $WINEPREFIX already has a server browser registered"
 snapshot "$run/base" 64 32
 
@@ -199,8 +196,28 @@ snapshot "$run/after" 64 32
 same "$run/base" "$run/after" "two vendors' products installed and removed"
 echo "msi x64: two products sharing the components: after the first's removal the second's clients browse and marshal; after both, the registry as before"
 
-# 4. The x86 package refuses 64-bit Windows (the x64 package has both proxy/stubs).
+# 4. The service form of the browser (-D OpcComnService=yes: ServiceInstall, ServiceControl and the
+#    AppID's LocalService, for a browser with -RunService): the service and the value are installed
+#    and removed with the package. (Whether COM starts the browser as a service needs that browser.)
+(cd "$run" && wixl -a x64 -I "$pkg/msi" -D OpcComnService=yes -D OpcComnArch=x64 -D OpcComnVersion=0.0.2 \
+    -D OpcComnNextVersion=0.0.3 -D OpcComnBin64=x64 -D OpcComnBin86=x86 -o "$run/service.msi" "$pkg/msi/opccomn.wxs")
+SERVICE='HKLM\SYSTEM\CurrentControlSet\Services\OpcComnBrowser'
+msi /i "$run/service.msi" || fail "install of the service form"
+[ "$(reg_value 64 "$SERVICE" ImagePath)" = 'C:\Program Files\Common Files\opccomn\opccomn_browser.exe -RunService' ] ||
+    fail "the service's ImagePath: $(reg_value 64 "$SERVICE" ImagePath)"
+[ "$(reg_value 64 "$SERVICE" Start)" = 0x3 ] || fail "the service does not start on demand"
+[ "$(reg_value 64 "$SERVICE" ObjectName)" = 'NT AUTHORITY\LocalService' ] || fail "the service's account"
+[ "$(reg_value 64 'HKLM\Software\Classes\AppID\{CCD63ADF-D02D-46DD-B170-FA6E0F086FE3}' LocalService)" = OpcComnBrowser ] ||
+    fail "the AppID names no LocalService"
+msi /x "$run/service.msi" || fail "removal of the service form"
+wine reg query "$SERVICE" /reg:64 >/dev/null 2>&1 && fail "the service stayed after removal"
+snapshot "$run/after" 64 32
+same "$run/base" "$run/after" "the service form installed and removed"
+echo "msi x64: the service form (built with OpcComnService): the service and the AppID's LocalService installed and removed with the package"
+
+# 5. The x86 package refuses 64-bit Windows (the x64 package has both proxy/stubs).
 msi /i "$msi86" && fail "the x86 package installed on 64-bit Windows"
+touch "$WINEPREFIX/clean"
 wineserver -k 2>/dev/null || true
 trap - EXIT
 
@@ -210,6 +227,7 @@ if [ "$x86_mode" != run ]; then
     exit 0
 fi
 export WINEARCH=win32 WINEPREFIX="$work/wineprefix-x86"
+[ -f "$WINEPREFIX/clean" ] || rm -rf "$WINEPREFIX"
 if [ ! -f "$WINEPREFIX/system.reg" ]; then
     echo "== creating 32-bit Wine prefix $WINEPREFIX"
     wine wineboot -i >/dev/null 2>&1 || true
@@ -222,6 +240,7 @@ wine cmd.exe /c exit 0 </dev/null >/dev/null 2>&1 || true
 # The test fixture every program that loads opccomn.dll needs under Wine 8 (tests/wine/bcryptprimitives.c).
 i686-w64-mingw32-gcc -O2 -shared -o "$WINEPREFIX/drive_c/windows/system32/bcryptprimitives.dll" \
     "$root/tests/wine/bcryptprimitives.c" "$root/tests/wine/bcryptprimitives.def" -ladvapi32 -Wl,--enable-stdcall-fixup
+rm -f "$WINEPREFIX/clean"
 wine "$run/msi_client32.exe" absent >/dev/null || fail "the prefix $WINEPREFIX already has a server browser registered"
 snapshot "$run/base86" 32
 msi /i "$run/earlier/opccomn-0.0.1-x86.msi" || fail "x86: install of the earlier version"
@@ -233,3 +252,4 @@ wine "$run/msi_client32.exe" absent >/dev/null || fail "x86: the browser is stil
 snapshot "$run/after86" 32
 same "$run/base86" "$run/after86" "x86: upgraded and removed"
 echo "msi x86 (32-bit Windows): an earlier version replaced; a client browses and marshals through the installed files; the registry as before"
+touch "$WINEPREFIX/clean"
