@@ -30,5 +30,10 @@ for arch in x64 x86; do
     (cd "$work" && wixl -a "$arch" -I "$root/packaging/msi" -D OpcComnArch="$arch" -D OpcComnVersion="$msi_version" \
         -D OpcComnNextVersion="$next_version" -D OpcComnBin64=x64 -D OpcComnBin86=x86 \
         -o "$out/opccomn-$version-$arch.msi" "$root/packaging/msi/opccomn.wxs")
+    # wixl leaves the File table's Version empty, and Windows Installer then treats a file as
+    # unversioned (replaced by any copy another product brings). The DLLs' version is their
+    # VERSIONINFO's FILEVERSION (MM.mm.0.bb, buildscript/resources.rs), so that an older copy never
+    # replaces a newer one; the browser has no version resource.
+    msibuild "$out/opccomn-$version-$arch.msi" -q "UPDATE \`File\` SET \`Version\` = '${BASH_REMATCH[1]}.${BASH_REMATCH[2]}.0.${BASH_REMATCH[3]}' WHERE \`File\` = 'OpcComnDll64' OR \`File\` = 'OpcComnDll86'"
 done
 echo "MSI: $out/opccomn-$version-x64.msi, $out/opccomn-$version-x86.msi (ProductVersion $msi_version)"

@@ -11,6 +11,7 @@ cd "$root"
 . scripts/deps.sh
 need_linux_tools
 need_windows_tools
+need_msi_tools
 need_nightly_rust_src
 build="$root/build"
 out=${1:-$build/package}

@@ -591,6 +591,7 @@ wine32_ok=0
 wine32_missing="not checked"
 if selected wine; then
     need_windows_tools
+    need_msi_tools
     # 32-bit Wine before the prefix: a prefix made by 64-bit Wine alone is unusable once wine32:i386
     # arrives (scripts/wine-env.sh also makes such a prefix anew).
     wine32_installed=0
