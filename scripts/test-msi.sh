@@ -155,8 +155,8 @@ snapshot "$run/after" 64 32
 same "$run/base" "$run/after" "OpcEnum and the Foundation stand-in removed"
 echo "msi x64: next to OpcEnum and the Foundation's proxy/stub: both left alone (OPCCOMN_TAKEOVER=1 takes the CLSID and gives it back), the registry as before"
 
-# 2. Alone: an earlier version, replaced by the package's (major upgrade); clients browse through the
-#    installed browser and marshal through the installed proxy/stubs (64-bit and 32-bit client);
+# 2. Alone: an earlier version, replaced by the package's (major upgrade); a repair; clients browse
+#    through the installed browser and marshal through the installed proxy/stubs (64-bit and 32-bit);
 #    OpcEnum and the Foundation's proxy/stub installed after; removal leaves theirs.
 earlier="$run/earlier/opccomn-0.0.1-x64.msi"
 msi /i "$earlier" || fail "install of the earlier version"
@@ -165,6 +165,10 @@ msi /i "$msi64" || fail "upgrade"
 installed "$(product_code "$earlier")" 64 && fail "the upgrade left the earlier version installed"
 installed "$(product_code "$msi64")" 64 || fail "the upgrade did not install the package"
 msi /i "$earlier" && fail "the earlier version installed over the later one"
+# A repair puts back a registration someone damaged (Wine's msiexec /fa fails: the same by properties).
+wine reg delete "$COMMON" /f /reg:64 >/dev/null 2>&1 || fail "no ProxyStubClsid32 to damage"
+msi /i "$msi64" REINSTALL=ALL REINSTALLMODE=omus || fail "repair"
+[ "$(reg_value 64 "$COMMON")" = "$OURS" ] || fail "the repair did not register the proxy/stub again"
 clients
 opcenum_register
 foundation ""
@@ -180,7 +184,7 @@ foundation /u
 wine reg delete 'HKLM\Software\Classes\OPC.ServerList' /f /reg:64 >/dev/null 2>&1 || true
 snapshot "$run/after" 64 32
 same "$run/base" "$run/after" "upgraded, OpcEnum and the Foundation's proxy/stub registered after, removed"
-echo "msi x64: an earlier version replaced; 64-bit and 32-bit clients browse and marshal through the installed files; OpcEnum and the Foundation's proxy/stub installed after keep their entries; the registry as before"
+echo "msi x64: an earlier version replaced; a repair registers again; 64-bit and 32-bit clients browse and marshal through the installed files; OpcEnum and the Foundation's proxy/stub installed after keep their entries; the registry as before"
 
 # 3. Two vendors' products sharing the components: install A, install B, remove A: B's clients still
 #    browse and marshal; remove B: the registry as before.
