@@ -133,6 +133,15 @@ need_miri() {
     cargo +"$OPCCOMN_NIGHTLY" miri --version >/dev/null
 }
 
+# wixl (Debian's msitools: wixl, msibuild, msiinfo) builds the Windows Installer packages from WiX
+# sources (scripts/build-msi.sh); Wine's msiexec installs them in the tests.
+need_msi_tools() {
+    local missing=()
+    command -v wixl >/dev/null || missing+=(wixl)
+    { command -v msiinfo && command -v msibuild; } >/dev/null || missing+=(msitools)
+    install_packages "to build the MSI packages (wixl, msibuild, msiinfo)" "${missing[@]}"
+}
+
 # install_packages WHY PACKAGE...: installs the Debian packages, saying which and why first.
 install_packages() {
     local why=$1

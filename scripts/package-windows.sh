@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds the binary package for Windows users: build/package/opccomn-<version>-windows.zip, laid out as
 # the README's "Windows binary package" lists (headers; x64/ and x86/ with opccomn.dll, opccomn.lib,
-# libopccomn.dll.a and libopccomn.a; the same for Windows 7 in win7/; the CMake package; README and
-# licences). Reuses the build directories of scripts/test.sh when they exist.
+# libopccomn.dll.a and libopccomn.a; the same for Windows 7 in win7/; msi/ with the MSI packages and
+# their WiX sources; the CMake package; README and licences). Reuses the build directories of scripts/test.sh when they exist.
 #
 # Usage: scripts/package-windows.sh [OUT_DIR]      (OUT_DIR: build/package)
 set -euo pipefail
@@ -11,6 +11,7 @@ cd "$root"
 . scripts/deps.sh
 need_linux_tools
 need_windows_tools
+need_msi_tools
 need_nightly_rust_src
 build="$root/build"
 out=${1:-$build/package}
@@ -72,6 +73,11 @@ cp "$(find_checker "$build/windows")" "$stage/x64/"
 cp "$(find_checker "$build/windows-x86")" "$stage/x86/"
 copy_variant "$build/windows7-x64" x86_64-win7-windows-gnu "$stage/win7/x64" x86_64-w64-mingw32
 copy_variant "$build/windows7-x86" i686-win7-windows-gnu "$stage/win7/x86" i686-w64-mingw32
+# The Windows Installer packages, built from the files just staged, and the WiX sources a vendor's
+# installer includes (docs/guide/installer.md).
+mkdir -p "$stage/msi"
+cp packaging/msi/opccomn.wxi packaging/msi/opccomn.wxs "$stage/msi/"
+scripts/build-msi.sh "$stage/msi" "$stage/x64" "$stage/x86" "$version" >/dev/null
 cp "$build/windows/package/opccomnConfig.cmake" "$build/windows/package/opccomnConfigVersion.cmake" "$stage/cmake/"
 # The documentation (the developers' README stays in the repository: the package has its own), the
 # C++ example server and the licences.

@@ -55,6 +55,7 @@ win7-build|wine|Windows 7 builds (x86_64-win7-windows-gnu, i686-win7-windows-gnu
 c-win7-x64|wine|C tests (Windows 7 x64 DLL, under Wine)
 c-win7-x86|wine32|C tests (Windows 7 x86 DLL, under 32-bit Wine)
 package-windows|wine|Windows binary package: unpacked, a CMake consumer built against it (x64, x86, Windows 7) and run
+msi|wine32|the MSI packages under msiexec: silent install and removal, a major upgrade, OpcEnum and a Foundation-style proxy/stub before and after, two vendor products sharing the components, the registry (both views) as before; clients browse and marshal through the installed files (x64 and x86 packages, 64- and 32-bit clients)
 package-cpp-example|wine|C++ example server and client and opccomn-check, built against the unpacked package (x64, x86), under Wine
 msvc-link|wine|MSVC-mode program (clang --target=*-pc-windows-msvc, lld-link) linked against the package'"'"'s opccomn.lib, under Wine
 miri|linux|Miri: every test that does not call the operating system (Stacked Borrows); the tests of the COM objects (Tree Borrows); started first at low priority, reported last'
@@ -493,6 +494,9 @@ stage_package_windows() {
         objdump -h "$pkg/$folder/opccomn.dll.debug" | grep -q '\.debug_info' ||
             { echo "package: $folder/opccomn.dll.debug holds no debug information" >&2; return 1; }
     done
+    for file in "opccomn-$version-x64.msi" "opccomn-$version-x86.msi" opccomn.wxi opccomn.wxs; do
+        [ -f "$pkg/msi/$file" ] || { echo "package: no msi/$file" >&2; return 1; }
+    done
     for folder in x64 x86; do
         [ -f "$pkg/$folder/opccomn-check.exe" ] || { echo "package: no $folder/opccomn-check.exe" >&2; return 1; }
     done
@@ -531,6 +535,19 @@ stage_package_windows() {
         (cd "$dir" && wine consumer.exe >consumer.out)
         echo "package consumer ($arch, Windows 7 variant $win7): ran, $(wc -l <"$dir/consumer.out") lines of output"
     done
+}
+
+# The MSI packages of the Windows package (scripts/test-msi.sh), with the stand-in for the Foundation's
+# proxy/stub of both builds. The x64 package holds the x86 proxy/stub too, whose registration runs
+# 32-bit: the stage needs 32-bit Wine.
+stage_msi() {
+    unpack_package
+    local variant
+    for variant in windows:x86_64 windows-x86:i686; do
+        cmake -S . -B "$build/${variant%%:*}" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-${variant#*:}.cmake" >/dev/null
+        cmake --build "$build/${variant%%:*}" -j2 --target opccomn_widl_ps >/dev/null
+    done
+    scripts/test-msi.sh "$pkg" "$build/windows/bin/opccomn_widl_ps.dll" "$build/windows-x86/bin/opccomn_widl_ps.dll" run
 }
 
 stage_package_cpp_example() {
@@ -582,6 +599,7 @@ wine32_ok=0
 wine32_missing="not checked"
 if selected wine; then
     need_windows_tools
+    need_msi_tools
     # 32-bit Wine before the prefix: a prefix made by 64-bit Wine alone is unusable once wine32:i386
     # arrives (scripts/wine-env.sh also makes such a prefix anew).
     wine32_installed=0
