@@ -8,12 +8,13 @@ use core::ptr;
 use windows_sys::Win32::Foundation::{GetLastError, ERROR_INSUFFICIENT_BUFFER, ERROR_SERVICE_DOES_NOT_EXIST};
 use windows_sys::Win32::System::Services::{
     ChangeServiceConfigW, CloseServiceHandle, ControlService, CreateServiceW, DeleteService, OpenSCManagerW,
-    OpenServiceW, QueryServiceConfigW, QueryServiceStatus, QUERY_SERVICE_CONFIGW, SC_HANDLE, SC_MANAGER_CONNECT,
-    SC_MANAGER_CREATE_SERVICE, SERVICE_CHANGE_CONFIG, SERVICE_CONTROL_STOP, SERVICE_DEMAND_START, SERVICE_ERROR_NORMAL,
-    SERVICE_NO_CHANGE, SERVICE_QUERY_CONFIG, SERVICE_QUERY_STATUS, SERVICE_STATUS, SERVICE_STOP, SERVICE_STOPPED,
+    OpenServiceW, QueryServiceConfigW, QueryServiceStatus, QueryServiceStatusEx, QUERY_SERVICE_CONFIGW, SC_HANDLE,
+    SC_MANAGER_CONNECT, SC_MANAGER_CREATE_SERVICE, SC_STATUS_PROCESS_INFO, SERVICE_CHANGE_CONFIG, SERVICE_CONTROL_STOP,
+    SERVICE_DEMAND_START, SERVICE_ERROR_NORMAL, SERVICE_NO_CHANGE, SERVICE_QUERY_CONFIG, SERVICE_QUERY_STATUS,
+    SERVICE_START_PENDING, SERVICE_STATUS, SERVICE_STATUS_PROCESS, SERVICE_STOP, SERVICE_STOPPED,
     SERVICE_WIN32_OWN_PROCESS,
 };
-use windows_sys::Win32::System::Threading::Sleep;
+use windows_sys::Win32::System::Threading::{GetCurrentProcessId, Sleep};
 
 use super::windows::last_error;
 use crate::com::wstr::wstr_units;
@@ -84,6 +85,49 @@ impl Scm {
     fn existing(&self, name: &str, access: u32) -> Result<ScHandle, HRESULT> {
         self.open(name, access)?.ok_or(0x8007_0424_u32 as HRESULT) // HRESULT_FROM_WIN32(ERROR_SERVICE_DOES_NOT_EXIST)
     }
+}
+
+/// Whether the service manager may be starting this process as the service `name`: `false` only when
+/// it says otherwise (no such service, or the service is not starting, or is starting in another
+/// process), so that a `-RunService` it did not start fails at once instead of after the dispatcher's
+/// wait for a connection (about ten seconds under Wine). When the service manager cannot be asked (no
+/// right to), `true`: the dispatcher decides.
+pub(super) fn may_be_starting(name: &str) -> bool {
+    // SAFETY: this machine's active database; no pointers but NULLs.
+    let manager = unsafe { OpenSCManagerW(ptr::null(), ptr::null(), SC_MANAGER_CONNECT) };
+    if manager.is_null() {
+        return true;
+    }
+    let manager = ScHandle(manager);
+    let name = wide(name);
+    // SAFETY: an open service manager; a NUL-terminated name.
+    let service = unsafe { OpenServiceW(manager.0, name.as_ptr(), SERVICE_QUERY_STATUS) };
+    if service.is_null() {
+        // SAFETY: no arguments; read at once after the call.
+        return unsafe { GetLastError() } != ERROR_SERVICE_DOES_NOT_EXIST;
+    }
+    let service = ScHandle(service);
+    // SAFETY: plain integers; all zero is a valid value.
+    let mut status: SERVICE_STATUS_PROCESS = unsafe { core::mem::zeroed() };
+    let mut needed = 0u32;
+    // SAFETY: an open service; a buffer of the structure's size.
+    let ok = unsafe {
+        QueryServiceStatusEx(
+            service.0,
+            SC_STATUS_PROCESS_INFO,
+            ptr::addr_of_mut!(status).cast(),
+            core::mem::size_of::<SERVICE_STATUS_PROCESS>() as u32,
+            &mut needed,
+        )
+    } != 0;
+    if !ok {
+        return true;
+    }
+    // The service manager sets START_PENDING before it creates the process, and records the process
+    // after: 0 is this process on its way.
+    // SAFETY: no arguments.
+    let this = unsafe { GetCurrentProcessId() };
+    status.dwCurrentState == SERVICE_START_PENDING && (status.dwProcessId == 0 || status.dwProcessId == this)
 }
 
 impl ServiceManager for Scm {

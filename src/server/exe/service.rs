@@ -30,6 +30,7 @@ use windows_sys::Win32::System::Services::{
     SERVICE_STATUS_HANDLE, SERVICE_STOPPED, SERVICE_STOP_PENDING, SERVICE_TABLE_ENTRYW, SERVICE_WIN32_OWN_PROCESS,
 };
 
+use super::scm;
 use super::windows::{last_error, release_timeout, serve, set_security, stop, Start};
 use super::OpcExeServerOptions;
 use crate::com::ffi::{self, Fail};
@@ -228,15 +229,24 @@ fn main(context: &Context) -> Result<HRESULT, Fail> {
     serve(&context.options, &context.table, Start::Service)
 }
 
+/// HRESULT_FROM_WIN32(ERROR_FAILED_SERVICE_CONTROLLER_CONNECT): the service manager did not start
+/// this process.
+const NOT_STARTED_BY_SCM: HRESULT = 0x8007_0427_u32 as HRESULT;
+
 /// Runs the host as the service `service` until the service manager stopped it: the dispatcher, on
 /// this thread. HRESULT_FROM_WIN32(ERROR_FAILED_SERVICE_CONTROLLER_CONNECT) when the service manager
-/// did not start this process (at once on Windows; under Wine after about ten seconds).
+/// did not start this process: at once when it says so (no such service, or not starting this
+/// process), else when the dispatcher finds no service manager to connect to (at once on Windows,
+/// under Wine after about ten seconds).
 pub(super) fn run(
     o: &OpcExeServerOptions,
     table: &[ServerClass],
     descriptions: &[ServerDescription],
     service: &ServiceOptions,
 ) -> Result<HRESULT, Fail> {
+    if !scm::may_be_starting(&service.name) {
+        return Err(NOT_STARTED_BY_SCM.into());
+    }
     let context = Context {
         options: *o,
         table: table.to_vec(),
