@@ -11,12 +11,18 @@
  * service within the server's bound although the client never lets go; unregistration, also of a
  * running service, leaves the registry as it was and no service. Each precondition a caller can break
  * has its error, with nothing written; another product's service of the same name is refused,
- * untouched, or (taken over) given back, never deleted; /RegServer after /Service goes back to the
- * EXE form.
+ * untouched, or (taken over) given back, never deleted, and so is one pointed at another program
+ * after registration; /RegServer after /Service goes back to the EXE form; -RunService in a process
+ * the service manager did not start (no service, the service stopped, the service running) is
+ * refused at once.
  *
- * The browser: `opccomn_browser /Service` registers it as the service OpcComnBrowser, a client
- * browses through it, advises a shutdown sink on the server list, and the service manager's stop
- * tells the sink and ends the service; `/UnregServer` leaves the registry as it was and no service. */
+ * The browser: `opccomn_browser /Service` registers it as the service OpcComnBrowser (twice: nothing
+ * changes), -RunService by hand is refused, a client browses through it, advises a shutdown sink on
+ * the server list, and the service manager's stop tells the sink and ends the service;
+ * `/UnregServer` leaves the registry as it was and no service.
+ *
+ * Services started by the service manager are never killed here (a test EXE server's class
+ * registration would stay in rpcss for the session): each is stopped through the service manager. */
 #include "oop.h"
 
 #include <winsvc.h>
