@@ -1054,9 +1054,29 @@ typedef struct OpcExeServerOptions {
    * second more for a client already on its way, then ends. Shorter values end the process sooner
    * after its last client, at a price under Wine, whose COM does not suspend the class objects: a
    * client whose activation meets the end can fail there (docs/guide/server-plumbing.md). Every
-   * exit of the server that is not a stop waits for it.
+   * exit of the server that is not a stop waits for it. Not used by a service, which serves until
+   * it is stopped.
    */
   uint32_t idle_linger_ms;
+  /**
+   * The name of the Windows service the server runs as (for example `L"VendorOpcServer"`), or NULL
+   * for a server that does not offer to: with a name, `/Service` registers the server as that
+   * service and the service manager starts it with `-RunService` (docs/guide/server-plumbing.md, "As
+   * a Windows service"); without, both are HRESULT_FROM_WIN32(ERROR_NOT_SUPPORTED) (0x80070032).
+   * 1 to 256 characters without `/` or `\`, else E_INVALIDARG whatever the command line. Under Wine
+   * COM starts a service only when its name has at most 38 characters. (Version 2 of the
+   * structure: a library older than it refuses this `struct_size` with E_INVALIDARG.)
+   */
+  LPCWSTR service_name;
+  /**
+   * The account `/Service` creates the service with: NULL for `NT AUTHORITY\LocalService`, the
+   * least privileged (no administrator rights, the network as an anonymous user), or
+   * `NT AUTHORITY\NetworkService` or `LocalSystem` for a server that needs more; anything else is
+   * E_INVALIDARG, as is an account without a `service_name` (an account with a password is an
+   * administrator's choice, in the service's properties, which registering again keeps). (Version
+   * 2.)
+   */
+  LPCWSTR service_account;
 } OpcExeServerOptions;
 
 /**
@@ -5349,7 +5369,17 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *
  * - `/RegServer` (or `-RegServer`): registers every class with a `registration` (NULL `module_path`:
  *   this EXE), unregistering again what it wrote when one fails; returns.
- * - `/UnregServer`: unregisters them, in reverse order (a class not registered is no failure); returns.
+ * - `/UnregServer`: unregisters them, in reverse order (a class not registered is no failure), and
+ *   the Windows service `/Service` registered, if any; returns.
+ * - `/Service` (with a `service_name`): registers every class as `/RegServer` does, with its AppID's
+ *   `LocalService` naming the service, and creates the service (own process, demand start,
+ *   `service_account`), after asking the service manager first; `/TakeOver` takes over another
+ *   product's service of that name (its command line, given back by `/UnregServer`) instead of
+ *   refusing it. `/RegServer` goes back to the EXE form, removing the service. Returns.
+ * - `-RunService` (the service manager starts the service so): runs as the service (on a thread of
+ *   the service manager's dispatcher, which `on_stop` is called on too): serves as a server started
+ *   by hand until the service manager stops it, the system shuts down or another stop, reporting its
+ *   state; returns when the service has stopped.
  * - Otherwise it serves: initialises COM (multithreaded apartment); when a class's registration has an
  *   AppID, sets the process's security from it (OpcInitializeServerSecurity() with `appid`: EOAC_APPID,
  *   so the AppID's AuthenticationLevel and permissions apply) unless the server set process security
@@ -5378,8 +5408,18 @@ HRESULT OPCCOMN_CDECL OpcModuleUnregister(const struct OpcServerClass *classes, 
  *
  * @return S_OK (registered, unregistered, or served until the last client left or a stop); S_FALSE after a
  * stop when objects were still referenced at the end of `release_timeout_ms`; E_INVALIDARG for a NULL
- * `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, or a command
- * line that both registers and unregisters; E_UNEXPECTED when a host already runs in the process;
+ * `options`, a wrong `struct_size`, no classes or over 256, a bad class or registration, a bad
+ * `service_name` or `service_account`, a command line that asks for two of `/RegServer`,
+ * `/UnregServer`, `/Service` and `-RunService`, or for `/Service` classes that cannot be one service
+ * (every registration an EXE server's, of one program, with an AppID whose `LocalService` is unset
+ * or the service's); HRESULT_FROM_WIN32(ERROR_NOT_SUPPORTED) (0x80070032) for `/Service` or
+ * `-RunService` without a `service_name`; for `/Service` and `/UnregServer` the service manager's
+ * errors, before anything is written or removed: E_ACCESSDENIED without administrator rights,
+ * HRESULT_FROM_WIN32(ERROR_SERVICE_EXISTS) (0x80070431) for a service of that name that starts
+ * another program (another product's) unless `/TakeOver`, HRESULT_FROM_WIN32(ERROR_SERVICE_MARKED_FOR_DELETE)
+ * (0x80070430) while a service of that name is being deleted;
+ * HRESULT_FROM_WIN32(ERROR_FAILED_SERVICE_CONTROLLER_CONNECT) (0x80070427) for `-RunService` in a
+ * process the service manager did not start; E_UNEXPECTED when a host already runs in the process;
  * HRESULT_FROM_WIN32(ERROR_ALREADY_EXISTS) (0x800700B7) when an object named `stop_event_name`
  * already exists (an event or any other kind: another instance of the server, or a name someone took
  * first), before anything is served; the errors of CoInitializeEx, CoRegisterClassObject and of
@@ -5396,7 +5436,8 @@ HRESULT OPCCOMN_CDECL OpcExeServerRun(const struct OpcExeServerOptions *options,
 /**
  * Stops the EXE server that OpcExeServerRun() runs in this process, as its operator would: the host
  * calls `on_stop` and ends once the clients let go (or `release_timeout_ms` passed). From any thread,
- * for example a service's control handler or the server's own user interface.
+ * for example the server's own user interface (a server running as a Windows service on the host is
+ * stopped by the service manager through the host itself).
  *
  * @return S_OK; S_FALSE when no host runs.
  *

@@ -44,7 +44,7 @@ pub(crate) fn program_path(command_line: &str) -> &str {
 
 /// Splits a command line into arguments the way Windows programs do for the cases that matter here:
 /// blanks separate arguments, double quotes group blanks into one.
-fn arguments(line: &str) -> Vec<String> {
+pub(crate) fn arguments(line: &str) -> Vec<String> {
     let mut args = Vec::new();
     let mut current = String::new();
     let mut quoted = false;

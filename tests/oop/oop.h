@@ -43,6 +43,8 @@ static CLSID oop_fake_clsid(unsigned n) {
  * on_stop, which notifies the sinks of the object asked (bounded by OOP_BOUNDED_MS). */
 #define OOP_CODE_STOP ((HRESULT)0xE0040206L)
 #define OOP_CODE_PROCESS_ID ((HRESULT)0xE0040207L) /* the server's process identifier, as text */
+/* The Windows service the test server offers to run as (OpcExeServerOptions::service_name). */
+#define OOP_SERVICE L"OpcComnTestServer"
 /* How long the test server keeps serving after its last client left (OpcExeServerOptions). */
 #define OOP_LINGER_MS 1000
 /* The sinks a test server object takes at once (its advise limit). */

@@ -10,6 +10,12 @@
  * (opccomn_widl_ps.dll) for the five interfaces; otherwise what the registry names (opccomn.dll).
  * With "-set:N" it serves its two classes under the CLSIDs oop_class(N, ...) instead (oop.h).
  *
+ * It offers to run as the Windows service OOP_SERVICE (oop.h): registered so (`/Service`, by the test
+ * of tests/oop/test_service.c through the library's host), the service manager starts it with
+ * -RunService, and it serves until stopped. "-release:MS" sets the host's release_timeout_ms (the
+ * service test's bound). A stop by the service manager (or any stop but OOP_CODE_STOP's) notifies the
+ * sinks of every server object, bounded by OOP_BOUNDED_MS.
+ *
  * The server answers the vendor codes of oop.h in GetErrorString, so the client can ask what the
  * server saw: the client name, the result of a shutdown notification, the proxy/stub in use. */
 #include "oop.h"
@@ -21,12 +27,17 @@ static OpcRegistry *fake_registry; /* the server list's registry */
 typedef struct Server {
     IUnknown unk;
     LONG refs;
+    struct Server *next, *prev; /* the live server objects (all_servers) */
     IUnknown *common;   /* inner IUnknown of the IOPCCommon session */
     IUnknown *shutdown; /* inner IUnknown of the shutdown connection point */
     CRITICAL_SECTION lock;
     WCHAR *client_name; /* the last name SetClientName gave, or NULL */
     WCHAR answer[64];   /* text of the last OOP_CODE_SHUTDOWN / OOP_CODE_PROXY_STUB answer */
 } Server;
+
+/* The live server objects, for a stop that tells every client. */
+static CRITICAL_SECTION servers_lock;
+static Server all_servers; /* the list's head (main links it to itself) */
 
 static HRESULT STDMETHODCALLTYPE server_qi(IUnknown *This, REFIID riid, void **ppv) {
     Server *s = (Server *)This;
@@ -49,6 +60,10 @@ static ULONG STDMETHODCALLTYPE server_release(IUnknown *This) {
     Server *s = (Server *)This;
     LONG n = InterlockedDecrement(&s->refs);
     if (n == 0) {
+        EnterCriticalSection(&servers_lock);
+        s->prev->next = s->next;
+        s->next->prev = s->prev;
+        LeaveCriticalSection(&servers_lock);
         s->refs = 1; /* guard against the inner objects' releases coming back */
         if (s->common) s->common->lpVtbl->Release(s->common);
         if (s->shutdown) s->shutdown->lpVtbl->Release(s->shutdown);
@@ -162,6 +177,12 @@ static HRESULT OPCCOMN_CDECL create_server(void *context, IUnknown *outer, REFII
     s->unk.lpVtbl = &server_vtbl;
     s->refs = 1;
     InitializeCriticalSection(&s->lock);
+    EnterCriticalSection(&servers_lock);
+    s->next = all_servers.next;
+    s->prev = &all_servers;
+    all_servers.next->prev = s;
+    all_servers.next = s;
+    LeaveCriticalSection(&servers_lock);
     OpcServerLock(); /* the server object counts on the process while it lives */
     for (i = 0; i < OOP_LOCALES; i++) locales[i] = oop_locale(i);
     memset(&options, 0, sizeof options);
@@ -189,18 +210,41 @@ static HRESULT OPCCOMN_CDECL create_list(void *context, IUnknown *outer, REFIID 
     return OpcServerListCreateOver(fake_registry, NULL, riid, ppv);
 }
 
-/* The operator's stop (the host calls it on its own thread): the client of the server object that
- * asked is told to disconnect, within a bound; then the host waits for the clients to let go. */
-static void OPCCOMN_CDECL on_stop(void *context) {
-    Server *s = (Server *)InterlockedExchangePointer((void *volatile *)&stopping, NULL);
+/* Tells the sinks of `s` that the server goes, within OOP_BOUNDED_MS. */
+static void notify_bounded(Server *s) {
     OpcShutdownNotifyOptions bounds;
-    (void)context;
-    if (!s) return; /* the watchdog's stop */
     memset(&bounds, 0, sizeof bounds);
     bounds.struct_size = sizeof bounds;
     bounds.timeout_ms = OOP_BOUNDED_MS;
     OpcShutdownNotifyBounded(&s->unk, W(OOP_REASON), &bounds, NULL, NULL, NULL);
-    s->unk.lpVtbl->Release(&s->unk);
+}
+
+/* The operator's stop (the host calls it on its own thread, or the service's): the client of the
+ * server object that asked (OOP_CODE_STOP) is told to disconnect, within a bound; any other stop (the
+ * service manager's, the system's shutdown, the watchdog's) tells every server object's clients. Then
+ * the host waits for the clients to let go. */
+static void OPCCOMN_CDECL on_stop(void *context) {
+    Server *s = (Server *)InterlockedExchangePointer((void *volatile *)&stopping, NULL), *each[64];
+    size_t n = 0, i;
+    (void)context;
+    if (s) {
+        notify_bounded(s);
+        s->unk.lpVtbl->Release(&s->unk);
+        return;
+    }
+    EnterCriticalSection(&servers_lock);
+    for (s = all_servers.next; s != &all_servers && n < 64; s = s->next) {
+        /* An object on its way out (its count already zero) is not taken. */
+        if (InterlockedCompareExchange(&s->refs, 0, 0) > 0) {
+            s->unk.lpVtbl->AddRef(&s->unk);
+            each[n++] = s;
+        }
+    }
+    LeaveCriticalSection(&servers_lock);
+    for (i = 0; i < n; i++) {
+        notify_bounded(each[i]);
+        each[i]->unk.lpVtbl->Release(&each[i]->unk);
+    }
 }
 
 /* A client that died leaves its references (Wine runs no rundown of a dead client's references):
@@ -265,10 +309,15 @@ int main(void) {
     options.class_count = 2;
     options.first_client_timeout_ms = 120000; /* a server nobody connects to gives up after two minutes */
     options.release_timeout_ms = 30000;       /* after a stop: 30 s for what is left */
+    if (wcsstr(GetCommandLineW(), L" -release:"))
+        options.release_timeout_ms = (uint32_t)_wtoi(wcsstr(GetCommandLineW(), L" -release:") + 10);
+    options.service_name = OOP_SERVICE;       /* -RunService: the service manager started it */
     options.idle_linger_ms = OOP_LINGER_MS;   /* the reconnect test's pauses stay far from its end */
     if (wcsstr(GetCommandLineW(), L" -linger:default")) options.idle_linger_ms = 0; /* the host's default */
     options.on_stop = on_stop;
     widl_mode = wcsstr(GetCommandLineW(), L"-ps:widl") != NULL;
+    InitializeCriticalSection(&servers_lock);
+    all_servers.next = all_servers.prev = &all_servers;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
     if (SUCCEEDED(hr) && widl_mode) hr = use_widl_proxy_stub();
     if (SUCCEEDED(hr) && wcsstr(GetCommandLineW(), L"-ps:opccomn-direct")) hr = use_opccomn_proxy_stub_directly();

@@ -141,7 +141,8 @@ pub(crate) fn unregister(regs: &Registries, d: &ServerDescription) -> Result<(),
                 reg.delete_value(key, name)?
             }
             Entry::Replaced(key, name, old, _) => reg.set_value(key, name, old)?,
-            Entry::Key(_) | Entry::OtherServer => {}
+            // A service is taken back by the EXE host, which knows the service manager (`service`).
+            Entry::Key(_) | Entry::OtherServer | Entry::Service { .. } => {}
         }
     }
     if reg.value(&module_key, LEDGER).is_some() {

@@ -220,7 +220,7 @@ fn take_over(
             }
             return;
         }
-        Entry::OtherServer => return,
+        Entry::OtherServer | Entry::Service { .. } => return,
         Entry::Added(k, n, w) => (k, n, None, w),
         Entry::Replaced(k, n, old, w) => (k, n, Some(old), w),
     };
@@ -238,7 +238,7 @@ fn take_over(
     let (their_previous, their_written) = match &theirs[i] {
         Entry::Added(_, _, w) => (None, w.clone()),
         Entry::Replaced(_, _, old, w) => (Some(old.clone()), w.clone()),
-        Entry::Key(_) | Entry::OtherServer => return,
+        Entry::Key(_) | Entry::OtherServer | Entry::Service { .. } => return,
     };
     let Some(their_written) = their_written else {
         return;

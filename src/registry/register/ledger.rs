@@ -27,6 +27,14 @@ pub(crate) enum Entry {
     /// At the first registration another server already registered the class in the other module key
     /// (`LocalServer32` for an in-process server, and the reverse).
     OtherServer,
+    /// The EXE host registered the server as the Windows service `name`, whose command line it set to
+    /// `written`: it created the service (`previous` `None`), or took over another product's service
+    /// of that name, whose command line was `previous` (see `service`).
+    Service {
+        name: String,
+        written: String,
+        previous: Option<String>,
+    },
 }
 
 fn escape(s: &str) -> String {
@@ -77,6 +85,16 @@ impl Entry {
         match self {
             Entry::Key(k) => format!("K{}", escape(k)),
             Entry::OtherServer => "O".to_string(),
+            // A library that predates service registration finds no entry it knows there and leaves
+            // the service alone.
+            Entry::Service {
+                name,
+                written,
+                previous,
+            } => match previous {
+                None => format!("S{}|{}", escape(name), escape(written)),
+                Some(previous) => format!("S{}|{}|{}", escape(name), escape(written), escape(previous)),
+            },
             // Typed entries have one more field (V) or two (R): the registry types. A library that
             // predates them finds no entry it knows there and leaves the value alone.
             Entry::Added(k, n, data) => match data {
@@ -137,6 +155,16 @@ impl Entry {
                 Some(data_of(data, kind)?),
             )),
             ('O', [empty]) if empty.is_empty() => Some(Entry::OtherServer),
+            ('S', [name, written]) => Some(Entry::Service {
+                name: name.clone(),
+                written: written.clone(),
+                previous: None,
+            }),
+            ('S', [name, written, previous]) => Some(Entry::Service {
+                name: name.clone(),
+                written: written.clone(),
+                previous: Some(previous.clone()),
+            }),
             _ => None,
         }
     }
@@ -144,7 +172,7 @@ impl Entry {
     /// The value this entry is about, for "already recorded" checks.
     pub(super) fn value(&self) -> Option<(RegPath, RegPath)> {
         match self {
-            Entry::Key(_) | Entry::OtherServer => None,
+            Entry::Key(_) | Entry::OtherServer | Entry::Service { .. } => None,
             Entry::Added(k, n, _) | Entry::Replaced(k, n, _, _) => Some((RegPath::new(k), RegPath::new(n))),
         }
     }
@@ -152,10 +180,11 @@ impl Entry {
     /// True when the value this entry recorded still holds the data the registration wrote, so that
     /// taking it back harms nobody. `expected` gives the data for entries of older ledgers, which did
     /// not record it (`None` from it too: the value is taken as still written, the rule of those
-    /// ledgers). A missing value, or one of another type, no longer holds it. Always true for keys.
+    /// ledgers). A missing value, or one of another type, no longer holds it. Always true for keys
+    /// (and for a service, which is not in the registry: `service` checks it).
     pub(crate) fn still_written(&self, reg: &dyn Registry, expected: impl Fn(&str, &str) -> Option<RegValue>) -> bool {
         let (key, name, written) = match self {
-            Entry::Key(_) | Entry::OtherServer => return true,
+            Entry::Key(_) | Entry::OtherServer | Entry::Service { .. } => return true,
             Entry::Added(k, n, w) | Entry::Replaced(k, n, _, w) => (k, n, w),
         };
         let Some(current) = reg.value(key, name) else {
@@ -173,11 +202,11 @@ impl Entry {
         self.value() == Some((RegPath::new(key), RegPath::new(name)))
     }
 
-    /// The key this entry is about (none for `OtherServer`).
+    /// The key this entry is about (none for `OtherServer` and `Service`).
     pub(crate) fn key(&self) -> Option<&str> {
         match self {
             Entry::Key(k) | Entry::Added(k, _, _) | Entry::Replaced(k, _, _, _) => Some(k),
-            Entry::OtherServer => None,
+            Entry::OtherServer | Entry::Service { .. } => None,
         }
     }
 }

@@ -52,7 +52,8 @@
 //!
 //! Files, one concern each: `description` (the C struct and its validation), `keys` (the key list),
 //! `ledger` (the record format of what was written), `algorithm` (register and unregister), `app_id`
-//! (the AppID several classes share); the category helpers of the specification are in
+//! (the AppID several classes share), `service` (the Windows service the EXE host's `/Service`
+//! registers, and its record); the category helpers of the specification are in
 //! `registry::category_helpers`.
 
 mod algorithm;
@@ -60,6 +61,7 @@ mod app_id;
 mod description;
 mod keys;
 mod ledger;
+mod service;
 
 pub(crate) use algorithm::{register, unregister, LCID_ENGLISH};
 pub(crate) use description::this_module_path;
@@ -68,6 +70,9 @@ pub use description::{
     OPC_REGISTRATION_KEEP_EXISTING,
 };
 pub(crate) use ledger::{read_ledger, Entry, Recorder, LEDGER};
+#[cfg(windows)]
+pub(crate) use service::{recorded_service, register_service, unregister_service, NewService, ServiceManager};
+pub(crate) use service::{valid_service_name, ServiceOptions, LOCAL_SERVICE, SERVICE_ACCOUNTS};
 
 use crate::com::alloc::alloc_wstr_from_str;
 use crate::com::ffi::{self, Hr};
@@ -172,3 +177,5 @@ pub unsafe extern "C" fn OpcRegistrationExport(server: *const OpcServerRegistrat
 pub(crate) mod tests;
 #[cfg(test)]
 mod tests_app_id;
+#[cfg(test)]
+mod tests_service;

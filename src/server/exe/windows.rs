@@ -1,4 +1,6 @@
-//! The EXE host on Windows: COM's class table, COM's server process count, events and the console.
+//! The EXE host on Windows: COM's class table, COM's server process count, events and the console;
+//! the command line's registrations (the Windows service's through `super::scm`), and serving, by
+//! COM's start, by hand or as the Windows service (`super::service`).
 
 use core::ffi::c_void;
 use core::ptr;
@@ -26,15 +28,16 @@ use windows_sys::Win32::System::Threading::{
     CreateEventW, GetCurrentProcess, OpenProcessToken, ResetEvent, SetEvent, WaitForMultipleObjects,
 };
 
-use super::OpcExeServerOptions;
+use super::{scm::Scm, service, HostCommand, OpcExeServerOptions};
 use crate::com::ffi::{self, Fail};
 use crate::com::iids::IID_IUNKNOWN;
 use crate::com::module_lock::{set_module_lock, ModuleLock};
 use crate::com::unknown::Counted;
 use crate::com::wstr::wstr_units;
 use crate::com::{IUnknown, E_UNEXPECTED, HRESULT, LPCWSTR, S_FALSE, S_OK};
-use crate::registry::cmdline::OpcServerCommand;
-use crate::registry::register::ServerDescription;
+use crate::registry::register::{
+    recorded_service, register_service, unregister_service, ServerDescription, ServiceOptions,
+};
 use crate::registry::registries;
 use crate::security::{OpcInitializeServerSecurity, OpcSecurityOptions, RPC_E_TOO_LATE};
 use crate::server::exe::HostCount;
@@ -353,7 +356,7 @@ impl Drop for Event {
     }
 }
 
-fn last_error() -> HRESULT {
+pub(super) fn last_error() -> HRESULT {
     // SAFETY: no arguments.
     let e = unsafe { windows_sys::Win32::Foundation::GetLastError() };
     if e == 0 {
@@ -461,7 +464,8 @@ pub(super) fn run(
     o: &OpcExeServerOptions,
     table: &[ServerClass],
     descriptions: &[ServerDescription],
-    command: OpcServerCommand,
+    command: HostCommand,
+    service: Option<&ServiceOptions>,
 ) -> Result<HRESULT, Fail> {
     if RUNNING.swap(true, Ordering::AcqRel) {
         return Err(E_UNEXPECTED.into());
@@ -475,13 +479,47 @@ pub(super) fn run(
     }
     // SAFETY: NULL: the system registry.
     let regs = unsafe { registries(ptr::null()) };
+    let scm = Scm::new(release_timeout(o));
     match command {
-        OpcServerCommand::Register => return Ok(register_all(&regs, descriptions).map(|()| S_OK)?),
-        OpcServerCommand::Unregister => return Ok(unregister_all(&regs, descriptions).map(|()| S_OK)?),
-        OpcServerCommand::None | OpcServerCommand::Embedding => {}
+        HostCommand::Register => {
+            // The EXE form: a service form registered before goes first, as /UnregServer takes it.
+            if recorded_service(&*regs.write, descriptions).is_some() {
+                unregister_service(&regs, &scm, descriptions)?;
+                unregister_all(&regs, descriptions)?;
+            }
+            return Ok(register_all(&regs, descriptions).map(|()| S_OK)?);
+        }
+        HostCommand::Unregister => {
+            // The service first: refused (without administrator rights) before anything is removed.
+            unregister_service(&regs, &scm, descriptions)?;
+            return Ok(unregister_all(&regs, descriptions).map(|()| S_OK)?);
+        }
+        HostCommand::Service { take_over } => {
+            let service = service.ok_or(E_UNEXPECTED)?; // checked by the caller
+            return Ok(register_service(&regs, &scm, descriptions, service, take_over).map(|()| S_OK)?);
+        }
+        HostCommand::RunService => {
+            let service = service.ok_or(E_UNEXPECTED)?; // checked by the caller
+            let result = service::run(o, table, descriptions, service);
+            drop(running);
+            return result;
+        }
+        HostCommand::ByHand | HostCommand::Embedding => {}
     }
-    // Process security from the server's AppID (EOAC_APPID: its AuthenticationLevel and permissions,
-    // which registration writes at PKT_INTEGRITY), unless the server set its own before.
+    set_security(descriptions)?;
+    let start = if command == HostCommand::Embedding {
+        Start::Com
+    } else {
+        Start::Hand
+    };
+    let result = serve(o, table, start);
+    drop(running);
+    result
+}
+
+/// Process security from the server's AppID (EOAC_APPID: its AuthenticationLevel and permissions,
+/// which registration writes at PKT_INTEGRITY), unless the server set its own before.
+pub(super) fn set_security(descriptions: &[ServerDescription]) -> Result<(), Fail> {
     if let Some(app_id) = descriptions.iter().find_map(|d| d.app_id) {
         let security = OpcSecurityOptions {
             struct_size: core::mem::size_of::<OpcSecurityOptions>() as u32,
@@ -497,13 +535,33 @@ pub(super) fn run(
             return Err(hr.into());
         }
     }
-    let result = serve(o, table, command == OpcServerCommand::Embedding);
-    drop(running);
-    result
+    Ok(())
+}
+
+/// After a stop, how long the host waits for the clients to release what they hold.
+pub(super) fn release_timeout(o: &OpcExeServerOptions) -> u32 {
+    if o.release_timeout_ms == 0 {
+        10_000
+    } else {
+        o.release_timeout_ms
+    }
+}
+
+/// How the host was started, which decides how long it serves.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Start {
+    /// By COM (`-Embedding`): until the last client left.
+    Com,
+    /// By hand: until stopped.
+    Hand,
+    /// By the service manager, as its service: until stopped, reporting its state to the service
+    /// manager and without the console's controls (a service gets every user's log-off there).
+    Service,
 }
 
 /// Serving, until the last client left or a stop.
-fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result<HRESULT, Fail> {
+pub(super) fn serve(o: &OpcExeServerOptions, table: &[ServerClass], start: Start) -> Result<HRESULT, Fail> {
+    let by_com = start == Start::Com;
     let stop = Event::new()?;
     let idle = Event::new()?;
     let named = if o.stop_event_name.is_null() {
@@ -521,25 +579,26 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
         unlock: process_unlock,
     }));
     set_module_lock(Some(ModuleLock::new(module_lock, module_unlock, ptr::null_mut())));
-    // SAFETY: a handler that only sets the host's event.
-    unsafe { SetConsoleCtrlHandler(Some(console_handler()), 1) };
+    if start != Start::Service {
+        // SAFETY: a handler that only sets the host's event.
+        unsafe { SetConsoleCtrlHandler(Some(console_handler()), 1) };
+    }
     if !by_com {
-        // Started by hand: serve until stopped, not until the first client leaves.
+        // Started by hand or as a service: serve until stopped, not until the first client leaves.
         process_lock();
         USED.store(false, Ordering::Release);
     }
     let mut registered = Registered::new(table)?;
+    if start == Start::Service {
+        service::serving();
+    }
 
     let first_client = if o.first_client_timeout_ms == 0 {
         60_000
     } else {
         o.first_client_timeout_ms
     };
-    let release_timeout = if o.release_timeout_ms == 0 {
-        10_000
-    } else {
-        o.release_timeout_ms
-    };
+    let release_timeout = release_timeout(o);
     let linger = if o.idle_linger_ms == 0 {
         LINGER_MS
     } else {
@@ -596,6 +655,10 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
     };
     let mut result = S_OK;
     if stopped {
+        if start == Start::Service {
+            // (Also when the stop came from the stop event or OpcExeServerStop.)
+            service::stopping(release_timeout);
+        }
         // No new client from now on; those connected are asked to go.
         COUNT.close();
         registered.revoke();
@@ -606,7 +669,12 @@ fn serve(o: &OpcExeServerOptions, table: &[ServerClass], by_com: bool) -> Result
         if !by_com {
             process_unlock();
         }
-        if !released_within(idle.0, release_timeout) {
+        let progress = || {
+            if start == Start::Service {
+                service::stopping(release_timeout);
+            }
+        };
+        if !released_within(idle.0, release_timeout, progress) {
             result = S_FALSE;
         }
     } else if !by_com {
@@ -647,9 +715,11 @@ fn linger_after_last_release(events: &[HANDLE], linger: u32) -> Idle {
     }
 }
 
-/// Whether nothing is held on the server within `ms` milliseconds.
-fn released_within(idle: HANDLE, ms: u32) -> bool {
+/// Whether nothing is held on the server within `ms` milliseconds; `progress` is called about once a
+/// second meanwhile (a service reports that it is still stopping).
+fn released_within(idle: HANDLE, ms: u32, progress: impl Fn()) -> bool {
     let mut left = ms;
+    let mut since_progress = 0;
     while COUNT.held() > 0 {
         if left == 0 {
             return false;
@@ -662,11 +732,16 @@ fn released_within(idle: HANDLE, ms: u32) -> bool {
         }
         let _ = wait(&[idle], step);
         left -= step;
+        since_progress += step;
+        if since_progress >= 1_000 {
+            since_progress = 0;
+            progress();
+        }
     }
     true
 }
 
-/// Sets the running host's stop event: S_OK, or S_FALSE when no host runs.
+/// Sets the running host's stop event: S_OK, or S_FALSE when no host runs (or it does not serve yet).
 pub(super) fn stop() -> HRESULT {
     let stop = STOP.load(Ordering::Acquire);
     if stop.is_null() {
