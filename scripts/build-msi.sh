@@ -2,6 +2,9 @@
 # Builds the Windows Installer packages with wixl (Debian's msitools) from packaging/msi/opccomn.wxs
 # and opccomn.wxi: opccomn-<version>-x64.msi (the x64 and x86 proxy/stubs, the x64 browser) and
 # opccomn-<version>-x86.msi (for 32-bit Windows: the x86 proxy/stub and browser).
+# The browser is registered as the Windows service OpcComnBrowser by default (the packages' property
+# OPCCOMN_SERVICE=1, opccomn.wxi); OPCCOMN_SERVICE=0 on msiexec's command line installs it as a local
+# server instead. One package for both: the form is chosen at install time, the components are the same.
 #
 # Usage: scripts/build-msi.sh OUT_DIR X64_DIR X86_DIR [VERSION]
 #   X64_DIR, X86_DIR: folders holding opccomn.dll and opccomn_browser.exe (the package's x64/ and x86/)

@@ -9,6 +9,10 @@
  *                                 full path); removes the fake server and waits for the browser to
  *                                 exit (not with nowait: a second client can then reach the same
  *                                 browser; two clients activating it at once may start two under Wine)
+ *   msi_client browse PROXY_DLL service
+ *                                 the same with the browser registered as the service OpcComnBrowser:
+ *                                 the activation started it through the service manager (the service
+ *                                 is running, in an opccomn_browser.exe process), and it keeps running
  *   msi_client absent             CLSID_OPCServerList is not registered (REGDB_E_CLASSNOTREG)
  *
  * Exit code 0 when every check passed. */
@@ -46,18 +50,37 @@ static void delete_tree(const WCHAR *key) {
     RegDeleteKeyW(HKEY_LOCAL_MACHINE, path);
 }
 
-static int browser_running(void) {
+/* Whether an opccomn_browser.exe process runs (pid 0), or process `pid` is one. */
+static int browser_process(DWORD pid) {
     PROCESSENTRY32W e;
     int found = 0;
     HANDLE snap = CreateToolhelp32Snapshot(TH32CS_SNAPPROCESS, 0);
     if (snap == INVALID_HANDLE_VALUE) return 0;
     e.dwSize = sizeof e;
     if (Process32FirstW(snap, &e)) {
-        do found |= _wcsicmp(e.szExeFile, L"opccomn_browser.exe") == 0;
+        do found |= _wcsicmp(e.szExeFile, L"opccomn_browser.exe") == 0 && (pid == 0 || e.th32ProcessID == pid);
         while (Process32NextW(snap, &e));
     }
     CloseHandle(snap);
     return found;
+}
+
+static int browser_running(void) {
+    return browser_process(0);
+}
+
+/* The state of the service OpcComnBrowser (SERVICE_RUNNING...) and its process; 0 when unreadable. */
+static DWORD service_state(DWORD *pid) {
+    SERVICE_STATUS_PROCESS st;
+    DWORD needed;
+    SC_HANDLE scm = OpenSCManagerW(NULL, NULL, SC_MANAGER_CONNECT), s = NULL;
+    memset(&st, 0, sizeof st);
+    if (scm) s = OpenServiceW(scm, L"OpcComnBrowser", SERVICE_QUERY_STATUS);
+    if (s && !QueryServiceStatusEx(s, SC_STATUS_PROCESS_INFO, (BYTE *)&st, sizeof st, &needed)) st.dwCurrentState = 0;
+    if (s) CloseServiceHandle(s);
+    if (scm) CloseServiceHandle(scm);
+    *pid = st.dwProcessId;
+    return st.dwCurrentState;
 }
 
 /* The full path of the loaded module whose file name is that of `path`, or "" (static buffer). */
@@ -70,7 +93,9 @@ static const WCHAR *loaded(const WCHAR *path) {
     return got;
 }
 
-static int browse(const WCHAR *proxy_dll, int wait_for_exit) {
+enum { WAIT_FOR_EXIT, NO_WAIT, AS_SERVICE };
+
+static int browse(const WCHAR *proxy_dll, int mode) {
     const int wide = sizeof(void *) == 8;
     const WCHAR *fake_key = wide ? FAKE_KEY_64 : FAKE_KEY_32;
     const CLSID *fake = wide ? &FAKE_64 : &FAKE_32;
@@ -79,6 +104,7 @@ static int browse(const WCHAR *proxy_dll, int wait_for_exit) {
     IOPCEnumGUID *e = NULL;
     GUID got[64];
     ULONG n = 0, i, found = 0;
+    DWORD pid = 0;
     LPOLESTR prog = NULL, user = NULL, vi = NULL;
     int k;
     StringFromGUID2(fake, clsid_text, 40);
@@ -92,6 +118,10 @@ static int browse(const WCHAR *proxy_dll, int wait_for_exit) {
     CHECK_HR(CoCreateInstance(&SERVER_LIST, NULL, CLSCTX_LOCAL_SERVER, &LIST2, (void **)&list), S_OK);
     if (list) {
         CHECK(browser_running());
+        if (mode == AS_SERVICE) {
+            CHECK(service_state(&pid) == SERVICE_RUNNING);
+            CHECK(pid != 0 && browser_process(pid));
+        }
         CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
         if (e) {
             CHECK_HR(e->lpVtbl->Next(e, 64, got, &n), S_FALSE);
@@ -115,10 +145,11 @@ static int browse(const WCHAR *proxy_dll, int wait_for_exit) {
     delete_tree(fake_key);
     CoUninitialize();
     /* The browser exits after its last client (about 6 s): the files can go once it has. */
-    if (wait_for_exit) {
+    if (mode == WAIT_FOR_EXIT) {
         for (k = 0; k < 300 && browser_running(); k++) Sleep(100);
         CHECK(!browser_running());
     }
+    if (mode == AS_SERVICE) CHECK(service_state(&pid) == SERVICE_RUNNING); /* serves until stopped */
     return test_summary("msi_client browse");
 }
 
@@ -135,10 +166,12 @@ int main(void) {
     int argc = 0;
     LPWSTR *argv = CommandLineToArgvW(GetCommandLineW(), &argc);
     (void)W; /* test_check.h's, unused here */
-    if (argv && argc == 3 && wcscmp(argv[1], L"browse") == 0) return browse(argv[2], 1);
+    if (argv && argc == 3 && wcscmp(argv[1], L"browse") == 0) return browse(argv[2], WAIT_FOR_EXIT);
     if (argv && argc == 4 && wcscmp(argv[1], L"browse") == 0 && wcscmp(argv[3], L"nowait") == 0)
-        return browse(argv[2], 0);
+        return browse(argv[2], NO_WAIT);
+    if (argv && argc == 4 && wcscmp(argv[1], L"browse") == 0 && wcscmp(argv[3], L"service") == 0)
+        return browse(argv[2], AS_SERVICE);
     if (argv && argc == 2 && wcscmp(argv[1], L"absent") == 0) return absent();
-    fprintf(stderr, "usage: msi_client browse PROXY_DLL [nowait] | absent\n");
+    fprintf(stderr, "usage: msi_client browse PROXY_DLL [nowait|service] | absent\n");
     return 2;
 }
