@@ -68,7 +68,7 @@ reg_value() {   # reg_value VIEW KEY [NAME]: the string data, or nothing
 # on demand, NT AUTHORITY\LocalService, its path in quotes, the AppID's LocalService naming it.
 service_form() {
     local image
-    image=$(reg_value "$svc_view" "$SERVICE" ImagePath)
+    image=$(reg_value "$svc_view" "$SERVICE" ImagePath) || true   # (none: the pipeline fails)
     [ "$image" = "\"$1\" -RunService" ] || fail "$2: the service's command line: ${image:-no service}"
     [ "$(reg_value "$svc_view" "$SERVICE" Start)" = 0x3 ] || fail "$2: the service does not start on demand"
     [ "$(reg_value "$svc_view" "$SERVICE" ObjectName)" = 'NT AUTHORITY\LocalService' ] || fail "$2: the service's account"
