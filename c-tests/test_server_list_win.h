@@ -2,8 +2,10 @@
  * regsvr32 over an OpcEnum-style registration of the same CLSID, CoCreateInstance by CLSID and by
  * ProgID, fake servers registered with the helpers (and one only in the 32-bit registry view) found
  * through IOPCServerList and IOPCServerList2 and through the system's ICatInformation (which agrees
- * with the server list on implemented and required categories), then
- * everything unregistered and the registry compared with what it was. */
+ * with the server list on implemented and required categories), answers never staler than the
+ * registry (a category entry or ProgID written a moment before, in either view or by another
+ * process, is in the next answer), then everything unregistered and the registry compared with what
+ * it was. */
 #include <comcat.h>
 
 static const CLSID CLSID_Fake1 = {0xC2000000, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x01}};
@@ -300,6 +302,92 @@ static void test_fake_servers(IOPCServerList *list, IOPCServerList2 *list2, OpcR
     (void)sys;
 }
 
+/* Runs `cmd` (a command line) in another process; its exit code. */
+static DWORD run_command(const wchar_t *cmd) {
+    wchar_t line[1200];
+    STARTUPINFOW si;
+    PROCESS_INFORMATION pi;
+    DWORD code = 999;
+    swprintf(line, 1200, L"%ls", cmd);
+    memset(&si, 0, sizeof si);
+    si.cb = sizeof si;
+    if (!CreateProcessW(NULL, line, NULL, NULL, FALSE, 0, NULL, NULL, &si, &pi)) return 998;
+    WaitForSingleObject(pi.hProcess, 60000);
+    GetExitCodeProcess(pi.hProcess, &code);
+    CloseHandle(pi.hProcess);
+    CloseHandle(pi.hThread);
+    return code;
+}
+
+/* Whether a DA 2.0 enumeration has `c` (and the enumerator is released). */
+static int da20_has(IOPCServerList *list, const CLSID *c) {
+    static CLSID all[20000];
+    CATID da20 = CATID_OPCDAServer20;
+    IEnumGUID *e = NULL;
+    CHECK_HR(list->lpVtbl->EnumClassesOfCategories(list, 1, &da20, 0, NULL, &e), S_OK);
+    return e ? contains(all, collect(e, all, 20000), c) : 0;
+}
+
+#define FAKE5_KEY L"CLSID\\{C2000000-5EED-4000-8000-000000000005}"
+#define FAKE5_DA20 FAKE5_KEY L"\\Implemented Categories\\{63D5F432-CFE4-11d1-B2C8-0060083BA1FB}"
+
+/* The server list keeps its last scan of the registry while the registry reports no change: a
+   category entry written a moment before an enumeration is in it, by this process in either view or
+   by another process, and so is its removal; GetClassDetails sees a ProgID written a moment before. */
+static void test_no_stale_answers(IOPCServerList *list, IOPCServerList2 *list2) {
+    static const CLSID fake5 = {0xC2000000, 0x5eed, 0x4000, {0x80, 0, 0, 0, 0, 0, 0, 0x05}};
+    static const REGSAM views[2] = {KEY_WOW64_32KEY, KEY_WOW64_64KEY};
+    LPOLESTR prog = NULL, user = NULL, vi = NULL;
+    int round, v;
+    for (v = 0; v < 2; v++) { /* what an interrupted earlier run left */
+        HKEY h;
+        if (RegOpenKeyExW(HKEY_CLASSES_ROOT, FAKE5_KEY, 0, KEY_ALL_ACCESS | views[v], &h) == ERROR_SUCCESS) {
+            RegDeleteTreeW(h, NULL);
+            RegCloseKey(h);
+            RegDeleteKeyExW(HKEY_CLASSES_ROOT, FAKE5_KEY, views[v], 0);
+        }
+    }
+    CHECK(!da20_has(list, &fake5)); /* the scan the next calls are served from */
+    CHECK(!da20_has(list, &fake5));
+    for (round = 0; round < 3; round++) {
+        for (v = 0; v < 2; v++) {
+            CHECK(set_sz(views[v], FAKE5_DA20, NULL, NULL) == ERROR_SUCCESS);
+            CHECK(da20_has(list, &fake5));
+            CHECK(da20_has(list, &fake5));
+            CHECK_HR(list2->lpVtbl->GetClassDetails(list2, &fake5, &prog, &user, &vi), REGDB_E_KEYMISSING);
+            CHECK(set_sz(views[v], FAKE5_KEY L"\\ProgID", NULL, L"Fake.Five.1") == ERROR_SUCCESS);
+            CHECK_HR(list2->lpVtbl->GetClassDetails(list2, &fake5, &prog, &user, &vi), S_OK);
+            CHECK(wstr_is(prog, "Fake.Five.1"));
+            CoTaskMemFree(prog);
+            CoTaskMemFree(user);
+            CoTaskMemFree(vi);
+            CHECK(set_sz(views[v], FAKE5_KEY L"\\ProgID", NULL, L"Fake.Five.2") == ERROR_SUCCESS);
+            CHECK_HR(list2->lpVtbl->GetClassDetails(list2, &fake5, &prog, &user, &vi), S_OK);
+            CHECK(wstr_is(prog, "Fake.Five.2"));
+            CoTaskMemFree(prog);
+            CoTaskMemFree(user);
+            CoTaskMemFree(vi);
+            {
+                HKEY h;
+                LONG e = RegOpenKeyExW(HKEY_CLASSES_ROOT, FAKE5_KEY, 0, KEY_ALL_ACCESS | views[v], &h);
+                CHECK(e == ERROR_SUCCESS);
+                if (e == ERROR_SUCCESS) {
+                    CHECK(RegDeleteTreeW(h, NULL) == ERROR_SUCCESS); /* the class key's subkeys */
+                    RegCloseKey(h);
+                }
+            }
+            CHECK(RegDeleteKeyExW(HKEY_CLASSES_ROOT, FAKE5_KEY, views[v], 0) == ERROR_SUCCESS);
+            CHECK(!da20_has(list, &fake5));
+            CHECK_HR(list2->lpVtbl->GetClassDetails(list2, &fake5, &prog, &user, &vi), REGDB_E_CLASSNOTREG);
+        }
+    }
+    /* Written and removed by another process (reg.exe). */
+    CHECK(run_command(L"reg.exe add \"HKCR\\" FAKE5_DA20 L"\" /f") == 0);
+    CHECK(da20_has(list, &fake5));
+    CHECK(run_command(L"reg.exe delete \"HKCR\\" FAKE5_KEY L"\" /f") == 0);
+    CHECK(!da20_has(list, &fake5));
+}
+
 static void test_com_activation(void) {
     wchar_t dll[MAX_PATH];
     OpcRegistry *sys = NULL;
@@ -362,6 +450,7 @@ static void test_com_activation(void) {
     CHECK_HR(hr, S_OK);
 
     if (list && list2) test_fake_servers(list, list2, sys);
+    if (list && list2) test_no_stale_answers(list, list2);
     if (list) list->lpVtbl->Release(list);
     if (list2) list2->lpVtbl->Release(list2);
     CoFreeUnusedLibraries();

@@ -5,10 +5,12 @@
 #
 # Usage: scripts/bench.sh [--record] [--wine | --wine32] [NAME...] [WORD...]
 #   --record the run's output, with the commit, the machine and its load, also goes to
-#            docs/dev/figures/bench-<linux|windows-x64|windows-x86>.txt, the figures the docs show
+#            docs/dev/figures/bench-<linux|windows-x64|windows-x86>.txt (with NAMEs given,
+#            bench-<...>-<NAME>[-<NAME>...].txt), the figures the docs show
 #            (docs/dev/benchmarks.md): commit it; figures are never copied into the docs by hand
-#   NAME     match-pattern, error-string, server-list (default: match-pattern and error-string on
-#            Linux; all three under Wine, as server-list needs the Windows registry)
+#   NAME     match-pattern, error-string, server-list, browser (default: match-pattern and
+#            error-string on Linux; all four under Wine, as server-list and browser need the Windows
+#            registry, browser also the browser service and COM)
 #   WORD     passed to the benchmarks: `scripts/bench.sh match-pattern typical Device` runs only the
 #            typical set of match-pattern, and of it only the filters containing "Device"
 #   --wine   the Windows DLL (x86_64, mingw-w64) under Wine instead of the Linux library
@@ -27,22 +29,23 @@ wine=0
 record=0
 arch=x86_64
 names=()
+named=""
 words=()
 for arg in "$@"; do
     case "$arg" in
         --record) record=1 ;;
         --wine) wine=1 ;;
         --wine32) wine=1; arch=x86 ;;
-        match-pattern | error-string | server-list) names+=("$arg") ;;
-        -*) echo "usage: scripts/bench.sh [--wine|--wine32] [match-pattern|error-string|server-list]... [word...]" >&2; exit 2 ;;
+        match-pattern | error-string | server-list | browser) names+=("$arg"); named="$named-$arg" ;;
+        -*) echo "usage: scripts/bench.sh [--wine|--wine32] [match-pattern|error-string|server-list|browser]... [word...]" >&2; exit 2 ;;
         *) words+=("$arg") ;;
     esac
 done
 if [ ${#names[@]} = 0 ]; then
-    # Linux: MatchPattern and GetErrorString. Under Wine all three: the server list's goal is stated
-    # for the Windows registry.
+    # Linux: MatchPattern and GetErrorString. Under Wine all four: the server list's and the
+    # browser's goals are stated for the Windows registry.
     if [ "$wine" = 1 ]; then
-        names=(match-pattern error-string server-list)
+        names=(match-pattern error-string server-list browser)
     else
         names=(match-pattern error-string)
     fi
@@ -117,7 +120,7 @@ if [ "$record" = 1 ]; then
     variant=linux
     [ "$wine" = 1 ] && variant="windows-$([ "$arch" = x86 ] && echo x86 || echo x64)"
     mkdir -p docs/dev/figures
-    figures="docs/dev/figures/bench-$variant.txt"
+    figures="docs/dev/figures/bench-$variant$named.txt"
     {
         echo "# Printed by: scripts/bench.sh $*"
         echo "# commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet HEAD -- src benches 2>/dev/null || echo ', with uncommitted changes in src/ or benches/')"

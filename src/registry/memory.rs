@@ -4,8 +4,10 @@
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
-use std::sync::{Mutex, MutexGuard};
+use std::sync::atomic::{AtomicU64, Ordering::SeqCst};
+use std::sync::{Arc, Mutex, MutexGuard};
 
+use super::watch::ChangeWatch;
 use super::{RegValue, Registry, MAX_KEY_DEPTH, MAX_NAME_UNITS};
 use crate::com::{E_INVALIDARG, HRESULT};
 
@@ -21,6 +23,8 @@ struct Node {
 #[derive(Default)]
 pub struct MemoryRegistry {
     root: Mutex<Node>,
+    /// Counts the writes (every call that may have changed the tree), for [`MemoryWatch`].
+    writes: AtomicU64,
 }
 
 /// The key names of `path`; `None` when a name is empty or too long, or the path deeper than the
@@ -99,6 +103,40 @@ impl MemoryRegistry {
         // Every operation leaves the tree consistent, so a panic elsewhere cannot corrupt it.
         self.root.lock().unwrap_or_else(|p| p.into_inner())
     }
+
+    /// The tree, to change: the change is counted (before the write returns) for [`MemoryWatch`].
+    fn root_to_write(&self) -> MutexGuard<'_, Node> {
+        let root = self.root();
+        self.writes.fetch_add(1, SeqCst);
+        root
+    }
+}
+
+/// The change watch of a registry held in memory: a change is any write since the arm.
+pub(crate) struct MemoryWatch {
+    reg: Arc<MemoryRegistry>,
+    armed_at: AtomicU64,
+}
+
+impl MemoryWatch {
+    pub(crate) fn new(reg: Arc<MemoryRegistry>) -> MemoryWatch {
+        // Not armed yet: a count no registry reaches.
+        MemoryWatch {
+            reg,
+            armed_at: AtomicU64::new(u64::MAX),
+        }
+    }
+}
+
+impl ChangeWatch for MemoryWatch {
+    fn arm(&self) -> Result<(), HRESULT> {
+        self.armed_at.store(self.reg.writes.load(SeqCst), SeqCst);
+        Ok(())
+    }
+
+    fn changed(&self) -> bool {
+        self.reg.writes.load(SeqCst) != self.armed_at.load(SeqCst)
+    }
 }
 
 impl Registry for MemoryRegistry {
@@ -133,7 +171,7 @@ impl Registry for MemoryRegistry {
 
     fn create_key(&self, path: &str) -> Result<(), HRESULT> {
         let parts = split(path).filter(|p| !p.is_empty()).ok_or(E_INVALIDARG)?;
-        self.root().create(&parts);
+        self.root_to_write().create(&parts);
         Ok(())
     }
 
@@ -142,7 +180,7 @@ impl Registry for MemoryRegistry {
         if name.encode_utf16().count() > MAX_NAME_UNITS {
             return Err(E_INVALIDARG);
         }
-        let mut root = self.root();
+        let mut root = self.root_to_write();
         let node = root.create(&parts);
         node.values
             .insert(fold(name).into_owned(), (name.to_string(), value.clone()));
@@ -151,7 +189,7 @@ impl Registry for MemoryRegistry {
 
     fn delete_value(&self, path: &str, name: &str) -> Result<(), HRESULT> {
         let parts = split(path).ok_or(E_INVALIDARG)?;
-        if let Some(node) = self.root().find_mut(&parts) {
+        if let Some(node) = self.root_to_write().find_mut(&parts) {
             node.values.remove(fold(name).as_ref());
         }
         Ok(())
@@ -160,7 +198,7 @@ impl Registry for MemoryRegistry {
     fn delete_key(&self, path: &str) -> Result<(), HRESULT> {
         let parts = split(path).filter(|p| !p.is_empty()).ok_or(E_INVALIDARG)?;
         let (last, parents) = parts.split_last().expect("checked non-empty");
-        let mut root = self.root();
+        let mut root = self.root_to_write();
         let Some(parent) = root.find_mut(parents) else {
             return Ok(());
         };

@@ -19,9 +19,11 @@ pub mod regfile;
 pub mod register;
 pub mod sddl;
 pub mod version;
+pub(crate) mod watch;
 #[cfg(windows)]
 pub mod windows;
 
+use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
 use crate::com::alloc::alloc_wstr_from_str;
@@ -241,22 +243,40 @@ pub fn parse_guid(text: &str) -> Option<GUID> {
     Some(GUID::from_u128(value))
 }
 
+/// What a scan of the registry found, kept until the registry changes (the server list's; the
+/// registry does not know its type).
+pub(crate) type Snapshot = dyn Any + Send + Sync;
+
 /// A registry with the views the server list merges.
 ///
 /// `write` is where registration writes; `views` are read in order by the server list (on 64-bit
 /// Windows the 64-bit and the 32-bit registry view, so a server registered in only one of them is still
-/// found; elsewhere just `write`).
+/// found; elsewhere just `write`). `snapshots` keeps the server list's last scan of `views` while their
+/// change watch says nothing changed.
 pub(crate) struct Registries {
     pub(crate) write: Arc<dyn Registry>,
     pub(crate) views: Vec<Arc<dyn Registry>>,
+    pub(crate) snapshots: watch::Snapshots<Snapshot>,
 }
 
 impl Registries {
-    fn single(reg: Arc<dyn Registry>) -> Registries {
+    /// `write` and `views` with the change watch of `views`.
+    pub(crate) fn new(
+        write: Arc<dyn Registry>,
+        views: Vec<Arc<dyn Registry>>,
+        watch: Box<dyn watch::ChangeWatch>,
+    ) -> Registries {
         Registries {
-            write: reg.clone(),
-            views: vec![reg],
+            write,
+            views,
+            snapshots: watch::Snapshots::new(watch),
         }
+    }
+
+    /// One registry held in memory, read and written.
+    pub(crate) fn memory(reg: Arc<memory::MemoryRegistry>) -> Registries {
+        let watch = Box::new(memory::MemoryWatch::new(reg.clone()));
+        Registries::new(reg.clone(), vec![reg], watch)
     }
 
     /// The system registry: on Windows `HKEY_CLASSES_ROOT` in both views (native first); elsewhere the
@@ -271,7 +291,7 @@ impl Registries {
                 }
                 #[cfg(not(windows))]
                 {
-                    Arc::new(Registries::single(Arc::new(memory::MemoryRegistry::new())))
+                    Arc::new(Registries::memory(Arc::new(memory::MemoryRegistry::new())))
                 }
             })
             .clone()
@@ -317,7 +337,7 @@ pub unsafe extern "C" fn OpcRegistryCreateMemory(reg: *mut *mut OpcRegistry) -> 
         // SAFETY: the caller vouches a non-NULL `reg` is writable.
         let out = unsafe { ffi::out(reg) }?;
         out.write(Box::into_raw(Box::new(OpcRegistry {
-            inner: Arc::new(Registries::single(Arc::new(memory::MemoryRegistry::new()))),
+            inner: Arc::new(Registries::memory(Arc::new(memory::MemoryRegistry::new()))),
         })));
         Ok(S_OK)
     })

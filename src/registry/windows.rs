@@ -10,10 +10,12 @@
 
 use core::ffi::c_void;
 use core::ptr;
+use std::sync::atomic::{AtomicBool, Ordering::SeqCst};
 use std::sync::{Arc, OnceLock};
 
 use windows_sys::Win32::Foundation::{
-    ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HMODULE, WIN32_ERROR,
+    CloseHandle, ERROR_FILE_NOT_FOUND, ERROR_MORE_DATA, ERROR_NO_MORE_ITEMS, ERROR_SUCCESS, HANDLE, HMODULE,
+    WAIT_TIMEOUT, WIN32_ERROR,
 };
 use windows_sys::Win32::System::Com::{CoCreateInstance, CLSCTX_INPROC_SERVER};
 use windows_sys::Win32::System::LibraryLoader::{
@@ -21,13 +23,16 @@ use windows_sys::Win32::System::LibraryLoader::{
     GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
 };
 use windows_sys::Win32::System::Registry::{
-    RegCloseKey, RegCreateKeyExW, RegDeleteKeyExW, RegDeleteValueW, RegEnumKeyExW, RegEnumValueW, RegOpenKeyExW,
-    RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT, HKEY_LOCAL_MACHINE, KEY_QUERY_VALUE, KEY_READ,
-    KEY_SET_VALUE, KEY_WOW64_32KEY, KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_OPTION_NON_VOLATILE,
-    REG_SZ,
+    RegCloseKey, RegCreateKeyExW, RegDeleteKeyExW, RegDeleteValueW, RegEnumKeyExW, RegEnumValueW,
+    RegNotifyChangeKeyValue, RegOpenKeyExW, RegQueryValueExW, RegSetValueExW, HKEY, HKEY_CLASSES_ROOT,
+    HKEY_CURRENT_USER, HKEY_LOCAL_MACHINE, KEY_NOTIFY, KEY_QUERY_VALUE, KEY_READ, KEY_SET_VALUE, KEY_WOW64_32KEY,
+    KEY_WOW64_64KEY, KEY_WRITE, REG_DWORD, REG_EXPAND_SZ, REG_NOTIFY_CHANGE_LAST_SET, REG_NOTIFY_CHANGE_NAME,
+    REG_NOTIFY_THREAD_AGNOSTIC, REG_OPTION_NON_VOLATILE, REG_SZ,
 };
 use windows_sys::Win32::System::SystemServices::MAXIMUM_ALLOWED;
+use windows_sys::Win32::System::Threading::{CreateEventW, ResetEvent, WaitForMultipleObjects};
 
+use super::watch::ChangeWatch;
 use super::{class_category_key, class_key, write_category, ClassStrings, RegValue, Registries, Registry};
 use crate::com::interfaces::ICatRegister;
 use crate::com::unknown::Counted;
@@ -480,6 +485,159 @@ fn ok(hr: HRESULT) -> Result<(), HRESULT> {
     }
 }
 
+/// A manual-reset event, closed when dropped.
+struct Event(HANDLE);
+
+// SAFETY: an event handle may be waited on, reset and closed from any thread.
+unsafe impl Send for Event {}
+// SAFETY: as above.
+unsafe impl Sync for Event {}
+
+impl Drop for Event {
+    fn drop(&mut self) {
+        // SAFETY: the handle was created by `Event::new` and is closed once.
+        unsafe { CloseHandle(self.0) };
+    }
+}
+
+impl Event {
+    /// A manual-reset event, signalled to start with (a watch not armed yet has "seen a change").
+    fn new() -> Result<Event, HRESULT> {
+        // SAFETY: no attributes, no name.
+        let h = unsafe { CreateEventW(ptr::null(), 1, 1, ptr::null()) };
+        if h.is_null() {
+            Err(E_FAIL)
+        } else {
+            Ok(Event(h))
+        }
+    }
+}
+
+/// One key watched with its own event.
+struct Watched {
+    key: Key,
+    event: Event,
+    /// A notification is pending on `key` (armed and not yet signalled).
+    armed: AtomicBool,
+}
+
+/// The change watch of the system registry: a registry change notification
+/// (`RegNotifyChangeKeyValue`, the whole subtree, names and values) on the classes the server list
+/// reads, in each view it reads: `HKEY_LOCAL_MACHINE\Software\Classes` (what Wine's
+/// `HKEY_CLASSES_ROOT` is) and, where there is one, `HKEY_CURRENT_USER\Software\Classes` (which
+/// Windows merges into `HKEY_CLASSES_ROOT`), each with its own manual-reset event. The registry
+/// signals an event in the same operation as the change it reports (a change by another process
+/// is seen by the next check). `changed` asks every event at once without waiting; `arm` arms again
+/// only the keys whose notification has fired, so no key gathers pending notifications.
+pub(crate) struct ClassesWatch {
+    /// The view flags of the views read.
+    views: Vec<u32>,
+    /// Opened on the first arm that could open them.
+    keys: OnceLock<Vec<Watched>>,
+    /// The notification's thread-agnostic flag, dropped after Windows 7 refused it (there the
+    /// notification ends, signalled, when the thread that armed it ends: one scan more).
+    agnostic: AtomicBool,
+}
+
+impl ClassesWatch {
+    fn new(views: Vec<u32>) -> ClassesWatch {
+        ClassesWatch {
+            views,
+            keys: OnceLock::new(),
+            agnostic: AtomicBool::new(true),
+        }
+    }
+
+    fn open(root: HKEY, view: u32) -> Option<Key> {
+        let mut h: HKEY = ptr::null_mut();
+        let path = wide("Software\\Classes");
+        // SAFETY: predefined root, NUL-terminated path; `h` is written on success.
+        let e = unsafe { RegOpenKeyExW(root, path.as_ptr(), 0, KEY_NOTIFY | view, &mut h) };
+        (e == ERROR_SUCCESS).then_some(Key(h))
+    }
+
+    /// The watched keys, opened once: the machine's classes in every view must open, the user's are
+    /// watched where they exist.
+    fn keys(&self) -> Result<&[Watched], HRESULT> {
+        if let Some(keys) = self.keys.get() {
+            return Ok(keys);
+        }
+        let mut keys = Vec::new();
+        for &view in &self.views {
+            let machine = Self::open(HKEY_LOCAL_MACHINE, view).ok_or(E_FAIL)?;
+            for key in [Some(machine), Self::open(HKEY_CURRENT_USER, view)]
+                .into_iter()
+                .flatten()
+            {
+                keys.push(Watched {
+                    key,
+                    event: Event::new()?,
+                    armed: AtomicBool::new(false),
+                });
+            }
+        }
+        Ok(self.keys.get_or_init(|| keys))
+    }
+
+    fn notify(&self, w: &Watched) -> WIN32_ERROR {
+        let filter = REG_NOTIFY_CHANGE_NAME | REG_NOTIFY_CHANGE_LAST_SET;
+        let notify = |filter| {
+            // SAFETY: an open key and event; asynchronous, so the call returns at once.
+            unsafe { RegNotifyChangeKeyValue(w.key.0, 1, filter, w.event.0, 1) }
+        };
+        if self.agnostic.load(SeqCst) {
+            let e = notify(filter | REG_NOTIFY_THREAD_AGNOSTIC);
+            if e != windows_sys::Win32::Foundation::ERROR_INVALID_PARAMETER {
+                return e;
+            }
+            self.agnostic.store(false, SeqCst);
+        }
+        notify(filter)
+    }
+}
+
+impl ChangeWatch for ClassesWatch {
+    fn arm(&self) -> Result<(), HRESULT> {
+        let mut result = Ok(());
+        for w in self.keys()? {
+            // SAFETY: an open event; a zero timeout only asks.
+            let fired = unsafe { WaitForMultipleObjects(1, &w.event.0, 0, 0) } != WAIT_TIMEOUT;
+            if w.armed.load(SeqCst) && !fired {
+                continue; // still pending: it reports the next change
+            }
+            w.armed.store(false, SeqCst);
+            // Reset before the notification is asked for: a change in between is read by the scan
+            // that follows the arm.
+            // SAFETY: an open event.
+            unsafe { ResetEvent(w.event.0) };
+            match self.notify(w) {
+                ERROR_SUCCESS => w.armed.store(true, SeqCst),
+                e => {
+                    // Signalled again: `changed` answers true until an arm succeeds.
+                    // SAFETY: an open event.
+                    unsafe { windows_sys::Win32::System::Threading::SetEvent(w.event.0) };
+                    result = Err(hr_from_win32(e));
+                }
+            }
+        }
+        result
+    }
+
+    fn changed(&self) -> bool {
+        let Some(keys) = self.keys.get() else { return true };
+        // (Two keys per view, two views.)
+        let mut events = [ptr::null_mut(); 8];
+        for (slot, w) in events.iter_mut().zip(keys) {
+            *slot = w.event.0;
+        }
+        let count = keys.len().min(events.len());
+        // SAFETY: `count` open events (below MAXIMUM_WAIT_OBJECTS); a zero timeout only asks.
+        let r = unsafe { WaitForMultipleObjects(count as u32, events.as_ptr(), 0, 0) };
+        // Any event signalled, or a failure to ask: changed.
+        r != WAIT_TIMEOUT
+    }
+}
+
 /// The registries of the system: writes go to the process's own view, reads merge both views.
 pub(crate) fn system_registries() -> Registries {
     let native: Arc<dyn Registry> = Arc::new(WindowsRegistry::native());
@@ -489,13 +647,14 @@ pub(crate) fn system_registries() -> Registries {
     } else {
         (0, KEY_WOW64_64KEY)
     };
-    Registries {
-        write: native,
-        views: vec![
+    Registries::new(
+        native,
+        vec![
             Arc::new(WindowsRegistry::view(first)),
             Arc::new(WindowsRegistry::view(second)),
         ],
-    }
+        Box::new(ClassesWatch::new(vec![first, second])),
+    )
 }
 
 /// The module (DLL or EXE) that contains this code, without taking a reference on it. Found from an
@@ -610,6 +769,47 @@ mod tests {
         assert_eq!(found.and_then(|s| s.user_type).as_deref(), Some(text));
         other.delete_key(key).unwrap();
         assert!(!other.key_exists(key));
+    }
+
+    #[test]
+    fn a_change_of_the_classes_in_either_view_signals_the_watch() {
+        let other_view = if cfg!(target_pointer_width = "64") {
+            KEY_WOW64_32KEY
+        } else {
+            KEY_WOW64_64KEY
+        };
+        let watch = ClassesWatch::new(vec![0, other_view]);
+        assert!(watch.changed(), "not armed yet");
+        for (view, n) in [(0, 1u128), (other_view, 2)] {
+            let reg = WindowsRegistry::view(view);
+            let key = format!(
+                "CLSID\\{}\\Implemented Categories\\{}",
+                GUID::from_u128(0xC3100000_0000_4000_8000_000000000000 + n),
+                crate::registry::categories::CATID_OPCDAServer20
+            );
+            // Other tests of this process write the registry meanwhile: a quiet moment is enough.
+            let quiet = (0..200).any(|_| {
+                watch.arm().unwrap();
+                !watch.changed() || {
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                    false
+                }
+            });
+            assert!(quiet, "the watch never stayed quiet once armed");
+            // A key deep below CLSID, written by this process: seen by the very next check.
+            reg.create_key(&key).unwrap();
+            assert!(watch.changed(), "view {view:#x}: a new key");
+            watch.arm().unwrap();
+            for parent in [
+                key.as_str(),
+                &key[..key.rfind('\\').unwrap()],
+                &key[..key.find("\\Impl").unwrap()],
+            ] {
+                reg.delete_key(parent).unwrap();
+            }
+            assert!(watch.changed(), "view {view:#x}: keys deleted");
+            assert!(!reg.key_exists(&key[..key.find("\\Impl").unwrap()]));
+        }
     }
 
     #[test]

@@ -37,8 +37,8 @@ pub mod interfaces;
 
 use core::ffi::c_void;
 use core::ptr;
-use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use crate::com::alloc::{alloc_wstr_from_str, task_free};
 use crate::com::enumerator::{EnumInterface, Enumerator};
@@ -50,7 +50,7 @@ use crate::com::{
     IUnknown, CATID, CLSID, CO_E_CLASSSTRING, GUID, HRESULT, LPOLESTR, REFIID, REGDB_E_CLASSNOTREG, S_OK, ULONG,
 };
 use crate::registry::categories::DA10;
-use crate::registry::{class_key, parse_guid, registries, OpcRegistry, Registries, REGDB_E_KEYMISSING};
+use crate::registry::{parse_guid, registries, OpcRegistry, Registries, Snapshot, REGDB_E_KEYMISSING};
 use interfaces::{IEnumGUID, IOPCEnumGUID, IOPCEnumGUIDVtbl};
 
 /// The enumerator of EnumClassesOfCategories: the core's snapshot enumerator over class identifiers,
@@ -83,6 +83,15 @@ pub(crate) struct ServerList {
     list: Slot,
     list2: Slot,
     regs: Arc<Registries>,
+    /// Answers from the last scan while the registry has not changed (`current_scan`); false when
+    /// the process's environment has `OPCCOMN_SERVER_LIST_CACHE=0` as the object was created: each
+    /// call then reads the registry (what the browser's benchmark compares with).
+    cached: bool,
+}
+
+/// False when the environment turns the server list's scan cache off (`OPCCOMN_SERVER_LIST_CACHE=0`).
+fn cache_enabled() -> bool {
+    std::env::var_os("OPCCOMN_SERVER_LIST_CACHE").is_none_or(|v| v != "0")
 }
 
 impl ComClass for ServerList {
@@ -102,90 +111,194 @@ fn guid_key(g: &GUID) -> u128 {
     (g.Data1 as u128) << 96 | (g.Data2 as u128) << 80 | (g.Data3 as u128) << 64 | u64::from_be_bytes(g.Data4) as u128
 }
 
+/// One class under `CLSID` in one registry view, with the categories under its `Implemented
+/// Categories` and `Required Categories` keys (subkey names that are not CATIDs left out; a missing key
+/// and an empty one alike).
+struct ScannedClass {
+    clsid: CLSID,
+    implemented: Vec<CATID>,
+    required: Vec<CATID>,
+}
+
+/// What a scan of the registry's views found: every class under `CLSID` with its categories; read
+/// on first need, the classes ProgIDs registered the old way name (Data Access 1.0) and each
+/// class's details. What a browser keeps between calls (`crate::registry::watch`): everything in it
+/// was read after the change watch was armed, so it holds while the watch has seen no change.
+pub(crate) struct Scan {
+    /// In the order of the views (a class in both views twice).
+    classes: Vec<ScannedClass>,
+    /// The first entry of each class in `classes`, by [`guid_key`].
+    first: HashMap<u128, usize>,
+    /// Whether `classes` has the implemented and the required categories (a full scan has both).
+    has_implemented: bool,
+    has_required: bool,
+    /// The classes named by a ProgID with an `OPC` subkey, in the views' order.
+    da10: OnceLock<Vec<CLSID>>,
+    /// GetClassDetails's answers, for classes in `classes` only (so as many as there are classes).
+    details: Mutex<HashMap<u128, ClassDetails>>,
+}
+
+impl Scan {
+    /// Reads the classes of every view, with the implemented and the required categories when asked.
+    pub(crate) fn read(regs: &Registries, implemented: bool, required: bool) -> Scan {
+        let mut children = Vec::new();
+        if implemented {
+            children.push("Implemented Categories");
+        }
+        if required {
+            children.push("Required Categories");
+        }
+        let catids = |names: Option<Vec<String>>| -> Vec<CATID> {
+            names.unwrap_or_default().iter().filter_map(|n| parse_guid(n)).collect()
+        };
+        let mut classes = Vec::new();
+        for view in &regs.views {
+            for (name, keys) in view.scan("CLSID", &children) {
+                let Some(clsid) = parse_guid(&name) else { continue };
+                let mut keys = keys.into_iter();
+                let implemented = if implemented {
+                    catids(keys.next().flatten())
+                } else {
+                    Vec::new()
+                };
+                let required = if required {
+                    catids(keys.next().flatten())
+                } else {
+                    Vec::new()
+                };
+                classes.push(ScannedClass {
+                    clsid,
+                    implemented,
+                    required,
+                });
+            }
+        }
+        let mut first = HashMap::with_capacity(classes.len());
+        for (i, c) in classes.iter().enumerate() {
+            first.entry(guid_key(&c.clsid)).or_insert(i);
+        }
+        Scan {
+            classes,
+            first,
+            has_implemented: implemented,
+            has_required: required,
+            da10: OnceLock::new(),
+            details: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// The classes ProgIDs registered the old way name (an `OPC` subkey and a `CLSID` value), read
+    /// once.
+    fn da10(&self, regs: &Registries) -> &[CLSID] {
+        self.da10.get_or_init(|| {
+            let mut found = Vec::new();
+            for view in &regs.views {
+                for name in view.subkeys("") {
+                    // File extensions and the well-known trees are never ProgIDs.
+                    if name.starts_with('.') || name.eq_ignore_ascii_case("CLSID") {
+                        continue;
+                    }
+                    if !view.key_exists(&format!("{name}\\OPC")) {
+                        continue;
+                    }
+                    if let Some(clsid) = view
+                        .value(&format!("{name}\\CLSID"), "")
+                        .and_then(|v| v.as_str().and_then(parse_guid))
+                    {
+                        found.push(clsid);
+                    }
+                }
+            }
+            found
+        })
+    }
+
+    /// The classes that implement any of `implemented` (`None`: regardless) and require nothing
+    /// beyond `required`, the categories the caller supports (`None`: no condition), sorted by
+    /// CLSID, each once. The scan must have read the categories the arguments ask about.
+    fn classes_of_categories(
+        &self,
+        regs: &Registries,
+        implemented: Option<&[CATID]>,
+        required: Option<&[CATID]>,
+    ) -> Vec<CLSID> {
+        debug_assert!(implemented.is_none() || self.has_implemented);
+        debug_assert!(required.is_none() || self.has_required);
+        // `required` lists the categories the caller supports (ICatInformation's rgcatidReq): a class
+        // qualifies when each category it requires is among them; a class requiring nothing always does.
+        let requirements_met = |class: &ScannedClass| match required {
+            None => true,
+            Some(supported) => class.required.iter().all(|c| supported.contains(c)),
+        };
+        let mut found: BTreeMap<u128, CLSID> = BTreeMap::new();
+        for class in &self.classes {
+            let implements = match implemented {
+                None => true,
+                Some(wanted) => class.implemented.iter().any(|c| wanted.contains(c)),
+            };
+            if implements && requirements_met(class) {
+                found.insert(guid_key(&class.clsid), class.clsid);
+            }
+        }
+        if implemented.is_some_and(|wanted| wanted.contains(&DA10)) {
+            for clsid in self.da10(regs) {
+                // The class must be registered, in any view; its required categories are those of
+                // the first view that registers it.
+                let Some(&i) = self.first.get(&guid_key(clsid)) else {
+                    continue;
+                };
+                if requirements_met(&self.classes[i]) {
+                    found.insert(guid_key(clsid), *clsid);
+                }
+            }
+        }
+        found.into_values().collect()
+    }
+
+    /// GetClassDetails's answer for `clsid` (with the version-independent ProgID), read once per
+    /// class: a class not in the scan is not registered.
+    fn class_details(&self, regs: &Registries, clsid: &CLSID) -> Result<ClassDetails, HRESULT> {
+        let key = guid_key(clsid);
+        if !self.first.contains_key(&key) {
+            return Err(REGDB_E_CLASSNOTREG);
+        }
+        if let Some(d) = self.details.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+            return Ok(d.clone());
+        }
+        // Read without the lock (callers asking about other classes do not wait); a class without a
+        // ProgID is asked about rarely and read each time.
+        let d = class_details(regs, clsid, true)?;
+        self.details
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .insert(key, d.clone());
+        Ok(d)
+    }
+}
+
 /// The classes that implement any of `implemented` (`None`: regardless) and require nothing beyond
-/// `required`, the categories the caller supports (`None`: no condition), sorted by CLSID, each once.
+/// `required`, the categories the caller supports (`None`: no condition), sorted by CLSID, each once:
+/// read from the registry now, only the categories the arguments ask about.
 pub(crate) fn classes_of_categories(
     regs: &Registries,
     implemented: Option<&[CATID]>,
     required: Option<&[CATID]>,
 ) -> Vec<CLSID> {
-    let mut found: BTreeMap<u128, CLSID> = BTreeMap::new();
-    let mut children = Vec::new();
-    if implemented.is_some() {
-        children.push("Implemented Categories");
-    }
-    if required.is_some() {
-        children.push("Required Categories");
-    }
-    // `required` lists the categories the caller supports (ICatInformation's rgcatidReq): a class
-    // qualifies when each category it requires is among them; a class requiring nothing always does.
-    let requirements_met = |cats: Option<&Vec<String>>| match required {
-        None => true,
-        Some(supported) => cats.is_none_or(|names| {
-            names
-                .iter()
-                .filter_map(|n| parse_guid(n))
-                .all(|c| supported.contains(&c))
-        }),
-    };
-    for view in &regs.views {
-        for (name, keys) in view.scan("CLSID", &children) {
-            let Some(clsid) = parse_guid(&name) else { continue };
-            let mut keys = keys.iter();
-            let implements = match implemented {
-                None => true,
-                Some(wanted) => keys
-                    .next()
-                    .and_then(Option::as_ref)
-                    .is_some_and(|names| names.iter().filter_map(|n| parse_guid(n)).any(|c| wanted.contains(&c))),
-            };
-            if implements && requirements_met(keys.next().and_then(Option::as_ref)) {
-                found.insert(guid_key(&clsid), clsid);
-            }
-        }
-    }
-    if implemented.is_some_and(|wanted| wanted.contains(&DA10)) {
-        for view in &regs.views {
-            for name in view.subkeys("") {
-                // File extensions and the well-known trees are never ProgIDs.
-                if name.starts_with('.') || name.eq_ignore_ascii_case("CLSID") {
-                    continue;
-                }
-                if !view.key_exists(&format!("{name}\\OPC")) {
-                    continue;
-                }
-                let Some(clsid) = view
-                    .value(&format!("{name}\\CLSID"), "")
-                    .and_then(|v| v.as_str().and_then(parse_guid))
-                else {
-                    continue;
-                };
-                if found.contains_key(&guid_key(&clsid)) {
-                    continue;
-                }
-                let class = class_key(&clsid);
-                let registered = regs.views.iter().find(|v| v.key_exists(&class));
-                if let Some(v) = registered {
-                    // Without required categories there is nothing to read (one registry call per
-                    // server less on the scan of every ProgID).
-                    let satisfied = required.is_none() || {
-                        let req = v
-                            .key_exists(&format!("{class}\\Required Categories"))
-                            .then(|| v.subkeys(&format!("{class}\\Required Categories")));
-                        requirements_met(req.as_ref())
-                    };
-                    if satisfied {
-                        found.insert(guid_key(&clsid), clsid);
-                    }
-                }
-            }
-        }
-    }
-    found.into_values().collect()
+    Scan::read(regs, implemented.is_some(), required.is_some()).classes_of_categories(regs, implemented, required)
+}
+
+/// The last full scan of `regs` while their change watch has seen no change, else a new one.
+pub(crate) fn current_scan(regs: &Registries) -> Arc<Scan> {
+    let read = || -> Arc<Snapshot> { Arc::new(Scan::read(regs, true, true)) };
+    // (Only the server list keeps snapshots: always a Scan.)
+    regs.snapshots
+        .get(read)
+        .downcast::<Scan>()
+        .unwrap_or_else(|_| Arc::new(Scan::read(regs, true, true)))
 }
 
 /// What GetClassDetails reports.
-#[derive(Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct ClassDetails {
     pub prog_id: String,
     pub user_type: String,
@@ -193,7 +306,7 @@ pub(crate) struct ClassDetails {
 }
 
 /// The details of `clsid` from the first view that registers it (`version_independent`: also read the
-/// version-independent ProgID, for IOPCServerList2).
+/// version-independent ProgID, for IOPCServerList2), read from the registry now.
 pub(crate) fn class_details(
     regs: &Registries,
     clsid: &CLSID,
@@ -254,7 +367,11 @@ fn enum_classes(
     ppenum: ffi::Out<'_, *mut IOPCEnumGUID>,
 ) -> FfiResult {
     let (implemented, required) = (category_list(implemented)?, category_list(required)?);
-    let classes = classes_of_categories(&list.regs, implemented, required);
+    let classes = if list.cached {
+        current_scan(&list.regs).classes_of_categories(&list.regs, implemented, required)
+    } else {
+        classes_of_categories(&list.regs, implemented, required)
+    };
     ppenum.write(Enumerator::<ClassEnum>::create(classes.into(), 0));
     Ok(S_OK)
 }
@@ -291,7 +408,11 @@ fn get_class_details(
     user_type: ffi::Out<'_, LPOLESTR>,
     vi: Option<ffi::Out<'_, LPOLESTR>>,
 ) -> FfiResult {
-    let details = class_details(&list.regs, clsid, vi.is_some())?;
+    let details = if list.cached {
+        current_scan(&list.regs).class_details(&list.regs, clsid)?
+    } else {
+        class_details(&list.regs, clsid, vi.is_some())?
+    };
     let mut strings = Allocated(Vec::new());
     let p = strings.string(&details.prog_id)?;
     let u = strings.string(&details.user_type)?;
@@ -392,6 +513,7 @@ pub(crate) unsafe fn create(
                 list: b.slot(&LIST_VTBL),
                 list2: b.slot(&LIST2_VTBL),
                 regs,
+                cached: cache_enabled(),
             })
         })
     }

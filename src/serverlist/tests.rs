@@ -1,6 +1,6 @@
 //! The server list's rules, checked against an in-memory registry.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use super::*;
 use crate::com::{LPWSTR, S_FALSE};
@@ -8,6 +8,30 @@ use crate::registry::categories::{CATID_OPCAEServer10, CATID_OPCDAServer10, CATI
 use crate::registry::memory::MemoryRegistry;
 use crate::registry::regfile;
 use crate::registry::Registry;
+
+/// The classes read from the registry now, checked against what the cache answers (kept scan or
+/// new one) at the same moment.
+fn classes_of_categories(regs: &Registries, implemented: Option<&[CATID]>, required: Option<&[CATID]>) -> Vec<CLSID> {
+    let now = super::classes_of_categories(regs, implemented, required);
+    assert_eq!(
+        current_scan(regs).classes_of_categories(regs, implemented, required),
+        now
+    );
+    now
+}
+
+/// GetClassDetails's answer read from the registry now, checked against the cache's likewise.
+fn class_details(regs: &Registries, clsid: &CLSID, version_independent: bool) -> Result<ClassDetails, HRESULT> {
+    let now = super::class_details(regs, clsid, version_independent);
+    let cached = current_scan(regs).class_details(regs, clsid).map(|mut d| {
+        if !version_independent {
+            d.version_independent_prog_id.clear();
+        }
+        d
+    });
+    assert_eq!(cached, now);
+    now
+}
 
 fn g(n: u128) -> GUID {
     GUID::from_u128(0xC0000000_0000_0000_0000_000000000000 + n)
@@ -53,11 +77,7 @@ fn sample() -> Registries {
         Some("V.Five.1"),
     );
     regfile::apply(&reg, "REGEDIT4\n[HKCR\\V.Ghost.1\\OPC]\n[HKCR\\V.Ghost.1\\CLSID]\n@=\"{C0000000-0000-0000-0000-0000000000FF}\"\n[HKCR\\CLSID\\not-a-guid\\Implemented Categories\\{63D5F432-CFE4-11d1-B2C8-0060083BA1FB}]\n").unwrap();
-    let reg: Arc<dyn Registry> = Arc::new(reg);
-    Registries {
-        write: reg.clone(),
-        views: vec![reg],
-    }
+    Registries::memory(Arc::new(reg))
 }
 
 fn ids(list: &[u128]) -> Vec<GUID> {
@@ -229,10 +249,11 @@ fn every_view_is_read_and_each_class_reported_once() {
             &crate::registry::RegValue::Sz("W.Seven.1".into()),
         )
         .unwrap();
-    let regs = Registries {
-        write: regs.write.clone(),
-        views: vec![regs.write.clone(), Arc::new(other)],
-    };
+    let regs = Registries::new(
+        regs.write.clone(),
+        vec![regs.write.clone(), Arc::new(other)],
+        Box::new(crate::registry::watch::tests::TestWatch::default()),
+    );
     assert_eq!(
         classes_of_categories(&regs, Some(&[CATID_OPCDAServer20]), None),
         ids(&[1, 2, 7])
@@ -302,9 +323,16 @@ fn enumeration_and_registration_may_run_on_several_threads() {
                     let mut d = crate::registry::register::tests::server(0x1000 + t * 100 + i);
                     d.implemented = vec![(CATID_OPCAEServer10, None)];
                     crate::registry::register::register(&regs, &d).unwrap();
-                    let found = classes_of_categories(&regs, Some(&[CATID_OPCAEServer10]), None);
+                    // (Other threads register meanwhile: the kept scan and a read of the registry
+                    // may differ by their classes, never by this thread's, registered before.)
+                    let ae = Some(&[CATID_OPCAEServer10][..]);
+                    let found = super::classes_of_categories(&regs, ae, None);
                     assert!(found.contains(&d.clsid) && found.contains(&g(3)));
-                    assert_eq!(class_details(&regs, &d.clsid, true).unwrap().prog_id, d.prog_id);
+                    let found = current_scan(&regs).classes_of_categories(&regs, ae, None);
+                    assert!(found.contains(&d.clsid) && found.contains(&g(3)));
+                    assert_eq!(super::class_details(&regs, &d.clsid, true).unwrap().prog_id, d.prog_id);
+                    let cached = current_scan(&regs).class_details(&regs, &d.clsid);
+                    assert_eq!(cached.unwrap().prog_id, d.prog_id);
                     crate::registry::register::unregister(&regs, &d).unwrap();
                 }
             })
@@ -388,4 +416,151 @@ fn the_com_object_answers_through_its_vtables() {
         assert_eq!(clsid, g(2));
         assert_eq!((vt.Release)(list), 0);
     }
+}
+
+/// A change of the registry, made once.
+type Change = Box<dyn FnOnce(&MemoryRegistry) + Send>;
+
+/// A registry that runs `during` once, right after the server list's scan of `CLSID` has read it: a
+/// change while a scan runs.
+struct ChangingDuringScan {
+    inner: Arc<MemoryRegistry>,
+    during: Mutex<Option<Change>>,
+}
+
+impl Registry for ChangingDuringScan {
+    fn key_exists(&self, path: &str) -> bool {
+        self.inner.key_exists(path)
+    }
+    fn subkeys(&self, path: &str) -> Vec<String> {
+        self.inner.subkeys(path)
+    }
+    fn values(&self, path: &str) -> Vec<(String, crate::registry::RegValue)> {
+        self.inner.values(path)
+    }
+    fn value(&self, path: &str, name: &str) -> Option<crate::registry::RegValue> {
+        self.inner.value(path, name)
+    }
+    fn create_key(&self, path: &str) -> Result<(), HRESULT> {
+        self.inner.create_key(path)
+    }
+    fn set_value(&self, path: &str, name: &str, value: &crate::registry::RegValue) -> Result<(), HRESULT> {
+        self.inner.set_value(path, name, value)
+    }
+    fn delete_value(&self, path: &str, name: &str) -> Result<(), HRESULT> {
+        self.inner.delete_value(path, name)
+    }
+    fn delete_key(&self, path: &str) -> Result<(), HRESULT> {
+        self.inner.delete_key(path)
+    }
+    fn scan(&self, parent: &str, children: &[&str]) -> Vec<(String, Vec<Option<Vec<String>>>)> {
+        let found = self.inner.scan(parent, children);
+        if let Some(change) = self.during.lock().unwrap().take() {
+            change(&self.inner);
+        }
+        found
+    }
+}
+
+fn da2_class(n: u128) -> String {
+    format!("CLSID\\{}\\Implemented Categories\\{CATID_OPCDAServer20}", g(n))
+}
+
+/// The cache over an in-memory registry and its own change watch: a class registered a moment
+/// before a call is in its answer, one removed is gone, and between changes the kept scan answers.
+#[test]
+fn the_kept_scan_is_never_stale() {
+    let regs = sample();
+    let da2 = Some(&[CATID_OPCDAServer20][..]);
+    let first = current_scan(&regs);
+    assert_eq!(first.classes_of_categories(&regs, da2, None), ids(&[1, 2]));
+    assert!(
+        Arc::ptr_eq(&first, &current_scan(&regs)),
+        "nothing changed: the kept scan"
+    );
+    regs.write.create_key(&da2_class(9)).unwrap();
+    assert_eq!(
+        current_scan(&regs).classes_of_categories(&regs, da2, None),
+        ids(&[1, 2, 9])
+    );
+    assert_eq!(
+        current_scan(&regs).class_details(&regs, &g(9)),
+        Err(REGDB_E_KEYMISSING),
+        "registered, without a ProgID"
+    );
+    regs.write
+        .set_value(&format!("CLSID\\{}\\ProgID", g(9)), "", &"V.Nine.1".into())
+        .unwrap();
+    assert_eq!(
+        current_scan(&regs).class_details(&regs, &g(9)).unwrap().prog_id,
+        "V.Nine.1"
+    );
+    // A change of a detail alone (the ProgID) is seen too.
+    regs.write
+        .set_value(&format!("CLSID\\{}\\ProgID", g(9)), "", &"V.Nine.2".into())
+        .unwrap();
+    assert_eq!(
+        current_scan(&regs).class_details(&regs, &g(9)).unwrap().prog_id,
+        "V.Nine.2"
+    );
+    regs.write.delete_key(&da2_class(9)).unwrap();
+    assert_eq!(
+        current_scan(&regs).classes_of_categories(&regs, da2, None),
+        ids(&[1, 2])
+    );
+    // Data Access 1.0 servers registered the old way, read on first need, are seen coming too.
+    let da1 = Some(&[CATID_OPCDAServer10][..]);
+    assert_eq!(current_scan(&regs).classes_of_categories(&regs, da1, None), ids(&[4]));
+    regfile::apply(
+        &*regs.write,
+        &format!(
+            "REGEDIT4\n[HKCR\\V.Old2.1\\OPC]\n[HKCR\\V.Old2.1\\CLSID]\n@=\"{}\"\n",
+            g(1)
+        ),
+    )
+    .unwrap();
+    assert_eq!(
+        current_scan(&regs).classes_of_categories(&regs, da1, None),
+        ids(&[1, 4])
+    );
+}
+
+/// A class registered while a scan runs, after the scan read `CLSID`: that scan misses it, the next
+/// call does not (the watch was armed before the scan).
+#[test]
+fn a_class_registered_during_a_scan_is_in_the_next_answer() {
+    let inner = Arc::new(MemoryRegistry::new());
+    inner.create_key(&da2_class(1)).unwrap();
+    let reg = Arc::new(ChangingDuringScan {
+        inner: inner.clone(),
+        during: Mutex::new(Some(Box::new(|r: &MemoryRegistry| {
+            r.create_key(&da2_class(2)).unwrap()
+        }))),
+    });
+    let regs = Registries::new(
+        reg.clone(),
+        vec![reg],
+        Box::new(crate::registry::memory::MemoryWatch::new(inner)),
+    );
+    let da2 = Some(&[CATID_OPCDAServer20][..]);
+    assert_eq!(current_scan(&regs).classes_of_categories(&regs, da2, None), ids(&[1]));
+    assert_eq!(
+        current_scan(&regs).classes_of_categories(&regs, da2, None),
+        ids(&[1, 2])
+    );
+}
+
+/// A watch that cannot be armed: every call reads the registry, and answers.
+#[test]
+fn without_a_watch_every_call_reads_the_registry() {
+    let reg = Arc::new(MemoryRegistry::new());
+    let watch = Arc::new(crate::registry::watch::tests::TestWatch::default());
+    watch.fail.store(true, std::sync::atomic::Ordering::SeqCst);
+    let regs = Registries::new(reg.clone(), vec![reg.clone()], Box::new(watch.clone()));
+    let da2 = Some(&[CATID_OPCDAServer20][..]);
+    assert_eq!(current_scan(&regs).classes_of_categories(&regs, da2, None), ids(&[]));
+    // A change the watch does not report (it is not armed): seen all the same.
+    reg.create_key(&da2_class(3)).unwrap();
+    assert_eq!(current_scan(&regs).classes_of_categories(&regs, da2, None), ids(&[3]));
+    assert_eq!(watch.arms.load(std::sync::atomic::Ordering::SeqCst), 2);
 }

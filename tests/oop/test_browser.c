@@ -72,6 +72,48 @@ static OpcServerRegistration fake_registration(unsigned n, CLSID *clsid) {
     return r;
 }
 
+/* Whether a DA 2.0 enumeration through `l2` has fake `n`. */
+static int enumeration_has(IOPCServerList2 *l2, unsigned n) {
+    IOPCEnumGUID *e = NULL;
+    GUID got[256];
+    ULONG count = 0, i;
+    CLSID f = fake(n);
+    int found = 0;
+    CHECK_HR(l2->lpVtbl->EnumClassesOfCategories(l2, 1, (CATID *)&CATID_DA2, 0, NULL, &e), S_OK);
+    if (!e) return 0;
+    CHECK(SUCCEEDED(e->lpVtbl->Next(e, 256, got, &count)));
+    for (i = 0; i < count; i++) found |= IsEqualGUID(&got[i], &f);
+    e->lpVtbl->Release(e);
+    return found;
+}
+
+/* The browser answers from its last scan of the registry while the registry reports no change: a
+   server this process registers a moment before a call is in the browser's next answer, and gone
+   from the one after its unregistration. */
+static void registered_a_moment_before(IOPCServerList2 *l2) {
+    const unsigned n = 2 * FAKES - 1; /* not registered by the other runs */
+    OpcServerRegistration r;
+    CLSID c;
+    LPOLESTR prog = NULL, user = NULL, vi = NULL;
+    int round;
+    CHECK(!enumeration_has(l2, n));
+    CHECK(!enumeration_has(l2, n));
+    r = fake_registration(n, &c);
+    for (round = 0; round < 3; round++) {
+        CHECK_HR(OpcRegisterServer(&r, NULL), S_OK);
+        CHECK(enumeration_has(l2, n));
+        CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &c, &prog, &user, &vi), S_OK);
+        CHECK(prog && wcscmp(prog, FAKE_PROGIDS[n]) == 0);
+        CoTaskMemFree(prog);
+        CoTaskMemFree(user);
+        CoTaskMemFree(vi);
+        prog = user = vi = NULL;
+        CHECK_HR(OpcUnregisterServer(&r, NULL), S_OK);
+        CHECK(!enumeration_has(l2, n));
+        CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &c, &prog, &user, &vi), REGDB_E_CLASSNOTREG);
+    }
+}
+
 /* Browses through the out-of-process server list: every fake server must be there. */
 static void browse(void) {
     IOPCServerList2 *l2 = NULL;
@@ -95,6 +137,7 @@ static void browse(void) {
         CHECK(found == FAKES);
         e->lpVtbl->Release(e);
     }
+    registered_a_moment_before(l2);
     CHECK_HR(l2->lpVtbl->GetClassDetails(l2, &one, &prog, &user, &vi), S_OK);
     CHECK(wstr_is(prog, "Oop.Browse1.1") && wstr_is(user, "Oop browse test server"));
     CHECK(wstr_is(vi, "")); /* no version-independent ProgID registered: an empty string */

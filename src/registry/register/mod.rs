@@ -144,7 +144,7 @@ pub unsafe extern "C" fn OpcUnregisterServer(server: *const OpcServerRegistratio
 
 /// The registration `d` would write into an empty registry, as `.reg` text.
 pub(crate) fn export_registration(d: &ServerDescription) -> Result<String, HRESULT> {
-    let regs = Registries::single(std::sync::Arc::new(crate::registry::memory::MemoryRegistry::new()));
+    let regs = Registries::memory(std::sync::Arc::new(crate::registry::memory::MemoryRegistry::new()));
     register(&regs, d)?;
     crate::registry::regfile::export(&*regs.write, "")
 }

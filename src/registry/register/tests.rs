@@ -9,7 +9,7 @@ use core::ptr;
 use std::sync::Arc;
 
 pub(crate) fn memory() -> Registries {
-    Registries::single(Arc::new(MemoryRegistry::new()))
+    Registries::memory(Arc::new(MemoryRegistry::new()))
 }
 
 pub(crate) fn server(n: u128) -> ServerDescription {
