@@ -10,6 +10,7 @@ use crate::proxy::test_layouts::Interface as T;
 
 pub(crate) mod build;
 mod constructs;
+mod da;
 #[cfg(windows)]
 mod runtime;
 

@@ -320,16 +320,17 @@ pub fn rust(model: &Model, sources: &str, purpose: &str) -> String {
     }
     let _ = writeln!(
         out,
-        "];\n\n/// The interfaces as registered under `Interface\\{{iid}}`: IID, name, `NumMethods` (IUnknown's three\n/// included).\npub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32); COUNT] = ["
+        "];\n\n/// The interfaces as registered under `Interface\\{{iid}}`: IID, name, `NumMethods` (IUnknown's three\n/// included), and the specification each belongs to.\npub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32, &str); COUNT] = ["
     );
     for i in &model.interfaces {
         let hex: String = i.uuid.chars().filter(|c| *c != '-').collect();
         let _ = writeln!(
             out,
-            "    (GUID::from_u128(0x{}), {:?}, {}),",
+            "    (GUID::from_u128(0x{}), {:?}, {}, {:?}),",
             hex.to_uppercase(),
             i.name,
-            i.vtable
+            i.vtable,
+            i.spec
         );
     }
     out += "];\n\n";
