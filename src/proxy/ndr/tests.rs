@@ -13,6 +13,7 @@ mod constructs;
 mod da;
 #[cfg(windows)]
 mod runtime;
+mod served;
 
 use build::{Msg, Sa, SaData, V};
 
