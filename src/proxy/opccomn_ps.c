@@ -27,6 +27,11 @@ HRESULT STDMETHODCALLTYPE IUnknown_QueryInterface_Proxy(IUnknown *This, REFIID r
 ULONG STDMETHODCALLTYPE IUnknown_AddRef_Proxy(IUnknown *This);
 ULONG STDMETHODCALLTYPE IUnknown_Release_Proxy(IUnknown *This);
 
+/* The IIDs of the Data Access interfaces under the proxy/stub's own names (opcda_ps.c defines them). */
+#define OPC_PS_PART_NAMES
+#include "generated/interfaces.h"
+#undef OPC_PS_PART_NAMES
+
 /* The generated stub vtables (CStdStubBuffer_METHODS) get the checking Invoke. */
 HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSAGE *msg, IRpcChannelBuffer *channel);
 #define CStdStubBuffer_Invoke OpcStubBuffer_Invoke
@@ -37,7 +42,7 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 #endif
 #undef CStdStubBuffer_Invoke
 
-/* The Data Access interfaces: their IIDs (defined in opcda_ps.c) and tables. */
+/* The Data Access interfaces: their IIDs (renamed above, defined in opcda_ps.c) and tables. */
 #include "generated/opcda_idl.h"
 extern const ExtendedProxyFileInfo opcda_ProxyFileInfo;
 

@@ -7,9 +7,14 @@
  *
  * Built by buildscript/proxy.rs for Windows targets. */
 #define USE_STUBLESS_PROXY
-#include <initguid.h> /* the Data Access IIDs, defined here (selectany) */
 #include <objbase.h>
 #include <rpcproxy.h>
+
+/* The IIDs of the Data Access interfaces under the proxy/stub's own names, so that a program that
+ * links opccomn statically may define IID_IOPCServer and the others itself. */
+#define OPC_PS_PART_NAMES
+#include "generated/interfaces.h"
+#undef OPC_PS_PART_NAMES
 
 /* mingw-w64 declares these runtime functions only for C++; the generated vtables name them. */
 HRESULT STDMETHODCALLTYPE IUnknown_QueryInterface_Proxy(IUnknown *This, REFIID riid, void **ppvObject);
@@ -25,3 +30,7 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 #include "generated/opcda_p_win32.c"
 #endif
 #undef CStdStubBuffer_Invoke
+
+/* Their definitions. */
+#define OPC_PS_PART_IIDS
+#include "generated/interfaces.h"

@@ -2,9 +2,55 @@
  * (`cargo run -p gen-header`).
  *
  * The interfaces opccomn's proxy/stub serves, numbered as src/proxy/generated/layouts.rs numbers
- * them: the checks (src/proxy/ndr) take this number. Included by src/proxy/opccomn_ps.c after the
- * widl-generated header that declares the IIDs. */
+ * them: the checks (src/proxy/ndr) take this number. Three parts, by what the includer defines:
+ * - OPC_PS_PART_NAMES, before the widl-generated headers: the IIDs of the interfaces that are not
+ *   OPC Common's get names of the proxy/stub's own (opccomn_ps_IID_...), so that a program linking
+ *   opccomn statically may define IID_IOPCServer and the others itself (OPC Common's IIDs are
+ *   opccomn's exported GUIDs);
+ * - OPC_PS_PART_IIDS: their definitions (src/proxy/opcda_ps.c);
+ * - neither: the numbering (src/proxy/opccomn_ps.c, after the headers that declare the IIDs). */
 
+#if defined(OPC_PS_PART_NAMES)
+#define IID_IOPCServer opccomn_ps_IID_IOPCServer
+#define IID_IOPCServerPublicGroups opccomn_ps_IID_IOPCServerPublicGroups
+#define IID_IOPCBrowseServerAddressSpace opccomn_ps_IID_IOPCBrowseServerAddressSpace
+#define IID_IOPCGroupStateMgt opccomn_ps_IID_IOPCGroupStateMgt
+#define IID_IOPCPublicGroupStateMgt opccomn_ps_IID_IOPCPublicGroupStateMgt
+#define IID_IOPCSyncIO opccomn_ps_IID_IOPCSyncIO
+#define IID_IOPCAsyncIO opccomn_ps_IID_IOPCAsyncIO
+#define IID_IOPCItemMgt opccomn_ps_IID_IOPCItemMgt
+#define IID_IEnumOPCItemAttributes opccomn_ps_IID_IEnumOPCItemAttributes
+#define IID_IOPCDataCallback opccomn_ps_IID_IOPCDataCallback
+#define IID_IOPCAsyncIO2 opccomn_ps_IID_IOPCAsyncIO2
+#define IID_IOPCItemProperties opccomn_ps_IID_IOPCItemProperties
+#define IID_IOPCItemDeadbandMgt opccomn_ps_IID_IOPCItemDeadbandMgt
+#define IID_IOPCItemSamplingMgt opccomn_ps_IID_IOPCItemSamplingMgt
+#define IID_IOPCBrowse opccomn_ps_IID_IOPCBrowse
+#define IID_IOPCItemIO opccomn_ps_IID_IOPCItemIO
+#define IID_IOPCSyncIO2 opccomn_ps_IID_IOPCSyncIO2
+#define IID_IOPCAsyncIO3 opccomn_ps_IID_IOPCAsyncIO3
+#define IID_IOPCGroupStateMgt2 opccomn_ps_IID_IOPCGroupStateMgt2
+#elif defined(OPC_PS_PART_IIDS)
+const IID IID_IOPCServer = {0x39c13a4d, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCServerPublicGroups = {0x39c13a4e, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCBrowseServerAddressSpace = {0x39c13a4f, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCGroupStateMgt = {0x39c13a50, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCPublicGroupStateMgt = {0x39c13a51, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCSyncIO = {0x39c13a52, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCAsyncIO = {0x39c13a53, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCItemMgt = {0x39c13a54, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IEnumOPCItemAttributes = {0x39c13a55, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCDataCallback = {0x39c13a70, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCAsyncIO2 = {0x39c13a71, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCItemProperties = {0x39c13a72, 0x011e, 0x11d0, {0x96, 0x75, 0x00, 0x20, 0xaf, 0xd8, 0xad, 0xb3}};
+const IID IID_IOPCItemDeadbandMgt = {0x5946DA93, 0x8B39, 0x4ec8, {0xAB, 0x3D, 0xAA, 0x73, 0xDF, 0x5B, 0xC8, 0x6F}};
+const IID IID_IOPCItemSamplingMgt = {0x3E22D313, 0xF08B, 0x41a5, {0x86, 0xC8, 0x95, 0xE9, 0x5C, 0xB4, 0x9F, 0xFC}};
+const IID IID_IOPCBrowse = {0x39227004, 0xA18F, 0x4b57, {0x8B, 0x0A, 0x52, 0x35, 0x67, 0x0F, 0x44, 0x68}};
+const IID IID_IOPCItemIO = {0x85C0B427, 0x2893, 0x4cbc, {0xBD, 0x78, 0xE5, 0xFC, 0x51, 0x46, 0xF0, 0x8F}};
+const IID IID_IOPCSyncIO2 = {0x730F5F0F, 0x55B1, 0x4c81, {0x9E, 0x18, 0xFF, 0x8A, 0x09, 0x04, 0xE1, 0xFA}};
+const IID IID_IOPCAsyncIO3 = {0x0967B97B, 0x36EF, 0x423e, {0xB6, 0xF8, 0x6B, 0xFF, 0x1E, 0x40, 0xD3, 0x9D}};
+const IID IID_IOPCGroupStateMgt2 = {0x8E368666, 0xD72E, 0x4f78, {0x87, 0xED, 0x64, 0x76, 0x11, 0xC6, 0x1C, 0x9F}};
+#else
 #define OPC_PS_INTERFACE_COUNT 24
 /* The words of what a reply check needs of its request (src/proxy/ndr: Context). */
 #define OPC_PS_CONTEXT_WORDS 8
@@ -35,3 +81,4 @@ static const IID *const opc_ps_interfaces[OPC_PS_INTERFACE_COUNT] = {
     &IID_IOPCAsyncIO3,
     &IID_IOPCGroupStateMgt2,
 };
+#endif
