@@ -4217,7 +4217,7 @@ static ARRAY_9: Array = Array {
     length: None,
     bound: 1048576,
     plain: 0,
-    align: 4,
+    align: 8,
     deferred: true,
 };
 
@@ -4372,7 +4372,7 @@ static ARRAY_17: Array = Array {
     length: None,
     bound: 65536,
     plain: 0,
-    align: 4,
+    align: 8,
     deferred: true,
 };
 

@@ -1420,7 +1420,7 @@ static ARRAY_13: Array = Array {
     length: None,
     bound: 65536,
     plain: 0,
-    align: 4,
+    align: 8,
     deferred: true,
 };
 

@@ -83,6 +83,28 @@ const GET_PROPERTIES_REPLY: &[&str] = &[
     "490034002900000001000000",
 ];
 
+/// IOPCAsyncIO::Write(1, 1, {1}, {VT_I4 3}) as Wine's engine (x64, the widl tables) wrote the request:
+/// the array of VARIANTs starts at 8 after its conformance (the format string's array has VARIANT's
+/// alignment), with 4 bytes of padding before the first element's place.
+const ASYNC_WRITE_REQUEST: &[&str] = &[
+    "0100000001000000010000000100000001000000000000005573657200000000",
+    "030000000000000003000000000000000300000001000000",
+];
+
+#[test]
+fn an_array_of_variants_starts_at_8() {
+    let wine = hex(ASYNC_WRITE_REQUEST);
+    assert_eq!(wine.0.len(), 56);
+    for d in [Dialect::Ndr, Dialect::Wine] {
+        assert_eq!(whole_req(D::IOPCAsyncIO, "Write", &wine, d), Context::of(&[1]));
+        // Without the padding the engine reads the first element's place at 24 from the message's
+        // end: refused.
+        let mut packed = wine.0.clone();
+        packed.drain(20..24);
+        assert!(req(D::IOPCAsyncIO, "Write", &Msg(packed), d).is_err());
+    }
+}
+
 #[test]
 fn replies_wines_engine_wrote_pass_and_their_prefixes_do_not() {
     whole_rep(

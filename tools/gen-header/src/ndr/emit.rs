@@ -156,10 +156,16 @@ impl Writer<'_> {
                 } else {
                     0
                 };
+                // The engine aligns the elements' start to the array's alignment, which for VARIANTs
+                // is VARIANT's memory alignment (the FC_BOGUS_ARRAY of widl's and MIDL's format
+                // strings), not their 4-byte places in the flat part.
+                let align = match a.elem {
+                    Node::Variant => 8,
+                    ref e => self.align(e),
+                };
                 let body = format!(
-                    "Array {{ elem: {elem}, size: {size}, length: {length}, bound: {}, plain: {plain}, align: {}, deferred: {} }}",
+                    "Array {{ elem: {elem}, size: {size}, length: {length}, bound: {}, plain: {plain}, align: {align}, deferred: {} }}",
                     a.bound,
-                    self.align(&a.elem),
                     self.deferred(&a.elem)
                 );
                 format!("Ty::Array(&{})", self.statics.named("ARRAY", "Array", body, ""))
