@@ -248,7 +248,12 @@ fn variants_as_the_runtime_marshals_them() {
             &real,
         );
         // The construct tests' messages are laid out as the runtime lays them out.
-        let built = Msg::default().u32(USER).variant(&v, Dialect::Wine).u32(0).u32(0).align(8);
+        let built = Msg::default()
+            .u32(USER)
+            .variant(&v, Dialect::Wine)
+            .u32(0)
+            .u32(0)
+            .align(8);
         assert_eq!(
             built.0.len(),
             real.0.len(),
