@@ -74,6 +74,7 @@ pub fn outputs(
             "src/proxy/generated/interfaces.h",
             emit::c_include(&served, &sources, CONTEXT_WORDS),
         ),
+        ("tests/oop/ps_args.h", emit::c_args(&served, &sources)),
         (
             "src/proxy/generated/test_layouts.rs",
             format(&emit::rust(

@@ -113,6 +113,9 @@ pub struct MethodOut {
     pub context: Vec<Save>,
     pub request_align8: bool,
     pub reply_align8: bool,
+    /// The C parameters after `This`, in order: `i` a value of at most 4 bytes, `h` one of 8, `p` a
+    /// pointer, `v` a VARIANT by value (for the tests' generic calls, `tests/oop/ps_args.h`).
+    pub args: String,
 }
 
 #[derive(Clone, Debug)]
@@ -1181,6 +1184,7 @@ impl Builder<'_> {
         }
         let mut request = Vec::new();
         let mut reply = Vec::new();
+        let mut args = String::new();
         // (slot, bound of the array it sizes) per use in the reply's parameters.
         let mut reply_uses: Vec<(u8, Option<u32>, bool)> = Vec::new();
         for (p, save) in m.params.iter().zip(&saves) {
@@ -1192,6 +1196,12 @@ impl Builder<'_> {
             if *save != Save::None {
                 self.check_saved(m, p, &node, *save, &pkey)?;
             }
+            args.push(match node {
+                Node::Pointer(..) | Node::Interface(..) | Node::Bstr | Node::SafeArray | Node::Str(_) => 'p',
+                Node::Variant => 'v',
+                Node::Base(8) => 'h',
+                _ => 'i',
+            });
             let (dir_in, dir_out) = direction(p);
             if dir_out && !matches!(node, Node::Pointer(..)) {
                 return Err(format!("{pkey}: an [out] parameter must be a pointer"));
@@ -1264,6 +1274,7 @@ impl Builder<'_> {
             context,
             request_align8,
             reply_align8,
+            args,
         })
     }
 }
