@@ -1,7 +1,7 @@
-//! For Windows targets, the proxy/stub of the OPC Common interfaces: compiles
-//! `src/proxy/opccomn_ps.c` (with the NDR tables `tools/gen-proxy.py` generated from
-//! `idl/opccomn.idl` into `src/proxy/generated/`, and the interface table `tools/gen-header` generated
-//! beside them) into a static library, links it, rpcrt4 (the NDR
+//! For Windows targets, the proxy/stub of the OPC Common and Data Access interfaces: compiles
+//! `src/proxy/opccomn_ps.c` and `src/proxy/opcda_ps.c` (with the NDR tables `tools/gen-proxy.py`
+//! generated from `idl/opccomn.idl` and `idl/opcda.idl` into `src/proxy/generated/`, and the interface
+//! table `tools/gen-header` generated beside them) into a static library, links it, rpcrt4 (the NDR
 //! engine that interprets the tables) and uuid, and sets `cfg(opccomn_proxy_stub)` for src/proxy. With
 //! mingw the tools are `<triple>-gcc` and `<triple>-ar` (or OPCCOMN_CC / OPCCOMN_AR), with MSVC `cl`
 //! and `lib` (or OPCCOMN_CL / OPCCOMN_LIB), see [`crate::toolchain`].
@@ -14,34 +14,48 @@ use crate::toolchain::{run, Toolchain};
 
 pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
     let src = manifest_dir.join("src/proxy");
+    // Each table file on its own (they define the same static names), with its checking wrapper.
+    let units = ["opccomn_ps", "opcda_ps"];
     for file in [
         "opccomn_ps.c",
+        "opcda_ps.c",
         "generated/interfaces.h",
         "generated/opccomn_idl.h",
         "generated/opccomn_p_win64.c",
         "generated/opccomn_p_win32.c",
+        "generated/opcda_idl.h",
+        "generated/opcda_p_win64.c",
+        "generated/opcda_p_win32.c",
     ] {
         println!("cargo:rerun-if-changed={}", src.join(file).display());
     }
     let dir = out_dir.join("proxy");
     fs::create_dir_all(&dir).expect("create proxy dir");
-    let (object, library) = match toolchain {
-        Toolchain::Mingw => (dir.join("opccomn_ps.o"), dir.join("libopccomn_ps.a")),
-        Toolchain::Msvc => (dir.join("opccomn_ps.obj"), dir.join("opccomn_ps.lib")),
+    let library = match toolchain {
+        Toolchain::Mingw => dir.join("libopccomn_ps.a"),
+        Toolchain::Msvc => dir.join("opccomn_ps.lib"),
     };
-    let mut cc = Command::new(toolchain.c_compiler());
-    match toolchain {
-        Toolchain::Mingw => {
-            cc.args(["-c", "-O2", "-Wall", "-Werror", "-o"]).arg(&object);
+    let mut objects = Vec::new();
+    for unit in units {
+        let object = match toolchain {
+            Toolchain::Mingw => dir.join(format!("{unit}.o")),
+            Toolchain::Msvc => dir.join(format!("{unit}.obj")),
+        };
+        let mut cc = Command::new(toolchain.c_compiler());
+        match toolchain {
+            Toolchain::Mingw => {
+                cc.args(["-c", "-O2", "-Wall", "-Werror", "-o"]).arg(&object);
+            }
+            Toolchain::Msvc => {
+                let mut fo = std::ffi::OsString::from("/Fo");
+                fo.push(&object);
+                cc.args(["/nologo", "/c", "/O2", "/W3", "/WX"]).arg(fo);
+            }
         }
-        Toolchain::Msvc => {
-            let mut fo = std::ffi::OsString::from("/Fo");
-            fo.push(&object);
-            cc.args(["/nologo", "/c", "/O2", "/W3", "/WX"]).arg(fo);
-        }
+        cc.arg(src.join(format!("{unit}.c")));
+        run(cc);
+        objects.push(object);
     }
-    cc.arg(src.join("opccomn_ps.c"));
-    run(cc);
     let _ = fs::remove_file(&library);
     let mut ar = Command::new(toolchain.archiver());
     match toolchain {
@@ -54,11 +68,13 @@ pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
             ar.arg("/nologo").arg(out);
         }
     }
-    ar.arg(&object);
+    ar.args(&objects);
     run(ar);
     println!("cargo:rustc-link-search=native={}", dir.display());
     println!("cargo:rustc-link-lib=static=opccomn_ps");
     println!("cargo:rustc-link-lib=dylib=rpcrt4");
+    // The Automation types' marshalling (VARIANT, BSTR, SAFEARRAY user-marshal routines) of the DA tables.
+    println!("cargo:rustc-link-lib=dylib=oleaut32");
     // The IIDs of IUnknown, IPSFactoryBuffer, IRpcProxyBuffer and IRpcChannelBuffer (mingw's libuuid.a).
     println!("cargo:rustc-link-lib=uuid");
     println!("cargo:rustc-cfg=opccomn_proxy_stub");

@@ -3,7 +3,8 @@
 # reference matcher), `.reg` import (OpcRegistryApply), EXE command lines (OpcParseCommandLine) and
 # version strings (OpcVersionParse/Format), the SDDL of AppID permissions (registry::sddl), the
 # proxy/stub's checks of NDR requests and replies (proxy::wire, against the hand-written checks they
-# replaced) and the interpreter of NDR layouts over a test IDL that uses every construct (proxy::ndr).
+# replaced), the interpreter of NDR layouts over a test IDL that uses every construct (proxy::ndr) and
+# over the layouts of every interface the proxy/stub serves, Data Access's included (layouts).
 # The targets are in fuzz/fuzz_targets/, their committed seed corpus in fuzz/seeds/<target>/. Built
 # with nightly Rust, libFuzzer (crate libfuzzer-sys) and AddressSanitizer; a crash, a failed assertion, a leak or a
 # timeout is a finding and fails the run (the input is kept in build/fuzz/artifacts/).
@@ -20,7 +21,7 @@ need_fuzz_tools
 seconds=${1:-${OPCCOMN_FUZZ_SECONDS:-30}}
 shift || true
 targets=("$@")
-[ "${#targets[@]}" -eq 0 ] && targets=(pattern regfile cmdline version sddl wire ndr)
+[ "${#targets[@]}" -eq 0 ] && targets=(pattern regfile cmdline version sddl wire ndr layouts)
 
 out="$root/build/fuzz"
 triple=x86_64-unknown-linux-gnu

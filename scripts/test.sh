@@ -185,7 +185,7 @@ run_x86_c_tests() {
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
         { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }
     # The proxy/stub robustness tests (ps.*; the runs against the unchecked stand-in must fail).
-    lines=$(grep -cE '^test_(stub_requests|proxy_replies): [0-9]+ passed, 0 failed' \
+    lines=$(grep -cE '^test_(stub_requests|proxy_replies|served_messages): [0-9]+ passed, 0 failed' \
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$ps_tests" -gt 0 ] && [ "$ps_tests" = "$lines" ] ||
         { echo "x86 proxy/stub tests in $dir: $ps_tests tests, $lines result lines" >&2; return 1; }

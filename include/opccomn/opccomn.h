@@ -202,6 +202,23 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_PROXY_STUB_TAKE_OVER 1
 
 /**
+ * OpcRegisterProxyStub() flag: register the OPC Common interfaces (IOPCShutdown, IOPCCommon,
+ * IOPCServerList, IOPCServerList2, IOPCEnumGUID). Without any of the specification flags, every
+ * interface the proxy/stub serves is registered.
+ *
+ * @ingroup proxystub
+ */
+#define OPC_PROXY_STUB_COMMON 256
+
+/**
+ * OpcRegisterProxyStub() flag: register the OPC Data Access 1.0, 2.05a and 3.0 interfaces (the
+ * connection-point callback IOPCDataCallback included).
+ *
+ * @ingroup proxystub
+ */
+#define OPC_PROXY_STUB_DA 512
+
+/**
  * OpcServerRegistration::flags: leave values that already exist as they are, instead of replacing
  * them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
  * another product registers too (opccomn's own server list under the CLSID of OpcEnum).
@@ -4743,20 +4760,24 @@ BOOL OPCCOMN_CDECL OpcPatternMatchA(const struct OpcPattern *filter, LPCSTR stri
 void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *filter);
 
 /**
- * Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
- * IOPCEnumGUID. Writes ::CLSID_OpcComnProxyStub with this module as its `InprocServer32`
- * (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods` and
- * `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub (the
- * OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has ::OPC_PROXY_STUB_TAKE_OVER. Records
- * what it adds or replaces, so OpcUnregisterProxyStub() undoes exactly that. Registering twice is
- * harmless.
+ * Registers opccomn's proxy/stub for the interfaces it serves: the OPC Common interfaces
+ * (IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2, IOPCEnumGUID) and those of OPC Data
+ * Access 1.0, 2.05a and 3.0 (IOPCServer, IOPCItemMgt, IOPCSyncIO, IOPCDataCallback, ...), or those
+ * of the specifications `flags` names. Writes ::CLSID_OpcComnProxyStub with this module as its
+ * `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods`
+ * and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub
+ * (the OPC Foundation's `opccomn_ps.dll` or `opcproxy.dll`) keeps it unless `flags` has
+ * ::OPC_PROXY_STUB_TAKE_OVER. Records what it adds or replaces, so OpcUnregisterProxyStub() undoes
+ * exactly that. Registering twice is harmless; registering one specification after another adds to
+ * what is registered.
  *
  * @param reg the registry to write, or NULL for the system registry (on 64-bit Windows the view of the
  *   calling process, so a 32-bit opccomn.dll registers the 32-bit view).
- * @param flags 0 or ::OPC_PROXY_STUB_TAKE_OVER.
+ * @param flags ::OPC_PROXY_STUB_TAKE_OVER or not, with the specifications to register
+ *   (::OPC_PROXY_STUB_COMMON, ::OPC_PROXY_STUB_DA); none of those: all of them.
  *
- * @return S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with another;
- * E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+ * @return S_OK when every interface registered now uses opccomn's proxy/stub; S_FALSE when some stay with
+ * another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
  *
  * @par Safety
  * `reg` must be NULL or a live registry handle.
@@ -4766,9 +4787,10 @@ void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *filter);
 HRESULT OPCCOMN_CDECL OpcRegisterProxyStub(const struct OpcRegistry *reg, uint32_t flags);
 
 /**
- * Removes what OpcRegisterProxyStub() added and restores the `ProxyStubClsid32` values it replaced;
- * interfaces another proxy/stub registered itself for since are left as they are. Unregistering what
- * is not registered succeeds.
+ * Removes what OpcRegisterProxyStub() added, for every specification, and restores the
+ * `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
+ * are left as they are. Unregistering what is not registered succeeds. (`regsvr32 /u` with
+ * `/i:"ProxyStub DA"` unregisters one specification.)
  *
  * @param reg the registry, or NULL for the system registry.
  *
@@ -4783,9 +4805,11 @@ HRESULT OPCCOMN_CDECL OpcUnregisterProxyStub(const struct OpcRegistry *reg);
 
 /**
  * `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
- * registers the proxy/stub in the system registry (OpcRegisterProxyStub()), `ProxyStub,TakeOver` also
- * takes over from another installed proxy/stub. Words are case-insensitive and separated by commas or
- * blanks. regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
+ * registers the proxy/stub in the system registry for every interface it serves
+ * (OpcRegisterProxyStub()), `ProxyStub,TakeOver` also takes over from another installed proxy/stub;
+ * the words `Common` and `DA` choose the specifications (`ProxyStub DA`: only Data Access's), for
+ * registering and for unregistering. Words are case-insensitive and separated by commas or blanks.
+ * regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
  *
  * @param install TRUE to register; FALSE to unregister (`regsvr32 /u /i:ProxyStub`).
  * @param command_line what follows `/i:`.

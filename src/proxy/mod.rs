@@ -1,7 +1,8 @@
 //! opccomn.dll as the proxy/stub of the OPC Common interfaces (IOPCShutdown, IOPCCommon,
-//! IOPCServerList, IOPCServerList2, IOPCEnumGUID), the way a MIDL "merged proxy/stub" DLL is one:
+//! IOPCServerList, IOPCServerList2, IOPCEnumGUID) and of the OPC Data Access interfaces (DA 1.0,
+//! 2.05a and 3.0, IOPCDataCallback included), the way a MIDL "merged proxy/stub" DLL is one:
 //! `DllGetClassObject(CLSID_OpcComnProxyStub)` hands out the system RPC runtime's PSFactoryBuffer over
-//! NDR format strings generated from `idl/opccomn.idl` (`src/proxy/opccomn_ps.c`, built by
+//! NDR format strings generated from `idl/opccomn.idl` and `idl/opcda.idl` (`src/proxy/opccomn_ps.c`, built by
 //! `buildscript/proxy.rs` on Windows with mingw; `tools/gen-proxy.py` generates and corrects the
 //! tables, CI checks they are current). The bytes on the wire are therefore the runtime's NDR for the interfaces as the OPC
 //! Foundation's IDL declares them, the same as its `opccomn_ps.dll` produces.
@@ -37,13 +38,49 @@ use crate::registry::{class_key, parse_guid, registries, OpcRegistry, RegValue, 
 /// `OpcRegisterProxyStub` flag: also take over interfaces another installed proxy/stub serves (the
 /// previous `ProxyStubClsid32` is restored by `OpcUnregisterProxyStub`).
 pub const OPC_PROXY_STUB_TAKE_OVER: u32 = 1;
+/// `OpcRegisterProxyStub` flag: register the OPC Common interfaces (IOPCShutdown, IOPCCommon,
+/// IOPCServerList, IOPCServerList2, IOPCEnumGUID). Without any of the specification flags, every
+/// interface the proxy/stub serves is registered.
+pub const OPC_PROXY_STUB_COMMON: u32 = 0x100;
+/// `OpcRegisterProxyStub` flag: register the OPC Data Access 1.0, 2.05a and 3.0 interfaces (the
+/// connection-point callback IOPCDataCallback included).
+pub const OPC_PROXY_STUB_DA: u32 = 0x200;
+
+/// The specifications whose interfaces the proxy/stub serves: the name registration's command line
+/// gives each (as `tools/gen-header` names them in the layouts) and its flag.
+///
+/// cbindgen:ignore
+const SPECIFICATIONS: [(&str, u32); 2] = [("Common", OPC_PROXY_STUB_COMMON), ("DA", OPC_PROXY_STUB_DA)];
+/// Every specification flag.
+///
+/// cbindgen:ignore
+const ALL_SPECIFICATIONS: u32 = OPC_PROXY_STUB_COMMON | OPC_PROXY_STUB_DA;
+
+/// The flag of a specification, by its name in the layouts.
+fn spec_flag(name: &str) -> u32 {
+    SPECIFICATIONS
+        .iter()
+        .find(|(n, _)| n.eq_ignore_ascii_case(name))
+        .map_or(0, |(_, flag)| *flag)
+}
 
 /// The interfaces the proxy/stub serves, generated from the IDL with its layouts.
-static INTERFACES: [(IID, &str, u32); layouts::COUNT] = layouts::PROXY_STUB_INTERFACES;
+static INTERFACES: [(IID, &str, u32, &str); layouts::COUNT] = layouts::PROXY_STUB_INTERFACES;
 
 /// The interfaces the proxy/stub serves: IID, name, `NumMethods` (IUnknown's three included).
 fn interfaces() -> [(&'static IID, &'static str, u32); layouts::COUNT] {
-    INTERFACES.each_ref().map(|(iid, name, methods)| (iid, *name, *methods))
+    INTERFACES
+        .each_ref()
+        .map(|(iid, name, methods, _)| (iid, *name, *methods))
+}
+
+/// Those of the specifications in `specs` (`OPC_PROXY_STUB_COMMON`, ...).
+fn interfaces_of(specs: u32) -> Vec<(&'static IID, &'static str, u32)> {
+    INTERFACES
+        .iter()
+        .filter(|(.., spec)| spec_flag(spec) & specs != 0)
+        .map(|(iid, name, methods, _)| (iid, *name, *methods))
+        .collect()
 }
 
 // The checks: used by the proxy/stub (Windows, mingw); everywhere else only their tests and the fuzz
@@ -206,7 +243,7 @@ unsafe extern "C" fn check_reply(
 }
 
 /// The PSFactoryBuffer for `rclsid` (CLSID_OpcComnProxyStub, or, as with MIDL's proxies, the IID of one
-/// of the five interfaces); CLASS_E_CLASSNOTAVAILABLE otherwise and where the proxy/stub is not built.
+/// of the interfaces it serves); CLASS_E_CLASSNOTAVAILABLE otherwise and where the proxy/stub is not built.
 ///
 /// # Safety
 /// `rclsid` and `riid` readable; `ppv` writable.
@@ -257,9 +294,10 @@ fn proxy_stub_of(reg: &dyn Registry, iid: &GUID) -> Option<GUID> {
     parse_guid(value.as_str()?)
 }
 
-/// Registers the proxy/stub (module `module`) in `reg`. Ok(true) when all five interfaces now use it,
-/// Ok(false) when some stay with another installed proxy/stub.
-pub(crate) fn register(reg: &dyn Registry, module: &str, take_over: bool) -> Result<bool, HRESULT> {
+/// Registers the proxy/stub (module `module`) in `reg` for the interfaces of the specifications in
+/// `specs`. Ok(true) when all of them now use it, Ok(false) when some stay with another installed
+/// proxy/stub.
+pub(crate) fn register(reg: &dyn Registry, module: &str, take_over: bool, specs: u32) -> Result<bool, HRESULT> {
     let module_key = module_key();
     let ours = CLSID_OpcComnProxyStub.to_string();
     let mut rec = Recorder::new(reg, read_ledger(reg, &module_key).unwrap_or_default());
@@ -267,7 +305,7 @@ pub(crate) fn register(reg: &dyn Registry, module: &str, take_over: bool) -> Res
     rec.value(&module_key, "", module, true)?;
     rec.value(&module_key, "ThreadingModel", "Both", true)?;
     let mut all = true;
-    for (iid, name, methods) in interfaces() {
+    for (iid, name, methods) in interfaces_of(specs) {
         match proxy_stub_of(reg, iid) {
             Some(other)
                 if other != CLSID_OpcComnProxyStub
@@ -289,8 +327,11 @@ pub(crate) fn register(reg: &dyn Registry, module: &str, take_over: bool) -> Res
     Ok(all)
 }
 
-/// Undoes [`register`] in `reg`, leaving interfaces that another proxy/stub serves by now.
-pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
+/// Undoes [`register`] in `reg` for the interfaces of the specifications in `specs`, leaving
+/// interfaces that another proxy/stub serves by now. What was registered for the other
+/// specifications stays, with the proxy/stub's class, in the ledger; the class goes with the last
+/// interface.
+pub(crate) fn unregister(reg: &dyn Registry, specs: u32) -> Result<(), HRESULT> {
     let module_key = module_key();
     let class = class_key(&CLSID_OpcComnProxyStub);
     let ledger = match read_ledger(reg, &module_key) {
@@ -320,12 +361,20 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
         .filter(|(iid, ..)| proxy_stub_of(reg, iid).is_some_and(|c| c != CLSID_OpcComnProxyStub))
         .map(|(iid, ..)| interface_key(iid).to_lowercase())
         .collect();
-    let keep = |key: &str| {
+    let under = |keys: &[String], key: &str| {
         let key = key.to_lowercase();
-        foreign
-            .iter()
+        keys.iter()
             .any(|f| key == *f || key.strip_prefix(f.as_str()).is_some_and(|rest| rest.starts_with('\\')))
     };
+    // The interfaces of the specifications that stay registered, and whether the ledger holds any of
+    // theirs (then the class and its module stay too).
+    let staying: Vec<String> = interfaces_of(ALL_SPECIFICATIONS & !specs)
+        .iter()
+        .map(|(iid, ..)| interface_key(iid).to_lowercase())
+        .collect();
+    let others_remain = ledger.iter().any(|e| e.key().is_some_and(|k| under(&staying, k)));
+    let stays = |key: &str| under(&staying, key) || (others_remain && !key.to_lowercase().starts_with("interface\\"));
+    let keep = |key: &str| under(&foreign, key) || stays(key);
     // What registration writes, for entries of ledgers that did not record it (the module path of
     // our own class: whatever it is).
     let ours = CLSID_OpcComnProxyStub.to_string();
@@ -363,7 +412,14 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
             _ => {}
         }
     }
-    if reg.value(&module_key, LEDGER).is_some() {
+    let remaining: Vec<String> = ledger
+        .iter()
+        .filter(|e| e.key().is_some_and(stays))
+        .map(Entry::encode)
+        .collect();
+    if others_remain {
+        reg.set_value(&module_key, LEDGER, &RegValue::Sz(remaining.join(";")))?;
+    } else if reg.value(&module_key, LEDGER).is_some() {
         reg.delete_value(&module_key, LEDGER)?;
     }
     let mut keys: Vec<&String> = ledger
@@ -383,47 +439,59 @@ pub(crate) fn unregister(reg: &dyn Registry) -> Result<(), HRESULT> {
     Ok(())
 }
 
-/// Registers opccomn's proxy/stub for IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and
-/// IOPCEnumGUID. Writes `CLSID_OpcComnProxyStub` with this module as its `InprocServer32`
-/// (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods` and
-/// `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub (the
-/// OPC Foundation's `opccomn_ps.dll`) keeps it unless `flags` has `OPC_PROXY_STUB_TAKE_OVER`. Records
-/// what it adds or replaces, so `OpcUnregisterProxyStub` undoes exactly that. Registering twice is
-/// harmless.
+/// Registers opccomn's proxy/stub for the interfaces it serves: the OPC Common interfaces
+/// (IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2, IOPCEnumGUID) and those of OPC Data
+/// Access 1.0, 2.05a and 3.0 (IOPCServer, IOPCItemMgt, IOPCSyncIO, IOPCDataCallback, ...), or those
+/// of the specifications `flags` names. Writes `CLSID_OpcComnProxyStub` with this module as its
+/// `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods`
+/// and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub
+/// (the OPC Foundation's `opccomn_ps.dll` or `opcproxy.dll`) keeps it unless `flags` has
+/// `OPC_PROXY_STUB_TAKE_OVER`. Records what it adds or replaces, so `OpcUnregisterProxyStub` undoes
+/// exactly that. Registering twice is harmless; registering one specification after another adds to
+/// what is registered.
 ///
 /// # Parameters
 /// - `reg`: the registry to write, or NULL for the system registry (on 64-bit Windows the view of the
 ///   calling process, so a 32-bit opccomn.dll registers the 32-bit view).
-/// - `flags`: 0 or `OPC_PROXY_STUB_TAKE_OVER`.
+/// - `flags`: `OPC_PROXY_STUB_TAKE_OVER` or not, with the specifications to register
+///   (`OPC_PROXY_STUB_COMMON`, `OPC_PROXY_STUB_DA`); none of those: all of them.
 ///
 /// # Returns
-/// S_OK when all five interfaces now use opccomn's proxy/stub; S_FALSE when some stay with another;
-/// E_INVALIDARG for unknown flags; registry errors as HRESULTs.
+/// S_OK when every interface registered now uses opccomn's proxy/stub; S_FALSE when some stay with
+/// another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
 ///
 /// # Safety
 /// `reg` must be NULL or a live registry handle.
 #[no_mangle]
 pub unsafe extern "C" fn OpcRegisterProxyStub(reg: *const OpcRegistry, flags: u32) -> Hr {
     ffi::boundary!(Opc, [], {
-        if flags & !OPC_PROXY_STUB_TAKE_OVER != 0 {
+        if flags & !(OPC_PROXY_STUB_TAKE_OVER | ALL_SPECIFICATIONS) != 0 {
             return Err(E_INVALIDARG.into());
         }
         // SAFETY: the caller vouches for the handle.
         let regs = unsafe { registries(reg) };
         let module = this_module_path(false)?;
-        Ok(
-            if register(&*regs.write, &module, flags & OPC_PROXY_STUB_TAKE_OVER != 0)? {
-                S_OK
-            } else {
-                S_FALSE
-            },
-        )
+        let take_over = flags & OPC_PROXY_STUB_TAKE_OVER != 0;
+        Ok(if register(&*regs.write, &module, take_over, specifications(flags))? {
+            S_OK
+        } else {
+            S_FALSE
+        })
     })
 }
 
-/// Removes what `OpcRegisterProxyStub` added and restores the `ProxyStubClsid32` values it replaced;
-/// interfaces another proxy/stub registered itself for since are left as they are. Unregistering what
-/// is not registered succeeds.
+/// The specifications `flags` names; none: all of them.
+fn specifications(flags: u32) -> u32 {
+    match flags & ALL_SPECIFICATIONS {
+        0 => ALL_SPECIFICATIONS,
+        specs => specs,
+    }
+}
+
+/// Removes what `OpcRegisterProxyStub` added, for every specification, and restores the
+/// `ProxyStubClsid32` values it replaced; interfaces another proxy/stub registered itself for since
+/// are left as they are. Unregistering what is not registered succeeds. (`regsvr32 /u` with
+/// `/i:"ProxyStub DA"` unregisters one specification.)
 ///
 /// # Parameters
 /// - `reg`: the registry, or NULL for the system registry.
@@ -438,31 +506,37 @@ pub unsafe extern "C" fn OpcUnregisterProxyStub(reg: *const OpcRegistry) -> Hr {
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller vouches for the handle.
         let regs = unsafe { registries(reg) };
-        unregister(&*regs.write)?;
+        unregister(&*regs.write, ALL_SPECIFICATIONS)?;
         Ok(S_OK)
     })
 }
 
-/// What a `DllInstall` command line asks for: Some(take_over) for `ProxyStub` (with `TakeOver`).
-fn parse_install_command(text: &str) -> Option<bool> {
+/// What a `DllInstall` command line asks for: Some(flags) for `ProxyStub` (`OpcRegisterProxyStub`'s
+/// flags: `TakeOver`, and the specifications named, `Common` and `DA`).
+fn parse_install_command(text: &str) -> Option<u32> {
     let mut proxy_stub = false;
-    let mut take_over = false;
+    let mut flags = 0;
     for word in text.split([',', ' ', ';']).filter(|w| !w.is_empty()) {
         if word.eq_ignore_ascii_case("ProxyStub") {
             proxy_stub = true;
         } else if word.eq_ignore_ascii_case("TakeOver") {
-            take_over = true;
+            flags |= OPC_PROXY_STUB_TAKE_OVER;
         } else {
-            return None;
+            match spec_flag(word) {
+                0 => return None,
+                flag => flags |= flag,
+            }
         }
     }
-    proxy_stub.then_some(take_over)
+    proxy_stub.then_some(flags)
 }
 
 /// `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
-/// registers the proxy/stub in the system registry (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also
-/// takes over from another installed proxy/stub. Words are case-insensitive and separated by commas or
-/// blanks. regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
+/// registers the proxy/stub in the system registry for every interface it serves
+/// (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also takes over from another installed proxy/stub;
+/// the words `Common` and `DA` choose the specifications (`ProxyStub DA`: only Data Access's), for
+/// registering and for unregistering. Words are case-insensitive and separated by commas or blanks.
+/// regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
 ///
 /// # Parameters
 /// - `install`: TRUE to register; FALSE to unregister (`regsvr32 /u /i:ProxyStub`).
@@ -479,15 +553,15 @@ pub unsafe extern "C" fn OpcDllInstall(install: BOOL, command_line: LPCWSTR) -> 
     ffi::boundary!(Opc, [], {
         // SAFETY: the caller vouches for NULL or a NUL-terminated string; the reader bounds the read.
         let text = unsafe { ffi::in_string(command_line)? };
-        let take_over = parse_install_command(&text).ok_or(E_INVALIDARG)?;
+        let flags = parse_install_command(&text).ok_or(E_INVALIDARG)?;
+        if install != 0 {
+            // SAFETY: NULL is the system registry.
+            return Ok(unsafe { OpcRegisterProxyStub(ptr::null(), flags) }.get());
+        }
         // SAFETY: NULL is the system registry.
-        Ok(unsafe {
-            if install != 0 {
-                OpcRegisterProxyStub(ptr::null(), u32::from(take_over)).get()
-            } else {
-                OpcUnregisterProxyStub(ptr::null()).get()
-            }
-        })
+        let regs = unsafe { registries(ptr::null()) };
+        unregister(&*regs.write, specifications(flags))?;
+        Ok(S_OK)
     })
 }
 

@@ -1,8 +1,9 @@
 /* The proxy/stub class of opccomn.dll (a MIDL "merged proxy/stub"): the PSFactoryBuffer for
- * IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and IOPCEnumGUID.
+ * IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and IOPCEnumGUID, and for the OPC Data
+ * Access interfaces (their tables in opcda_ps.c, a translation unit of their own).
  *
  * The marshalling itself is the system RPC runtime's: the generated files in generated/ hold only NDR
- * format strings and tables (tools/gen-proxy.py makes them from idl/opccomn.idl with widl -Oif), which
+ * format strings and tables (tools/gen-proxy.py makes them from idl/opccomn.idl and idl/opcda.idl with widl -Oif), which
  * NdrClientCall2 / NdrStubCall2 interpret, as they interpret the format strings of MIDL's /Oicf
  * proxies. This file adds what MIDL's dlldata.c would (the factory and its two entry points, under
  * opccomn's names, because DllGetClassObject / DllCanUnloadNow are opccomn's own; src/proxy/mod.rs
@@ -26,6 +27,11 @@ HRESULT STDMETHODCALLTYPE IUnknown_QueryInterface_Proxy(IUnknown *This, REFIID r
 ULONG STDMETHODCALLTYPE IUnknown_AddRef_Proxy(IUnknown *This);
 ULONG STDMETHODCALLTYPE IUnknown_Release_Proxy(IUnknown *This);
 
+/* The IIDs of the Data Access interfaces under the proxy/stub's own names (opcda_ps.c defines them). */
+#define OPC_PS_PART_NAMES
+#include "generated/interfaces.h"
+#undef OPC_PS_PART_NAMES
+
 /* The generated stub vtables (CStdStubBuffer_METHODS) get the checking Invoke. */
 HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSAGE *msg, IRpcChannelBuffer *channel);
 #define CStdStubBuffer_Invoke OpcStubBuffer_Invoke
@@ -35,6 +41,10 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 #include "generated/opccomn_p_win32.c"
 #endif
 #undef CStdStubBuffer_Invoke
+
+/* The Data Access interfaces: their IIDs (renamed above, defined in opcda_ps.c) and tables. */
+#include "generated/opcda_idl.h"
+extern const ExtendedProxyFileInfo opcda_ProxyFileInfo;
 
 /* The interfaces by number, as the checks number them (generated from the IDL with the checks' layouts). */
 #include "generated/interfaces.h"
@@ -67,6 +77,7 @@ extern const CLSID CLSID_OpcComnProxyStub;
 
 static const ProxyFileInfo *const proxy_files[] = {
     (const ProxyFileInfo *)&opccomn_ProxyFileInfo,
+    (const ProxyFileInfo *)&opcda_ProxyFileInfo,
     NULL,
 };
 

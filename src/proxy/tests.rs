@@ -62,7 +62,7 @@ fn install_foundation(reg: &MemoryRegistry, interfaces: &[(&GUID, &str, u32)]) {
 )]
 fn registration_writes_the_interfaces_and_unregistration_removes_everything() {
     let reg = MemoryRegistry::new();
-    assert_eq!(register(&reg, MODULE, false), Ok(true));
+    assert_eq!(register(&reg, MODULE, false, ALL_SPECIFICATIONS), Ok(true));
     let ours = CLSID_OpcComnProxyStub.to_string();
     assert_eq!(
         sz(&reg, &class_key(&CLSID_OpcComnProxyStub), "").as_deref(),
@@ -77,11 +77,11 @@ fn registration_writes_the_interfaces_and_unregistration_removes_everything() {
         assert_eq!(sz(&reg, &format!("{key}\\ProxyStubClsid32"), ""), Some(ours.clone()));
     }
     // Twice is harmless and the ledger still undoes everything.
-    assert_eq!(register(&reg, MODULE, false), Ok(true));
-    unregister(&reg).unwrap();
+    assert_eq!(register(&reg, MODULE, false, ALL_SPECIFICATIONS), Ok(true));
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     assert_eq!(dump(&reg), Vec::new(), "everything opccomn wrote is gone");
     // Unregistering again (nothing registered) succeeds.
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
 }
 
 #[test]
@@ -96,7 +96,7 @@ fn an_installed_foundation_proxy_stub_keeps_its_interfaces() {
     install_foundation(&reg, &old[..3]);
     let before = dump(&reg);
     assert_eq!(
-        register(&reg, MODULE, false),
+        register(&reg, MODULE, false, ALL_SPECIFICATIONS),
         Ok(false),
         "S_FALSE: some interfaces stay with opccomn_ps"
     );
@@ -106,7 +106,7 @@ fn an_installed_foundation_proxy_stub_keeps_its_interfaces() {
     for (iid, ..) in &old[3..] {
         assert_eq!(proxy_stub_of(&reg, iid), Some(CLSID_OpcComnProxyStub));
     }
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     assert_eq!(dump(&reg), before, "the Foundation's registration is exactly as it was");
 }
 
@@ -119,13 +119,13 @@ fn taking_over_is_undone_by_unregistration() {
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces());
     let before = dump(&reg);
-    assert_eq!(register(&reg, MODULE, true), Ok(true));
+    assert_eq!(register(&reg, MODULE, true, ALL_SPECIFICATIONS), Ok(true));
     for (iid, ..) in interfaces() {
         assert_eq!(proxy_stub_of(&reg, iid), Some(CLSID_OpcComnProxyStub));
         // The Foundation's name stays.
         assert!(sz(&reg, &interface_key(iid), "").is_some());
     }
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     assert_eq!(dump(&reg), before, "ProxyStubClsid32 points to opccomn_ps.dll again");
 }
 
@@ -136,7 +136,7 @@ fn taking_over_is_undone_by_unregistration() {
 )]
 fn a_proxy_stub_installed_after_us_keeps_what_it_wrote() {
     let reg = MemoryRegistry::new();
-    assert_eq!(register(&reg, MODULE, false), Ok(true));
+    assert_eq!(register(&reg, MODULE, false, ALL_SPECIFICATIONS), Ok(true));
     // opccomn_ps.dll installed later overwrites two interfaces.
     install_foundation(&reg, &interfaces()[..2]);
     let theirs: Vec<_> = interfaces()[..2]
@@ -146,7 +146,7 @@ fn a_proxy_stub_installed_after_us_keeps_what_it_wrote() {
             (sz(&reg, &key, ""), sz(&reg, &format!("{key}\\NumMethods"), ""))
         })
         .collect();
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     for ((iid, ..), (name, methods)) in interfaces()[..2].iter().zip(theirs) {
         let key = interface_key(iid);
         assert_eq!(proxy_stub_of(&reg, iid), Some(FOUNDATION));
@@ -175,9 +175,9 @@ fn a_dangling_proxy_stub_class_is_replaced_and_restored() {
         .unwrap();
     let before = dump(&reg);
     // The Foundation's DLL is gone (its class has no InprocServer32): nothing serves the interface.
-    assert_eq!(register(&reg, MODULE, false), Ok(true));
+    assert_eq!(register(&reg, MODULE, false, ALL_SPECIFICATIONS), Ok(true));
     assert_eq!(proxy_stub_of(&reg, interfaces()[0].0), Some(CLSID_OpcComnProxyStub));
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     assert_eq!(dump(&reg), before);
 }
 
@@ -191,7 +191,7 @@ fn values_rewritten_since_registration_stay() {
     // and its method count while the proxy/stub is still ours.
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces()[..1]);
-    assert_eq!(register(&reg, MODULE, true), Ok(true));
+    assert_eq!(register(&reg, MODULE, true, ALL_SPECIFICATIONS), Ok(true));
     let key = interface_key(interfaces()[0].0);
     reg.set_value(&key, "", &RegValue::Sz("IOPCShutdown (v2)".into()))
         .unwrap();
@@ -199,7 +199,7 @@ fn values_rewritten_since_registration_stay() {
         .unwrap();
     let other = interface_key(interfaces()[1].0);
     reg.set_value(&other, "", &RegValue::Sz("Their name".into())).unwrap();
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     // The taken-over interface gets the Foundation's proxy/stub back; what others rewrote stays.
     assert_eq!(proxy_stub_of(&reg, interfaces()[0].0), Some(FOUNDATION));
     assert_eq!(sz(&reg, &key, "").as_deref(), Some("IOPCShutdown (v2)"));
@@ -209,7 +209,7 @@ fn values_rewritten_since_registration_stay() {
     // A ProxyStubClsid32 written over ours since is not set back to what it was before us.
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces()[..1]);
-    assert_eq!(register(&reg, MODULE, true), Ok(true));
+    assert_eq!(register(&reg, MODULE, true, ALL_SPECIFICATIONS), Ok(true));
     let newer = GUID::from_u128(0x5EED);
     reg.set_value(
         &format!("{key}\\ProxyStubClsid32"),
@@ -217,7 +217,7 @@ fn values_rewritten_since_registration_stay() {
         &RegValue::Sz(newer.to_string()),
     )
     .unwrap();
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     assert_eq!(proxy_stub_of(&reg, interfaces()[0].0), Some(newer));
     assert!(!reg.key_exists(&class_key(&CLSID_OpcComnProxyStub)));
 }
@@ -230,9 +230,9 @@ fn values_rewritten_since_registration_stay() {
 fn unregistration_without_a_ledger_removes_only_our_values() {
     let reg = MemoryRegistry::new();
     install_foundation(&reg, &interfaces()[..1]);
-    register(&reg, MODULE, false).unwrap();
+    register(&reg, MODULE, false, ALL_SPECIFICATIONS).unwrap();
     reg.delete_value(&module_key(), LEDGER).unwrap();
-    unregister(&reg).unwrap();
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
     assert_eq!(proxy_stub_of(&reg, interfaces()[0].0), Some(FOUNDATION));
     for (iid, ..) in &interfaces()[1..] {
         assert_eq!(proxy_stub_of(&reg, iid), None);
@@ -247,6 +247,7 @@ fn the_c_entry_points_check_their_arguments() {
     unsafe {
         assert_eq!(crate::registry::OpcRegistryCreateMemory(&mut mem), S_OK);
         assert_eq!(OpcRegisterProxyStub(mem, 2), E_INVALIDARG);
+        assert_eq!(OpcRegisterProxyStub(mem, 0x8000), E_INVALIDARG);
         // Registering finds this module's path with dladdr, which Miri cannot call.
         #[cfg(not(miri))]
         {
@@ -260,7 +261,86 @@ fn the_c_entry_points_check_their_arguments() {
         assert_eq!(OpcDllInstall(1, unknown.as_ptr()), E_INVALIDARG);
         crate::registry::OpcRegistryRelease(mem);
     }
-    assert_eq!(parse_install_command("proxystub"), Some(false));
-    assert_eq!(parse_install_command("ProxyStub, TakeOver"), Some(true));
+    assert_eq!(parse_install_command("proxystub"), Some(0));
+    assert_eq!(
+        parse_install_command("ProxyStub, TakeOver"),
+        Some(OPC_PROXY_STUB_TAKE_OVER)
+    );
+    assert_eq!(parse_install_command("ProxyStub da"), Some(OPC_PROXY_STUB_DA));
+    assert_eq!(
+        parse_install_command("ProxyStub Common DA TakeOver"),
+        Some(OPC_PROXY_STUB_TAKE_OVER | OPC_PROXY_STUB_COMMON | OPC_PROXY_STUB_DA)
+    );
     assert_eq!(parse_install_command("TakeOver"), None);
+    assert_eq!(parse_install_command("DA"), None);
+    assert_eq!(parse_install_command("ProxyStub HDA2"), None);
+    assert_eq!(specifications(0), ALL_SPECIFICATIONS);
+    assert_eq!(
+        specifications(OPC_PROXY_STUB_TAKE_OVER | OPC_PROXY_STUB_DA),
+        OPC_PROXY_STUB_DA
+    );
+}
+
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "safe code only (no unsafe on its path), long under Miri: the native run checks it"
+)]
+fn the_specifications_register_and_unregister_on_their_own() {
+    let common: Vec<_> = interfaces_of(OPC_PROXY_STUB_COMMON);
+    let da: Vec<_> = interfaces_of(OPC_PROXY_STUB_DA);
+    assert_eq!(common.len(), 5);
+    assert_eq!(da.len(), 19, "every interface of opcda.idl");
+    assert_eq!(common.len() + da.len(), interfaces().len());
+    assert!(da.iter().any(|(_, name, _)| *name == "IOPCDataCallback"));
+    assert!(
+        da.iter().any(|(_, name, n)| *name == "IOPCSyncIO2" && *n == 7),
+        "inherited methods counted"
+    );
+
+    // DA only: the Common interfaces are not touched.
+    let reg = MemoryRegistry::new();
+    assert_eq!(register(&reg, MODULE, false, OPC_PROXY_STUB_DA), Ok(true));
+    for (iid, ..) in &da {
+        assert_eq!(proxy_stub_of(&reg, iid), Some(CLSID_OpcComnProxyStub));
+    }
+    for (iid, ..) in &common {
+        assert!(!reg.key_exists(&interface_key(iid)));
+    }
+    // Then Common too; unregistering DA leaves Common and the class registered, with a ledger that
+    // still undoes them.
+    assert_eq!(register(&reg, MODULE, false, OPC_PROXY_STUB_COMMON), Ok(true));
+    unregister(&reg, OPC_PROXY_STUB_DA).unwrap();
+    for (iid, ..) in &da {
+        assert!(!reg.key_exists(&interface_key(iid)), "DA's are gone");
+    }
+    for (iid, ..) in &common {
+        assert_eq!(proxy_stub_of(&reg, iid), Some(CLSID_OpcComnProxyStub));
+    }
+    assert_eq!(sz(&reg, &module_key(), "").as_deref(), Some(MODULE));
+    unregister(&reg, OPC_PROXY_STUB_COMMON).unwrap();
+    assert_eq!(dump(&reg), Vec::new(), "the last specification takes the class with it");
+
+    // A Foundation-style DA proxy/stub (opcproxy.dll) keeps its interfaces unless taken over, and gets
+    // them back on unregistration; Common's are registered beside it.
+    let reg = MemoryRegistry::new();
+    install_foundation(&reg, &da);
+    let before = dump(&reg);
+    assert_eq!(register(&reg, MODULE, false, ALL_SPECIFICATIONS), Ok(false));
+    for (iid, ..) in &da {
+        assert_eq!(proxy_stub_of(&reg, iid), Some(FOUNDATION));
+    }
+    assert_eq!(register(&reg, MODULE, true, OPC_PROXY_STUB_DA), Ok(true));
+    for (iid, ..) in &da {
+        assert_eq!(proxy_stub_of(&reg, iid), Some(CLSID_OpcComnProxyStub));
+    }
+    unregister(&reg, OPC_PROXY_STUB_DA).unwrap();
+    for (iid, ..) in &da {
+        assert_eq!(proxy_stub_of(&reg, iid), Some(FOUNDATION), "restored");
+    }
+    for (iid, ..) in &common {
+        assert_eq!(proxy_stub_of(&reg, iid), Some(CLSID_OpcComnProxyStub));
+    }
+    unregister(&reg, ALL_SPECIFICATIONS).unwrap();
+    assert_eq!(dump(&reg), before);
 }

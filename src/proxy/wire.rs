@@ -27,6 +27,18 @@ use crate::com::HRESULT;
 /// `QueryAvailableLocaleIDs`; `idl/ndr-bounds.txt`).
 pub(crate) const MAX_ELEMENTS: u32 = ndr::DEFAULT_BOUND;
 
+/// The OPC Common interfaces (the first five of [`Interface`]; the hand-written checks of
+/// `reference`, which the generated ones are compared with, know only these).
+///
+/// cbindgen:ignore
+pub const COMMON: [Interface; 5] = [
+    Interface::IOPCShutdown,
+    Interface::IOPCCommon,
+    Interface::IOPCServerList,
+    Interface::IOPCEnumGUID,
+    Interface::IOPCServerList2,
+];
+
 /// `NDR_LOCAL_DATA_REPRESENTATION`, as the proxy's own requests are.
 const LOCAL: u32 = 0x10;
 

@@ -2,9 +2,10 @@
  * Data Access interfaces, built the way a MIDL proxy/stub DLL is, from the tables widl generates from
  * idl/opcda.idl, idl/opc_ae.idl and idl/opchda.idl (made at build time by tools/gen-proxy.py --out,
  * corrected like the committed copy; one object per file, classic_ps_tables.c) and MIDL's dlldata
- * routines. The cross-process test of those tables (test_da_tables.c with da_server.c) uses it on both
- * sides, registered per process (da.h). Its CLSID is the tests' own. A test fixture, never shipped:
- * opccomn.dll does not serve these interfaces until their requests and replies are checked. */
+ * routines: the stand-in for the Foundation's proxy/stub of those interfaces. The cross-process DA test
+ * (test_da_tables.c with da_server.c) uses it on the client's side against opccomn.dll's on the
+ * server's ("classic"), registered per process (da.h). Its CLSID is the tests' own. A test fixture,
+ * never shipped. */
 #define USE_STUBLESS_PROXY
 #define REGISTER_PROXY_DLL
 #define PROXY_CLSID_IS {0xC3000000, 0x5EED, 0x4000, {0x80, 0x00, 0x00, 0x00, 0x00, 0x00, 0xDA, 0x01}}

@@ -1,7 +1,7 @@
-/* Shared by the cross-process test of the Data Access tables (test_da_tables.c, the client) and its
- * EXE server (da_server.c): the classes, the items the server serves with their values, and the
- * registration of opc_classic_widl_ps.dll (classic_widl_ps.c) as this process's proxy/stub for the
- * Data Access interfaces. Windows only; the types and IIDs come from the header widl generates from
+/* Shared by the cross-process test of the Data Access proxy/stub (test_da_tables.c, the client) and
+ * its EXE server (da_server.c): the classes, the items the server serves with their values, and the
+ * registration of opccomn.dll's proxy/stub (or of the stand-in for the Foundation's) as this process's
+ * for the Data Access interfaces. Windows only; the types and IIDs come from the header widl generates from
  * idl/opcda.idl (opcda_idl.h; this file defines the IIDs, so one translation unit per program). */
 #ifndef OPCCOMN_DA_H
 #define OPCCOMN_DA_H
@@ -13,11 +13,10 @@
 
 #include "opcda_idl.h"
 
-/* The test DA server (da_server.c, LocalServer32) and the proxy/stub DLL's CLSID (classic_widl_ps.c). */
+/* The test DA server (da_server.c, LocalServer32). */
 static const CLSID CLSID_DaTestServer = {0xC3000000, 0x5EED, 0x4000, {0x80, 0, 0, 0, 0, 0, 0xDA, 0x02}};
-static const CLSID CLSID_ClassicWidlProxyStub = {0xC3000000, 0x5EED, 0x4000, {0x80, 0, 0, 0, 0, 0, 0xDA, 0x01}};
 
-/* The Data Access interfaces the DLL serves in these two processes. */
+/* The Data Access interfaces opccomn.dll's proxy/stub serves in these two processes. */
 static const IID *const DA_IIDS[] = {
     &IID_IOPCServer, &IID_IOPCServerPublicGroups, &IID_IOPCBrowseServerAddressSpace, &IID_IOPCGroupStateMgt,
     &IID_IOPCPublicGroupStateMgt, &IID_IOPCSyncIO, &IID_IOPCAsyncIO, &IID_IOPCItemMgt, &IID_IEnumOPCItemAttributes,
@@ -26,8 +25,11 @@ static const IID *const DA_IIDS[] = {
     &IID_IOPCGroupStateMgt2};
 #define DA_IID_COUNT (sizeof DA_IIDS / sizeof DA_IIDS[0])
 
+/* The CLSID of opc_classic_widl_ps.dll (classic_widl_ps.c), the stand-in for the OPC Foundation's
+ * proxy/stub of the same interfaces. */
+static const CLSID CLSID_ClassicWidlProxyStub = {0xC3000000, 0x5EED, 0x4000, {0x80, 0, 0, 0, 0, 0, 0xDA, 0x01}};
+
 typedef HRESULT(STDAPICALLTYPE *DaGetClassObjectFn)(REFCLSID, REFIID, void **);
-typedef LONG(WINAPI *DaRefsFn)(void);
 
 /* Makes COM use opc_classic_widl_ps.dll for the Data Access interfaces in this process (the
  * multithreaded apartment). */
@@ -50,15 +52,33 @@ static HRESULT use_classic_proxy_stub(void) {
     return hr;
 }
 
-/* The live proxies and stubs of opc_classic_widl_ps.dll in this process (each holds a reference on
- * its factory, the factory one of its own); -1 when it is not loaded. */
-static LONG classic_proxy_stub_refs(void) {
-    HMODULE dll = GetModuleHandleW(L"opc_classic_widl_ps.dll");
-    DaRefsFn refs;
-    if (!dll) return -1;
-    refs = (DaRefsFn)(void (*)(void))GetProcAddress(dll, "ClassicProxyStubRefs");
-    return refs ? refs() : -1;
+/* Makes COM use opccomn.dll's proxy/stub (CLSID_OpcComnProxyStub) for the Data Access interfaces in
+ * this process (the multithreaded apartment), without the registry. */
+static HRESULT use_opccomn_proxy_stub(void) {
+    IUnknown *factory = NULL;
+    DWORD cookie;
+    HRESULT hr;
+    size_t i;
+    hr = OpcDllGetClassObject(&CLSID_OpcComnProxyStub, &IID_IUnknown, (void **)&factory);
+    if (FAILED(hr)) return hr;
+    hr = CoRegisterClassObject(&CLSID_OpcComnProxyStub, factory, CLSCTX_INPROC_SERVER, REGCLS_MULTIPLEUSE, &cookie);
+    factory->lpVtbl->Release(factory);
+    for (i = 0; SUCCEEDED(hr) && i < DA_IID_COUNT; i++) hr = CoRegisterPSClsid(DA_IIDS[i], &CLSID_OpcComnProxyStub);
+    return hr;
 }
+
+/* Whether COM takes this process's proxies and stubs of every Data Access interface from opccomn.dll. */
+static int da_proxy_stub_is_opccomn(void) {
+    CLSID clsid;
+    size_t i;
+    for (i = 0; i < DA_IID_COUNT; i++)
+        if (FAILED(CoGetPSClsid(DA_IIDS[i], &clsid)) || !IsEqualCLSID(&clsid, &CLSID_OpcComnProxyStub)) return 0;
+    return 1;
+}
+
+/* A code the server's IOPCServer::GetErrorString answers with "opccomn" when its proxy/stub for the
+ * DA interfaces is opccomn.dll's, "other" otherwise. */
+#define DA_CODE_PROXY_STUB ((HRESULT)0xE0040301L)
 
 /* ---- What the server serves ---- */
 

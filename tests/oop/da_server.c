@@ -1,7 +1,7 @@
-/* The EXE server of the cross-process test of the Data Access tables (test_da_tables.c): a small OPC
- * DA server written in C (LocalServer32, started by COM with -Embedding, hosted by OpcExeServerRun),
- * reached through opc_classic_widl_ps.dll's proxies and stubs, which it registers for this process
- * (da.h). It serves the items of da.h and checks what it receives: a request that does not arrive as
+/* The EXE server of the cross-process test of the Data Access proxy/stub (test_da_tables.c): a small
+ * OPC DA server written in C (LocalServer32, started by COM with -Embedding, hosted by
+ * OpcExeServerRun), reached through opccomn.dll's proxies and stubs, which it registers for this
+ * process (da.h); GetErrorString of DA_CODE_PROXY_STUB says whether they are opccomn's. It serves the items of da.h and checks what it receives: a request that does not arrive as
  * the client sent it is answered with E_INVALIDARG or a per-item error, which the client sees.
  *
  * Server object: IOPCServer (AddGroup of one group, GetErrorString, GetGroupByName, GetStatus,
@@ -665,6 +665,10 @@ static HRESULT STDMETHODCALLTYPE opc_error_string(IOPCServer *This, HRESULT code
     (void)This;
     if (!text) return E_POINTER;
     *text = NULL;
+    if (code == DA_CODE_PROXY_STUB) {
+        *text = da_task_string(da_proxy_stub_is_opccomn() ? "opccomn" : "other");
+        return *text ? S_OK : E_OUTOFMEMORY;
+    }
     if (code != DA_ERROR_CODE || locale != 0x0409) return E_INVALIDARG;
     *text = da_task_string(DA_ERROR_TEXT);
     return *text ? S_OK : E_OUTOFMEMORY;
@@ -987,7 +991,7 @@ int main(void) {
     options.release_timeout_ms = 30000;
     options.idle_linger_ms = 100;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
-    if (SUCCEEDED(hr)) hr = use_classic_proxy_stub();
+    if (SUCCEEDED(hr)) hr = use_opccomn_proxy_stub();
     timer = CreateThread(NULL, 0, watchdog, NULL, 0, NULL);
     if (timer) CloseHandle(timer);
     if (SUCCEEDED(hr)) hr = OpcExeServerRun(&options, NULL);

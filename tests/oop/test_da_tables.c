@@ -1,8 +1,9 @@
-/* The NDR tables of the Data Access interfaces (tools/gen-proxy.py from idl/opcda.idl) across
- * processes, under the real COM runtime (Wine in CI): this client and the EXE server da_server.c, both
- * with opc_classic_widl_ps.dll (classic_widl_ps.c: the generated tables in a MIDL-style proxy/stub DLL)
- * as their proxy/stub for the DA interfaces. Every value crosses the wire and is checked on the other
- * side: the server answers a request it did not receive as sent with an error.
+/* opccomn.dll's proxy/stub of the Data Access interfaces (the NDR tables tools/gen-proxy.py makes from
+ * idl/opcda.idl, with the checks generated from the same IDL) across processes, under the real COM
+ * runtime (Wine in CI): this client and the EXE server da_server.c, both with opccomn.dll's proxy/stub
+ * as theirs for the DA interfaces (registered per process, da.h). Every value crosses the wire and is
+ * checked on the other side: the server answers a request it did not receive as sent with an error.
+ * Both sides' proxies check: a count beyond its bound never leaves the client.
  *
  * Covered: IOPCServer::GetStatus (the structure and its vendor string), GetErrorString ([out, string]
  * LPWSTR *), AddGroup (unique in-pointers, iid_is), GetGroupByName, RemoveGroup;
@@ -124,6 +125,32 @@ static void check_status(IOPCServer *server) {
     CHECK(wsame(st->szVendorInfo, W(DA_VENDOR_INFO)));
     CoTaskMemFree(st->szVendorInfo);
     CoTaskMemFree(st);
+}
+
+/* Both processes use opccomn.dll's proxy/stub, and this client's proxies check what they send: a
+ * count beyond its bound (65,536 property IDs, idl/ndr-bounds.txt) is refused before it is sent, with
+ * the code MIDL's [range] gives (a proxy without the checks would send it and the server answer). */
+static void check_opccomn_serves(IOPCServer *server, IOPCItemProperties *props, int classic) {
+    LPWSTR text = (LPWSTR)GARBAGE_PTR;
+    DWORD *ids;
+    VARIANT *data = (VARIANT *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    CHECK(da_proxy_stub_is_opccomn() == !classic);
+    CHECK_HR(server->lpVtbl->GetErrorString(server, DA_CODE_PROXY_STUB, 0x0409, &text), S_OK);
+    CHECK(wsame(text, W("opccomn")));
+    if (text != GARBAGE_PTR) CoTaskMemFree(text);
+    if (classic) return; /* the stand-in's proxy sends what it is given */
+    ids = (DWORD *)calloc(65537, sizeof(DWORD));
+    if (!ids || !props) {
+        CHECK(0);
+        free(ids);
+        return;
+    }
+    ids[0] = DA_PROPERTY_IDS[0];
+    CHECK_HR(props->lpVtbl->GetItemProperties(props, (LPWSTR)W(DA_ITEM_IDS[0]), 65537, ids, &data, &errors),
+             HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND));
+    CHECK(data == NULL && errors == NULL);
+    free(ids);
 }
 
 static void check_error_string(IOPCServer *server) {
@@ -497,7 +524,11 @@ static void check_browse(IOPCServer *server) {
     b->lpVtbl->Release(b);
 }
 
-int main(void) {
+/* argv[1] "classic": this client uses opc_classic_widl_ps.dll (the widl-generated tables in a
+ * MIDL-style proxy/stub DLL: the stand-in for the OPC Foundation's DA proxy/stub) while the server
+ * keeps opccomn.dll's, so that each side's proxy talks to the other's stub (the callback too). */
+int main(int argc, char **argv) {
+    int classic = argc > 1 && strcmp(argv[1], "classic") == 0;
     OpcServerRegistration reg;
     IOPCServer *server = NULL;
     IUnknown *group = NULL;
@@ -507,7 +538,7 @@ int main(void) {
     OPCHANDLE servers[DA_ITEMS] = {0, 0, 0, 0};
     OPCHANDLE server_group = GARBAGE_U32;
     DWORD revised = GARBAGE_U32;
-    LONG bias = -60, baseline;
+    LONG bias = -60;
     WCHAR *slash;
     int waited;
 
@@ -515,8 +546,7 @@ int main(void) {
     slash = wcsrchr(server_path, L'\\');
     wcscpy(slash ? slash + 1 : server_path, L"opc_da_test_server.exe");
     CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
-    CHECK_HR(use_classic_proxy_stub(), S_OK);
-    baseline = classic_proxy_stub_refs();
+    CHECK_HR(classic ? use_classic_proxy_stub() : use_opccomn_proxy_stub(), S_OK);
     memset(&reg, 0, sizeof reg);
     reg.struct_size = sizeof reg;
     reg.server_type = OPC_SERVER_TYPE_LOCAL;
@@ -528,7 +558,10 @@ int main(void) {
 
     CHECK_HR(CoCreateInstance(&CLSID_DaTestServer, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServer, (void **)&server), S_OK);
     if (server) {
-        CHECK(classic_proxy_stub_refs() > baseline); /* the server's proxy is the DLL's */
+        IOPCItemProperties *props = NULL;
+        CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCItemProperties, (void **)&props), S_OK);
+        check_opccomn_serves(server, props, classic);
+        if (props) props->lpVtbl->Release(props);
         check_status(server);
         check_error_string(server);
         CHECK_HR(server->lpVtbl->AddGroup(server, W(DA_GROUP_NAME), TRUE, 1000, 42, &bias, NULL, 0x0407,
@@ -562,7 +595,6 @@ int main(void) {
         check_browse(server);
         server->lpVtbl->Release(server);
     }
-    CHECK(classic_proxy_stub_refs() == baseline); /* every proxy gone */
     /* The server exits once its objects are gone (its linger is 100 ms; 10 s bound a broken run). */
     for (waited = 0; waited < 100 && process_running(L"opc_da_test_server.exe") == 1; waited++) Sleep(100);
     CHECK(process_running(L"opc_da_test_server.exe") == 0);

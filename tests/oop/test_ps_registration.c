@@ -6,6 +6,8 @@
  *     `/i:ProxyStub,TakeOver` takes them over, `/u /n /i:ProxyStub` gives them back exactly;
  *   - with opccomn registered first and opccomn_ps.dll installed later, unregistering opccomn leaves
  *     opccomn_ps.dll's registration intact;
+ *   - `/i:ProxyStub,DA` registers the Data Access interfaces alone, `/i:ProxyStub,Common` adds OPC
+ *     Common's, `/u /n /i:ProxyStub,DA` takes back Data Access's and keeps the rest registered;
  *   - an unknown /i: command fails. */
 #include "oop.h"
 
@@ -47,6 +49,25 @@ static int all_are(const WCHAR *clsid) {
     return ok;
 }
 
+/* Some of the 19 Data Access interfaces: IOPCServer, IOPCDataCallback (the callback), IOPCSyncIO2
+ * (a derived one) and IOPCGroupStateMgt2 (the last). */
+static const WCHAR *const DA_SOME[] = {L"{39C13A4D-011E-11D0-9675-0020AFD8ADB3}", L"{39C13A70-011E-11D0-9675-0020AFD8ADB3}",
+                                       L"{730F5F0F-55B1-4C81-9E18-FF8A0904E1FA}", L"{8E368666-D72E-4F78-87ED-647611C61C9F}"};
+
+static int da_are(const WCHAR *clsid) {
+    static WCHAR data[64];
+    WCHAR key[96];
+    int i, ok = 1;
+    for (i = 0; i < 4; i++) {
+        DWORD size = sizeof data;
+        swprintf(key, 96, L"Interface\\%ls\\ProxyStubClsid32", DA_SOME[i]);
+        data[0] = 0;
+        if (RegGetValueW(HKEY_CLASSES_ROOT, key, NULL, RRF_RT_REG_SZ, NULL, data, &size) != ERROR_SUCCESS) data[0] = 0;
+        ok &= _wcsicmp(data, clsid) == 0;
+    }
+    return ok;
+}
+
 static int key_exists(const WCHAR *key) {
     HKEY h;
     if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_READ, &h) != ERROR_SUCCESS) return 0;
@@ -78,6 +99,7 @@ int main(void) {
     regsvr32(L"/u /n /i:ProxyStub", L"opccomn.dll");
     if (!all_are(L"")) regsvr32(L"/u", L"opccomn_widl_ps.dll");
     CHECK(all_are(L""));
+    CHECK(da_are(L""));
 
     /* Plain regsvr32 registers the server list only. */
     CHECK(regsvr32(L"", L"opccomn.dll") == 0);
@@ -128,8 +150,28 @@ int main(void) {
     CHECK(regsvr32(L"/u", L"opccomn_widl_ps.dll") == 0);
     CHECK(all_are(L""));
 
+    /* One specification at a time. */
+    CHECK(regsvr32(L"/n /i:ProxyStub,DA", L"opccomn.dll") == 0);
+    CHECK(da_are(OUR_CLSID));
+    CHECK(all_are(L""));
+    CHECK(regsvr32(L"/n /i:ProxyStub,Common", L"opccomn.dll") == 0);
+    CHECK(all_are(OUR_CLSID));
+    CHECK(regsvr32(L"/u /n /i:ProxyStub,DA", L"opccomn.dll") == 0);
+    CHECK(da_are(L""));
+    CHECK(all_are(OUR_CLSID));
+    CHECK(key_exists(our_class));
+    CHECK(regsvr32(L"/u /n /i:ProxyStub", L"opccomn.dll") == 0);
+    CHECK(all_are(L""));
+    CHECK(!key_exists(our_class));
+    /* Without a specification: all of them. */
+    CHECK(regsvr32(L"/n /i:ProxyStub", L"opccomn.dll") == 0);
+    CHECK(all_are(OUR_CLSID) && da_are(OUR_CLSID));
+    CHECK(regsvr32(L"/u /n /i:ProxyStub", L"opccomn.dll") == 0);
+    CHECK(all_are(L"") && da_are(L""));
+
     /* An unknown command fails and writes nothing. */
     CHECK(regsvr32(L"/n /i:Everything", L"opccomn.dll") != 0);
+    CHECK(regsvr32(L"/n /i:ProxyStub,HDA3", L"opccomn.dll") != 0);
     CHECK(!key_exists(our_class));
     OpcRegistryRelease(sys);
     return test_summary("test_ps_registration");

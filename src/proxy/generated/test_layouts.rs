@@ -123,14 +123,44 @@ pub(crate) static INTERFACES: [Layout; COUNT] = [
 ];
 
 /// The interfaces as registered under `Interface\{iid}`: IID, name, `NumMethods` (IUnknown's three
-/// included).
-pub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32); COUNT] = [
-    (GUID::from_u128(0x6E0C1B1000004E449C00000000000001), "INdrBase", 6),
-    (GUID::from_u128(0x6E0C1B1000004E449C00000000000002), "INdrArrays", 12),
-    (GUID::from_u128(0x6E0C1B1000004E449C00000000000003), "INdrStructs", 7),
-    (GUID::from_u128(0x6E0C1B1000004E449C00000000000004), "INdrAutomation", 6),
-    (GUID::from_u128(0x6E0C1B1000004E449C00000000000005), "INdrInterfaces", 7),
-    (GUID::from_u128(0x6E0C1B1000004E449C00000000000006), "INdrDerived", 7),
+/// included), and the specification each belongs to.
+pub(crate) const PROXY_STUB_INTERFACES: [(GUID, &str, u32, &str); COUNT] = [
+    (
+        GUID::from_u128(0x6E0C1B1000004E449C00000000000001),
+        "INdrBase",
+        6,
+        "Test",
+    ),
+    (
+        GUID::from_u128(0x6E0C1B1000004E449C00000000000002),
+        "INdrArrays",
+        12,
+        "Test",
+    ),
+    (
+        GUID::from_u128(0x6E0C1B1000004E449C00000000000003),
+        "INdrStructs",
+        7,
+        "Test",
+    ),
+    (
+        GUID::from_u128(0x6E0C1B1000004E449C00000000000004),
+        "INdrAutomation",
+        6,
+        "Test",
+    ),
+    (
+        GUID::from_u128(0x6E0C1B1000004E449C00000000000005),
+        "INdrInterfaces",
+        7,
+        "Test",
+    ),
+    (
+        GUID::from_u128(0x6E0C1B1000004E449C00000000000006),
+        "INdrDerived",
+        7,
+        "Test",
+    ),
 ];
 
 /// INdrBase's methods from vtable index 3.
@@ -1025,7 +1055,7 @@ static STRUCT_PLAIN: Struct = Struct {
 
 static STRUCT_RECORD: Struct = Struct {
     name: "RECORD",
-    align: 4,
+    align: 8,
     fields: &[
         Ty::Pointer(&POINTER_2),   // szName
         Ty::Base(4),               // dwBlobSize
@@ -1072,7 +1102,7 @@ static ARRAY_0: Array = Array {
     length: None,
     bound: 65536,
     plain: 0,
-    align: 4,
+    align: 8,
     deferred: true,
 };
 
@@ -1331,7 +1361,7 @@ static ARRAY_12: Array = Array {
     length: None,
     bound: 65536,
     plain: 0,
-    align: 4,
+    align: 8,
     deferred: true,
 };
 
@@ -1390,7 +1420,7 @@ static ARRAY_13: Array = Array {
     length: None,
     bound: 65536,
     plain: 0,
-    align: 4,
+    align: 8,
     deferred: true,
 };
 

@@ -123,7 +123,9 @@ pub struct Array {
     /// The element's size when it is plain (see [`Struct::plain`]): the elements are skipped in one
     /// step; 0 otherwise.
     pub plain: u32,
-    /// The element's alignment (for plain elements).
+    /// Where the elements start is aligned to this, after the conformance and variance, whatever
+    /// their number: the element's alignment, or 8 for VARIANTs (the format strings' array of
+    /// VARIANTs has VARIANT's memory alignment, though each element's place is 4 bytes).
     pub align: u8,
     /// Whether the elements have deferred pointees.
     pub deferred: bool,

@@ -598,8 +598,8 @@ impl<'a> Walk<'a> {
                 actual
             }
         };
+        self.align(at, usize::from(a.align))?;
         if a.plain != 0 {
-            self.align(at, usize::from(a.align))?;
             let bytes = (count as usize).checked_mul(a.plain as usize).ok_or(BAD_STUB_DATA)?;
             return self.skip(at, bytes);
         }

@@ -10,8 +10,10 @@ use crate::proxy::test_layouts::Interface as T;
 
 pub(crate) mod build;
 mod constructs;
+mod da;
 #[cfg(windows)]
 mod runtime;
+mod served;
 
 use build::{Msg, Sa, SaData, V};
 

@@ -604,8 +604,10 @@ fn the_body_of_a_bstr_is_at_4_for_windows_and_at_8_for_wine() {
 }
 
 /// A VARIANT parameter, none in the array, an empty VARIANT out.
+/// `Variants(v, 0, [], ...)`: the array's elements would start at 8 (the engine pads to it even for
+/// none).
 fn variants(v: &V, d: Dialect) -> Msg {
-    Msg::default().u32(USER).variant(v, d).u32(0).u32(0)
+    Msg::default().u32(USER).variant(v, d).u32(0).u32(0).align(8)
 }
 
 fn every_scalar() -> Vec<V> {
@@ -736,6 +738,7 @@ fn a_safearray_is_read_as_its_reader_reads_it() {
                 .variant(&v, d)
                 .u32(1)
                 .u32(1)
+                .align(8)
                 .u32(USER)
                 .variant(&V::I4(7), d)
         };

@@ -241,14 +241,19 @@ fn variants_as_the_runtime_marshals_them() {
     let i = index(T::INdrAutomation, "Variants");
     for v in values() {
         let mut var = variant(&v);
-        let real = Msg(marshalled_variant(&mut var)).u32(0).u32(0);
+        let real = Msg(marshalled_variant(&mut var)).u32(0).u32(0).align(8);
         // The checks pass the runtime's bytes, and refuse every prefix of them.
         whole(
             |b| check_request(T::INdrAutomation.layout(), i, b, LOCAL, Dialect::Wine).map(|_| ()),
             &real,
         );
         // The construct tests' messages are laid out as the runtime lays them out.
-        let built = Msg::default().u32(USER).variant(&v, Dialect::Wine).u32(0).u32(0);
+        let built = Msg::default()
+            .u32(USER)
+            .variant(&v, Dialect::Wine)
+            .u32(0)
+            .u32(0)
+            .align(8);
         assert_eq!(
             built.0.len(),
             real.0.len(),

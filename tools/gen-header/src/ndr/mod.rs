@@ -7,7 +7,8 @@
 //!
 //! The bounds of arrays whose counts a peer chooses come from `idl/ndr-bounds.txt` (and
 //! `idl/testdata/ndr-constructs-bounds.txt`): `Interface.Method.parameter` or `Structure.field`, the
-//! bound, and why; every other such array gets [`resolve::DEFAULT_BOUND`].
+//! bound, and why. Every such array of the served IDL must be named there; the test IDL's may take
+//! [`resolve::DEFAULT_BOUND`].
 
 mod emit;
 mod parse;
@@ -16,8 +17,9 @@ mod resolve;
 #[cfg(test)]
 mod tests;
 
-/// The IDL files whose interfaces the proxy/stub serves, in the order they are numbered.
-pub const SERVED: &[&str] = &["idl/opccomn.idl"];
+/// The IDL files whose interfaces the proxy/stub serves, in the order they are numbered, each with
+/// the name of its specification (what registration's command line chooses by).
+pub const SERVED: &[(&str, &str)] = &[("idl/opccomn.idl", "Common"), ("idl/opcda.idl", "DA")];
 /// Files whose interfaces the served ones may name (for their IIDs).
 const SYSTEM: &[&str] = &["idl/combase.idl", "idl/internal.idl"];
 const BOUNDS: &str = "idl/ndr-bounds.txt";
@@ -39,16 +41,17 @@ const TEST_PURPOSE: &str =
 /// The layouts of the interfaces of `served`, with `system` for the interfaces they name.
 fn model(
     read: &dyn Fn(&str) -> String,
-    served: &[&str],
+    served: &[(&str, &str)],
     system: &[&str],
     bounds: &str,
+    require_bounds: bool,
 ) -> Result<resolve::Model, String> {
     let mut files = Vec::new();
-    for path in served.iter().chain(system) {
+    for path in served.iter().map(|(path, _)| path).chain(system) {
         files.push(parse::parse(path, &read(path)).map_err(|e| e.to_string())?);
     }
     let bounds = resolve::parse_bounds(bounds, &read(bounds))?;
-    resolve::model(&files, served, &bounds)
+    resolve::model(&files, served, &bounds, require_bounds)
 }
 
 /// The generated files: (path, text); `format` is rustfmt.
@@ -56,9 +59,12 @@ pub fn outputs(
     read: &dyn Fn(&str) -> String,
     format: &dyn Fn(&str) -> String,
 ) -> Result<Vec<(&'static str, String)>, String> {
-    let served = model(read, SERVED, SYSTEM, BOUNDS)?;
-    let sources = format!("{} and {BOUNDS}", SERVED.join(", "));
-    let test = model(read, &[TEST_IDL], &["idl/combase.idl"], TEST_BOUNDS)?;
+    // Every bound of the served interfaces is a decision with its reason; the test IDL's arrays may
+    // take the default.
+    let served = model(read, SERVED, SYSTEM, BOUNDS, true)?;
+    let files: Vec<&str> = SERVED.iter().map(|(path, _)| *path).collect();
+    let sources = format!("{} and {BOUNDS}", files.join(", "));
+    let test = model(read, &[(TEST_IDL, "Test")], &["idl/combase.idl"], TEST_BOUNDS, false)?;
     Ok(vec![
         (
             "src/proxy/generated/layouts.rs",
@@ -68,6 +74,7 @@ pub fn outputs(
             "src/proxy/generated/interfaces.h",
             emit::c_include(&served, &sources, CONTEXT_WORDS),
         ),
+        ("tests/oop/ps_args.h", emit::c_args(&served, &sources)),
         (
             "src/proxy/generated/test_layouts.rs",
             format(&emit::rust(

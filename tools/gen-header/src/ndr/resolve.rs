@@ -113,6 +113,9 @@ pub struct MethodOut {
     pub context: Vec<Save>,
     pub request_align8: bool,
     pub reply_align8: bool,
+    /// The C parameters after `This`, in order: `i` a value of at most 4 bytes, `h` one of 8, `p` a
+    /// pointer, `v` a VARIANT by value (for the tests' generic calls, `tests/oop/ps_args.h`).
+    pub args: String,
 }
 
 #[derive(Clone, Debug)]
@@ -122,6 +125,8 @@ pub struct InterfaceOut {
     pub iid: [u8; 16],
     pub vtable: u32,
     pub methods: Vec<MethodOut>,
+    /// The specification it belongs to (the name its IDL file is served under).
+    pub spec: String,
 }
 
 /// Where a caller-chosen count's bound comes from, for the generated file's table.
@@ -479,6 +484,10 @@ struct Builder<'a> {
     structs: BTreeMap<String, StructDef>,
     in_progress: HashSet<String>,
     bound_uses: Vec<BoundUse>,
+    /// Whether every array a peer sizes must be named in the bounds file (the served IDL: each
+    /// bound is a decision with its reason); the arrays it does not name.
+    require_bounds: bool,
+    unnamed: Vec<String>,
 }
 
 impl Builder<'_> {
@@ -488,7 +497,12 @@ impl Builder<'_> {
                 self.bounds_used.insert(key.to_string());
                 (*b, Some(r.clone()))
             }
-            None => (DEFAULT_BOUND, None),
+            None => {
+                if self.require_bounds && !self.unnamed.iter().any(|k| k == key) {
+                    self.unnamed.push(key.to_string());
+                }
+                (DEFAULT_BOUND, None)
+            }
         };
         let use_ = BoundUse {
             key: key.to_string(),
@@ -855,7 +869,18 @@ impl Builder<'_> {
             }
         }
         self.in_progress.remove(name);
-        let align = out.iter().map(|(_, n)| self.align(n)).max().unwrap_or(1);
+        // A VARIANT field makes the structure 8-aligned on the wire, though its own place in the flat
+        // part is a 4-byte pointer: the format strings' FC_BOGUS_STRUCT of such a structure (widl's and
+        // MIDL's, Win32 and Win64) carry VARIANT's memory alignment, and the engine aligns each
+        // structure to it (an array of OPCITEMSTATE has 24-byte elements).
+        let align = out
+            .iter()
+            .map(|(_, n)| match n {
+                Node::Variant => 8,
+                n => self.align(n),
+            })
+            .max()
+            .unwrap_or(1);
         let deferred = out.iter().any(|(_, n)| self.deferred(n));
         let plain = self.plain_struct(&out, align);
         let size = self.flat_size(&out).unwrap_or(0);
@@ -1159,6 +1184,7 @@ impl Builder<'_> {
         }
         let mut request = Vec::new();
         let mut reply = Vec::new();
+        let mut args = String::new();
         // (slot, bound of the array it sizes) per use in the reply's parameters.
         let mut reply_uses: Vec<(u8, Option<u32>, bool)> = Vec::new();
         for (p, save) in m.params.iter().zip(&saves) {
@@ -1170,6 +1196,12 @@ impl Builder<'_> {
             if *save != Save::None {
                 self.check_saved(m, p, &node, *save, &pkey)?;
             }
+            args.push(match node {
+                Node::Pointer(..) | Node::Interface(..) | Node::Bstr | Node::SafeArray | Node::Str(_) => 'p',
+                Node::Variant => 'v',
+                Node::Base(8) => 'h',
+                _ => 'i',
+            });
             let (dir_in, dir_out) = direction(p);
             if dir_out && !matches!(node, Node::Pointer(..)) {
                 return Err(format!("{pkey}: an [out] parameter must be a pointer"));
@@ -1242,16 +1274,20 @@ impl Builder<'_> {
             context,
             request_align8,
             reply_align8,
+            args,
         })
     }
 }
 
-/// The layouts of every interface of `served` (in order), with `env` the files whose types and
-/// interfaces they may name (`served` included).
+/// The layouts of every interface of `served` (in order: each IDL file with the name of its
+/// specification), with `env` the files whose types and interfaces they may name (`served`
+/// included). With `require_bounds`, an array a peer sizes that the bounds file does not name is an
+/// error (all of them listed), not the default.
 pub fn model(
     env_files: &[parse::File],
-    served: &[&str],
+    served: &[(&str, &str)],
     bounds_file: &BTreeMap<String, (u32, String)>,
+    require_bounds: bool,
 ) -> Result<Model, Error> {
     let mut b = Builder {
         env: Env::new(env_files)?,
@@ -1260,9 +1296,11 @@ pub fn model(
         structs: BTreeMap::new(),
         in_progress: HashSet::new(),
         bound_uses: Vec::new(),
+        require_bounds,
+        unnamed: Vec::new(),
     };
     let mut interfaces = Vec::new();
-    for path in served {
+    for (path, spec) in served {
         let file = env_files
             .iter()
             .find(|f| f.path == *path)
@@ -1310,8 +1348,16 @@ pub fn model(
                 uuid,
                 vtable: 3 + methods.len() as u32,
                 methods,
+                spec: spec.to_string(),
             });
         }
+    }
+    if !b.unnamed.is_empty() {
+        b.unnamed.sort();
+        return Err(format!(
+            "the bounds file names no bound (with its reason) for these arrays a peer sizes: {}",
+            b.unnamed.join(", ")
+        ));
     }
     for key in bounds_file.keys() {
         if !b.bounds_used.contains(key) {

@@ -12,7 +12,14 @@ fn read(path: &str) -> String {
 }
 
 fn test_model() -> Model {
-    super::model(&read, &[super::TEST_IDL], &["idl/combase.idl"], super::TEST_BOUNDS).unwrap()
+    super::model(
+        &read,
+        &[(super::TEST_IDL, "Test")],
+        &["idl/combase.idl"],
+        super::TEST_BOUNDS,
+        false,
+    )
+    .unwrap()
 }
 
 /// The layouts of a small IDL (with combase.idl for IUnknown), or the generator's error.
@@ -22,7 +29,17 @@ fn small(idl: &str, bounds: &str) -> Result<Model, String> {
         parse::parse("idl/combase.idl", &read("idl/combase.idl")).unwrap(),
     ];
     let bounds = resolve::parse_bounds("b.txt", bounds)?;
-    resolve::model(&files, &["t.idl"], &bounds)
+    resolve::model(&files, &[("t.idl", "T")], &bounds, false)
+}
+
+/// As [`small`], with every array a peer sizes required in the bounds file (as for the served IDL).
+fn small_strict(idl: &str, bounds: &str) -> Result<Model, String> {
+    let files = vec![
+        parse::parse("t.idl", idl).map_err(|e| e.to_string())?,
+        parse::parse("idl/combase.idl", &read("idl/combase.idl")).unwrap(),
+    ];
+    let bounds = resolve::parse_bounds("b.txt", bounds)?;
+    resolve::model(&files, &[("t.idl", "T")], &bounds, true)
 }
 
 fn method<'m>(model: &'m Model, iface: &str, name: &str) -> &'m resolve::MethodOut {
@@ -189,9 +206,10 @@ fn opc_common_resolves_to_the_layouts_it_has_always_had() {
         super::SERVED,
         &["idl/combase.idl", "idl/internal.idl"],
         "idl/ndr-bounds.txt",
+        true,
     )
     .unwrap();
-    let v: Vec<(&str, u32)> = m.interfaces.iter().map(|i| (i.name.as_str(), i.vtable)).collect();
+    let v: Vec<(&str, u32)> = m.interfaces[..5].iter().map(|i| (i.name.as_str(), i.vtable)).collect();
     assert_eq!(
         v,
         [
@@ -209,6 +227,44 @@ fn opc_common_resolves_to_the_layouts_it_has_always_had() {
     assert!(q.request.is_empty());
     assert_eq!(q.reply.len(), 3, "count, array, HRESULT");
     // Every bound is named, with its reason.
+    assert!(m.bounds.iter().all(|b| b.reason.is_some()), "{:?}", m.bounds);
+}
+
+#[test]
+fn data_access_resolves_with_every_bound_decided() {
+    let m = super::model(
+        &read,
+        super::SERVED,
+        &["idl/combase.idl", "idl/internal.idl"],
+        "idl/ndr-bounds.txt",
+        true,
+    )
+    .unwrap();
+    let da: Vec<(&str, u32, &str)> = m.interfaces[5..]
+        .iter()
+        .map(|i| (i.name.as_str(), i.vtable, i.spec.as_str()))
+        .collect();
+    assert_eq!(da.len(), 19);
+    assert!(da.iter().all(|(.., spec)| *spec == "DA"), "{da:?}");
+    assert!(m.interfaces[..5].iter().all(|i| i.spec == "Common"));
+    // Derived interfaces carry their bases' methods first.
+    assert!(da.contains(&("IOPCSyncIO2", 7, "DA")));
+    assert!(da.contains(&("IOPCAsyncIO3", 12, "DA")));
+    assert!(da.contains(&("IOPCGroupStateMgt2", 9, "DA")));
+    // A sync read: dwCount sizes the server's arrays in the reply, so the reply needs it and it is
+    // bounded as soon as the request is read.
+    let read = method(&m, "IOPCSyncIO", "Read");
+    assert_eq!(read.context, [Save::Int(0)]);
+    assert_eq!(read.bounds, [(0, 1_048_576)]);
+    // AddGroup's iid_is: the IID goes to the reply's context (four words).
+    let add = method(&m, "IOPCServer", "AddGroup");
+    assert_eq!(add.context.len(), 1);
+    assert!(matches!(add.context[0], Save::Guid(_)), "{:?}", add.context);
+    // Browse: a count the server returns sizes its array.
+    let browse = method(&m, "IOPCBrowse", "Browse");
+    assert!(browse.bounds.is_empty(), "nothing of the request sizes the reply");
+    let blob = m.bounds.iter().find(|b| b.key == "OPCITEMDEF.pBlob").unwrap();
+    assert_eq!(blob.bound, 65_536);
     assert!(m.bounds.iter().all(|b| b.reason.is_some()), "{:?}", m.bounds);
 }
 
@@ -268,6 +324,16 @@ fn what_the_language_cannot_say_is_refused_with_a_reason() {
     assert!(e.contains("sizes no array"), "{e}");
     let e = resolve::parse_bounds("b.txt", "ITest.M.p 5\n").unwrap_err();
     assert!(e.contains("needs its reason"), "{e}");
+    // Where every bound must be decided (the served IDL), an array a peer sizes without its line is
+    // refused, each one named; with its line it resolves to that bound.
+    let idl = format!(
+        "typedef struct tagS {{ DWORD n; [size_is(n)] BYTE *b; }} S;\n{HEAD}HRESULT M([in] DWORD n, [in, size_is(n)] S *p, [out, size_is(,n)] DWORD **q);\n}}"
+    );
+    let e = small_strict(&idl, "ITest.M.q 7 why\n").unwrap_err();
+    assert!(e.contains("no bound") && e.contains("ITest.M.p, S.b"), "{e}");
+    assert!(!e.contains("ITest.M.q"), "{e}");
+    let m = small_strict(&idl, "ITest.M.q 7 why\nITest.M.p 5 why\nS.b 3 why\n").unwrap();
+    assert_eq!(method(&m, "ITest", "M").bounds, [(0, 7)]);
 }
 
 #[test]
