@@ -51,7 +51,8 @@ expect() {   # expect REGEX: a line of the log matches
 expect '^mc -u -U -r \. -h \. opccomn_messages\.mc$'
 expect '^rc /nologo /fo opccomn\.res opccomn\.rc$'
 expect '^cl /nologo /c /O2 /W3 /WX /Fo[^ ]*/opccomn_ps\.obj [^ ]*/src/proxy/opccomn_ps\.c$'
-expect '^lib /nologo /OUT:[^ ]*/opccomn_ps\.lib [^ ]*/opccomn_ps\.obj$'
+expect '^cl /nologo /c /O2 /W3 /WX /Fo[^ ]*/opcda_ps\.obj [^ ]*/src/proxy/opcda_ps\.c$'
+expect '^lib /nologo /OUT:[^ ]*/opccomn_ps\.lib [^ ]*/opccomn_ps\.obj [^ ]*/opcda_ps\.obj$'
 output=$(ls -t "$CARGO_TARGET_DIR/$target"/debug/build/opccomn-*/output | head -1)
 for want in 'cargo:rustc-link-arg-cdylib=.*/opccomn\.res$' 'cargo:rustc-link-lib=static=opccomn_ps$' \
     'cargo:rustc-link-lib=dylib=rpcrt4$' 'cargo:rustc-cfg=opccomn_proxy_stub$'; do
