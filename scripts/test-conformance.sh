@@ -24,9 +24,10 @@ check="$bin/opccomn-check.exe"
 report="python3 $root/tests/conformance/check_report.py"
 passed=0
 
-# Whatever this script registers in the shared Wine prefix is taken back when it ends, passed or
-# failed, so that a failure here does not become a failure of the stages after it (whose tests
-# compare the registry with what it was). Each step ignores what is not registered.
+# Whatever this script registers in the shared Wine prefix is taken back when it fails (a run that
+# passes has unregistered each server after its checks), so that a failure here does not become a
+# failure of the stages after it (whose tests compare the registry with what it was). Each step
+# ignores what is not registered.
 cleanup() {
     [ -d "$bin" ] || return 0
     (cd "$bin" && wine opccomn_browser.exe /UnregServer >/dev/null 2>&1) || true
@@ -37,7 +38,7 @@ cleanup() {
         (cd "$example" && wine opccomn_example_server.exe /UnregServer >/dev/null 2>&1) || true
     fi
 }
-trap cleanup EXIT
+trap 'status=$?; [ "$status" -eq 0 ] || cleanup' EXIT
 
 # run_checker NAME FORMAT ARGS...: runs the checker, report in $out/NAME.FORMAT, exit code in $rc.
 #
