@@ -480,6 +480,9 @@ fn check_callback(t: &mut Tally, log: &CallbackLog, index: usize, kind: Kind, tr
 
 // ---- Browsing -----------------------------------------------------------------------------------------
 
+/// A property as it arrives: ID, type, description, item ID, value, error.
+type Property = (u32, u16, Option<String>, Option<String>, Value, HRESULT);
+
 /// The server's IOPCBrowse, for the crate's BrowseTrait.
 struct Browser(IOPCBrowse);
 
@@ -607,7 +610,7 @@ fn browse(t: &mut Tally, browser: &Browser) {
             // SAFETY: the array of dwNumProperties properties the proxy unnot_opccomn for this process.
             unsafe { std::slice::from_raw_parts_mut(item.pItemProperties, item.dwNumProperties as usize) }
         };
-        let got: Vec<(u32, u16, Option<String>, Option<String>, Value, HRESULT)> = properties
+        let got: Vec<Property> = properties
             .iter_mut()
             .map(|p| {
                 let value = std::mem::take(&mut p.vValue);
@@ -626,7 +629,7 @@ fn browse(t: &mut Tally, browser: &Browser) {
             unsafe { CoTaskMemFree(Some(item.pItemProperties as *const _)) };
             item.pItemProperties = std::ptr::null_mut();
         }
-        let want: Vec<(u32, u16, Option<String>, Option<String>, Value, HRESULT)> = if i < ITEM_IDS.len() {
+        let want: Vec<Property> = if i < ITEM_IDS.len() {
             vec![
                 (
                     1,
@@ -752,11 +755,11 @@ fn add_items(t: &mut Tally, group: &v2::Group) -> Vec<u32> {
     };
     let (results, errors) = (results.as_slice(), errors.as_slice());
     let mut handles = Vec::new();
-    for i in 0..ITEM_IDS.len() {
+    for (i, (id, canonical)) in ITEM_IDS.iter().zip(ITEM_TYPES).enumerate() {
         let ok = errors.get(i) == Some(&S_OK)
             && results.get(i).is_some_and(|r| {
                 r.hServer == server_handle(i)
-                    && r.vtCanonicalDataType == ITEM_TYPES[i]
+                    && r.vtCanonicalDataType == canonical
                     && r.dwAccessRights == OPC_READABLE | OPC_WRITEABLE
                     && r.dwBlobSize == 0
             });
@@ -764,7 +767,7 @@ fn add_items(t: &mut Tally, group: &v2::Group) -> Vec<u32> {
             ok,
             &format!(
                 "AddItems: {:?} added, its server handle, canonical type {:#06X}, readable and writeable",
-                ITEM_IDS[i], ITEM_TYPES[i]
+                id, canonical
             ),
         );
         handles.push(results.get(i).map_or(0, |r| r.hServer));
