@@ -3,22 +3,26 @@
 # and opc_comn_bindings 0.3.0, in a program of their own (tests/third-party/opc-da-client, its own
 # Cargo project and Cargo.lock), built for x86_64-pc-windows-gnu (and i686-pc-windows-gnu, run under
 # 32-bit Wine, when the x86 build is given). It browses with the crate's own
-# client code through the library's browser service (opccomn_browser.exe) alone, and calls IOPCCommon
+# client code through the library's browser service (opccomn_browser.exe) alone, calls IOPCCommon
 # and the IOPCShutdown connection point of the C++ example's EXE server through opccomn.dll's
-# proxy/stub. See docs/dev/third-party-client.md for what is asserted and what belongs to the crate.
+# proxy/stub, and is a Data Access client, with the crate's client code, of the C test DA server
+# (opc_da_test_server.exe, tests/oop/da_server.c) through the same proxy/stub. See
+# docs/dev/third-party-client.md for what is asserted and what belongs to the crate.
 #
-# The browser, the example server and the proxy/stub (`regsvr32 /n /i:ProxyStub`: nothing in-process
-# answers CLSID_OPCServerList) are registered for the run and unregistered after it, whatever
-# happened; the registry's classes (both views) must then be exactly as they were before.
+# The browser, the example server, the DA test server and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
+# which registers the OPC Common and Data Access interfaces: nothing in-process answers
+# CLSID_OPCServerList) are registered for the run and unregistered after it, whatever happened; the
+# registry's classes (both views) must then be exactly as they were before.
 #
 # Usage: scripts/test-third-party-client.sh BIN_DIR EXAMPLE_DIR [X86_BIN_DIR]
-#   BIN_DIR      the x64 Windows build's program directory (opccomn.dll, opccomn_browser.exe),
-#                e.g. build/windows/bin
+#   BIN_DIR      the x64 Windows build's program directory (opccomn.dll, opccomn_browser.exe,
+#                opc_da_test_server.exe), e.g. build/windows/bin
 #   EXAMPLE_DIR  the built C++ example (opccomn_example_server.exe, with its opccomn.dll), e.g.
 #                build/example-x64 (scripts/test.sh's example stage builds it)
 #   X86_BIN_DIR  the x86 Windows build's program directory (its opccomn.dll), e.g. build/windows-x86/bin:
 #                the program also runs as a 32-bit client, with the x86 proxy/stub registered in the
-#                32-bit view, against the same x64 browser service and example EXE server
+#                32-bit view, against the same x64 browser service, example EXE server and DA
+#                test server
 # Needs WINEPREFIX set up (scripts/wine-env.sh). The program is built in build/third-party-client
 # (cargo --locked: the crates' versions are those of the committed Cargo.lock).
 set -euo pipefail
@@ -34,7 +38,8 @@ if [ "$#" = 3 ]; then
     targets+=(i686-pc-windows-gnu)
 fi
 : "${WINEPREFIX:?set up a Wine prefix first (. scripts/wine-env.sh build/windows)}"
-for file in "$bin/opccomn.dll" "$bin/opccomn_browser.exe" "$example/opccomn_example_server.exe"; do
+for file in "$bin/opccomn.dll" "$bin/opccomn_browser.exe" "$bin/opc_da_test_server.exe" \
+    "$example/opccomn_example_server.exe"; do
     [ -f "$file" ] || { echo "test-third-party-client: no $file (build it first)" >&2; exit 1; }
 done
 
@@ -73,10 +78,12 @@ unregister() {
     [ -z "$x86_bin" ] || (cd "$x86_bin" && wine regsvr32 /u /s /n /i:ProxyStub opccomn.dll) ||
         echo "unregistering the x86 proxy/stub failed" >&2
     (cd "$example" && wine opccomn_example_server.exe /UnregServer) || echo "opccomn_example_server.exe /UnregServer failed" >&2
+    (cd "$bin" && wine opc_da_test_server.exe /UnregServer) || echo "opc_da_test_server.exe /UnregServer failed" >&2
 }
 trap unregister EXIT
 
 (cd "$example" && wine opccomn_example_server.exe /RegServer)
+(cd "$bin" && wine opc_da_test_server.exe /RegServer)
 (cd "$bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)
 # A 32-bit client's COM loads the proxy/stub from the 32-bit view.
 [ -z "$x86_bin" ] || (cd "$x86_bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)

@@ -43,7 +43,7 @@ rust-windows|wine|Rust tests (Windows x64, under Wine)
 acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
 c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
 example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
-third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub (x64 and x86 clients, under Wine)
+third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub, a Data Access client of the C test DA server through the proxy/stub alone (x64 and x86 clients, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
 coexistence|wine|header and library beside the OPC Foundation'"'"'s headers (MIDL'"'"'s and widl'"'"'s) and *_i.c; a server DLL with its own .def; the static library linked with the documented and pkg-config'"'"'s lists (x64, x86, Linux)
@@ -383,8 +383,8 @@ stage_example_x64() {
 stage_third_party_client() {
     build_windows
     [ -f "$build/example-x64/CMakeCache.txt" ] || example_stage x64 "$build/windows" "$root/cmake/mingw-w64-x86_64.cmake"
-    # The x86 client (32-bit Wine) against the same x64 browser and example server, through the x86
-    # proxy/stub.
+    # The x86 client (32-bit Wine) against the same x64 browser, example server and DA test server,
+    # through the x86 proxy/stub.
     if [ "$wine32_ok" = 1 ]; then
         build_windows_x86
         scripts/test-third-party-client.sh "$build/windows/bin" "$build/example-x64" "$build/windows-x86/bin"

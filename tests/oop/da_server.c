@@ -5,12 +5,15 @@
  * the client sent it is answered with E_INVALIDARG or a per-item error, which the client sees.
  *
  * Server object: IOPCServer (AddGroup of one group, GetErrorString, GetGroupByName, GetStatus,
- * RemoveGroup), IOPCItemProperties, IOPCBrowse (GetProperties, Browse with a continuation point).
+ * RemoveGroup), IOPCItemProperties, IOPCBrowse (GetProperties, Browse with a continuation point),
+ * and, aggregated, the library's IOPCCommon (OpcCommonCreate) and IOPCShutdown connection point
+ * (OpcShutdownCreate), which a DA 2.0 client expects of a server object.
  * Group object: IOPCItemMgt (AddItems, RemoveItems), IOPCSyncIO (Read, Write), IOPCGroupStateMgt
- * (GetState, SetState, SetName), IOPCAsyncIO2 (Refresh2: an OnDataChange from a thread of the
- * server), IConnectionPointContainer with the IOPCDataCallback connection point. What the test does
- * not call answers E_NOTIMPL. Exits when its last object is released (or after two minutes without
- * a client, or 20 minutes after the start: a client that died). */
+ * (GetState, SetState, SetName), IOPCAsyncIO2 (Read: an OnReadComplete, Refresh2: an OnDataChange,
+ * each from a thread of the server), IConnectionPointContainer with the IOPCDataCallback connection
+ * point. What the tests do not call answers E_NOTIMPL. `/RegServer` and `/UnregServer` register and
+ * unregister it (LocalServer32, ProgID Oop.DaServer.1). Exits when its last object is released (or
+ * after two minutes without a client, or 20 minutes after the start: a client that died). */
 #include "da.h"
 
 #include <olectl.h> /* CONNECT_E_* */
@@ -71,6 +74,8 @@ typedef struct Server {
     IOPCServer server; /* the identity */
     IOPCItemProperties properties;
     IOPCBrowse browse;
+    IUnknown *common;   /* inner IUnknown of the aggregated IOPCCommon session */
+    IUnknown *shutdown; /* inner IUnknown of the aggregated IOPCShutdown connection point */
     LONG refs;
     Group *group; /* the one group the server keeps (AddGroup to RemoveGroup, or to its own end) */
 } Server;
@@ -390,10 +395,14 @@ static IOPCGroupStateMgtVtbl state_vtbl = {state_qi,  state_add_ref,  state_rele
 typedef struct Refresh {
     Group *group; /* a reference */
     DWORD transaction;
+    int read;                /* an IOPCAsyncIO2::Read of `items`, else a refresh of every added item */
+    DWORD count;             /* a read's items, in the order asked */
+    int items[DA_ITEMS];
 } Refresh;
 
-/* The data change of a refresh: every added item, from a thread of the server, as the specification
- * has refreshes delivered. */
+/* The callback of a refresh (OnDataChange of every added item, stamped as the cache's + 20 s) or of a
+ * read (OnReadComplete of the items read, stamped as a sync read from the device), from a thread of
+ * the server, as the specification has them delivered. */
 static DWORD WINAPI refresh_thread(void *param) {
     Refresh *r = (Refresh *)param;
     Group *g = r->group;
@@ -404,28 +413,32 @@ static DWORD WINAPI refresh_thread(void *param) {
     HRESULT errors[DA_ITEMS];
     IOPCDataCallback *sink;
     OPCHANDLE group_handle;
-    DWORD n = 0;
+    DWORD n = 0, k;
     int i;
     CoInitializeEx(NULL, COINIT_MULTITHREADED);
     EnterCriticalSection(&g->lock);
     sink = g->sink;
     if (sink) sink->lpVtbl->AddRef(sink);
     group_handle = g->client_group;
-    for (i = 0; i < DA_ITEMS; i++) {
+    for (k = 0; k < (r->read ? r->count : (DWORD)DA_ITEMS); k++) {
+        i = r->read ? r->items[k] : (int)k;
         if (!g->added[i]) continue;
         handles[n] = g->client_item[i];
         VariantInit(&values[n]);
         errors[n] = VariantCopy(&values[n], &g->values[i]);
         qualities[n] = OPC_QUALITY_GOOD_;
-        times[n] = da_time((unsigned)i + 20);
+        times[n] = da_time((unsigned)i + (r->read ? 10 : 20));
         n++;
     }
     LeaveCriticalSection(&g->lock);
-    if (sink) {
+    if (sink && r->read) {
+        sink->lpVtbl->OnReadComplete(sink, r->transaction, group_handle, S_OK, S_OK, n, handles, values, qualities,
+                                     times, errors);
+    } else if (sink) {
         sink->lpVtbl->OnDataChange(sink, r->transaction, group_handle, S_OK, S_OK, n, handles, values, qualities,
                                    times, errors);
-        sink->lpVtbl->Release(sink);
     }
+    if (sink) sink->lpVtbl->Release(sink);
     while (n) VariantClear(&values[--n]);
     group_release(g);
     free(r);
@@ -433,12 +446,75 @@ static DWORD WINAPI refresh_thread(void *param) {
     return 0;
 }
 
+/* Starts the callback of `r` (its group referenced here) on a thread of its own. */
+static HRESULT start_callback(Refresh *r) {
+    HANDLE thread;
+    group_add_ref(r->group);
+    thread = CreateThread(NULL, 0, refresh_thread, r, 0, NULL);
+    if (!thread) {
+        group_release(r->group);
+        free(r);
+        return E_OUTOFMEMORY;
+    }
+    CloseHandle(thread);
+    return S_OK;
+}
+
+/* Whether a callback is advised on the group's connection point. */
+static int group_connected(Group *g) {
+    int connected;
+    EnterCriticalSection(&g->lock);
+    connected = g->sink != NULL;
+    LeaveCriticalSection(&g->lock);
+    return connected;
+}
+
+/* A read from the device of at most DA_ITEMS items: an invalid handle gets OPC_E_INVALIDHANDLE and
+ * is left out of the OnReadComplete; with none valid there is no callback (S_FALSE, cancel ID 0). */
 static HRESULT STDMETHODCALLTYPE async_read(IOPCAsyncIO2 *This, DWORD count, OPCHANDLE *handles, DWORD transaction,
                                             DWORD *cancel, HRESULT **errors) {
-    (void)This, (void)count, (void)handles, (void)transaction;
+    Group *g = CONTAINER(Group, async, This);
+    Refresh *r;
+    HRESULT *e, hr = S_OK;
+    DWORD k;
     if (cancel) *cancel = 0;
     if (errors) *errors = NULL;
-    return E_NOTIMPL;
+    if (!cancel || !errors) return E_POINTER;
+    if (count == 0 || count > DA_ITEMS || !handles) return E_INVALIDARG;
+    if (!group_connected(g)) return CONNECT_E_NOCONNECTION;
+    r = (Refresh *)calloc(1, sizeof *r);
+    e = (HRESULT *)task_alloc_zero(count * sizeof *e);
+    if (!r || !e) {
+        free(r);
+        CoTaskMemFree(e);
+        return E_OUTOFMEMORY;
+    }
+    r->group = g;
+    r->transaction = transaction;
+    r->read = 1;
+    EnterCriticalSection(&g->lock);
+    for (k = 0; k < count; k++) {
+        int i = item_of_handle(handles[k]);
+        if (i < 0 || !g->added[i]) {
+            e[k] = OPC_E_INVALIDHANDLE_;
+            hr = S_FALSE;
+        } else {
+            r->items[r->count++] = i;
+        }
+    }
+    LeaveCriticalSection(&g->lock);
+    if (r->count == 0) {
+        free(r);
+    } else {
+        HRESULT started = start_callback(r);
+        if (FAILED(started)) {
+            CoTaskMemFree(e);
+            return started;
+        }
+        *cancel = transaction + 1;
+    }
+    *errors = e;
+    return hr;
 }
 
 static HRESULT STDMETHODCALLTYPE async_write(IOPCAsyncIO2 *This, DWORD count, OPCHANDLE *handles, VARIANT *values,
@@ -453,27 +529,17 @@ static HRESULT STDMETHODCALLTYPE async_refresh(IOPCAsyncIO2 *This, OPCDATASOURCE
                                                DWORD *cancel) {
     Group *g = CONTAINER(Group, async, This);
     Refresh *r;
-    HANDLE thread;
-    int connected;
+    HRESULT hr;
     if (!cancel) return E_POINTER;
     *cancel = 0;
     if (source != OPC_DS_CACHE && source != OPC_DS_DEVICE) return E_INVALIDARG;
-    EnterCriticalSection(&g->lock);
-    connected = g->sink != NULL;
-    LeaveCriticalSection(&g->lock);
-    if (!connected) return CONNECT_E_NOCONNECTION;
-    r = (Refresh *)malloc(sizeof *r);
+    if (!group_connected(g)) return CONNECT_E_NOCONNECTION;
+    r = (Refresh *)calloc(1, sizeof *r);
     if (!r) return E_OUTOFMEMORY;
     r->group = g;
     r->transaction = transaction;
-    group_add_ref(g);
-    thread = CreateThread(NULL, 0, refresh_thread, r, 0, NULL);
-    if (!thread) {
-        group_release(g);
-        free(r);
-        return E_OUTOFMEMORY;
-    }
-    CloseHandle(thread);
+    hr = start_callback(r);
+    if (FAILED(hr)) return hr;
     *cancel = transaction + 1;
     return S_OK;
 }
@@ -586,6 +652,10 @@ static HRESULT server_qi(Server *s, REFIID riid, void **ppv) {
     if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCServer)) *ppv = &s->server;
     else if (IsEqualIID(riid, &IID_IOPCItemProperties)) *ppv = &s->properties;
     else if (IsEqualIID(riid, &IID_IOPCBrowse)) *ppv = &s->browse;
+    else if (IsEqualIID(riid, &IID_IOPCCommon) && s->common)
+        return s->common->lpVtbl->QueryInterface(s->common, riid, ppv);
+    else if (IsEqualIID(riid, &IID_IConnectionPointContainer) && s->shutdown)
+        return s->shutdown->lpVtbl->QueryInterface(s->shutdown, riid, ppv);
     else return E_NOINTERFACE;
     InterlockedIncrement(&s->refs);
     return S_OK;
@@ -595,6 +665,8 @@ static ULONG server_release(Server *s) {
     LONG n = InterlockedDecrement(&s->refs);
     if (n == 0) {
         if (s->group) group_release(s->group);
+        if (s->common) s->common->lpVtbl->Release(s->common);
+        if (s->shutdown) s->shutdown->lpVtbl->Release(s->shutdown);
         free(s);
         OpcServerUnlock();
     }
@@ -960,8 +1032,10 @@ static HRESULT OPCCOMN_CDECL create_server(void *context, IUnknown *outer, REFII
     s->browse.lpVtbl = &browse_vtbl;
     s->refs = 1;
     OpcServerLock(); /* the server object counts on the process while it lives */
-    hr = server_qi(s, riid, ppv);
-    server_release(s);
+    hr = OpcCommonCreate(NULL, (IUnknown *)&s->server, &IID_IUnknown, (void **)&s->common);
+    if (SUCCEEDED(hr)) hr = OpcShutdownCreate((IUnknown *)&s->server, &IID_IUnknown, (void **)&s->shutdown);
+    if (SUCCEEDED(hr)) hr = server_qi(s, riid, ppv);
+    server_release(s); /* frees the object when creating or QueryInterface failed */
     return hr;
 }
 
@@ -975,14 +1049,23 @@ static DWORD WINAPI watchdog(void *unused) {
 }
 
 int main(void) {
+    OpcServerRegistration reg;
     OpcServerClass cls;
     OpcExeServerOptions options;
     HANDLE timer;
     HRESULT hr;
+    /* What /RegServer writes (this EXE), as test_da_tables registers it. */
+    memset(&reg, 0, sizeof reg);
+    reg.struct_size = sizeof reg;
+    reg.server_type = OPC_SERVER_TYPE_LOCAL;
+    reg.clsid = CLSID_DaTestServer;
+    reg.prog_id = L"Oop.DaServer.1";
+    reg.user_type = L"opccomn DA tables test server";
     memset(&cls, 0, sizeof cls);
     cls.struct_size = sizeof cls;
     cls.clsid = &CLSID_DaTestServer;
     cls.create = create_server;
+    cls.registration = &reg;
     memset(&options, 0, sizeof options);
     options.struct_size = sizeof options;
     options.classes = &cls;

@@ -8,9 +8,14 @@
 //!   IOPCCommon through `opc_da`'s `CommonTrait`, the IOPCShutdown connection point through its
 //!   `ConnectionPointContainerTrait`, and a shutdown sink made with windows-core's `#[implement]` that
 //!   the server calls back when its operator stops it.
+//! - A Data Access server in another process (`da.rs`): the C test server `opc_da_test_server.exe`
+//!   through opccomn.dll's proxy/stub alone, with `opc_da`'s v2 client code: connect, status, a group
+//!   and its items, sync and async reads (every value the one the server serves), write and read
+//!   back, data-change callbacks to an `#[implement]` IOPCDataCallback, browsing and item
+//!   properties, removal.
 //!
-//! The script registers the browser, the example server and the proxy/stub before and removes them
-//! after. Prints `third-party-client: N passed, M failed`; exits non-zero when a check failed.
+//! The script registers the browser, the example server, the DA test server and the proxy/stub
+//! before and removes them after. Prints `third-party-client: N passed, M failed`; exits non-zero when a check failed.
 //!
 //! What belongs to the crate is not asserted: its GUID iterator yields the 16 zero GUIDs of its cache
 //! before the first `IEnumGUID::Next` and pads every batch to 16 with whatever the cache held, so only
@@ -39,6 +44,8 @@ use windows::Win32::System::Registry::{
 use windows::Win32::System::Threading::{EVENT_MODIFY_STATE, OpenEventW, SetEvent};
 use windows::core::{GUID, HRESULT, HSTRING, IUnknown, Interface, PCWSTR};
 use windows_core::implement;
+
+mod da;
 
 /// CLSID_OPCServerList (the browser's class; OpcEnum's CLSID).
 const CLSID_OPC_SERVER_LIST: GUID = GUID::from_u128(0x13486d51_4821_11d2_a494_3cb306c10000);
@@ -621,6 +628,7 @@ fn main() -> ExitCode {
     let mut t = Tally::default();
     browse(&mut t);
     example_server(&mut t);
+    da::da_server(&mut t);
     // SAFETY: balances the CoInitializeEx above; every interface of this thread is released.
     unsafe { CoUninitialize() };
     println!("third-party-client: {} passed, {} failed", t.passed, t.failed);
