@@ -20,9 +20,8 @@ use windows_sys::Win32::Security::{
     TOKEN_INFORMATION_CLASS, TOKEN_QUERY,
 };
 use windows_sys::Win32::System::Com::{
-    CoAddRefServerProcess, CoInitializeEx, CoLockObjectExternal, CoRegisterClassObject, CoReleaseServerProcess,
-    CoResumeClassObjects, CoRevokeClassObject, CLSCTX_LOCAL_SERVER, COINIT_MULTITHREADED, REGCLS_MULTIPLEUSE,
-    REGCLS_SUSPENDED,
+    CoAddRefServerProcess, CoInitializeEx, CoRegisterClassObject, CoReleaseServerProcess, CoResumeClassObjects,
+    CoRevokeClassObject, CLSCTX_LOCAL_SERVER, COINIT_MULTITHREADED, REGCLS_MULTIPLEUSE, REGCLS_SUSPENDED,
 };
 use windows_sys::Win32::System::Console::SetConsoleCtrlHandler;
 use windows_sys::Win32::System::Threading::{
@@ -367,27 +366,8 @@ pub(super) fn last_error() -> HRESULT {
     }
 }
 
-/// A class object registered with COM: its registration (`cookie`, 0 once revoked) and the host's
-/// reference, with an external lock (`CoLockObjectExternal`) on its stub.
-struct ClassObject {
-    cookie: u32,
-    locked: bool,
-    object: Counted<IUnknown>,
-}
-
-/// The class objects registered with COM, revoked when the host ends (or earlier, by `revoke`), and
-/// released when dropped.
-///
-/// Each class object's stub is held by an external lock from its registration until the host has
-/// closed its count (the drop, which comes after every path to the end has closed it): revoking a
-/// registration does not tear the stub down while clients that got the class object before the
-/// revocation may still call `CreateInstance` on it. Under Wine, the teardown of the last stub of
-/// an interface waits for the calls on that interface while holding the lock that marshaling an
-/// interface pointer takes, so a `CreateInstance` in flight that marshals its new object and the
-/// teardown (by the revocation, or by a client's release after it) would wait for each other for
-/// ever. Once the count is closed a `CreateInstance` refuses without marshaling anything, and the
-/// teardown at the drop waits only for such calls.
-struct Registered(Vec<ClassObject>);
+/// The class objects registered with COM, revoked and released when dropped.
+struct Registered(Vec<(u32, Counted<IUnknown>)>);
 
 impl Registered {
     /// Registers the class object of each class with COM, suspended; `CoResumeClassObjects` hands
@@ -417,14 +397,7 @@ impl Registered {
             if hr < 0 {
                 return Err(hr.into());
             }
-            // SAFETY: a live object of ours, in this process's apartment (COM initialised). A failure
-            // leaves the stub's lifetime to COM alone, as without the lock.
-            let locked = unsafe { CoLockObjectExternal(unknown.as_ptr().cast(), 1, 0) } >= 0;
-            registered.0.push(ClassObject {
-                cookie,
-                locked,
-                object: unknown,
-            });
+            registered.0.push((cookie, unknown));
         }
         // SAFETY: no arguments: every class object is registered, hand them out from now on.
         let hr = unsafe { CoResumeClassObjects() };
@@ -434,20 +407,12 @@ impl Registered {
         Ok(registered)
     }
 
-    /// Whether any class object is still registered (handed out by COM).
-    fn any_registered(&self) -> bool {
-        self.0.iter().any(|c| c.cookie != 0)
-    }
-
-    /// Revokes every registration: COM hands out none of them from now on. The objects, and the locks
-    /// on their stubs, stay until the drop.
+    /// Revokes every registration: COM hands out none of them from now on.
     fn revoke(&mut self) {
-        for class in &mut self.0 {
-            if class.cookie != 0 {
-                // SAFETY: a registration of ours, revoked once.
-                unsafe { CoRevokeClassObject(class.cookie) };
-                class.cookie = 0;
-            }
+        for (cookie, unknown) in self.0.drain(..) {
+            // SAFETY: a registration of ours; the reference we kept for it goes after.
+            unsafe { CoRevokeClassObject(cookie) };
+            drop(unknown);
         }
     }
 }
@@ -455,13 +420,6 @@ impl Registered {
 impl Drop for Registered {
     fn drop(&mut self) {
         self.revoke();
-        for class in self.0.drain(..) {
-            if class.locked {
-                // SAFETY: the lock taken at registration, released once; the last unlock lets COM
-                // release the stub (the host's own reference goes with `class.object` after).
-                unsafe { CoLockObjectExternal(class.object.as_ptr().cast(), 0, 1) };
-            }
-        }
     }
 }
 
@@ -676,7 +634,7 @@ pub(super) fn serve(o: &OpcExeServerOptions, table: &[ServerClass], start: Start
             Idle::Busy => {
                 // A client came and holds the server: serve on, with the class objects handed out
                 // again (Windows suspended them when the count fell to zero).
-                if registered.any_registered() {
+                if !registered.0.is_empty() {
                     // SAFETY: no arguments.
                     unsafe { CoResumeClassObjects() };
                 }
