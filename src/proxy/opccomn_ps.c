@@ -67,6 +67,8 @@ static const ProxyFileInfo *const proxy_files[] = {
 
 /* The one factory object of the runtime; it initialises it on first use and counts its references. */
 static CStdPSFactoryBuffer factory = {0};
+/* Held while the runtime initialises or hands out the factory (OpcProxyStubGetClassObject). */
+static SRWLOCK factory_lock = SRWLOCK_INIT;
 
 /* The stub vtables name CStdStubBuffer_Release; as in MIDL's dlldata.c it releases the factory's
  * reference too, so OpcProxyStubCanUnloadNow sees the stubs still alive. */
@@ -375,9 +377,15 @@ HRESULT OpcProxyStubGetClassObject(REFCLSID rclsid, REFIID riid, void **ppv, con
     if (!ppv) return E_POINTER;
     *ppv = NULL;
     checks = library_checks;
-    /* Initialises the runtime's factory (and checks rclsid) on first use. */
+    /* Initialises the runtime's factory (and checks rclsid) on first use: one call at a time. The
+     * runtime's first call marks the factory initialised before it has filled in the stub vtables'
+     * missing methods (Wine's NdrDllGetClassObject does), so a second thread calling meanwhile (COM
+     * loads a proxy/stub on whichever threads first marshal its interfaces) would get a factory whose
+     * stubs call through NULL. */
+    AcquireSRWLockExclusive(&factory_lock);
     hr = NdrDllGetClassObject(rclsid, &IID_IPSFactoryBuffer, (void **)&runtime, (const ProxyFileInfo **)proxy_files,
                               &CLSID_OpcComnProxyStub, &factory);
+    ReleaseSRWLockExclusive(&factory_lock);
     if (FAILED(hr)) return hr;
     hr = IPSFactoryBuffer_QueryInterface(&checked_factory, riid, ppv);
     IPSFactoryBuffer_Release(runtime);
