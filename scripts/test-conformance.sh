@@ -88,13 +88,14 @@ grep -q OpcRegisterProxyStub "$bin/opccomn.dll" ||
 # tested in stage c-windows, not here, so a failure is said loudly and made once more, and a second
 # failure ends the stage.
 register_defect() {
-    local dll=$1 code=0
-    (cd "$bin" && wine regsvr32 /s "$dll") || code=$?
-    [ "$code" -eq 0 ] && return 0
-    echo "!!!! regsvr32 $dll failed with exit code $code: once more" >&2
-    code=0
-    (cd "$bin" && wine regsvr32 /s "$dll") || code=$?
-    [ "$code" -eq 0 ] || { echo "regsvr32 $dll failed again with exit code $code" >&2; exit 1; }
+    local dll=$1 attempt code
+    for attempt in 1 2; do
+        code=0
+        (cd "$bin" && wine regsvr32 /s "$dll") || code=$?
+        [ "$code" -eq 0 ] && return 0
+        echo "!!!! regsvr32 $dll failed with exit code $code (attempt $attempt of 2)" >&2
+    done
+    exit 1
 }
 
 while read -r number name want flags; do
