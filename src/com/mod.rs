@@ -8,6 +8,8 @@ pub mod guids;
 pub mod hresult;
 pub mod iids;
 pub mod interfaces;
+#[cfg(windows)]
+pub(crate) mod kept;
 pub mod module_lock;
 pub mod object;
 #[cfg(windows)]

@@ -8,7 +8,7 @@
 
 use core::ffi::c_void;
 
-use super::types::HRESULT;
+use super::types::{GUID, HRESULT};
 
 #[link(name = "ole32")]
 extern "system" {
@@ -18,4 +18,19 @@ extern "system" {
     pub fn CoTaskMemFree(pv: *const c_void);
     /// Creates the free-threaded marshaler aggregated into `outer`.
     pub fn CoCreateFreeThreadedMarshaler(outer: *mut c_void, marshal: *mut *mut c_void) -> HRESULT;
+    /// Writes the marshal data of `unk`'s `riid` to `stream`.
+    pub fn CoMarshalInterface(
+        stream: *mut c_void,
+        riid: *const GUID,
+        unk: *mut c_void,
+        dest_context: u32,
+        dest_context_data: *mut c_void,
+        flags: u32,
+    ) -> HRESULT;
+    /// Releases the marshal data at `stream`'s position (and what they hold).
+    pub fn CoReleaseMarshalData(stream: *mut c_void) -> HRESULT;
+    /// A stream on `hglobal` (NULL: new memory), which frees it when released if `delete_on_release`.
+    pub fn CreateStreamOnHGlobal(hglobal: *mut c_void, delete_on_release: i32, stream: *mut *mut c_void) -> HRESULT;
+    /// The memory a stream made by CreateStreamOnHGlobal writes to.
+    pub fn GetHGlobalFromStream(stream: *mut c_void, hglobal: *mut *mut c_void) -> HRESULT;
 }

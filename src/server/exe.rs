@@ -51,6 +51,8 @@ use crate::registry::cmdline::{arguments, parse_command_line, OpcServerCommand};
 use crate::registry::register::{valid_service_name, ServiceOptions, LOCAL_SERVICE, SERVICE_ACCOUNTS};
 
 #[cfg(windows)]
+mod keep;
+#[cfg(windows)]
 mod scm;
 #[cfg(windows)]
 mod service;

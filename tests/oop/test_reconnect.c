@@ -2,7 +2,7 @@
  * that browse and then connect do, under the real COM runtime (Wine in CI): every reconnect must
  * succeed, whatever the gap, on servers that run the library's EXE host at its defaults.
  *
- *   test_reconnect TARGET...   TARGET: "browser" (the server browser, opccomn_browser.exe beside this
+ *   test_reconnect [-burst] TARGET...   TARGET: "browser" (the server browser, opccomn_browser.exe beside this
  *                              program, registered here), "server" (the cross-process test server
  *                              with the host's default linger, registered here), "example" (the C++
  *                              example's EXE server, registered by the caller)
@@ -10,12 +10,22 @@
  * For each target, CHILDREN processes each connect ROUNDS times: create the class, call one method,
  * release everything, wait a gap. The CHILDREN x ROUNDS gaps are distinct and spread evenly over 0 to
  * 3 s, so the server's count falls to zero and rises again at every distance from the last release,
- * from several processes at once. The targets run at the same time. */
+ * from several processes at once. The targets run at the same time.
+ *
+ * With -burst: BURST_CHILDREN processes x BURST_ROUNDS reconnects without gaps, each release right
+ * after the reply to the call: a server's last object, and with it the last stub of an interface,
+ * goes while the thread that served the call is still finishing it. (tests/oop/interfaces-kept.sh
+ * runs it and checks that the served interfaces stay registered with the RPC runtime throughout.) */
 #include "oop.h"
 
 #define CHILDREN 8
 #define ROUNDS 25
 #define MAX_GAP_MS 3000
+#define BURST_CHILDREN 2
+#define BURST_ROUNDS 200
+
+/* This run's children, reconnects per child, longest gap (-burst: the BURST_ figures, no gaps). */
+static int children_n = CHILDREN, rounds_n = ROUNDS, max_gap = MAX_GAP_MS;
 /* How long all children together may take (each takes about 40 s on an idle machine, far more on a
  * loaded one: every activation then waits for the CPU). */
 #define DEADLINE_MS 240000
@@ -65,14 +75,14 @@ static HRESULT connect_to(const char *target, const char **stage, IUnknown **kee
  * MAX_GAP_MS. */
 static DWORD gap_ms(int child, int round) {
     unsigned k = (unsigned)(round * CHILDREN + child);
-    return (DWORD)((k * 1543u) % (MAX_GAP_MS + 1));
+    return (DWORD)((k * 1543u) % (unsigned)(max_gap + 1));
 }
 
 /* A child: ROUNDS reconnects; its exit code is the number that failed. */
 static int child_main(const char *target, int child) {
     int round, failed = 0;
-    if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED))) return ROUNDS;
-    for (round = 0; round < ROUNDS; round++) {
+    if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED))) return rounds_n;
+    for (round = 0; round < rounds_n; round++) {
         const char *stage = "";
         DWORD gap = gap_ms(child, round);
         DWORD t0 = GetTickCount();
@@ -159,13 +169,17 @@ int main(int argc, char **argv) {
     WCHAR server_path[MAX_PATH], *slash;
     OpcServerRegistration server;
     CLSID server_clsid;
+    if (argc >= 2 && !strcmp(argv[1], "-burst")) {
+        children_n = BURST_CHILDREN, rounds_n = BURST_ROUNDS, max_gap = 0;
+        argv++, argc--;
+    }
     if (argc == 4 && !strcmp(argv[1], "child")) return child_main(argv[2], atoi(argv[3]));
     for (i = 1; i < argc && count < 8; i++) {
         if (strcmp(argv[i], "browser") && strcmp(argv[i], "server") && strcmp(argv[i], "example")) count = 0, i = argc;
         else targets[count++] = argv[i];
     }
     if (count == 0) {
-        fprintf(stderr, "usage: test_reconnect browser|server|example...\n");
+        fprintf(stderr, "usage: test_reconnect [-burst] browser|server|example...\n");
         return 2;
     }
     GetModuleFileNameW(NULL, dir, MAX_PATH);
@@ -187,7 +201,7 @@ int main(int argc, char **argv) {
             set_test_server_command(&server_clsid, server_path);
         }
     }
-    printf("test_reconnect: %d processes x %d reconnects per target, gaps 0 to %d ms\n", CHILDREN, ROUNDS, MAX_GAP_MS);
+    printf("test_reconnect: %d processes x %d reconnects per target, gaps 0 to %d ms\n", children_n, rounds_n, max_gap);
     fflush(stdout);
     /* Each server is started by one activation first: under Wine, clients that activate a class at
      * the same moment while no process serves it can make COM start one process each, and those no
@@ -200,9 +214,9 @@ int main(int argc, char **argv) {
         CHECK_HR(connect_to(targets[t], &stage, &warm[t]), S_OK);
     }
     for (t = 0; t < count; t++) {
-        for (i = 0; i < CHILDREN; i++) {
+        for (i = 0; i < children_n; i++) {
             WCHAR args[64];
-            swprintf(args, 64, L"child %hs %d", targets[t], i);
+            swprintf(args, 64, L"%ls child %hs %d", max_gap ? L"" : L"-burst", targets[t], i);
             children[n] = spawn(args);
             CHECK(children[n] != NULL);
             if (children[n]) n++;
@@ -217,18 +231,18 @@ int main(int argc, char **argv) {
         /* 25 gaps of 1.5 s on average, and the activations: far less than this, all together. */
         DWORD left = spent < DEADLINE_MS ? DEADLINE_MS - spent : 0;
         if (WaitForSingleObject(children[i], left) != WAIT_OBJECT_0) {
-            printf("test_reconnect: child %d of %s did not finish within %d s\n", i % CHILDREN,
-                   targets[i / CHILDREN], DEADLINE_MS / 1000);
+            printf("test_reconnect: child %d of %s did not finish within %d s\n", i % children_n,
+                   targets[i / children_n], DEADLINE_MS / 1000);
             TerminateProcess(children[i], 999);
             WaitForSingleObject(children[i], 5000);
         }
         GetExitCodeProcess(children[i], &code);
         CHECK(code == 0);
-        failed_total += code == 0 ? 0 : (code <= ROUNDS ? (int)code : ROUNDS);
+        failed_total += code == 0 ? 0 : (code <= (DWORD)rounds_n ? (int)code : rounds_n);
         CloseHandle(children[i]);
     }
-    for (t = 0; t < count; t++) printf("test_reconnect: %s: %d reconnects\n", targets[t], CHILDREN * ROUNDS);
-    printf("test_reconnect: %d of %d reconnects failed\n", failed_total, n * ROUNDS);
+    for (t = 0; t < count; t++) printf("test_reconnect: %s: %d reconnects\n", targets[t], children_n * rounds_n);
+    printf("test_reconnect: %d of %d reconnects failed\n", failed_total, n * rounds_n);
 
     /* The servers end on their own, the linger (5 s) and the end's pause (1 s) after their last
      * release. */

@@ -28,9 +28,11 @@ use windows_sys::Win32::System::Threading::{
     CreateEventW, GetCurrentProcess, OpenProcessToken, ResetEvent, SetEvent, WaitForMultipleObjects,
 };
 
+use super::keep::KEEPER;
 use super::{scm::Scm, service, HostCommand, OpcExeServerOptions};
 use crate::com::ffi::{self, Fail};
 use crate::com::iids::IID_IUNKNOWN;
+use crate::com::kept::Kept;
 use crate::com::module_lock::{set_module_lock, ModuleLock};
 use crate::com::unknown::Counted;
 use crate::com::wstr::wstr_units;
@@ -588,6 +590,9 @@ pub(super) fn serve(o: &OpcExeServerOptions, table: &[ServerClass], start: Start
         process_lock();
         USED.store(false, Ordering::Release);
     }
+    // Before the first client: the interfaces clients will be handed stay registered with the RPC
+    // runtime until the end (keep.rs says why).
+    let kept = Kept::new(&KEEPER);
     let mut registered = Registered::new(table)?;
     if start == Start::Service {
         service::serving();
@@ -681,6 +686,7 @@ pub(super) fn serve(o: &OpcExeServerOptions, table: &[ServerClass], start: Start
         process_unlock();
     }
     drop(registered);
+    drop(kept);
     Ok(result)
 }
 
