@@ -206,11 +206,14 @@ fn opcitemdef_strings_and_blobs_are_checked_against_their_counts() {
         assert_eq!(ctx, Context::of(&[2]), "the reply's arrays are sized by dwCount");
         assert_eq!(req(D::IOPCItemMgt, "AddItems", &add_items(5, 6), d), Err(BAD_STUB_DATA));
         // A blob beyond its bound (65,536 bytes, idl/ndr-bounds.txt) is refused as MIDL's [range] does.
-        assert_eq!(
-            req(D::IOPCItemMgt, "AddItems", &add_items(65_537, 65_537), d),
-            Err(INVALID_BOUND)
-        );
-        whole_req(D::IOPCItemMgt, "AddItems", &add_items(65_536, 65_536), d);
+        // (Not under Miri: `whole_req` checks every cut of the message, and the message is 64 KiB.)
+        if !cfg!(miri) {
+            assert_eq!(
+                req(D::IOPCItemMgt, "AddItems", &add_items(65_537, 65_537), d),
+                Err(INVALID_BOUND)
+            );
+            whole_req(D::IOPCItemMgt, "AddItems", &add_items(65_536, 65_536), d);
+        }
     }
 }
 
@@ -239,16 +242,19 @@ fn opcitemresult_blobs_are_counted_by_their_own_field() {
             rep(D::IOPCItemMgt, "AddItems", &Context::of(&[1]), &result(3, 4), d),
             Err(BAD_STUB_DATA)
         );
-        assert_eq!(
-            rep(
-                D::IOPCItemMgt,
-                "AddItems",
-                &Context::of(&[1]),
-                &result(70_000, 70_000),
-                d
-            ),
-            Err(INVALID_BOUND)
-        );
+        // (Not under Miri, where building the 70,000-byte blob alone takes minutes.)
+        if !cfg!(miri) {
+            assert_eq!(
+                rep(
+                    D::IOPCItemMgt,
+                    "AddItems",
+                    &Context::of(&[1]),
+                    &result(70_000, 70_000),
+                    d
+                ),
+                Err(INVALID_BOUND)
+            );
+        }
         // Two results announced, one sent.
         assert!(rep(D::IOPCItemMgt, "AddItems", &Context::of(&[2]), &result(3, 3), d).is_err());
     }
