@@ -21,6 +21,9 @@ models=("$@")
 declare -A flags=([stacked]="" [tree]="-Zmiri-tree-borrows")
 # Test-name filters per model (libtest: a test runs when its path contains one of them).
 declare -A filters=([stacked]="" [tree]="com:: common:: shutdown:: proxy:: serverlist:: module:: server:: security:: locale:: errors:: stress_tests")
+# Tests left out per model among those the filters take: the NDR checks (proxy::ndr, safe code over
+# byte slices, every cut of each message) run under Stacked Borrows only.
+declare -A skips=([stacked]="" [tree]="--skip proxy::ndr::")
 for m in "${models[@]}"; do
     [ -n "${flags[$m]+set}" ] || { echo "usage: scripts/miri.sh [stacked|tree]..." >&2; exit 2; }
 done
@@ -39,7 +42,7 @@ for m in "${models[@]}"; do
         t=$SECONDS rc=0
         # shellcheck disable=SC2086 # the filters are words
         MIRIFLAGS="${flags[$m]} ${MIRIFLAGS:-}" cargo +"$OPCCOMN_NIGHTLY" miri test --lib -j2 -- --test-threads=1 \
-            ${filters[$m]} >"$out/$m.log" 2>&1 || rc=$?
+            ${filters[$m]} ${skips[$m]} >"$out/$m.log" 2>&1 || rc=$?
         echo "$rc" >"$out/$m.rc"
         echo $((SECONDS - t)) >"$out/$m.seconds"
     ) &
