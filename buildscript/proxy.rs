@@ -1,6 +1,6 @@
-//! For Windows targets, the proxy/stub of the OPC Common and Data Access interfaces: compiles
-//! `src/proxy/opccomn_ps.c` and `src/proxy/opcda_ps.c` (with the NDR tables `tools/gen-proxy.py`
-//! generated from `idl/opccomn.idl` and `idl/opcda.idl` into `src/proxy/generated/`, and the interface
+//! For Windows targets, the proxy/stub of the OPC Common, Data Access, Alarms & Events and HDA
+//! interfaces: compiles `src/proxy/opccomn_ps.c`, `opcda_ps.c`, `opc_ae_ps.c` and `opchda_ps.c` (with
+//! the NDR tables `tools/gen-proxy.py` generated from the IDL files of `idl/` into `src/proxy/generated/`, and the interface
 //! table `tools/gen-header` generated beside them) into a static library, links it, rpcrt4 (the NDR
 //! engine that interprets the tables) and uuid, and sets `cfg(opccomn_proxy_stub)` for src/proxy. With
 //! mingw the tools are `<triple>-gcc` and `<triple>-ar` (or OPCCOMN_CC / OPCCOMN_AR), with MSVC `cl`
@@ -15,7 +15,7 @@ use crate::toolchain::{run, Toolchain};
 pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
     let src = manifest_dir.join("src/proxy");
     // Each table file on its own (they define the same static names), with its checking wrapper.
-    let units = ["opccomn_ps", "opcda_ps"];
+    let units = ["opccomn_ps", "opcda_ps", "opc_ae_ps", "opchda_ps"];
     for file in [
         "opccomn_ps.c",
         "opcda_ps.c",
@@ -26,6 +26,14 @@ pub fn build(manifest_dir: &Path, out_dir: &Path, toolchain: &Toolchain) {
         "generated/opcda_idl.h",
         "generated/opcda_p_win64.c",
         "generated/opcda_p_win32.c",
+        "opc_ae_ps.c",
+        "opchda_ps.c",
+        "generated/opc_ae_idl.h",
+        "generated/opc_ae_p_win64.c",
+        "generated/opc_ae_p_win32.c",
+        "generated/opchda_idl.h",
+        "generated/opchda_p_win64.c",
+        "generated/opchda_p_win32.c",
     ] {
         println!("cargo:rerun-if-changed={}", src.join(file).display());
     }

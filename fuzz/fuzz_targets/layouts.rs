@@ -8,7 +8,7 @@
 //!
 //! Seeds: a request and a reply of every method, made from its layout (src/proxy/ndr/tests/served.rs).
 //!
-//! Input: byte 0 the interface (mod their number), byte 1 the method (3 + mod 10: one past the longest
+//! Input: byte 0 the interface (mod their number), byte 1 the method (3 + mod 24: past the longest
 //! interface's), byte 2 bit 0 the dialect (Wine's), bit 1 a reply (not a request), bytes 3 to 18 the
 //! reply's context (four words: the request's counts, or the IID of `iid_is`); the message is the
 //! rest, copied to an 8-byte boundary.
@@ -44,7 +44,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     let iface = Interface::all()[usize::from(data[0]) % Interface::all().len()].layout();
-    let method = 3 + u32::from(data[1] % 10);
+    let method = 3 + u32::from(data[1] % 24);
     let dialect = if data[2] & 1 != 0 { Dialect::Wine } else { Dialect::Ndr };
     let is_reply = data[2] & 2 != 0;
     let words: Vec<u32> = data[3..19]

@@ -219,6 +219,22 @@ typedef struct IOPCServerList2 IOPCServerList2;
 #define OPC_PROXY_STUB_DA 512
 
 /**
+ * OpcRegisterProxyStub() flag: register the OPC Alarms & Events 1.10 interfaces (the event sink
+ * IOPCEventSink included).
+ *
+ * @ingroup proxystub
+ */
+#define OPC_PROXY_STUB_AE 1024
+
+/**
+ * OpcRegisterProxyStub() flag: register the OPC Historical Data Access 1.20 interfaces (the
+ * callback IOPCHDA_DataCallback included).
+ *
+ * @ingroup proxystub
+ */
+#define OPC_PROXY_STUB_HDA 2048
+
+/**
  * OpcServerRegistration::flags: leave values that already exist as they are, instead of replacing
  * them, except the server's own module key (`InprocServer32` / `LocalServer32`). For a class that
  * another product registers too (opccomn's own server list under the CLSID of OpcEnum).
@@ -4763,7 +4779,8 @@ void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *filter);
  * Registers opccomn's proxy/stub for the interfaces it serves: the OPC Common interfaces
  * (IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2, IOPCEnumGUID) and those of OPC Data
  * Access 1.0, 2.05a and 3.0 (IOPCServer, IOPCItemMgt, IOPCSyncIO, IOPCDataCallback, ...), or those
- * of the specifications `flags` names. Writes ::CLSID_OpcComnProxyStub with this module as its
+ * of the specifications `flags` names; and those of OPC Alarms & Events 1.10 (IOPCEventServer,
+ * IOPCEventSink, ...) and Historical Data Access 1.20 (IOPCHDA_Server, IOPCHDA_DataCallback, ...). Writes ::CLSID_OpcComnProxyStub with this module as its
  * `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods`
  * and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub
  * (the OPC Foundation's `opccomn_ps.dll` or `opcproxy.dll`) keeps it unless `flags` has
@@ -4774,7 +4791,8 @@ void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *filter);
  * @param reg the registry to write, or NULL for the system registry (on 64-bit Windows the view of the
  *   calling process, so a 32-bit opccomn.dll registers the 32-bit view).
  * @param flags ::OPC_PROXY_STUB_TAKE_OVER or not, with the specifications to register
- *   (::OPC_PROXY_STUB_COMMON, ::OPC_PROXY_STUB_DA); none of those: all of them.
+ *   (::OPC_PROXY_STUB_COMMON, ::OPC_PROXY_STUB_DA, ::OPC_PROXY_STUB_AE, ::OPC_PROXY_STUB_HDA); none
+ *   of those: all of them.
  *
  * @return S_OK when every interface registered now uses opccomn's proxy/stub; S_FALSE when some stay with
  * another; E_INVALIDARG for unknown flags; registry errors as HRESULTs.
@@ -4807,7 +4825,7 @@ HRESULT OPCCOMN_CDECL OpcUnregisterProxyStub(const struct OpcRegistry *reg);
  * `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
  * registers the proxy/stub in the system registry for every interface it serves
  * (OpcRegisterProxyStub()), `ProxyStub,TakeOver` also takes over from another installed proxy/stub;
- * the words `Common` and `DA` choose the specifications (`ProxyStub DA`: only Data Access's), for
+ * the words `Common`, `DA`, `AE` and `HDA` choose the specifications (`ProxyStub DA`: only Data Access's), for
  * registering and for unregistering. Words are case-insensitive and separated by commas or blanks.
  * regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
  *

@@ -1,8 +1,9 @@
 //! opccomn.dll as the proxy/stub of the OPC Common interfaces (IOPCShutdown, IOPCCommon,
-//! IOPCServerList, IOPCServerList2, IOPCEnumGUID) and of the OPC Data Access interfaces (DA 1.0,
-//! 2.05a and 3.0, IOPCDataCallback included), the way a MIDL "merged proxy/stub" DLL is one:
+//! IOPCServerList, IOPCServerList2, IOPCEnumGUID) and of the OPC Data Access (DA 1.0, 2.05a and
+//! 3.0, IOPCDataCallback included), Alarms & Events 1.10 and Historical Data Access 1.20 interfaces,
+//! the way a MIDL "merged proxy/stub" DLL is one:
 //! `DllGetClassObject(CLSID_OpcComnProxyStub)` hands out the system RPC runtime's PSFactoryBuffer over
-//! NDR format strings generated from `idl/opccomn.idl` and `idl/opcda.idl` (`src/proxy/opccomn_ps.c`, built by
+//! NDR format strings generated from `idl/opccomn.idl`, `opcda.idl`, `opc_ae.idl` and `opchda.idl` (`src/proxy/opccomn_ps.c`, built by
 //! `buildscript/proxy.rs` on Windows with mingw; `tools/gen-proxy.py` generates and corrects the
 //! tables, CI checks they are current). The bytes on the wire are therefore the runtime's NDR for the interfaces as the OPC
 //! Foundation's IDL declares them, the same as its `opccomn_ps.dll` produces.
@@ -45,16 +46,27 @@ pub const OPC_PROXY_STUB_COMMON: u32 = 0x100;
 /// `OpcRegisterProxyStub` flag: register the OPC Data Access 1.0, 2.05a and 3.0 interfaces (the
 /// connection-point callback IOPCDataCallback included).
 pub const OPC_PROXY_STUB_DA: u32 = 0x200;
+/// `OpcRegisterProxyStub` flag: register the OPC Alarms & Events 1.10 interfaces (the event sink
+/// IOPCEventSink included).
+pub const OPC_PROXY_STUB_AE: u32 = 0x400;
+/// `OpcRegisterProxyStub` flag: register the OPC Historical Data Access 1.20 interfaces (the
+/// callback IOPCHDA_DataCallback included).
+pub const OPC_PROXY_STUB_HDA: u32 = 0x800;
 
 /// The specifications whose interfaces the proxy/stub serves: the name registration's command line
 /// gives each (as `tools/gen-header` names them in the layouts) and its flag.
 ///
 /// cbindgen:ignore
-const SPECIFICATIONS: [(&str, u32); 2] = [("Common", OPC_PROXY_STUB_COMMON), ("DA", OPC_PROXY_STUB_DA)];
+const SPECIFICATIONS: [(&str, u32); 4] = [
+    ("Common", OPC_PROXY_STUB_COMMON),
+    ("DA", OPC_PROXY_STUB_DA),
+    ("AE", OPC_PROXY_STUB_AE),
+    ("HDA", OPC_PROXY_STUB_HDA),
+];
 /// Every specification flag.
 ///
 /// cbindgen:ignore
-const ALL_SPECIFICATIONS: u32 = OPC_PROXY_STUB_COMMON | OPC_PROXY_STUB_DA;
+const ALL_SPECIFICATIONS: u32 = OPC_PROXY_STUB_COMMON | OPC_PROXY_STUB_DA | OPC_PROXY_STUB_AE | OPC_PROXY_STUB_HDA;
 
 /// The flag of a specification, by its name in the layouts.
 fn spec_flag(name: &str) -> u32 {
@@ -442,7 +454,8 @@ pub(crate) fn unregister(reg: &dyn Registry, specs: u32) -> Result<(), HRESULT> 
 /// Registers opccomn's proxy/stub for the interfaces it serves: the OPC Common interfaces
 /// (IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2, IOPCEnumGUID) and those of OPC Data
 /// Access 1.0, 2.05a and 3.0 (IOPCServer, IOPCItemMgt, IOPCSyncIO, IOPCDataCallback, ...), or those
-/// of the specifications `flags` names. Writes `CLSID_OpcComnProxyStub` with this module as its
+/// of the specifications `flags` names; and those of OPC Alarms & Events 1.10 (IOPCEventServer,
+/// IOPCEventSink, ...) and Historical Data Access 1.20 (IOPCHDA_Server, IOPCHDA_DataCallback, ...). Writes `CLSID_OpcComnProxyStub` with this module as its
 /// `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods`
 /// and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub
 /// (the OPC Foundation's `opccomn_ps.dll` or `opcproxy.dll`) keeps it unless `flags` has
@@ -454,7 +467,8 @@ pub(crate) fn unregister(reg: &dyn Registry, specs: u32) -> Result<(), HRESULT> 
 /// - `reg`: the registry to write, or NULL for the system registry (on 64-bit Windows the view of the
 ///   calling process, so a 32-bit opccomn.dll registers the 32-bit view).
 /// - `flags`: `OPC_PROXY_STUB_TAKE_OVER` or not, with the specifications to register
-///   (`OPC_PROXY_STUB_COMMON`, `OPC_PROXY_STUB_DA`); none of those: all of them.
+///   (`OPC_PROXY_STUB_COMMON`, `OPC_PROXY_STUB_DA`, `OPC_PROXY_STUB_AE`, `OPC_PROXY_STUB_HDA`); none
+///   of those: all of them.
 ///
 /// # Returns
 /// S_OK when every interface registered now uses opccomn's proxy/stub; S_FALSE when some stay with
@@ -512,7 +526,7 @@ pub unsafe extern "C" fn OpcUnregisterProxyStub(reg: *const OpcRegistry) -> Hr {
 }
 
 /// What a `DllInstall` command line asks for: Some(flags) for `ProxyStub` (`OpcRegisterProxyStub`'s
-/// flags: `TakeOver`, and the specifications named, `Common` and `DA`).
+/// flags: `TakeOver`, and the specifications named, `Common`, `DA`, `AE` and `HDA`).
 fn parse_install_command(text: &str) -> Option<u32> {
     let mut proxy_stub = false;
     let mut flags = 0;
@@ -534,7 +548,7 @@ fn parse_install_command(text: &str) -> Option<u32> {
 /// `DllInstall` of opccomn.dll, for `regsvr32 /i:<command line>`: the command line `ProxyStub`
 /// registers the proxy/stub in the system registry for every interface it serves
 /// (`OpcRegisterProxyStub`), `ProxyStub,TakeOver` also takes over from another installed proxy/stub;
-/// the words `Common` and `DA` choose the specifications (`ProxyStub DA`: only Data Access's), for
+/// the words `Common`, `DA`, `AE` and `HDA` choose the specifications (`ProxyStub DA`: only Data Access's), for
 /// registering and for unregistering. Words are case-insensitive and separated by commas or blanks.
 /// regsvr32 also calls DllRegisterServer / DllUnregisterServer unless given `/n`.
 ///

@@ -1,6 +1,7 @@
 /* The proxy/stub class of opccomn.dll (a MIDL "merged proxy/stub"): the PSFactoryBuffer for
  * IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2 and IOPCEnumGUID, and for the OPC Data
- * Access interfaces (their tables in opcda_ps.c, a translation unit of their own).
+ * Access, Alarms & Events and Historical Data Access interfaces (their tables in opcda_ps.c,
+ * opc_ae_ps.c and opchda_ps.c, translation units of their own).
  *
  * The marshalling itself is the system RPC runtime's: the generated files in generated/ hold only NDR
  * format strings and tables (tools/gen-proxy.py makes them from idl/opccomn.idl and idl/opcda.idl with widl -Oif), which
@@ -45,6 +46,11 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 /* The Data Access interfaces: their IIDs (renamed above, defined in opcda_ps.c) and tables. */
 #include "generated/opcda_idl.h"
 extern const ExtendedProxyFileInfo opcda_ProxyFileInfo;
+/* Alarms & Events and Historical Data Access: the same (opc_ae_ps.c, opchda_ps.c). */
+#include "generated/opc_ae_idl.h"
+#include "generated/opchda_idl.h"
+extern const ExtendedProxyFileInfo opc_ae_ProxyFileInfo;
+extern const ExtendedProxyFileInfo opchda_ProxyFileInfo;
 
 /* The interfaces by number, as the checks number them (generated from the IDL with the checks' layouts). */
 #include "generated/interfaces.h"
@@ -78,6 +84,8 @@ extern const CLSID CLSID_OpcComnProxyStub;
 static const ProxyFileInfo *const proxy_files[] = {
     (const ProxyFileInfo *)&opccomn_ProxyFileInfo,
     (const ProxyFileInfo *)&opcda_ProxyFileInfo,
+    (const ProxyFileInfo *)&opc_ae_ProxyFileInfo,
+    (const ProxyFileInfo *)&opchda_ProxyFileInfo,
     NULL,
 };
 

@@ -31,6 +31,6 @@ HRESULT STDMETHODCALLTYPE OpcStubBuffer_Invoke(IRpcStubBuffer *This, RPCOLEMESSA
 #endif
 #undef CStdStubBuffer_Invoke
 
-/* Their definitions. */
+/* Their definitions, and those of the Alarms & Events and HDA interfaces (opc_ae_ps.c, opchda_ps.c). */
 #define OPC_PS_PART_IIDS
 #include "generated/interfaces.h"

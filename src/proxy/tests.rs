@@ -274,6 +274,10 @@ fn the_c_entry_points_check_their_arguments() {
     assert_eq!(parse_install_command("TakeOver"), None);
     assert_eq!(parse_install_command("DA"), None);
     assert_eq!(parse_install_command("ProxyStub HDA2"), None);
+    assert_eq!(
+        parse_install_command("ProxyStub,AE,HDA"),
+        Some(OPC_PROXY_STUB_AE | OPC_PROXY_STUB_HDA)
+    );
     assert_eq!(specifications(0), ALL_SPECIFICATIONS);
     assert_eq!(
         specifications(OPC_PROXY_STUB_TAKE_OVER | OPC_PROXY_STUB_DA),
@@ -291,7 +295,12 @@ fn the_specifications_register_and_unregister_on_their_own() {
     let da: Vec<_> = interfaces_of(OPC_PROXY_STUB_DA);
     assert_eq!(common.len(), 5);
     assert_eq!(da.len(), 19, "every interface of opcda.idl");
-    assert_eq!(common.len() + da.len(), interfaces().len());
+    let ae = interfaces_of(OPC_PROXY_STUB_AE);
+    let hda = interfaces_of(OPC_PROXY_STUB_HDA);
+    assert_eq!((ae.len(), hda.len()), (6, 10), "every interface of opc_ae.idl and opchda.idl");
+    assert_eq!(common.len() + da.len() + ae.len() + hda.len(), interfaces().len());
+    assert!(ae.iter().any(|(_, name, _)| *name == "IOPCEventSink"));
+    assert!(hda.iter().any(|(_, name, _)| *name == "IOPCHDA_DataCallback"));
     assert!(da.iter().any(|(_, name, _)| *name == "IOPCDataCallback"));
     assert!(
         da.iter().any(|(_, name, n)| *name == "IOPCSyncIO2" && *n == 7),

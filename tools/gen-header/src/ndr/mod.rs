@@ -19,7 +19,12 @@ mod tests;
 
 /// The IDL files whose interfaces the proxy/stub serves, in the order they are numbered, each with
 /// the name of its specification (what registration's command line chooses by).
-pub const SERVED: &[(&str, &str)] = &[("idl/opccomn.idl", "Common"), ("idl/opcda.idl", "DA")];
+pub const SERVED: &[(&str, &str)] = &[
+    ("idl/opccomn.idl", "Common"),
+    ("idl/opcda.idl", "DA"),
+    ("idl/opc_ae.idl", "AE"),
+    ("idl/opchda.idl", "HDA"),
+];
 /// Files whose interfaces the served ones may name (for their IIDs).
 const SYSTEM: &[&str] = &["idl/combase.idl", "idl/internal.idl"];
 const BOUNDS: &str = "idl/ndr-bounds.txt";
