@@ -297,7 +297,11 @@ fn the_specifications_register_and_unregister_on_their_own() {
     assert_eq!(da.len(), 19, "every interface of opcda.idl");
     let ae = interfaces_of(OPC_PROXY_STUB_AE);
     let hda = interfaces_of(OPC_PROXY_STUB_HDA);
-    assert_eq!((ae.len(), hda.len()), (6, 10), "every interface of opc_ae.idl and opchda.idl");
+    assert_eq!(
+        (ae.len(), hda.len()),
+        (6, 10),
+        "every interface of opc_ae.idl and opchda.idl"
+    );
     assert_eq!(common.len() + da.len() + ae.len() + hda.len(), interfaces().len());
     assert!(ae.iter().any(|(_, name, _)| *name == "IOPCEventSink"));
     assert!(hda.iter().any(|(_, name, _)| *name == "IOPCHDA_DataCallback"));

@@ -2,8 +2,8 @@
  *
  * Every method of every interface opccomn's proxy/stub serves, by interface and method name, with
  * its C parameters after `This` in order: i a value of at most 4 bytes, h one of 8, p a pointer,
- * v a VARIANT by value. For the tests' generic calls through the proxies
- * (tests/oop/test_served_messages.c). */
+ * v a VARIANT by value, f a structure of 8 bytes by value (a FILETIME). For the tests'
+ * generic calls through the proxies (tests/oop/test_served_messages.c). */
 
 static const char *const PS_ARGS[][3] = {
     {"IOPCShutdown", "ShutdownRequest", "p"},
@@ -175,7 +175,7 @@ static const char *const PS_ARGS[][3] = {
     {"IOPCHDA_Server", "ValidateItemIDs", "ipp"},
     {"IOPCHDA_Server", "CreateBrowse", "ippppp"},
     {"IOPCHDA_SyncRead", "ReadRaw", "ppiiippp"},
-    {"IOPCHDA_SyncRead", "ReadProcessed", "ppiipppp"},
+    {"IOPCHDA_SyncRead", "ReadProcessed", "ppfipppp"},
     {"IOPCHDA_SyncRead", "ReadAtTime", "ipippp"},
     {"IOPCHDA_SyncRead", "ReadModified", "ppiippp"},
     {"IOPCHDA_SyncRead", "ReadAttribute", "ppiippp"},
@@ -189,9 +189,9 @@ static const char *const PS_ARGS[][3] = {
     {"IOPCHDA_SyncAnnotations", "Read", "ppippp"},
     {"IOPCHDA_SyncAnnotations", "Insert", "ipppp"},
     {"IOPCHDA_AsyncRead", "ReadRaw", "ippiiippp"},
-    {"IOPCHDA_AsyncRead", "AdviseRaw", "ipiippp"},
-    {"IOPCHDA_AsyncRead", "ReadProcessed", "ippiipppp"},
-    {"IOPCHDA_AsyncRead", "AdviseProcessed", "ipiippipp"},
+    {"IOPCHDA_AsyncRead", "AdviseRaw", "ipfippp"},
+    {"IOPCHDA_AsyncRead", "ReadProcessed", "ippfipppp"},
+    {"IOPCHDA_AsyncRead", "AdviseProcessed", "ipfippipp"},
     {"IOPCHDA_AsyncRead", "ReadAtTime", "iipippp"},
     {"IOPCHDA_AsyncRead", "ReadModified", "ippiippp"},
     {"IOPCHDA_AsyncRead", "ReadAttribute", "ippiippp"},
@@ -207,8 +207,8 @@ static const char *const PS_ARGS[][3] = {
     {"IOPCHDA_AsyncAnnotations", "Read", "ippippp"},
     {"IOPCHDA_AsyncAnnotations", "Insert", "iippppp"},
     {"IOPCHDA_AsyncAnnotations", "Cancel", "i"},
-    {"IOPCHDA_Playback", "ReadRawWithUpdate", "ippiiiippp"},
-    {"IOPCHDA_Playback", "ReadProcessedWithUpdate", "ippiiiipppp"},
+    {"IOPCHDA_Playback", "ReadRawWithUpdate", "ippiffippp"},
+    {"IOPCHDA_Playback", "ReadProcessedWithUpdate", "ippfifipppp"},
     {"IOPCHDA_Playback", "Cancel", "i"},
     {"IOPCHDA_DataCallback", "OnDataChange", "iiipp"},
     {"IOPCHDA_DataCallback", "OnReadComplete", "iiipp"},

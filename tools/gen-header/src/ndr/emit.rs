@@ -411,8 +411,8 @@ pub fn c_args(model: &Model, sources: &str) -> String {
          \x20*\n\
          \x20* Every method of every interface opccomn's proxy/stub serves, by interface and method name, with\n\
          \x20* its C parameters after `This` in order: i a value of at most 4 bytes, h one of 8, p a pointer,\n\
-         \x20* v a VARIANT by value. For the tests' generic calls through the proxies\n\
-         \x20* (tests/oop/test_served_messages.c). */\n\n\
+         \x20* v a VARIANT by value, f a structure of 8 bytes by value (a FILETIME). For the tests'\n\
+         \x20* generic calls through the proxies (tests/oop/test_served_messages.c). */\n\n\
          static const char *const PS_ARGS[][3] = {{\n"
     );
     for i in &model.interfaces {

@@ -114,7 +114,7 @@ pub struct MethodOut {
     pub request_align8: bool,
     pub reply_align8: bool,
     /// The C parameters after `This`, in order: `i` a value of at most 4 bytes, `h` one of 8, `p` a
-    /// pointer, `v` a VARIANT by value (for the tests' generic calls, `tests/oop/ps_args.h`).
+    /// pointer, `v` a VARIANT by value, `f` a structure of 8 bytes (4-byte aligned) by value (for the tests' generic calls, `tests/oop/ps_args.h`).
     pub args: String,
 }
 
@@ -1196,10 +1196,14 @@ impl Builder<'_> {
             if *save != Save::None {
                 self.check_saved(m, p, &node, *save, &pkey)?;
             }
-            args.push(match node {
+            args.push(match &node {
                 Node::Pointer(..) | Node::Interface(..) | Node::Bstr | Node::SafeArray | Node::Str(_) => 'p',
                 Node::Variant => 'v',
                 Node::Base(8) => 'h',
+                // A structure of 8 bytes by value (HDA's FILETIME intervals): one slot on x64, two
+                // on x86.
+                Node::Struct(name) if self.structs.get(name).is_some_and(|s| s.size == 8 && s.align <= 4) => 'f',
+                Node::Struct(name) => return Err(format!("{pkey}: a structure {name} by value is not supported")),
                 _ => 'i',
             });
             let (dir_in, dir_out) = direction(p);
