@@ -99,8 +99,8 @@ std::string ProxyHint(const IID &iid, const char *name) {
         return "";
     }
     return std::string("no proxy/stub is registered for ") + name +
-           " on this machine (regsvr32 /n /i:ProxyStub opccomn.dll registers the OPC Common and Data Access"
-           " interfaces; or the OPC Foundation's Core Components)";
+           " on this machine (regsvr32 /n /i:ProxyStub opccomn.dll registers the OPC Common, Data"
+           " Access, Alarms & Events and HDA interfaces; or the OPC Foundation's Core Components)";
 }
 
 // ---- The checks: creation ----

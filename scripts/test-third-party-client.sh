@@ -10,7 +10,7 @@
 # docs/dev/third-party-client.md for what is asserted and what belongs to the crate.
 #
 # The browser, the example server, the DA test server and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
-# which registers the OPC Common and Data Access interfaces: nothing in-process answers
+# which registers the OPC Common, Data Access, A&E and HDA interfaces: nothing in-process answers
 # CLSID_OPCServerList) are registered for the run and unregistered after it, whatever happened; the
 # registry's classes (both views) must then be exactly as they were before.
 #

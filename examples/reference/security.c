@@ -24,7 +24,7 @@ static HRESULT SecureProxy(IUnknown *proxy) {
 /* [security] */
 
 /* [proxystub] */
-/* An installer makes opccomn.dll the proxy/stub of the OPC Common and Data Access interfaces (what
+/* An installer makes opccomn.dll the proxy/stub of the OPC Common, DA, A&E and HDA interfaces (what
  * `regsvr32 /n /i:ProxyStub opccomn.dll` does), leaving the OPC Foundation's where it is installed;
  * at uninstall it takes back only what it wrote. NULL is the system registry. */
 static HRESULT InstallProxyStub(const OpcRegistry *reg) {

@@ -1,6 +1,7 @@
 //! The interpreter of NDR layouts (proxy::ndr) over the layouts of the interfaces opccomn.dll's
-//! proxy/stub serves (src/proxy/generated/layouts.rs: OPC Common and Data Access, generated from
-//! idl/opccomn.idl and idl/opcda.idl): any message for any method, as a request or a reply, read by
+//! proxy/stub serves (src/proxy/generated/layouts.rs: OPC Common, Data Access, A&E and HDA,
+//! generated from idl/opccomn.idl, opcda.idl, opc_ae.idl and opchda.idl): any message for any
+//! method, as a request or a reply, read by
 //! either runtime's dialect, is answered S_OK or with RPC_X_BAD_STUB_DATA,
 //! RPC_S_INVALID_BOUND or RPC_S_PROCNUM_OUT_OF_RANGE, never a panic or a read outside the message.
 //! What passes keeps passing with bytes after it (a message may be longer than what is read) and at

@@ -4777,10 +4777,11 @@ void OPCCOMN_CDECL OpcPatternFree(struct OpcPattern *filter);
 
 /**
  * Registers opccomn's proxy/stub for the interfaces it serves: the OPC Common interfaces
- * (IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2, IOPCEnumGUID) and those of OPC Data
- * Access 1.0, 2.05a and 3.0 (IOPCServer, IOPCItemMgt, IOPCSyncIO, IOPCDataCallback, ...), or those
- * of the specifications `flags` names; and those of OPC Alarms & Events 1.10 (IOPCEventServer,
- * IOPCEventSink, ...) and Historical Data Access 1.20 (IOPCHDA_Server, IOPCHDA_DataCallback, ...). Writes ::CLSID_OpcComnProxyStub with this module as its
+ * (IOPCShutdown, IOPCCommon, IOPCServerList, IOPCServerList2, IOPCEnumGUID), those of OPC Data
+ * Access 1.0, 2.05a and 3.0 (IOPCServer, IOPCItemMgt, IOPCSyncIO, IOPCDataCallback, ...), of OPC
+ * Alarms & Events 1.10 (IOPCEventServer, IOPCEventSink, ...) and of Historical Data Access 1.20
+ * (IOPCHDA_Server, IOPCHDA_DataCallback, ...), or those of the specifications `flags` names.
+ * Writes ::CLSID_OpcComnProxyStub with this module as its
  * `InprocServer32` (ThreadingModel Both) and, per interface, `Interface\{iid}` with `NumMethods`
  * and `ProxyStubClsid32`. An interface whose `ProxyStubClsid32` names another installed proxy/stub
  * (the OPC Foundation's `opccomn_ps.dll` or `opcproxy.dll`) keeps it unless `flags` has
