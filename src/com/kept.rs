@@ -10,7 +10,9 @@ use core::ptr;
 
 use super::ffi::{self, Crossed, Hr};
 use super::iids::IID_IUNKNOWN;
-use super::ole32::{CoMarshalInterface, CoReleaseMarshalData, CreateStreamOnHGlobal, GetHGlobalFromStream};
+use super::ole32::{
+    CoMarshalInterface, CoReleaseMarshalData, CreateStreamOnHGlobal, GlobalAlloc, GlobalFree, GMEM_MOVEABLE,
+};
 use super::unknown::Counted;
 use super::{IUnknown, E_NOINTERFACE, E_UNEXPECTED, GUID, S_OK};
 
@@ -114,20 +116,28 @@ impl Kept {
 }
 
 /// Marshals `keeper`'s `iid` table-strong into new memory: that memory, or `None` when the interface
-/// cannot be marshaled here.
+/// cannot be marshaled here (the memory then freed).
 fn marshal(keeper: &'static Keeper, iid: &GUID) -> Option<*mut c_void> {
+    // The memory is ours from the start, so that each failure below can free it. (Movable, as
+    // CreateStreamOnHGlobal requires; the stream grows it as it writes.)
+    // SAFETY: no pointer arguments.
+    let memory = unsafe { GlobalAlloc(GMEM_MOVEABLE, 64) };
+    if memory.is_null() {
+        return None;
+    }
     let mut stream: *mut c_void = ptr::null_mut();
-    // SAFETY: NULL memory: the stream allocates its own, not freed when the stream goes (FALSE).
-    if unsafe { CreateStreamOnHGlobal(ptr::null_mut(), 0, &mut stream) } < 0 {
+    // SAFETY: movable memory of ours, which the stream does not free when it goes (FALSE).
+    let created = unsafe { CreateStreamOnHGlobal(memory, 0, &mut stream) } >= 0;
+    let stream = if created {
+        // SAFETY: the reference CreateStreamOnHGlobal gave us, released when `stream` drops.
+        unsafe { Counted::adopt(stream.cast::<IUnknown>()) }
+    } else {
+        None
+    };
+    let Some(stream) = stream else {
+        free(memory, false);
         return None;
-    }
-    // SAFETY: the reference CreateStreamOnHGlobal gave us, released when `stream` drops.
-    let stream = unsafe { Counted::adopt(stream.cast::<IUnknown>()) }?;
-    let mut memory: *mut c_void = ptr::null_mut();
-    // SAFETY: a stream created on memory; a writable out-pointer.
-    if unsafe { GetHGlobalFromStream(stream.as_ptr().cast(), &mut memory) } < 0 || memory.is_null() {
-        return None;
-    }
+    };
     // SAFETY: a valid stream and IID; a static object answering for `iid`, whose table COM only calls
     // through IUnknown's methods here.
     let hr = unsafe {
@@ -148,22 +158,25 @@ fn marshal(keeper: &'static Keeper, iid: &GUID) -> Option<*mut c_void> {
     Some(memory)
 }
 
-/// Frees memory a stream wrote to and no stream owns any more, releasing the marshal data at its
-/// start first when `marshaled`.
+/// Frees memory `marshal` allocated, releasing the marshal data at its start first when `marshaled`.
 fn free(memory: *mut c_void, marshaled: bool) {
-    let mut stream: *mut c_void = ptr::null_mut();
-    // SAFETY: memory from `marshal`, handed to a new stream that reads it from the start and frees it
-    // when it goes (TRUE).
-    if unsafe { CreateStreamOnHGlobal(memory, 1, &mut stream) } < 0 {
-        return;
-    }
-    // SAFETY: the reference CreateStreamOnHGlobal gave us, released (and the memory with it) at the end.
-    if let Some(stream) = unsafe { Counted::adopt(stream.cast::<IUnknown>()) } {
-        if marshaled {
-            // SAFETY: a stream positioned at the marshal data `marshal` wrote.
-            unsafe { CoReleaseMarshalData(stream.as_ptr().cast()) };
+    if marshaled {
+        let mut stream: *mut c_void = ptr::null_mut();
+        // SAFETY: memory from `marshal`, handed to a new stream that reads it from the start and frees
+        // it when it goes (TRUE).
+        if unsafe { CreateStreamOnHGlobal(memory, 1, &mut stream) } >= 0 {
+            // SAFETY: the reference CreateStreamOnHGlobal gave us, released (and the memory with it)
+            // at the end.
+            if let Some(stream) = unsafe { Counted::adopt(stream.cast::<IUnknown>()) } {
+                // SAFETY: a stream positioned at the marshal data `marshal` wrote.
+                unsafe { CoReleaseMarshalData(stream.as_ptr().cast()) };
+                return;
+            }
         }
+        // (Without a stream the marshal data cannot be released: the memory at least is freed.)
     }
+    // SAFETY: global memory from `marshal`, which nothing else owns.
+    unsafe { GlobalFree(memory) };
 }
 
 impl Drop for Kept {
@@ -240,5 +253,22 @@ mod tests {
         drop(again);
         // SAFETY: balances CoInitializeEx above.
         unsafe { CoUninitialize() };
+    }
+
+    #[test]
+    fn a_thread_without_com_keeps_what_its_process_lets_it() {
+        // Kept::new's precondition broken: a thread that never initialised COM. Its marshals fail
+        // (CO_E_NOTINITIALIZED: nothing kept) unless another thread of the process holds the
+        // multithreaded apartment, which this thread then implicitly belongs to (other tests of this
+        // process may); either way it returns, and what it kept is released when dropped.
+        let kept = std::thread::spawn(|| {
+            let kept = Kept::new(&KEEPER);
+            let n = kept.len();
+            drop(kept);
+            n
+        })
+        .join()
+        .expect("Kept::new without COM returns");
+        assert!(kept == 0 || kept == 2, "{kept} kept");
     }
 }

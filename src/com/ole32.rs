@@ -31,6 +31,18 @@ extern "system" {
     pub fn CoReleaseMarshalData(stream: *mut c_void) -> HRESULT;
     /// A stream on `hglobal` (NULL: new memory), which frees it when released if `delete_on_release`.
     pub fn CreateStreamOnHGlobal(hglobal: *mut c_void, delete_on_release: i32, stream: *mut *mut c_void) -> HRESULT;
-    /// The memory a stream made by CreateStreamOnHGlobal writes to.
-    pub fn GetHGlobalFromStream(stream: *mut c_void, hglobal: *mut *mut c_void) -> HRESULT;
+}
+
+/// `GlobalAlloc`'s flag for movable memory (what CreateStreamOnHGlobal takes).
+///
+/// cbindgen:ignore
+pub const GMEM_MOVEABLE: u32 = 0x0002;
+
+// (kernel32's, for the memory of CreateStreamOnHGlobal's streams.)
+#[link(name = "kernel32")]
+extern "system" {
+    /// Allocates `bytes` of global memory with `flags`; NULL when out of memory.
+    pub fn GlobalAlloc(flags: u32, bytes: usize) -> *mut c_void;
+    /// Frees global memory; NULL when it did.
+    pub fn GlobalFree(memory: *mut c_void) -> *mut c_void;
 }
