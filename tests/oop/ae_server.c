@@ -6,7 +6,9 @@
  * which the client sees.
  *
  * Server object: IOPCEventServer2 (GetStatus, CreateEventSubscription, QueryEventCategories,
- * GetConditionState, the Enable/Disable methods of both versions, GetEnableStateByArea/BySource).
+ * GetConditionState, the Enable/Disable methods of both versions, GetEnableStateByArea/BySource,
+ * CreateAreaBrowser). Area browser object: IOPCEventAreaBrowser over the areas and sources of ae.h
+ * (BrowseOPCAreas with MatchPatternW's filters: an IEnumString of the names).
  * Subscription object: IOPCEventSubscriptionMgt (SetFilter, GetFilter, GetState, SetState, Refresh:
  * an OnEvent of the two events of ae.h from a thread of the server) and IConnectionPointContainer
  * with the IOPCEventSink connection point. What the test does not call answers E_NOTIMPL. */
@@ -464,10 +466,202 @@ static HRESULT STDMETHODCALLTYPE srv_ack(IOPCEventServer2 *This, DWORD count, LP
     return E_NOTIMPL;
 }
 
-static HRESULT STDMETHODCALLTYPE srv_area_browser(IOPCEventServer2 *This, REFIID riid, LPUNKNOWN *unk) {
-    (void)This, (void)riid;
-    if (unk) *unk = NULL;
+/* ---- The area browser: the areas of ae.h as a tree, their sources as leaves ---- */
+
+/* An IEnumString of copies of texts. */
+typedef struct Strings {
+    IEnumString iface;
+    LONG refs;
+    ULONG count, next;
+    LPWSTR texts[AE_AREAS + AE_SOURCES];
+} Strings;
+
+static HRESULT STDMETHODCALLTYPE str_qi(IEnumString *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (!IsEqualIID(riid, &IID_IUnknown) && !IsEqualIID(riid, &IID_IEnumString)) return E_NOINTERFACE;
+    *ppv = This;
+    InterlockedIncrement(&((Strings *)This)->refs);
+    return S_OK;
+}
+static ULONG STDMETHODCALLTYPE str_add_ref(IEnumString *This) {
+    return (ULONG)InterlockedIncrement(&((Strings *)This)->refs);
+}
+static ULONG STDMETHODCALLTYPE str_release(IEnumString *This) {
+    Strings *e = (Strings *)This;
+    LONG n = InterlockedDecrement(&e->refs);
+    ULONG k;
+    if (n == 0) {
+        for (k = 0; k < e->count; k++) CoTaskMemFree(e->texts[k]);
+        free(e);
+        OpcServerUnlock(); /* an enumerator counts on the process while it lives */
+    }
+    return (ULONG)n;
+}
+static HRESULT STDMETHODCALLTYPE str_next(IEnumString *This, ULONG celt, LPOLESTR *out, ULONG *fetched) {
+    Strings *e = (Strings *)This;
+    ULONG n = 0;
+    if (!out || (celt > 1 && !fetched)) return E_POINTER;
+    while (n < celt && e->next < e->count) {
+        out[n] = (LPOLESTR)CoTaskMemAlloc((wcslen(e->texts[e->next]) + 1) * sizeof(WCHAR));
+        if (!out[n]) break;
+        wcscpy(out[n], e->texts[e->next]);
+        n++;
+        e->next++;
+    }
+    if (fetched) *fetched = n;
+    return n == celt ? S_OK : S_FALSE;
+}
+static HRESULT STDMETHODCALLTYPE str_skip(IEnumString *This, ULONG celt) {
+    Strings *e = (Strings *)This;
+    ULONG left = e->count - e->next;
+    e->next += celt < left ? celt : left;
+    return celt <= left ? S_OK : S_FALSE;
+}
+static HRESULT STDMETHODCALLTYPE str_reset(IEnumString *This) {
+    ((Strings *)This)->next = 0;
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE str_clone(IEnumString *This, IEnumString **out) {
+    (void)This;
+    if (out) *out = NULL;
     return E_NOTIMPL;
+}
+static IEnumStringVtbl str_vtbl = {str_qi, str_add_ref, str_release, str_next, str_skip, str_reset, str_clone};
+
+typedef struct Browser {
+    IOPCEventAreaBrowser iface;
+    LONG refs;
+    CRITICAL_SECTION lock;
+    int area; /* the position: an index of AE_AREA_NAMES, or -1 for the root */
+} Browser;
+
+static HRESULT STDMETHODCALLTYPE br_qi(IOPCEventAreaBrowser *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (!IsEqualIID(riid, &IID_IUnknown) && !IsEqualIID(riid, &IID_IOPCEventAreaBrowser)) return E_NOINTERFACE;
+    *ppv = This;
+    InterlockedIncrement(&((Browser *)This)->refs);
+    return S_OK;
+}
+static ULONG STDMETHODCALLTYPE br_add_ref(IOPCEventAreaBrowser *This) {
+    return (ULONG)InterlockedIncrement(&((Browser *)This)->refs);
+}
+static ULONG STDMETHODCALLTYPE br_release(IOPCEventAreaBrowser *This) {
+    Browser *b = (Browser *)This;
+    LONG n = InterlockedDecrement(&b->refs);
+    if (n == 0) {
+        DeleteCriticalSection(&b->lock);
+        free(b);
+        OpcServerUnlock();
+    }
+    return (ULONG)n;
+}
+
+/* The part of qualified name `name` after the area `area` (-1: the root) and its dot, when `name` is
+ * a child of it (no further dot), else NULL. */
+static const char *child_part(int area, const char *name) {
+    const char *rest = name;
+    if (area >= 0) {
+        size_t n = strlen(AE_AREA_NAMES[area]);
+        if (strncmp(name, AE_AREA_NAMES[area], n) != 0 || name[n] != '.') return NULL;
+        rest = name + n + 1;
+    }
+    return strchr(rest, '.') ? NULL : rest;
+}
+
+/* The child area (by_area) or source named `name` of the position, or -1. */
+static int child_index(int area, int by_area, const WCHAR *name) {
+    int i;
+    for (i = 0; name && i < (by_area ? AE_AREAS : AE_SOURCES); i++) {
+        const char *part = child_part(area, by_area ? AE_AREA_NAMES[i] : AE_SOURCE_NAMES[i]);
+        if (part && is_utf8(name, part)) return i;
+    }
+    return -1;
+}
+
+static HRESULT STDMETHODCALLTYPE br_change(IOPCEventAreaBrowser *This, OPCAEBROWSEDIRECTION direction,
+                                           LPCWSTR name) {
+    Browser *b = (Browser *)This;
+    HRESULT hr = S_OK;
+    int i;
+    EnterCriticalSection(&b->lock);
+    if (direction == OPCAE_BROWSE_UP && name && !name[0]) {
+        if (b->area < 0) hr = E_FAIL;
+        else b->area = b->area == 0 ? -1 : 0; /* the tree is two levels deep */
+    } else if (direction == OPCAE_BROWSE_DOWN && (i = child_index(b->area, 1, name)) >= 0) {
+        b->area = i;
+    } else {
+        hr = E_INVALIDARG;
+    }
+    LeaveCriticalSection(&b->lock);
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE br_browse(IOPCEventAreaBrowser *This, OPCAEBROWSETYPE type, LPCWSTR filter,
+                                           LPENUMSTRING *out) {
+    Browser *b = (Browser *)This;
+    Strings *e;
+    int i, by_area = type == OPC_AREA;
+    if (!out) return E_POINTER;
+    *out = NULL;
+    if ((type != OPC_AREA && type != OPC_SOURCE) || !filter) return E_INVALIDARG;
+    e = (Strings *)calloc(1, sizeof *e);
+    if (!e) return E_OUTOFMEMORY;
+    e->iface.lpVtbl = &str_vtbl;
+    e->refs = 1;
+    OpcServerLock();
+    EnterCriticalSection(&b->lock);
+    for (i = 0; i < (by_area ? AE_AREAS : AE_SOURCES); i++) {
+        const char *part = child_part(b->area, by_area ? AE_AREA_NAMES[i] : AE_SOURCE_NAMES[i]);
+        LPWSTR text = part ? task_utf8(part) : NULL;
+        if (text && (!filter[0] || MatchPatternW(text, filter, FALSE))) e->texts[e->count++] = text;
+        else CoTaskMemFree(text);
+    }
+    LeaveCriticalSection(&b->lock);
+    *out = &e->iface;
+    return e->count ? S_OK : S_FALSE;
+}
+
+/* The qualified name of the child area (by_area) or source `name` of the position. */
+static HRESULT qualified(Browser *b, int by_area, LPCWSTR name, LPWSTR *out) {
+    int i;
+    if (!out) return E_POINTER;
+    *out = NULL;
+    EnterCriticalSection(&b->lock);
+    i = child_index(b->area, by_area, name);
+    LeaveCriticalSection(&b->lock);
+    if (i < 0) return E_INVALIDARG;
+    *out = task_utf8(by_area ? AE_AREA_NAMES[i] : AE_SOURCE_NAMES[i]);
+    return *out ? S_OK : E_OUTOFMEMORY;
+}
+
+static HRESULT STDMETHODCALLTYPE br_area_name(IOPCEventAreaBrowser *This, LPCWSTR name, LPWSTR *out) {
+    return qualified((Browser *)This, 1, name, out);
+}
+static HRESULT STDMETHODCALLTYPE br_source_name(IOPCEventAreaBrowser *This, LPCWSTR name, LPWSTR *out) {
+    return qualified((Browser *)This, 0, name, out);
+}
+
+static IOPCEventAreaBrowserVtbl br_vtbl = {br_qi,     br_add_ref,   br_release,    br_change,
+                                           br_browse, br_area_name, br_source_name};
+
+static HRESULT STDMETHODCALLTYPE srv_area_browser(IOPCEventServer2 *This, REFIID riid, LPUNKNOWN *unk) {
+    Browser *b;
+    HRESULT hr;
+    (void)This;
+    if (!unk) return E_POINTER;
+    *unk = NULL;
+    b = (Browser *)calloc(1, sizeof *b);
+    if (!b) return E_OUTOFMEMORY;
+    b->iface.lpVtbl = &br_vtbl;
+    b->refs = 1;
+    b->area = -1;
+    InitializeCriticalSection(&b->lock);
+    OpcServerLock();
+    hr = br_qi(&b->iface, riid, (void **)unk);
+    br_release(&b->iface);
+    return hr;
 }
 
 static HRESULT STDMETHODCALLTYPE srv_enable_area2(IOPCEventServer2 *This, DWORD n, LPWSTR *names, HRESULT **errors) {

@@ -12,7 +12,9 @@
  * GetEnableStateByArea ([in, string, size_is(n)] LPWSTR * with per-element results);
  * IOPCEventSubscriptionMgt::GetState, SetState (unique in-pointers), SetFilter, GetFilter, Refresh;
  * IOPCEventSink::OnEvent with two ONEVENTSTRUCTs (strings, NULL strings, FILETIMEs, VT_BSTR and VT_I4
- * attributes) through the subscription's connection point. */
+ * attributes) through the subscription's connection point; IOPCEventServer::CreateAreaBrowser and
+ * IOPCEventAreaBrowser (ChangeBrowsePosition, BrowseOPCAreas: an IEnumString out,
+ * GetQualifiedAreaName, GetQualifiedSourceName). */
 #include "ae.h"
 
 #include <olectl.h> /* CONNECT_E_* */
@@ -346,6 +348,68 @@ static void check_subscription(IOPCEventServer2 *server) {
     sink.called = NULL;
 }
 
+/* Whether `e` enumerates exactly the UTF-8 texts `want[0..count)`; releases it. */
+static int enumerates(IEnumString *e, const char *const *want, ULONG count) {
+    LPOLESTR got[4];
+    ULONG fetched = GARBAGE_U32, k;
+    HRESULT hr;
+    int same;
+    if (!e || e == GARBAGE_PTR) return 0;
+    memset(got, 0, sizeof got);
+    hr = e->lpVtbl->Next(e, 4, got, &fetched);
+    same = hr == (count == 4 ? S_OK : S_FALSE) && fetched == count;
+    for (k = 0; k < fetched && k < 4; k++) {
+        same &= k < count && is_utf8(got[k], want[k]);
+        CoTaskMemFree(got[k]);
+    }
+    e->lpVtbl->Release(e);
+    return same;
+}
+
+/* IOPCEventAreaBrowser: down the tree and up, areas and sources by filters, qualified names. */
+static void check_area_browser(IOPCEventServer2 *server) {
+    static const char *const root[1] = {"Plant"};
+    static const char *const tanks[2] = {"Tank1", "Tank2 \xe2\x82\xac"};
+    static const char *const tank2[1] = {"Tank2 \xe2\x82\xac"};
+    static const char *const tank1_sources[2] = {"Level", "Temp"};
+    IOPCEventAreaBrowser *b = NULL;
+    IEnumString *e = (IEnumString *)GARBAGE_PTR;
+    LPWSTR name = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->CreateAreaBrowser(server, &IID_IOPCEventAreaBrowser, (IUnknown **)&b), S_OK);
+    if (!b) return;
+    CHECK_HR(b->lpVtbl->BrowseOPCAreas(b, OPC_AREA, W(""), &e), S_OK);
+    CHECK(enumerates(e, root, 1));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->BrowseOPCAreas(b, OPC_SOURCE, W("*"), &e), S_FALSE); /* the root has no sources */
+    CHECK(enumerates(e, NULL, 0));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCAE_BROWSE_DOWN, W("Nowhere")), E_INVALIDARG);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCAE_BROWSE_DOWN, W("Plant")), S_OK);
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->BrowseOPCAreas(b, OPC_AREA, W("Tank*"), &e), S_OK);
+    CHECK(enumerates(e, tanks, 2));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->BrowseOPCAreas(b, OPC_AREA, W("*\xe2\x82\xac"), &e), S_OK);
+    CHECK(enumerates(e, tank2, 1));
+    CHECK_HR(b->lpVtbl->GetQualifiedAreaName(b, W(tanks[1]), &name), S_OK);
+    CHECK(name != GARBAGE_PTR && is_utf8(name, AE_AREA_NAMES[2]));
+    if (name != GARBAGE_PTR) CoTaskMemFree(name);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCAE_BROWSE_DOWN, W("Tank1")), S_OK);
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->BrowseOPCAreas(b, OPC_SOURCE, W("*"), &e), S_OK);
+    CHECK(enumerates(e, tank1_sources, 2));
+    name = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetQualifiedSourceName(b, W("Temp"), &name), S_OK);
+    CHECK(name != GARBAGE_PTR && is_utf8(name, AE_SOURCE_NAMES[1]));
+    if (name != GARBAGE_PTR) CoTaskMemFree(name);
+    name = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetQualifiedSourceName(b, W("Pressure"), &name), E_INVALIDARG);
+    CHECK(name == NULL);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCAE_BROWSE_UP, W("")), S_OK);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCAE_BROWSE_UP, W("")), S_OK);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCAE_BROWSE_UP, W("")), E_FAIL);
+    b->lpVtbl->Release(b);
+}
+
 int main(void) {
     OpcServerRegistration reg;
     IOPCEventServer2 *server = NULL;
@@ -372,6 +436,7 @@ int main(void) {
         check_condition_state(server);
         check_enable(server);
         check_subscription(server);
+        check_area_browser(server);
         server->lpVtbl->Release(server);
     }
     /* The server exits once its objects are gone (its linger is 100 ms; 10 s bound a broken run). */
