@@ -180,7 +180,7 @@ run_x86_c_tests() {
             { echo "$t (x86, $dir) printed no result line" >&2; return 1; }
     done
     # The cross-process tests (tests/oop) of the same build: one result line per ctest entry.
-    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration|reconnect|da_tables|service): [0-9]+ passed, 0 failed' \
+    lines=$(grep -cE '^test_(oop|browser|ps_registration|bench_registration|reconnect|da_tables|ae_tables|hda_tables|service): [0-9]+ passed, 0 failed' \
         "$dir/Testing/Temporary/LastTest.log") || true
     [ "$oop_tests" -gt 0 ] && [ "$oop_tests" = "$lines" ] ||
         { echo "x86 cross-process tests in $dir: $oop_tests tests, $lines result lines" >&2; return 1; }

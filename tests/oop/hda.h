@@ -1,0 +1,148 @@
+/* Shared by the cross-process test of the Historical Data Access proxy/stub (test_hda_tables.c, the
+ * client) and its EXE server (hda_server.c): the class, the items the server serves and their
+ * history. The types and IIDs come from the header widl generates from idl/opchda.idl (opchda_idl.h;
+ * this file defines the IIDs, so one translation unit per program). Windows only. */
+#ifndef OPCCOMN_HDA_H
+#define OPCCOMN_HDA_H
+
+#include "classic_oop.h"
+
+#include <initguid.h>
+#include <ocidl.h>
+
+#include "opchda_idl.h"
+
+/* The test HDA server (hda_server.c, LocalServer32). */
+static const CLSID CLSID_HdaTestServer = {0xC3000000, 0x5EED, 0x4000, {0x80, 0, 0, 0, 0, 0, 0x4D, 0x02}};
+
+/* The HDA interfaces opccomn.dll's proxy/stub serves in these two processes. */
+static const IID *const HDA_IIDS[] = {&IID_IOPCHDA_Browser,        &IID_IOPCHDA_Server,          &IID_IOPCHDA_SyncRead,
+                                      &IID_IOPCHDA_SyncUpdate,     &IID_IOPCHDA_SyncAnnotations, &IID_IOPCHDA_AsyncRead,
+                                      &IID_IOPCHDA_AsyncUpdate,    &IID_IOPCHDA_AsyncAnnotations,
+                                      &IID_IOPCHDA_Playback,       &IID_IOPCHDA_DataCallback};
+#define HDA_IID_COUNT (sizeof HDA_IIDS / sizeof HDA_IIDS[0])
+
+/* The server's status: its vendor text when its proxy/stub of the HDA interfaces is opccomn.dll's. */
+#define HDA_VENDOR_INFO "opccomn HDA test server \xe2\x82\xac"
+#define HDA_VENDOR_INFO_OTHER "proxy/stub not opccomn's"
+#define HDA_STATUS_TEXT "Running \xc3\xa4\xc3\xb6\xc3\xbc"
+
+#define HDA_E_INVALIDHANDLE ((HRESULT)0xC0040001L) /* OPC_E_INVALIDHANDLE */
+#define HDA_E_UNKNOWNITEMID ((HRESULT)0xC0040007L) /* OPC_E_UNKNOWNITEMID */
+#define HDA_QUALITY_RAW 0x00040000u                /* OPCHDA_RAW */
+#define HDA_QUALITY_CALCULATED 0x00080000u         /* OPCHDA_CALCULATED */
+
+/* The item attributes (GetItemAttributes). */
+#define HDA_ATTRS 3
+static const DWORD HDA_ATTR_IDS[HDA_ATTRS] = {1, 2, 0x80000001u};
+static const char *const HDA_ATTR_NAMES[HDA_ATTRS] = {"Data Type", "Description", "Vendor \xe2\x82\xac"};
+static const char *const HDA_ATTR_TEXTS[HDA_ATTRS] = {"Data type of the item", "Description \xc3\xa4\xc3\xb6\xc3\xbc",
+                                                     "A vendor's attribute \xf0\x9f\x98\x80"};
+static const VARTYPE HDA_ATTR_TYPES[HDA_ATTRS] = {VT_I2, VT_BSTR, VT_R8};
+
+/* The items: ID, the client handle the test gives each, the server's handle. */
+#define HDA_ITEMS 2
+static const char *const HDA_ITEM_IDS[HDA_ITEMS] = {"Plant.Tank1.Level", "Plant.Tank1.Name \xe2\x82\xac"};
+#define HDA_CLIENT_HANDLE(i) ((OPCHANDLE)(500 + (i)))
+#define HDA_SERVER_HANDLE(i) ((OPCHANDLE)(0x100 + (i)))
+
+/* A raw read: HDA_RAW_VALUES values of each item (VT_R8 and VT_BSTR). */
+#define HDA_RAW_VALUES 3
+/* The time range the client asks for: from "NOW-1H" (a string the server resolves to test_time(10))
+ * to a FILETIME (which the server revises to test_time(12)). */
+#define HDA_START_TEXT "NOW-1H"
+#define HDA_END_ASKED 50u
+#define HDA_START_RESOLVED 10u
+#define HDA_END_RESOLVED 12u
+/* The interval of a processed read (a FILETIME by value: its two halves differ, so that one
+ * taken apart or shifted on the stack shows), and its two intervals' values per aggregate. */
+#define HDA_INTERVAL_LOW 0x65A0BC00u
+#define HDA_INTERVAL_HIGH 0x00000001u
+#define HDA_INTERVALS 2
+
+static FILETIME hda_interval(void) {
+    FILETIME f;
+    f.dwLowDateTime = HDA_INTERVAL_LOW;
+    f.dwHighDateTime = HDA_INTERVAL_HIGH;
+    return f;
+}
+
+/* Fills `it` with the raw history of item `i` (aggregate 0) or its processed history by `aggregate`
+ * (task memory). */
+static void hda_fill_item(int i, DWORD aggregate, OPCHDA_ITEM *it) {
+    DWORD k, n = aggregate ? HDA_INTERVALS : HDA_RAW_VALUES;
+    memset(it, 0, sizeof *it);
+    it->hClient = HDA_CLIENT_HANDLE(i);
+    it->haAggregate = aggregate;
+    it->pftTimeStamps = (FILETIME *)task_zero(n * sizeof(FILETIME));
+    it->pdwQualities = (DWORD *)task_zero(n * sizeof(DWORD));
+    it->pvDataValues = (VARIANT *)task_zero(n * sizeof(VARIANT));
+    if (!it->pftTimeStamps || !it->pdwQualities || !it->pvDataValues) return; /* dwCount 0 */
+    it->dwCount = n;
+    for (k = 0; k < n; k++) {
+        VARIANT *v = &it->pvDataValues[k];
+        char text[64];
+        VariantInit(v);
+        if (aggregate) {
+            it->pftTimeStamps[k] = test_time(HDA_START_RESOLVED + 600 * k);
+            it->pdwQualities[k] = HDA_QUALITY_CALCULATED | 0xC0;
+            V_VT(v) = VT_R8;
+            V_R8(v) = aggregate * 10.0 + k + 0.25;
+        } else if (i == 0) {
+            it->pftTimeStamps[k] = test_time(HDA_START_RESOLVED + k);
+            it->pdwQualities[k] = HDA_QUALITY_RAW | (k == 1 ? 0x40 : 0xC0);
+            V_VT(v) = VT_R8;
+            V_R8(v) = 1.5 + k * 1e100;
+        } else {
+            it->pftTimeStamps[k] = test_time(HDA_START_RESOLVED + k);
+            it->pdwQualities[k] = HDA_QUALITY_RAW | 0xC0;
+            snprintf(text, sizeof text, "Wert %lu \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac", (unsigned long)k);
+            V_VT(v) = VT_BSTR;
+            V_BSTR(v) = bstr_utf8(text);
+        }
+    }
+}
+
+static void hda_free_item(OPCHDA_ITEM *it) {
+    DWORD k;
+    for (k = 0; it->pvDataValues && k < it->dwCount; k++) VariantClear(&it->pvDataValues[k]);
+    CoTaskMemFree(it->pftTimeStamps);
+    CoTaskMemFree(it->pdwQualities);
+    CoTaskMemFree(it->pvDataValues);
+    memset(it, 0, sizeof *it);
+}
+
+static int hda_same_variant(const VARIANT *a, const VARIANT *b) {
+    if (V_VT(a) != V_VT(b)) return 0;
+    switch (V_VT(a)) {
+    case VT_R8: return V_R8(a) == V_R8(b);
+    case VT_BSTR:
+        return V_BSTR(a) && V_BSTR(b) && SysStringLen(V_BSTR(a)) == SysStringLen(V_BSTR(b)) &&
+               memcmp(V_BSTR(a), V_BSTR(b), SysStringLen(V_BSTR(a)) * sizeof(WCHAR)) == 0;
+    default: return 0;
+    }
+}
+
+/* Whether `got` is the history hda_fill_item(i, aggregate) gives, value for value. */
+static int hda_is_item(const OPCHDA_ITEM *got, int i, DWORD aggregate) {
+    OPCHDA_ITEM want;
+    DWORD k;
+    int same;
+    hda_fill_item(i, aggregate, &want);
+    same = got->hClient == want.hClient && got->haAggregate == want.haAggregate && got->dwCount == want.dwCount &&
+           got->pftTimeStamps && got->pdwQualities && got->pvDataValues;
+    for (k = 0; same && k < want.dwCount; k++)
+        same = same_filetime(got->pftTimeStamps[k], want.pftTimeStamps[k]) &&
+               got->pdwQualities[k] == want.pdwQualities[k] &&
+               hda_same_variant(&got->pvDataValues[k], &want.pvDataValues[k]);
+    hda_free_item(&want);
+    return same;
+}
+
+/* The annotations of item 0 (item 1 has none). */
+#define HDA_ANNOTATIONS 2
+static const char *const HDA_ANNOTATION_TEXTS[HDA_ANNOTATIONS] = {"Calibrated \xc3\xa4\xc3\xb6\xc3\xbc",
+                                                                  "Checked \xe2\x82\xac"};
+static const char *const HDA_ANNOTATION_USERS[HDA_ANNOTATIONS] = {"operator", "maintenance \xf0\x9f\x98\x80"};
+
+#endif

@@ -1,0 +1,511 @@
+/* The EXE server of the cross-process test of the Historical Data Access proxy/stub
+ * (test_hda_tables.c): a small OPC HDA server written in C (LocalServer32, started by COM with
+ * -Embedding, hosted by OpcExeServerRun), reached through opccomn.dll's proxies and stubs, which it
+ * registers for this process (classic_oop.h). It serves the items of hda.h and checks what it
+ * receives: a request that does not arrive as the client sent it is answered with E_INVALIDARG (or a
+ * per-item error), which the client sees.
+ *
+ * One object: IOPCHDA_Server (GetItemAttributes, GetHistorianStatus, GetItemHandles),
+ * IOPCHDA_SyncRead (ReadRaw, ReadProcessed), IOPCHDA_AsyncRead (ReadRaw, ReadProcessed: an
+ * OnReadComplete from a thread of the server), IOPCHDA_SyncAnnotations (QueryCapabilities, Read) and
+ * IConnectionPointContainer with the IOPCHDA_DataCallback connection point. What the test does not
+ * call answers E_NOTIMPL. */
+#include "hda.h"
+
+#include "sink_point.h"
+
+#define CONTAINER(type, field, p) ((type *)((char *)(p) - offsetof(type, field)))
+
+typedef struct Server {
+    IOPCHDA_Server server; /* the identity */
+    IOPCHDA_SyncRead sync;
+    IOPCHDA_AsyncRead async;
+    IOPCHDA_SyncAnnotations annotations;
+    SinkPoint cp; /* IOPCHDA_DataCallback */
+    LONG refs;
+    CRITICAL_SECTION lock;
+    int handed_out[HDA_ITEMS]; /* GetItemHandles gave the item's handle */
+} Server;
+
+static HRESULT server_qi(Server *s, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCHDA_Server)) *ppv = &s->server;
+    else if (IsEqualIID(riid, &IID_IOPCHDA_SyncRead)) *ppv = &s->sync;
+    else if (IsEqualIID(riid, &IID_IOPCHDA_AsyncRead)) *ppv = &s->async;
+    else if (IsEqualIID(riid, &IID_IOPCHDA_SyncAnnotations)) *ppv = &s->annotations;
+    else if (IsEqualIID(riid, &IID_IConnectionPointContainer)) *ppv = &s->cp.container;
+    else return E_NOINTERFACE;
+    InterlockedIncrement(&s->refs);
+    return S_OK;
+}
+
+static ULONG server_release(Server *s) {
+    LONG n = InterlockedDecrement(&s->refs);
+    if (n == 0) {
+        sink_point_end(&s->cp);
+        DeleteCriticalSection(&s->lock);
+        free(s);
+        OpcServerUnlock();
+    }
+    return (ULONG)n;
+}
+
+#define SERVER_UNKNOWN(prefix, Iface, field)                                                                    \
+    static HRESULT STDMETHODCALLTYPE prefix##_qi(Iface *This, REFIID riid, void **ppv) {                       \
+        return server_qi(CONTAINER(Server, field, This), riid, ppv);                                            \
+    }                                                                                                           \
+    static ULONG STDMETHODCALLTYPE prefix##_add_ref(Iface *This) {                                             \
+        return (ULONG)InterlockedIncrement(&CONTAINER(Server, field, This)->refs);                              \
+    }                                                                                                           \
+    static ULONG STDMETHODCALLTYPE prefix##_release(Iface *This) { return server_release(CONTAINER(Server, field, This)); }
+
+SERVER_UNKNOWN(srv, IOPCHDA_Server, server)
+SERVER_UNKNOWN(sync, IOPCHDA_SyncRead, sync)
+SERVER_UNKNOWN(async, IOPCHDA_AsyncRead, async)
+SERVER_UNKNOWN(ann, IOPCHDA_SyncAnnotations, annotations)
+
+/* A copy in task memory of the UTF-8 texts `names[0..count)`, or NULL. */
+static LPWSTR *task_names(const char *const *names, DWORD count) {
+    LPWSTR *copy = (LPWSTR *)task_zero(count * sizeof *copy);
+    DWORD k;
+    for (k = 0; copy && k < count; k++) copy[k] = task_utf8(names[k]);
+    return copy;
+}
+
+/* -- IOPCHDA_Server -- */
+
+static HRESULT STDMETHODCALLTYPE srv_attributes(IOPCHDA_Server *This, DWORD *count, DWORD **ids, LPWSTR **names,
+                                                LPWSTR **texts, VARTYPE **types) {
+    (void)This;
+    if (!count || !ids || !names || !texts || !types) return E_POINTER;
+    *count = HDA_ATTRS;
+    *ids = (DWORD *)task_zero(sizeof HDA_ATTR_IDS);
+    *names = task_names(HDA_ATTR_NAMES, HDA_ATTRS);
+    *texts = task_names(HDA_ATTR_TEXTS, HDA_ATTRS);
+    *types = (VARTYPE *)task_zero(sizeof HDA_ATTR_TYPES);
+    if (!*ids || !*names || !*texts || !*types) return E_OUTOFMEMORY; /* a test server: what it allocated stays */
+    memcpy(*ids, HDA_ATTR_IDS, sizeof HDA_ATTR_IDS);
+    memcpy(*types, HDA_ATTR_TYPES, sizeof HDA_ATTR_TYPES);
+    return S_OK;
+}
+
+static HRESULT STDMETHODCALLTYPE srv_aggregates(IOPCHDA_Server *This, DWORD *count, DWORD **ids, LPWSTR **names,
+                                                LPWSTR **texts) {
+    (void)This;
+    if (count) *count = 0;
+    if (ids) *ids = NULL;
+    if (names) *names = NULL;
+    if (texts) *texts = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE srv_status(IOPCHDA_Server *This, OPCHDA_SERVERSTATUS *status, FILETIME **current,
+                                            FILETIME **start, WORD *major, WORD *minor, WORD *build,
+                                            DWORD *max_values, LPWSTR *text, LPWSTR *vendor) {
+    (void)This;
+    if (!status || !current || !start || !major || !minor || !build || !max_values || !text || !vendor)
+        return E_POINTER;
+    *status = OPCHDA_UP;
+    *current = (FILETIME *)task_zero(sizeof(FILETIME));
+    *start = (FILETIME *)task_zero(sizeof(FILETIME));
+    if (*current) **current = test_time(1);
+    if (*start) **start = test_time(0);
+    *major = 1;
+    *minor = 20;
+    *build = 42;
+    *max_values = 1000;
+    *text = task_utf8(HDA_STATUS_TEXT);
+    *vendor = task_utf8(proxy_stub_is_opccomn_for(HDA_IIDS, HDA_IID_COUNT) ? HDA_VENDOR_INFO : HDA_VENDOR_INFO_OTHER);
+    return *current && *start && *text && *vendor ? S_OK : E_OUTOFMEMORY;
+}
+
+/* The item whose ID is `id`, or -1. */
+static int item_index(const WCHAR *id) {
+    int i;
+    for (i = 0; id && i < HDA_ITEMS; i++)
+        if (is_utf8(id, HDA_ITEM_IDS[i])) return i;
+    return -1;
+}
+
+/* The item whose server handle is `h` (handed out), or -1. */
+static int item_of_handle(Server *s, OPCHANDLE h) {
+    int i = h >= HDA_SERVER_HANDLE(0) && h < HDA_SERVER_HANDLE(HDA_ITEMS) ? (int)(h - HDA_SERVER_HANDLE(0)) : -1;
+    int out;
+    if (i < 0) return -1;
+    EnterCriticalSection(&s->lock);
+    out = s->handed_out[i];
+    LeaveCriticalSection(&s->lock);
+    return out ? i : -1;
+}
+
+static HRESULT STDMETHODCALLTYPE srv_handles(IOPCHDA_Server *This, DWORD count, LPWSTR *ids, OPCHANDLE *clients,
+                                             OPCHANDLE **servers, HRESULT **errors) {
+    Server *s = CONTAINER(Server, server, This);
+    HRESULT hr = S_OK;
+    DWORD k;
+    if (!servers || !errors) return E_POINTER;
+    *servers = NULL;
+    *errors = NULL;
+    if (count == 0 || !ids || !clients) return E_INVALIDARG;
+    *servers = (OPCHANDLE *)task_zero(count * sizeof(OPCHANDLE));
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*servers || !*errors) return E_OUTOFMEMORY; /* a test server: what it allocated stays */
+    EnterCriticalSection(&s->lock);
+    for (k = 0; k < count; k++) {
+        int i = item_index(ids[k]);
+        if (i < 0) {
+            (*errors)[k] = HDA_E_UNKNOWNITEMID;
+            hr = S_FALSE;
+        } else if (clients[k] != HDA_CLIENT_HANDLE(i)) { /* not as the client sent it */
+            (*errors)[k] = E_INVALIDARG;
+            hr = S_FALSE;
+        } else {
+            s->handed_out[i] = 1;
+            (*servers)[k] = HDA_SERVER_HANDLE(i);
+        }
+    }
+    LeaveCriticalSection(&s->lock);
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE srv_release_handles(IOPCHDA_Server *This, DWORD count, OPCHANDLE *servers,
+                                                     HRESULT **errors) {
+    (void)This, (void)count, (void)servers;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE srv_validate(IOPCHDA_Server *This, DWORD count, LPWSTR *ids, HRESULT **errors) {
+    (void)This, (void)count, (void)ids;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE srv_browse(IOPCHDA_Server *This, DWORD count, DWORD *ids,
+                                            OPCHDA_OPERATORCODES *operators, VARIANT *filters,
+                                            IOPCHDA_Browser **browser, HRESULT **errors) {
+    (void)This, (void)count, (void)ids, (void)operators, (void)filters;
+    if (browser) *browser = NULL;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static IOPCHDA_ServerVtbl srv_vtbl = {srv_qi,      srv_add_ref,         srv_release,  srv_attributes,
+                                      srv_aggregates, srv_status,       srv_handles,  srv_release_handles,
+                                      srv_validate, srv_browse};
+
+/* -- Reading -- */
+
+/* Whether the time range is the client's (hda.h); if so it is resolved as the server resolves it. */
+static int take_range(OPCHDA_TIME *start, OPCHDA_TIME *end) {
+    if (!start || !end || !start->bString || !is_utf8(start->szTime, HDA_START_TEXT) || end->bString ||
+        end->szTime || !same_filetime(end->ftTime, test_time(HDA_END_ASKED)))
+        return 0;
+    start->ftTime = test_time(HDA_START_RESOLVED);
+    end->ftTime = test_time(HDA_END_RESOLVED);
+    return 1;
+}
+
+/* The histories of `count` items (raw when `aggregates` is NULL), an invalid handle an error of its
+ * own with an empty item. */
+static HRESULT read_items(Server *s, DWORD count, const OPCHANDLE *handles, const DWORD *aggregates,
+                          OPCHDA_ITEM **items, HRESULT **errors) {
+    HRESULT hr = S_OK;
+    DWORD k;
+    *items = (OPCHDA_ITEM *)task_zero(count * sizeof(OPCHDA_ITEM));
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*items || !*errors) return E_OUTOFMEMORY; /* a test server: what it allocated stays */
+    for (k = 0; k < count; k++) {
+        int i = item_of_handle(s, handles[k]);
+        if (i < 0) {
+            (*errors)[k] = HDA_E_INVALIDHANDLE;
+            hr = S_FALSE;
+        } else if (aggregates && aggregates[k] != OPCHDA_AVERAGE && aggregates[k] != OPCHDA_MAXIMUM) {
+            (*errors)[k] = E_INVALIDARG; /* not as the client sent it */
+            hr = S_FALSE;
+        } else {
+            hda_fill_item(i, aggregates ? aggregates[k] : 0, &(*items)[k]);
+        }
+    }
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE sync_raw(IOPCHDA_SyncRead *This, OPCHDA_TIME *start, OPCHDA_TIME *end,
+                                          DWORD num_values, BOOL bounds, DWORD count, OPCHANDLE *handles,
+                                          OPCHDA_ITEM **items, HRESULT **errors) {
+    if (!items || !errors) return E_POINTER;
+    *items = NULL;
+    *errors = NULL;
+    if (count == 0 || !handles || num_values != HDA_RAW_VALUES || bounds || !take_range(start, end))
+        return E_INVALIDARG;
+    return read_items(CONTAINER(Server, sync, This), count, handles, NULL, items, errors);
+}
+
+static HRESULT STDMETHODCALLTYPE sync_processed(IOPCHDA_SyncRead *This, OPCHDA_TIME *start, OPCHDA_TIME *end,
+                                                FILETIME interval, DWORD count, OPCHANDLE *handles,
+                                                DWORD *aggregates, OPCHDA_ITEM **items, HRESULT **errors) {
+    if (!items || !errors) return E_POINTER;
+    *items = NULL;
+    *errors = NULL;
+    if (count == 0 || !handles || !aggregates || !same_filetime(interval, hda_interval()) || !take_range(start, end))
+        return E_INVALIDARG;
+    return read_items(CONTAINER(Server, sync, This), count, handles, aggregates, items, errors);
+}
+
+static HRESULT STDMETHODCALLTYPE sync_at_time(IOPCHDA_SyncRead *This, DWORD ntimes, FILETIME *times, DWORD count,
+                                              OPCHANDLE *handles, OPCHDA_ITEM **items, HRESULT **errors) {
+    (void)This, (void)ntimes, (void)times, (void)count, (void)handles;
+    if (items) *items = NULL;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE sync_modified(IOPCHDA_SyncRead *This, OPCHDA_TIME *start, OPCHDA_TIME *end,
+                                               DWORD num_values, DWORD count, OPCHANDLE *handles,
+                                               OPCHDA_MODIFIEDITEM **items, HRESULT **errors) {
+    (void)This, (void)start, (void)end, (void)num_values, (void)count, (void)handles;
+    if (items) *items = NULL;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE sync_attribute(IOPCHDA_SyncRead *This, OPCHDA_TIME *start, OPCHDA_TIME *end,
+                                                OPCHANDLE handle, DWORD count, DWORD *ids,
+                                                OPCHDA_ATTRIBUTE **values, HRESULT **errors) {
+    (void)This, (void)start, (void)end, (void)handle, (void)count, (void)ids;
+    if (values) *values = NULL;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static IOPCHDA_SyncReadVtbl sync_vtbl = {sync_qi,      sync_add_ref,  sync_release,  sync_raw,
+                                         sync_processed, sync_at_time, sync_modified, sync_attribute};
+
+/* An asynchronous read: its OnReadComplete from a thread of the server. */
+typedef struct AsyncRead {
+    Server *server; /* a reference */
+    DWORD transaction, count;
+    OPCHANDLE handles[HDA_ITEMS];
+    DWORD aggregates[HDA_ITEMS];
+    int processed;
+} AsyncRead;
+
+static DWORD WINAPI read_thread(void *param) {
+    AsyncRead *r = (AsyncRead *)param;
+    IOPCHDA_DataCallback *sink;
+    OPCHDA_ITEM *items = NULL;
+    HRESULT *errors = NULL;
+    DWORD k;
+    CoInitializeEx(NULL, COINIT_MULTITHREADED);
+    sink = (IOPCHDA_DataCallback *)sink_point_sink(&r->server->cp);
+    if (read_items(r->server, r->count, r->handles, r->processed ? r->aggregates : NULL, &items, &errors) == S_OK &&
+        sink)
+        sink->lpVtbl->OnReadComplete(sink, r->transaction, S_OK, r->count, items, errors);
+    if (sink) sink->lpVtbl->Release(sink);
+    for (k = 0; items && k < r->count; k++) hda_free_item(&items[k]);
+    CoTaskMemFree(items);
+    CoTaskMemFree(errors);
+    server_release(r->server);
+    free(r);
+    CoUninitialize();
+    return 0;
+}
+
+/* Starts the read of `count` items (at most HDA_ITEMS, each valid) with `aggregates` or raw. */
+static HRESULT start_read(Server *s, DWORD transaction, DWORD count, const OPCHANDLE *handles, const DWORD *aggregates,
+                          DWORD *cancel, HRESULT **errors) {
+    IUnknown *sink = sink_point_sink(&s->cp);
+    AsyncRead *r;
+    HANDLE thread;
+    DWORD k;
+    if (!sink) return CONNECT_E_NOCONNECTION;
+    sink->lpVtbl->Release(sink);
+    if (count == 0 || count > HDA_ITEMS || !handles) return E_INVALIDARG;
+    for (k = 0; k < count; k++)
+        if (item_of_handle(s, handles[k]) < 0) return E_INVALIDARG; /* not as the client sent them */
+    r = (AsyncRead *)calloc(1, sizeof *r);
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!r || !*errors) {
+        free(r);
+        CoTaskMemFree(*errors);
+        *errors = NULL;
+        return E_OUTOFMEMORY;
+    }
+    r->server = s;
+    r->transaction = transaction;
+    r->count = count;
+    memcpy(r->handles, handles, count * sizeof *handles);
+    if (aggregates) memcpy(r->aggregates, aggregates, count * sizeof *aggregates);
+    r->processed = aggregates != NULL;
+    InterlockedIncrement(&s->refs);
+    thread = CreateThread(NULL, 0, read_thread, r, 0, NULL);
+    if (!thread) {
+        server_release(s);
+        free(r);
+        CoTaskMemFree(*errors);
+        *errors = NULL;
+        return E_OUTOFMEMORY;
+    }
+    CloseHandle(thread);
+    *cancel = transaction + 1;
+    return S_OK;
+}
+
+static HRESULT STDMETHODCALLTYPE async_raw(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
+                                           OPCHDA_TIME *end, DWORD num_values, BOOL bounds, DWORD count,
+                                           OPCHANDLE *handles, DWORD *cancel, HRESULT **errors) {
+    if (!cancel || !errors) return E_POINTER;
+    *cancel = 0;
+    *errors = NULL;
+    if (num_values != HDA_RAW_VALUES || bounds || !take_range(start, end)) return E_INVALIDARG;
+    return start_read(CONTAINER(Server, async, This), transaction, count, handles, NULL, cancel, errors);
+}
+
+static HRESULT STDMETHODCALLTYPE async_advise_raw(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
+                                                  FILETIME interval, DWORD count, OPCHANDLE *handles, DWORD *cancel,
+                                                  HRESULT **errors) {
+    (void)This, (void)transaction, (void)start, (void)interval, (void)count, (void)handles;
+    if (cancel) *cancel = 0;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE async_processed(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
+                                                 OPCHDA_TIME *end, FILETIME interval, DWORD count, OPCHANDLE *handles,
+                                                 DWORD *aggregates, DWORD *cancel, HRESULT **errors) {
+    if (!cancel || !errors) return E_POINTER;
+    *cancel = 0;
+    *errors = NULL;
+    if (!aggregates || !same_filetime(interval, hda_interval()) || !take_range(start, end)) return E_INVALIDARG;
+    return start_read(CONTAINER(Server, async, This), transaction, count, handles, aggregates, cancel, errors);
+}
+
+static HRESULT STDMETHODCALLTYPE async_advise_processed(IOPCHDA_AsyncRead *This, DWORD transaction,
+                                                        OPCHDA_TIME *start, FILETIME interval, DWORD count,
+                                                        OPCHANDLE *handles, DWORD *aggregates, DWORD intervals,
+                                                        DWORD *cancel, HRESULT **errors) {
+    (void)This, (void)transaction, (void)start, (void)interval, (void)count, (void)handles, (void)aggregates;
+    (void)intervals;
+    if (cancel) *cancel = 0;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE async_at_time(IOPCHDA_AsyncRead *This, DWORD transaction, DWORD ntimes,
+                                               FILETIME *times, DWORD count, OPCHANDLE *handles, DWORD *cancel,
+                                               HRESULT **errors) {
+    (void)This, (void)transaction, (void)ntimes, (void)times, (void)count, (void)handles;
+    if (cancel) *cancel = 0;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE async_modified(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
+                                                OPCHDA_TIME *end, DWORD num_values, DWORD count, OPCHANDLE *handles,
+                                                DWORD *cancel, HRESULT **errors) {
+    (void)This, (void)transaction, (void)start, (void)end, (void)num_values, (void)count, (void)handles;
+    if (cancel) *cancel = 0;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE async_attribute(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
+                                                 OPCHDA_TIME *end, OPCHANDLE handle, DWORD count, DWORD *ids,
+                                                 DWORD *cancel, HRESULT **errors) {
+    (void)This, (void)transaction, (void)start, (void)end, (void)handle, (void)count, (void)ids;
+    if (cancel) *cancel = 0;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static HRESULT STDMETHODCALLTYPE async_cancel(IOPCHDA_AsyncRead *This, DWORD cancel) {
+    (void)This, (void)cancel;
+    return E_NOTIMPL;
+}
+
+static IOPCHDA_AsyncReadVtbl async_vtbl = {
+    async_qi,          async_add_ref,   async_release,          async_raw,     async_advise_raw,
+    async_processed,   async_advise_processed, async_at_time,   async_modified, async_attribute, async_cancel};
+
+/* -- IOPCHDA_SyncAnnotations -- */
+
+static HRESULT STDMETHODCALLTYPE ann_capabilities(IOPCHDA_SyncAnnotations *This,
+                                                  OPCHDA_ANNOTATIONCAPABILITIES *capabilities) {
+    (void)This;
+    if (!capabilities) return E_POINTER;
+    *capabilities = OPCHDA_READANNOTATIONCAP;
+    return S_OK;
+}
+
+static HRESULT STDMETHODCALLTYPE ann_read(IOPCHDA_SyncAnnotations *This, OPCHDA_TIME *start, OPCHDA_TIME *end,
+                                          DWORD count, OPCHANDLE *handles, OPCHDA_ANNOTATION **values,
+                                          HRESULT **errors) {
+    Server *s = CONTAINER(Server, annotations, This);
+    HRESULT hr = S_OK;
+    DWORD k, n;
+    if (!values || !errors) return E_POINTER;
+    *values = NULL;
+    *errors = NULL;
+    if (count == 0 || !handles || !take_range(start, end)) return E_INVALIDARG;
+    *values = (OPCHDA_ANNOTATION *)task_zero(count * sizeof(OPCHDA_ANNOTATION));
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*values || !*errors) return E_OUTOFMEMORY; /* a test server: what it allocated stays */
+    for (k = 0; k < count; k++) {
+        OPCHDA_ANNOTATION *a = &(*values)[k];
+        int i = item_of_handle(s, handles[k]);
+        if (i < 0) {
+            (*errors)[k] = HDA_E_INVALIDHANDLE;
+            hr = S_FALSE;
+            continue;
+        }
+        a->hClient = HDA_CLIENT_HANDLE(i);
+        if (i != 0) continue; /* no annotations */
+        a->ftTimeStamps = (FILETIME *)task_zero(HDA_ANNOTATIONS * sizeof(FILETIME));
+        a->ftAnnotationTime = (FILETIME *)task_zero(HDA_ANNOTATIONS * sizeof(FILETIME));
+        a->szAnnotation = task_names(HDA_ANNOTATION_TEXTS, HDA_ANNOTATIONS);
+        a->szUser = task_names(HDA_ANNOTATION_USERS, HDA_ANNOTATIONS);
+        if (!a->ftTimeStamps || !a->ftAnnotationTime || !a->szAnnotation || !a->szUser) return E_OUTOFMEMORY;
+        for (n = 0; n < HDA_ANNOTATIONS; n++) {
+            a->ftTimeStamps[n] = test_time(HDA_START_RESOLVED + n);
+            a->ftAnnotationTime[n] = test_time(100 + n);
+        }
+        a->dwNumValues = HDA_ANNOTATIONS;
+    }
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE ann_insert(IOPCHDA_SyncAnnotations *This, DWORD count, OPCHANDLE *handles,
+                                            FILETIME *times, OPCHDA_ANNOTATION *values, HRESULT **errors) {
+    (void)This, (void)count, (void)handles, (void)times, (void)values;
+    if (errors) *errors = NULL;
+    return E_NOTIMPL;
+}
+
+static IOPCHDA_SyncAnnotationsVtbl ann_vtbl = {ann_qi, ann_add_ref, ann_release, ann_capabilities, ann_read,
+                                               ann_insert};
+
+static HRESULT OPCCOMN_CDECL create_server(void *context, IUnknown *outer, REFIID riid, void **ppv) {
+    Server *s;
+    HRESULT hr;
+    (void)context;
+    (void)outer; /* not aggregatable: the library refuses an outer object */
+    s = (Server *)calloc(1, sizeof *s);
+    if (!s) return E_OUTOFMEMORY;
+    s->server.lpVtbl = &srv_vtbl;
+    s->sync.lpVtbl = &sync_vtbl;
+    s->async.lpVtbl = &async_vtbl;
+    s->annotations.lpVtbl = &ann_vtbl;
+    s->refs = 1;
+    InitializeCriticalSection(&s->lock);
+    sink_point_init(&s->cp, (IUnknown *)&s->server, &IID_IOPCHDA_DataCallback);
+    OpcServerLock(); /* the server object counts on the process while it lives */
+    hr = server_qi(s, riid, ppv);
+    server_release(s);
+    return hr;
+}
+
+int main(void) {
+    return run_test_server("hda_server", &CLSID_HdaTestServer, L"Oop.HdaServer.1", L"opccomn HDA tables test server",
+                           create_server, HDA_IIDS, HDA_IID_COUNT);
+}

@@ -1,0 +1,461 @@
+/* opccomn.dll's proxy/stub of the Historical Data Access 1.20 interfaces (the NDR tables
+ * tools/gen-proxy.py makes from idl/opchda.idl, with the checks generated from the same IDL) across
+ * processes, under the real COM runtime (Wine in CI): this client and the EXE server hda_server.c,
+ * both with opccomn.dll's proxy/stub as theirs for the HDA interfaces (registered per process,
+ * classic_oop.h). Every value crosses the wire and is checked on the other side: the server answers a
+ * request it did not receive as sent with an error. A count beyond its bound never leaves the client.
+ *
+ * Covered: IOPCHDA_Server::GetHistorianStatus (FILETIME ** and two strings), GetItemAttributes
+ * ([out, size_is(,*n), string] LPWSTR ** beside DWORD ** and VARTYPE **), GetItemHandles;
+ * IOPCHDA_SyncRead::ReadRaw ([in, out] OPCHDA_TIME with a string and without, OPCHDA_ITEM arrays of
+ * VT_R8 and VT_BSTR values, FILETIMEs and qualities, an invalid handle's empty item), ReadProcessed
+ * (a FILETIME by value, whose two halves the server checks), ReadAttribute (the bound);
+ * IOPCHDA_SyncAnnotations::QueryCapabilities, Read (OPCHDA_ANNOTATION, one with no values);
+ * IOPCHDA_AsyncRead::ReadRaw and ReadProcessed, each answered by IOPCHDA_DataCallback::OnReadComplete
+ * through the server's connection point. */
+#include "hda.h"
+
+#include <olectl.h> /* CONNECT_E_* */
+
+static WCHAR server_path[MAX_PATH];
+
+/* ---- The client's callback: checks what OnReadComplete brings (the main thread waits meanwhile) ---- */
+
+typedef struct Callback {
+    IOPCHDA_DataCallback iface;
+    LONG refs;
+    HANDLE called; /* set by OnReadComplete */
+    int calls;
+    /* What the next OnReadComplete must bring: the transaction, the items, raw or by `aggregate`. */
+    DWORD transaction, count, aggregate;
+} Callback;
+
+static HRESULT STDMETHODCALLTYPE cb_qi(IOPCHDA_DataCallback *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCHDA_DataCallback)) {
+        *ppv = This;
+        This->lpVtbl->AddRef(This);
+        return S_OK;
+    }
+    *ppv = NULL;
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE cb_add_ref(IOPCHDA_DataCallback *This) {
+    return (ULONG)InterlockedIncrement(&((Callback *)This)->refs);
+}
+static ULONG STDMETHODCALLTYPE cb_release(IOPCHDA_DataCallback *This) {
+    return (ULONG)InterlockedDecrement(&((Callback *)This)->refs); /* static: nothing to free */
+}
+static HRESULT STDMETHODCALLTYPE cb_data_change(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                DWORD count, OPCHDA_ITEM *items, HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)count, (void)items, (void)errors;
+    CHECK(0); /* not asked for */
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_read_complete(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                  DWORD count, OPCHDA_ITEM *items, HRESULT *errors) {
+    Callback *c = (Callback *)This;
+    DWORD k;
+    c->calls++;
+    CHECK(transaction == c->transaction);
+    CHECK_HR(status, S_OK);
+    CHECK(count == c->count && items && errors);
+    for (k = 0; items && errors && k < count && k < c->count; k++) {
+        CHECK(hda_is_item(&items[k], c->aggregate ? 0 : (int)k, c->aggregate));
+        CHECK_HR(errors[k], S_OK);
+    }
+    SetEvent(c->called);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_read_modified(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                  DWORD count, OPCHDA_MODIFIEDITEM *items, HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)count, (void)items, (void)errors;
+    CHECK(0);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_read_attribute(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                   OPCHANDLE client, DWORD count, OPCHDA_ATTRIBUTE *values,
+                                                   HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)client, (void)count, (void)values, (void)errors;
+    CHECK(0);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_read_annotations(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                     DWORD count, OPCHDA_ANNOTATION *values, HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)count, (void)values, (void)errors;
+    CHECK(0);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_insert_annotations(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                       DWORD count, OPCHANDLE *clients, HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)count, (void)clients, (void)errors;
+    CHECK(0);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_playback(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                             DWORD count, OPCHDA_ITEM **items, HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)count, (void)items, (void)errors;
+    CHECK(0);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_update_complete(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
+                                                    DWORD count, OPCHANDLE *clients, HRESULT *errors) {
+    (void)This, (void)transaction, (void)status, (void)count, (void)clients, (void)errors;
+    CHECK(0);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE cb_cancel_complete(IOPCHDA_DataCallback *This, DWORD cancel) {
+    (void)This, (void)cancel;
+    CHECK(0);
+    return S_OK;
+}
+static IOPCHDA_DataCallbackVtbl cb_vtbl = {cb_qi,          cb_add_ref,          cb_release,
+                                           cb_data_change, cb_read_complete,    cb_read_modified,
+                                           cb_read_attribute, cb_read_annotations, cb_insert_annotations,
+                                           cb_playback,    cb_update_complete,  cb_cancel_complete};
+
+/* Static, as the server's proxy may release it after the test's function returned. */
+static Callback cb;
+
+/* ---- Checks ---- */
+
+/* The time range hda.h asks for: its string in task memory (an [in, out] structure's string the
+ * proxy may replace). */
+static void make_range(OPCHDA_TIME *start, OPCHDA_TIME *end) {
+    memset(start, 0, sizeof *start);
+    memset(end, 0, sizeof *end);
+    start->bString = TRUE;
+    start->szTime = task_utf8(HDA_START_TEXT);
+    end->bString = FALSE;
+    end->szTime = NULL;
+    end->ftTime = test_time(HDA_END_ASKED);
+}
+
+/* Whether the range came back as the server resolved it (the strings as they were); frees them. */
+static int range_resolved(OPCHDA_TIME *start, OPCHDA_TIME *end) {
+    int ok = start->bString && is_utf8(start->szTime, HDA_START_TEXT) &&
+             same_filetime(start->ftTime, test_time(HDA_START_RESOLVED)) && !end->bString && end->szTime == NULL &&
+             same_filetime(end->ftTime, test_time(HDA_END_RESOLVED));
+    CoTaskMemFree(start->szTime);
+    CoTaskMemFree(end->szTime);
+    start->szTime = end->szTime = NULL;
+    return ok;
+}
+
+/* Both processes use opccomn.dll's proxy/stub (the server says so in its status). */
+static void check_status(IOPCHDA_Server *server) {
+    OPCHDA_SERVERSTATUS status = (OPCHDA_SERVERSTATUS)0;
+    FILETIME *current = (FILETIME *)GARBAGE_PTR, *start = (FILETIME *)GARBAGE_PTR;
+    WORD major = 0, minor = 0, build = 0;
+    DWORD max_values = GARBAGE_U32;
+    LPWSTR text = (LPWSTR)GARBAGE_PTR, vendor = (LPWSTR)GARBAGE_PTR;
+    CHECK(proxy_stub_is_opccomn_for(HDA_IIDS, HDA_IID_COUNT));
+    CHECK_HR(server->lpVtbl->GetHistorianStatus(server, &status, &current, &start, &major, &minor, &build, &max_values,
+                                                &text, &vendor),
+             S_OK);
+    CHECK(status == OPCHDA_UP && major == 1 && minor == 20 && build == 42 && max_values == 1000);
+    CHECK(current && current != GARBAGE_PTR && start && start != GARBAGE_PTR);
+    if (current && current != GARBAGE_PTR) CHECK(same_filetime(*current, test_time(1)));
+    if (start && start != GARBAGE_PTR) CHECK(same_filetime(*start, test_time(0)));
+    CHECK(text != GARBAGE_PTR && is_utf8(text, HDA_STATUS_TEXT));
+    CHECK(vendor != GARBAGE_PTR && is_utf8(vendor, HDA_VENDOR_INFO));
+    if (current != GARBAGE_PTR) CoTaskMemFree(current);
+    if (start != GARBAGE_PTR) CoTaskMemFree(start);
+    if (text != GARBAGE_PTR) CoTaskMemFree(text);
+    if (vendor != GARBAGE_PTR) CoTaskMemFree(vendor);
+}
+
+static void check_attributes(IOPCHDA_Server *server) {
+    DWORD count = GARBAGE_U32, *ids = (DWORD *)GARBAGE_PTR, k;
+    LPWSTR *names = (LPWSTR *)GARBAGE_PTR, *texts = (LPWSTR *)GARBAGE_PTR;
+    VARTYPE *types = (VARTYPE *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->GetItemAttributes(server, &count, &ids, &names, &texts, &types), S_OK);
+    CHECK(count == HDA_ATTRS && ids != GARBAGE_PTR && names != GARBAGE_PTR && texts != GARBAGE_PTR &&
+          types != GARBAGE_PTR && ids && names && texts && types);
+    if (count != HDA_ATTRS || !ids || ids == GARBAGE_PTR || !names || names == GARBAGE_PTR || !texts ||
+        texts == GARBAGE_PTR || !types || types == GARBAGE_PTR)
+        return;
+    for (k = 0; k < count; k++) {
+        CHECK(ids[k] == HDA_ATTR_IDS[k] && types[k] == HDA_ATTR_TYPES[k]);
+        CHECK(is_utf8(names[k], HDA_ATTR_NAMES[k]) && is_utf8(texts[k], HDA_ATTR_TEXTS[k]));
+        CoTaskMemFree(names[k]);
+        CoTaskMemFree(texts[k]);
+    }
+    CoTaskMemFree(ids);
+    CoTaskMemFree(names);
+    CoTaskMemFree(texts);
+    CoTaskMemFree(types);
+}
+
+static void check_handles(IOPCHDA_Server *server) {
+    LPWSTR ids[3];
+    OPCHANDLE clients[3] = {HDA_CLIENT_HANDLE(0), 777, HDA_CLIENT_HANDLE(1)};
+    OPCHANDLE *servers = (OPCHANDLE *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    ids[0] = (LPWSTR)W(HDA_ITEM_IDS[0]);
+    ids[1] = (LPWSTR)W("Plant.Nowhere");
+    ids[2] = (LPWSTR)W(HDA_ITEM_IDS[1]);
+    CHECK_HR(server->lpVtbl->GetItemHandles(server, 3, ids, clients, &servers, &errors), S_FALSE);
+    CHECK(servers && servers != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (!servers || servers == GARBAGE_PTR || !errors || errors == GARBAGE_PTR) return;
+    CHECK(servers[0] == HDA_SERVER_HANDLE(0) && servers[1] == 0 && servers[2] == HDA_SERVER_HANDLE(1));
+    CHECK_HR(errors[0], S_OK);
+    CHECK_HR(errors[1], HDA_E_UNKNOWNITEMID);
+    CHECK_HR(errors[2], S_OK);
+    CoTaskMemFree(servers);
+    CoTaskMemFree(errors);
+}
+
+static void free_items(OPCHDA_ITEM *items, DWORD count) {
+    DWORD k;
+    for (k = 0; k < count; k++) hda_free_item(&items[k]);
+    CoTaskMemFree(items);
+}
+
+static void check_read_raw(IOPCHDA_SyncRead *sync) {
+    OPCHANDLE handles[3] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1), 0x999};
+    OPCHDA_TIME start, end;
+    OPCHDA_ITEM *items = (OPCHDA_ITEM *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    make_range(&start, &end);
+    CHECK_HR(sync->lpVtbl->ReadRaw(sync, &start, &end, HDA_RAW_VALUES, FALSE, 3, handles, &items, &errors), S_FALSE);
+    CHECK(range_resolved(&start, &end));
+    CHECK(items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR) {
+        CHECK(hda_is_item(&items[0], 0, 0));
+        CHECK(hda_is_item(&items[1], 1, 0));
+        CHECK(items[2].hClient == 0 && items[2].dwCount == 0 && !items[2].pftTimeStamps && !items[2].pdwQualities &&
+              !items[2].pvDataValues);
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+        free_items(items, 3);
+        CoTaskMemFree(errors);
+    }
+    /* Not as the server expects (a value more): refused, nothing comes back. */
+    make_range(&start, &end);
+    items = (OPCHDA_ITEM *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(sync->lpVtbl->ReadRaw(sync, &start, &end, HDA_RAW_VALUES + 1, FALSE, 2, handles, &items, &errors),
+             E_INVALIDARG);
+    CHECK(items == NULL && errors == NULL);
+    range_resolved(&start, &end); /* frees */
+}
+
+static void check_read_processed(IOPCHDA_SyncRead *sync) {
+    OPCHANDLE handles[2] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(0)};
+    DWORD aggregates[2] = {OPCHDA_AVERAGE, OPCHDA_MAXIMUM};
+    OPCHDA_TIME start, end;
+    OPCHDA_ITEM *items = (OPCHDA_ITEM *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    FILETIME other;
+    make_range(&start, &end);
+    CHECK_HR(sync->lpVtbl->ReadProcessed(sync, &start, &end, hda_interval(), 2, handles, aggregates, &items, &errors),
+             S_OK);
+    CHECK(range_resolved(&start, &end));
+    CHECK(items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR) {
+        CHECK(hda_is_item(&items[0], 0, OPCHDA_AVERAGE));
+        CHECK(hda_is_item(&items[1], 0, OPCHDA_MAXIMUM));
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        free_items(items, 2);
+        CoTaskMemFree(errors);
+    }
+    /* Another interval (its high half one more): the server sees it and refuses. */
+    other = hda_interval();
+    other.dwHighDateTime++;
+    make_range(&start, &end);
+    items = (OPCHDA_ITEM *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(sync->lpVtbl->ReadProcessed(sync, &start, &end, other, 2, handles, aggregates, &items, &errors),
+             E_INVALIDARG);
+    CHECK(items == NULL && errors == NULL);
+    range_resolved(&start, &end); /* frees */
+}
+
+/* A count beyond its bound (65,537 attribute IDs, idl/ndr-bounds.txt) is refused by this client's
+ * proxy before it is sent, with the code MIDL's [range] gives; at the bound the request leaves (the
+ * server does not implement ReadAttribute). */
+static void check_bound(IOPCHDA_SyncRead *sync) {
+    OPCHDA_TIME start, end;
+    OPCHDA_ATTRIBUTE *values = (OPCHDA_ATTRIBUTE *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    DWORD *ids = (DWORD *)calloc(65537, sizeof(DWORD));
+    if (!ids) {
+        CHECK(0);
+        return;
+    }
+    make_range(&start, &end);
+    CHECK_HR(sync->lpVtbl->ReadAttribute(sync, &start, &end, HDA_SERVER_HANDLE(0), 65537, ids, &values, &errors),
+             HRESULT_FROM_WIN32(RPC_S_INVALID_BOUND));
+    CHECK(values == NULL && errors == NULL);
+    values = (OPCHDA_ATTRIBUTE *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(sync->lpVtbl->ReadAttribute(sync, &start, &end, HDA_SERVER_HANDLE(0), 65536, ids, &values, &errors),
+             E_NOTIMPL);
+    CHECK(values == NULL && errors == NULL);
+    CoTaskMemFree(start.szTime);
+    CoTaskMemFree(end.szTime);
+    free(ids);
+}
+
+static void check_annotations(IOPCHDA_Server *server) {
+    IOPCHDA_SyncAnnotations *ann = NULL;
+    OPCHDA_ANNOTATIONCAPABILITIES caps = (OPCHDA_ANNOTATIONCAPABILITIES)0;
+    OPCHANDLE handles[2] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1)};
+    OPCHDA_TIME start, end;
+    OPCHDA_ANNOTATION *values = (OPCHDA_ANNOTATION *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    DWORD n;
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_SyncAnnotations, (void **)&ann), S_OK);
+    if (!ann) return;
+    CHECK_HR(ann->lpVtbl->QueryCapabilities(ann, &caps), S_OK);
+    CHECK(caps == OPCHDA_READANNOTATIONCAP);
+    make_range(&start, &end);
+    CHECK_HR(ann->lpVtbl->Read(ann, &start, &end, 2, handles, &values, &errors), S_OK);
+    CHECK(range_resolved(&start, &end));
+    CHECK(values && values != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (values && values != GARBAGE_PTR && errors && errors != GARBAGE_PTR) {
+        OPCHDA_ANNOTATION *a = &values[0];
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK(a->hClient == HDA_CLIENT_HANDLE(0) && a->dwNumValues == HDA_ANNOTATIONS && a->ftTimeStamps &&
+              a->szAnnotation && a->ftAnnotationTime && a->szUser);
+        if (a->dwNumValues == HDA_ANNOTATIONS && a->ftTimeStamps && a->szAnnotation && a->ftAnnotationTime && a->szUser)
+            for (n = 0; n < HDA_ANNOTATIONS; n++) {
+                CHECK(same_filetime(a->ftTimeStamps[n], test_time(HDA_START_RESOLVED + n)));
+                CHECK(same_filetime(a->ftAnnotationTime[n], test_time(100 + n)));
+                CHECK(is_utf8(a->szAnnotation[n], HDA_ANNOTATION_TEXTS[n]));
+                CHECK(is_utf8(a->szUser[n], HDA_ANNOTATION_USERS[n]));
+                CoTaskMemFree(a->szAnnotation[n]);
+                CoTaskMemFree(a->szUser[n]);
+            }
+        CoTaskMemFree(a->ftTimeStamps);
+        CoTaskMemFree(a->szAnnotation);
+        CoTaskMemFree(a->ftAnnotationTime);
+        CoTaskMemFree(a->szUser);
+        a = &values[1];
+        CHECK(a->hClient == HDA_CLIENT_HANDLE(1) && a->dwNumValues == 0 && !a->ftTimeStamps && !a->szAnnotation &&
+              !a->ftAnnotationTime && !a->szUser);
+        CoTaskMemFree(values);
+        CoTaskMemFree(errors);
+    }
+    ann->lpVtbl->Release(ann);
+}
+
+static void check_async(IOPCHDA_Server *server) {
+    IConnectionPointContainer *cpc = NULL;
+    IConnectionPoint *cp = NULL;
+    IOPCHDA_AsyncRead *async = NULL;
+    OPCHANDLE handles[2] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1)};
+    DWORD aggregate = OPCHDA_MAXIMUM, cookie = GARBAGE_U32, cancel = GARBAGE_U32;
+    OPCHDA_TIME start, end;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    memset(&cb, 0, sizeof cb);
+    cb.iface.lpVtbl = &cb_vtbl;
+    cb.refs = 1;
+    cb.called = CreateEventW(NULL, FALSE, FALSE, NULL);
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IConnectionPointContainer, (void **)&cpc), S_OK);
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_AsyncRead, (void **)&async), S_OK);
+    if (!cpc || !async) return;
+    /* Without a callback the read is refused. */
+    make_range(&start, &end);
+    CHECK_HR(async->lpVtbl->ReadRaw(async, 30, &start, &end, HDA_RAW_VALUES, FALSE, 2, handles, &cancel, &errors),
+             CONNECT_E_NOCONNECTION);
+    CHECK(cancel == 0 && errors == NULL);
+    range_resolved(&start, &end); /* frees */
+    CHECK_HR(cpc->lpVtbl->FindConnectionPoint(cpc, &IID_IOPCHDA_DataCallback, &cp), S_OK);
+    if (cp) {
+        CHECK_HR(cp->lpVtbl->Advise(cp, (IUnknown *)&cb.iface, &cookie), S_OK);
+        CHECK(cookie == 1);
+        /* A raw read of both items. */
+        cb.transaction = 31;
+        cb.count = 2;
+        cb.aggregate = 0;
+        make_range(&start, &end);
+        errors = (HRESULT *)GARBAGE_PTR;
+        CHECK_HR(async->lpVtbl->ReadRaw(async, 31, &start, &end, HDA_RAW_VALUES, FALSE, 2, handles, &cancel, &errors),
+                 S_OK);
+        CHECK(cancel == 32 && range_resolved(&start, &end));
+        if (errors && errors != GARBAGE_PTR) {
+            CHECK_HR(errors[0], S_OK);
+            CHECK_HR(errors[1], S_OK);
+            CoTaskMemFree(errors);
+        } else {
+            CHECK(0);
+        }
+        /* The server's thread calls back; 60 s only bound a broken run. */
+        CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
+        CHECK(cb.calls == 1);
+        /* A processed read of the first item (the interval by value again). */
+        cb.transaction = 41;
+        cb.count = 1;
+        cb.aggregate = OPCHDA_MAXIMUM;
+        make_range(&start, &end);
+        errors = (HRESULT *)GARBAGE_PTR;
+        CHECK_HR(async->lpVtbl->ReadProcessed(async, 41, &start, &end, hda_interval(), 1, handles, &aggregate, &cancel,
+                                              &errors),
+                 S_OK);
+        CHECK(cancel == 42 && range_resolved(&start, &end));
+        if (errors && errors != GARBAGE_PTR) {
+            CHECK_HR(errors[0], S_OK);
+            CoTaskMemFree(errors);
+        } else {
+            CHECK(0);
+        }
+        CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
+        CHECK(cb.calls == 2);
+        CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), S_OK);
+        CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), CONNECT_E_NOCONNECTION);
+        cp->lpVtbl->Release(cp);
+    }
+    async->lpVtbl->Release(async);
+    cpc->lpVtbl->Release(cpc);
+}
+
+int main(void) {
+    OpcServerRegistration reg;
+    IOPCHDA_Server *server = NULL;
+    IOPCHDA_SyncRead *sync = NULL;
+    int waited;
+
+    beside_this_program(server_path, L"opc_hda_test_server.exe");
+    CHECK_HR(CoInitializeEx(NULL, COINIT_MULTITHREADED), S_OK);
+    CHECK_HR(use_opccomn_proxy_stub_for(HDA_IIDS, HDA_IID_COUNT), S_OK);
+    memset(&reg, 0, sizeof reg);
+    reg.struct_size = sizeof reg;
+    reg.server_type = OPC_SERVER_TYPE_LOCAL;
+    reg.clsid = CLSID_HdaTestServer;
+    reg.prog_id = L"Oop.HdaServer.1";
+    reg.user_type = L"opccomn HDA tables test server";
+    reg.module_path = server_path;
+    CHECK_HR(OpcRegisterServer(&reg, NULL), S_OK);
+
+    CHECK_HR(CoCreateInstance(&CLSID_HdaTestServer, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCHDA_Server, (void **)&server),
+             S_OK);
+    if (server) {
+        check_status(server);
+        check_attributes(server);
+        check_handles(server);
+        CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_SyncRead, (void **)&sync), S_OK);
+        if (sync) {
+            check_read_raw(sync);
+            check_read_processed(sync);
+            check_bound(sync);
+            sync->lpVtbl->Release(sync);
+        }
+        check_annotations(server);
+        check_async(server);
+        server->lpVtbl->Release(server);
+    }
+    /* The server exits once its objects are gone (its linger is 100 ms; 10 s bound a broken run). */
+    for (waited = 0; waited < 100 && process_running(L"opc_hda_test_server.exe") == 1; waited++) Sleep(100);
+    CHECK(process_running(L"opc_hda_test_server.exe") == 0);
+    /* The server let go of the callback before it ended. */
+    CHECK(cb.refs == 1);
+    if (cb.called) CloseHandle(cb.called);
+    CHECK_HR(OpcUnregisterServer(&reg, NULL), S_OK);
+    CoUninitialize();
+    return test_summary("test_hda_tables");
+}
