@@ -6,10 +6,13 @@
 # client code through the library's browser service (opccomn_browser.exe) alone, calls IOPCCommon
 # and the IOPCShutdown connection point of the C++ example's EXE server through opccomn.dll's
 # proxy/stub, and is a Data Access client, with the crate's client code, of the C test DA server
-# (opc_da_test_server.exe, tests/oop/da_server.c) through the same proxy/stub. See
-# docs/dev/third-party-client.md for what is asserted and what belongs to the crate.
+# (opc_da_test_server.exe, tests/oop/da_server.c) through the same proxy/stub; then the same client of
+# a Data Access server written with the crate's server module (tests/third-party/opc-da-server, its
+# own Cargo project and Cargo.lock, opc_da_crate_server.exe, x64), serving the same items, through
+# the same proxy/stub. See docs/dev/third-party-client.md for what is asserted and what belongs to the
+# crate.
 #
-# The browser, the example server, the DA test server and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
+# The browser, the example server, the two DA servers and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
 # which registers the OPC Common, Data Access, A&E and HDA interfaces: nothing in-process answers
 # CLSID_OPCServerList) are registered for the run and unregistered after it, whatever happened; the
 # registry's classes (both views) must then be exactly as they were before.
@@ -48,14 +51,22 @@ done
 # system's IConnectionPoint proxy (see the documentation).
 target_dir="$root/build/third-party-client"
 manifest="$root/tests/third-party/opc-da-client/Cargo.toml"
+server_manifest="$root/tests/third-party/opc-da-server/Cargo.toml"
 # Without optimisation (the release profile's checks, at opt-level 0): a test program, built in half
 # the time. Linted once: the code is the same for both targets.
 export CARGO_PROFILE_RELEASE_OPT_LEVEL=0
-CARGO_TARGET_DIR="$target_dir" cargo clippy -q --release --locked -j2 --manifest-path "$manifest" \
-    --target "${targets[0]}" -- -D warnings
+# The server declares the client's dependencies, so both share one build of the crates.
+for m in "$manifest" "$server_manifest"; do
+    CARGO_TARGET_DIR="$target_dir" cargo clippy -q --release --locked -j2 --manifest-path "$m" \
+        --target "${targets[0]}" -- -D warnings
+done
 for target in "${targets[@]}"; do
     CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$manifest" --target "$target"
 done
+# The crate-made server runs as an x64 process, for the x64 and the x86 client alike.
+CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$server_manifest" \
+    --target "${targets[0]}"
+crate_server_dir="$target_dir/${targets[0]}/release"
 out="$target_dir/run"
 rm -rf "$out" && mkdir -p "$out"
 
@@ -79,11 +90,14 @@ unregister() {
         echo "unregistering the x86 proxy/stub failed" >&2
     (cd "$example" && wine opccomn_example_server.exe /UnregServer) || echo "opccomn_example_server.exe /UnregServer failed" >&2
     (cd "$bin" && wine opc_da_test_server.exe /UnregServer) || echo "opc_da_test_server.exe /UnregServer failed" >&2
+    (cd "$crate_server_dir" && wine opc_da_crate_server.exe /UnregServer) ||
+        echo "opc_da_crate_server.exe /UnregServer failed" >&2
 }
 trap unregister EXIT
 
 (cd "$example" && wine opccomn_example_server.exe /RegServer)
 (cd "$bin" && wine opc_da_test_server.exe /RegServer)
+(cd "$crate_server_dir" && wine opc_da_crate_server.exe /RegServer)
 (cd "$bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)
 # A 32-bit client's COM loads the proxy/stub from the 32-bit view.
 [ -z "$x86_bin" ] || (cd "$x86_bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)

@@ -628,7 +628,8 @@ fn main() -> ExitCode {
     let mut t = Tally::default();
     browse(&mut t);
     example_server(&mut t);
-    da::da_server(&mut t);
+    da::da_server(&mut t, &da::C_TEST_SERVER);
+    da::da_server(&mut t, &da::CRATE_SERVER);
     // SAFETY: balances the CoInitializeEx above; every interface of this thread is released.
     unsafe { CoUninitialize() };
     println!("third-party-client: {} passed, {} failed", t.passed, t.failed);
