@@ -63,10 +63,14 @@ done
 for target in "${targets[@]}"; do
     CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$manifest" --target "$target"
 done
-# The crate-made server runs as an x64 process, for the x64 and the x86 client alike.
-CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$server_manifest" \
-    --target "${targets[0]}"
-crate_server_dir="$target_dir/${targets[0]}/release"
+# The crate-made server, built for each target too: every client talks to the x64 one and, with an
+# x86 build, to the x86 one (a 32-bit process, its class registered in the 32-bit view).
+for target in "${targets[@]}"; do
+    CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$server_manifest" \
+        --target "$target"
+done
+crate_server_dirs=()
+for target in "${targets[@]}"; do crate_server_dirs+=("$target_dir/$target/release"); done
 out="$target_dir/run"
 rm -rf "$out" && mkdir -p "$out"
 
@@ -90,14 +94,19 @@ unregister() {
         echo "unregistering the x86 proxy/stub failed" >&2
     (cd "$example" && wine opccomn_example_server.exe /UnregServer) || echo "opccomn_example_server.exe /UnregServer failed" >&2
     (cd "$bin" && wine opc_da_test_server.exe /UnregServer) || echo "opc_da_test_server.exe /UnregServer failed" >&2
-    (cd "$crate_server_dir" && wine opc_da_crate_server.exe /UnregServer) ||
-        echo "opc_da_crate_server.exe /UnregServer failed" >&2
+    local dir
+    for dir in "${crate_server_dirs[@]}"; do
+        (cd "$dir" && wine opc_da_crate_server.exe /UnregServer) ||
+            echo "$dir/opc_da_crate_server.exe /UnregServer failed" >&2
+    done
 }
 trap unregister EXIT
 
 (cd "$example" && wine opccomn_example_server.exe /RegServer)
 (cd "$bin" && wine opc_da_test_server.exe /RegServer)
-(cd "$crate_server_dir" && wine opc_da_crate_server.exe /RegServer)
+for dir in "${crate_server_dirs[@]}"; do (cd "$dir" && wine opc_da_crate_server.exe /RegServer); done
+# The client runs the x86 server's checks only when it is registered.
+if [ -n "$x86_bin" ]; then export OPC_DA_CRATE_SERVER_X86=1; else export OPC_DA_CRATE_SERVER_X86=0; fi
 (cd "$bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)
 # A 32-bit client's COM loads the proxy/stub from the 32-bit view.
 [ -z "$x86_bin" ] || (cd "$x86_bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)

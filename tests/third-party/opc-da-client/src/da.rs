@@ -50,6 +50,10 @@ pub(crate) struct Target {
     clsid: GUID,
     /// Its program, as the process list names it.
     exe: &'static str,
+    /// The registry view of its LocalServer32 (an x86 server registers in the 32-bit one).
+    view: View,
+    /// What the program calls it.
+    name: &'static str,
     /// Made with `opc_da` 0.3.1's server module (tests/third-party/opc-da-server): where the crate
     /// answers differently from the C test server, the program checks what the crate does (each
     /// case is named where it is checked, and in docs/dev/third-party-client.md).
@@ -60,14 +64,27 @@ pub(crate) struct Target {
 pub(crate) const C_TEST_SERVER: Target = Target {
     clsid: GUID::from_u128(0xc3000000_5eed_4000_8000_00000000da02),
     exe: "opc_da_test_server.exe",
+    view: View::Bits64,
+    name: "the C test server (x64)",
     made_with_crate: false,
 };
 
 /// A server written with the crate `opc_da` 0.3.1's server module (its `Server` and `Group` COM
-/// objects and its `ConnectionPoint`), serving the same items.
+/// objects and its `ConnectionPoint`), serving the same items: the x64 build.
 pub(crate) const CRATE_SERVER: Target = Target {
     clsid: GUID::from_u128(0xc3000000_5eed_4000_8000_00000000da03),
     exe: "opc_da_crate_server.exe",
+    view: View::Bits64,
+    name: "the opc_da server (x64)",
+    made_with_crate: true,
+};
+
+/// The same server built for x86 (a 32-bit process under 32-bit Wine, registered in the 32-bit view).
+pub(crate) const CRATE_SERVER_X86: Target = Target {
+    clsid: GUID::from_u128(0xc3000000_5eed_4000_8000_00000000da04),
+    exe: "opc_da_crate_server.exe",
+    view: View::Bits32,
+    name: "the opc_da server (x86)",
     made_with_crate: true,
 };
 
@@ -1134,12 +1151,12 @@ fn status(t: &mut Tally, server: &v2::Server, groups: u32, target: &Target) {
 }
 
 pub(crate) fn da_server(t: &mut Tally, target: &Target) {
-    println!("-- Data Access server {} ({})", target.exe, braced(&target.clsid));
+    println!("-- Data Access server: {}, {} ({})", target.name, target.exe, braced(&target.clsid));
     let class_key = format!("CLSID\\{}", braced(&target.clsid));
-    let local_server = default_value(&format!("{class_key}\\LocalServer32"), View::Bits64).unwrap_or_default();
+    let local_server = default_value(&format!("{class_key}\\LocalServer32"), target.view).unwrap_or_default();
     t.check(
         local_server.to_ascii_lowercase().contains(target.exe),
-        &format!("{} is a LocalServer32 ({local_server:?})", target.exe),
+        &format!("{} is a LocalServer32 ({local_server:?})", target.name),
     );
     // Only opccomn.dll marshals the DA interfaces: registered for this process's view, and what its
     // COM uses.

@@ -14,7 +14,8 @@
 //! server's clients are told.
 //!
 //! Usage: `opc_da_crate_server.exe /RegServer | /UnregServer | -Embedding` (COM starts it with
-//! -Embedding).
+//! -Embedding). Built for x64 its class is {C3000000-5EED-4000-8000-00000000DA03}; built for x86,
+//! {C3000000-5EED-4000-8000-00000000DA04}, registered in the 32-bit view.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
@@ -50,8 +51,12 @@ use windows::Win32::System::Variant::{VARENUM, VARIANT, VT_ARRAY, VT_BSTR, VT_I2
 use windows::core::{BOOL, GUID, HRESULT, IUnknown, Interface, PCWSTR, PWSTR};
 use windows_core::{ComObject, implement};
 
-/// This server's class.
+/// This server's class: one for the x64 build, another for the x86 build (registered in the 32-bit
+/// view), so that both can be registered at once.
+#[cfg(target_pointer_width = "64")]
 const CLSID_CRATE_SERVER: GUID = GUID::from_u128(0xc3000000_5eed_4000_8000_00000000da03);
+#[cfg(target_pointer_width = "32")]
+const CLSID_CRATE_SERVER: GUID = GUID::from_u128(0xc3000000_5eed_4000_8000_00000000da04);
 
 const OPC_E_INVALIDHANDLE: HRESULT = HRESULT(0xC004_0001_u32 as i32);
 const OPC_E_BADTYPE: HRESULT = HRESULT(0xC004_0004_u32 as i32);
