@@ -1151,7 +1151,12 @@ fn status(t: &mut Tally, server: &v2::Server, groups: u32, target: &Target) {
 }
 
 pub(crate) fn da_server(t: &mut Tally, target: &Target) {
-    println!("-- Data Access server: {}, {} ({})", target.name, target.exe, braced(&target.clsid));
+    println!(
+        "-- Data Access server: {}, {} ({})",
+        target.name,
+        target.exe,
+        braced(&target.clsid)
+    );
     let class_key = format!("CLSID\\{}", braced(&target.clsid));
     let local_server = default_value(&format!("{class_key}\\LocalServer32"), target.view).unwrap_or_default();
     t.check(
