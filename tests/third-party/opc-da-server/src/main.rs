@@ -35,7 +35,7 @@ use opc_da_bindings::{
     IOPCDataCallback, OPC_DS_DEVICE, OPC_READABLE, OPC_WRITEABLE, tagOPCDATASOURCE, tagOPCITEMDEF, tagOPCITEMRESULT,
     tagOPCITEMSTATE, tagOPCITEMVQT,
 };
-use windows::Win32::Foundation::{E_FAIL, E_INVALIDARG, E_NOINTERFACE, E_NOTIMPL, E_POINTER, FILETIME, S_FALSE, S_OK};
+use windows::Win32::Foundation::{E_FAIL, E_INVALIDARG, E_NOTIMPL, E_POINTER, FILETIME, S_FALSE, S_OK};
 use windows::Win32::System::Com::{
     CLSCTX_LOCAL_SERVER, COINIT_MULTITHREADED, CONNECTDATA, CoInitializeEx, CoRegisterClassObject, CoRevokeClassObject,
     CoTaskMemAlloc, CoUninitialize, FORMATETC, IAdviseSink, IClassFactory, IClassFactory_Impl, IConnectionPoint,
@@ -232,14 +232,16 @@ fn error_text(code: i32) -> windows::core::Result<String> {
     }
 }
 
-// ---- The process's objects: it exits once the last server object is released -------------------------
+// ---- The process's objects: it exits once the last server object (or lock) is released ---------------
 
 static LIVE_SERVERS: AtomicUsize = AtomicUsize::new(0);
 static EVER_SERVED: AtomicBool = AtomicBool::new(false);
 static DONE: (Mutex<bool>, Condvar) = (Mutex::new(false), Condvar::new());
 
 fn server_released() {
-    if LIVE_SERVERS.fetch_sub(1, Ordering::SeqCst) == 1 {
+    // An unlock without a lock changes nothing.
+    let before = LIVE_SERVERS.fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| n.checked_sub(1));
+    if before == Ok(1) {
         let (lock, signal) = &DONE;
         if let Ok(mut done) = lock.lock() {
             *done = true;
@@ -515,11 +517,7 @@ impl ServerTrait for DaServer {
             Ok(unknown) => unknown,
             Err(error) => {
                 group.0.disconnect();
-                return Err(if error.code() == E_NOINTERFACE {
-                    E_NOINTERFACE.into()
-                } else {
-                    error
-                });
+                return Err(error);
             }
         };
         self.groups.lock().map_err(|_| E_FAIL)?.insert(handle, group);
@@ -1347,7 +1345,14 @@ impl IClassFactory_Impl for Factory_Impl {
         unsafe { server.query(riid, object).ok() }
     }
 
-    fn LockServer(&self, _lock: BOOL) -> windows::core::Result<()> {
+    fn LockServer(&self, lock: BOOL) -> windows::core::Result<()> {
+        // A lock keeps the process as a server object does.
+        if lock.as_bool() {
+            LIVE_SERVERS.fetch_add(1, Ordering::SeqCst);
+            EVER_SERVED.store(true, Ordering::SeqCst);
+        } else {
+            server_released();
+        }
         Ok(())
     }
 }
