@@ -8,8 +8,8 @@
 # proxy/stub, and is a Data Access client, with the crate's client code, of the C test DA server
 # (opc_da_test_server.exe, tests/oop/da_server.c) through the same proxy/stub; then the same client of
 # a Data Access server written with the crate's server module (tests/third-party/opc-da-server, its
-# own Cargo project and Cargo.lock, opc_da_crate_server.exe, x64), serving the same items, through
-# the same proxy/stub. See docs/dev/third-party-client.md for what is asserted and what belongs to the
+# own Cargo project and Cargo.lock, opc_da_crate_server.exe, built for the same targets: the x64
+# build, and the x86 one in a 32-bit process), serving the same items, through the same proxy/stub. See docs/dev/third-party-client.md for what is asserted and what belongs to the
 # crate.
 #
 # The browser, the example server, the two DA servers and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
@@ -25,7 +25,8 @@
 #   X86_BIN_DIR  the x86 Windows build's program directory (its opccomn.dll), e.g. build/windows-x86/bin:
 #                the program also runs as a 32-bit client, with the x86 proxy/stub registered in the
 #                32-bit view, against the same x64 browser service, example EXE server and DA
-#                test server
+#                test server, and the opc_da server is built for x86 too (its own class, registered
+#                in the 32-bit view) and served to both clients
 # Needs WINEPREFIX set up (scripts/wine-env.sh). The program is built in build/third-party-client
 # (cargo --locked: the crates' versions are those of the committed Cargo.lock).
 set -euo pipefail
