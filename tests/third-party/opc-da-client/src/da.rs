@@ -1116,6 +1116,40 @@ fn group_calls(t: &mut Tally, group: &v2::Group, target: &Target) {
 
 // ---- The server ---------------------------------------------------------------------------------------
 
+/// IOPCCommon of the opc_da server (the crate's IOPCCommon on the server's locales en-US and de-DE
+/// and its error texts) through the crate's CommonTrait.
+fn crate_common(t: &mut Tally, server: &v2::Server) {
+    let locale = t.ok(server.get_locale_id(), "IOPCCommon::GetLocaleID (opc_da CommonTrait)");
+    t.check(
+        locale == Some(0x0800),
+        &format!("GetLocaleID: LOCALE_SYSTEM_DEFAULT at first ({locale:?})"),
+    );
+    t.ok(server.set_locale_id(0x0407), "SetLocaleID(de-DE)");
+    t.check_code(&server.set_locale_id(0x0411), E_INVALIDARG, "SetLocaleID(ja-JP)");
+    let locale = t.ok(server.get_locale_id(), "GetLocaleID after SetLocaleID");
+    t.check(
+        locale == Some(0x0407),
+        &format!("GetLocaleID: de-DE, the locale set ({locale:?})"),
+    );
+    if let Some(locales) = t.ok(server.query_available_locale_ids(), "QueryAvailableLocaleIDs") {
+        t.check(
+            locales.as_slice() == [0x0409, 0x0407],
+            &format!("QueryAvailableLocaleIDs: en-US and de-DE ({:?})", locales.as_slice()),
+        );
+    }
+    let text = t.ok(
+        server.get_error_string(OPC_E_UNKNOWNITEMID),
+        "IOPCCommon::GetErrorString(OPC_E_UNKNOWNITEMID)",
+    );
+    t.check(
+        text.as_deref() == Some("The item ID is not defined in the server address space."),
+        &format!("GetErrorString: the server's text ({text:?})"),
+    );
+    // Not asked for a code without a text: the crate's IOPCCommon::GetErrorString makes every
+    // failure E_FAIL with windows-core's Error::new, which calls RoOriginateErrorW, a stub in Wine 8
+    // (the server faults there and the client gets 0xC0000005).
+}
+
 fn status(t: &mut Tally, server: &v2::Server, groups: u32, target: &Target) {
     if target.made_with_crate {
         // Not called: opc_da 0.3.1's IOPCServer::GetStatus converts the status with its
@@ -1212,6 +1246,9 @@ pub(crate) fn da_server(t: &mut Tally, target: &Target) {
         CONNECT_E_NOCONNECTION,
         "the server object has no IOPCDataCallback connection point (its groups do)",
     );
+    if target.made_with_crate {
+        crate_common(t, &server);
+    }
 
     let mut revised = 0;
     let mut group_handle = 0;
