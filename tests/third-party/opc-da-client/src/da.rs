@@ -1,6 +1,8 @@
 //! A Data Access server in another process through opccomn.dll's proxy/stub, with `opc_da`'s own v2
 //! client code: the C test server `opc_da_test_server.exe` (tests/oop/da_server.c), whose items and
-//! values are those of tests/oop/da.h, repeated below.
+//! values are those of tests/oop/da.h, repeated below; then `opc_da_crate_server.exe`
+//! (tests/third-party/opc-da-server), a server made with `opc_da`'s server module that serves the
+//! same items, its x64 build and, when registered, its x86 build.
 //!
 //! The crate's client API is used wherever it has a call: `v2::Client::create_server`, `ServerTrait`
 //! (AddGroup, GetStatus, RemoveGroup), `CommonTrait`, `ItemPropertiesTrait`, `ItemMgtTrait`,
