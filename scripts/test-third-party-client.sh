@@ -6,10 +6,13 @@
 # client code through the library's browser service (opccomn_browser.exe) alone, calls IOPCCommon
 # and the IOPCShutdown connection point of the C++ example's EXE server through opccomn.dll's
 # proxy/stub, and is a Data Access client, with the crate's client code, of the C test DA server
-# (opc_da_test_server.exe, tests/oop/da_server.c) through the same proxy/stub. See
-# docs/dev/third-party-client.md for what is asserted and what belongs to the crate.
+# (opc_da_test_server.exe, tests/oop/da_server.c) through the same proxy/stub; then the same client of
+# a Data Access server written with the crate's server module (tests/third-party/opc-da-server, its
+# own Cargo project and Cargo.lock, opc_da_crate_server.exe, built for the same targets: the x64
+# build, and the x86 one in a 32-bit process), serving the same items, through the same proxy/stub. See docs/dev/third-party-client.md for what is asserted and what belongs to the
+# crate.
 #
-# The browser, the example server, the DA test server and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
+# The browser, the example server, the two DA servers and the proxy/stub (`regsvr32 /n /i:ProxyStub`,
 # which registers the OPC Common, Data Access, A&E and HDA interfaces: nothing in-process answers
 # CLSID_OPCServerList) are registered for the run and unregistered after it, whatever happened; the
 # registry's classes (both views) must then be exactly as they were before.
@@ -22,7 +25,8 @@
 #   X86_BIN_DIR  the x86 Windows build's program directory (its opccomn.dll), e.g. build/windows-x86/bin:
 #                the program also runs as a 32-bit client, with the x86 proxy/stub registered in the
 #                32-bit view, against the same x64 browser service, example EXE server and DA
-#                test server
+#                test server, and the opc_da server is built for x86 too (its own class, registered
+#                in the 32-bit view) and served to both clients
 # Needs WINEPREFIX set up (scripts/wine-env.sh). The program is built in build/third-party-client
 # (cargo --locked: the crates' versions are those of the committed Cargo.lock).
 set -euo pipefail
@@ -48,14 +52,26 @@ done
 # system's IConnectionPoint proxy (see the documentation).
 target_dir="$root/build/third-party-client"
 manifest="$root/tests/third-party/opc-da-client/Cargo.toml"
+server_manifest="$root/tests/third-party/opc-da-server/Cargo.toml"
 # Without optimisation (the release profile's checks, at opt-level 0): a test program, built in half
 # the time. Linted once: the code is the same for both targets.
 export CARGO_PROFILE_RELEASE_OPT_LEVEL=0
-CARGO_TARGET_DIR="$target_dir" cargo clippy -q --release --locked -j2 --manifest-path "$manifest" \
-    --target "${targets[0]}" -- -D warnings
+# The server declares the client's dependencies, so both share one build of the crates.
+for m in "$manifest" "$server_manifest"; do
+    CARGO_TARGET_DIR="$target_dir" cargo clippy -q --release --locked -j2 --manifest-path "$m" \
+        --target "${targets[0]}" -- -D warnings
+done
 for target in "${targets[@]}"; do
     CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$manifest" --target "$target"
 done
+# The crate-made server, built for each target too: every client talks to the x64 one and, with an
+# x86 build, to the x86 one (a 32-bit process, its class registered in the 32-bit view).
+for target in "${targets[@]}"; do
+    CARGO_TARGET_DIR="$target_dir" cargo build --release --locked -j2 --manifest-path "$server_manifest" \
+        --target "$target"
+done
+crate_server_dirs=()
+for target in "${targets[@]}"; do crate_server_dirs+=("$target_dir/$target/release"); done
 out="$target_dir/run"
 rm -rf "$out" && mkdir -p "$out"
 
@@ -79,11 +95,19 @@ unregister() {
         echo "unregistering the x86 proxy/stub failed" >&2
     (cd "$example" && wine opccomn_example_server.exe /UnregServer) || echo "opccomn_example_server.exe /UnregServer failed" >&2
     (cd "$bin" && wine opc_da_test_server.exe /UnregServer) || echo "opc_da_test_server.exe /UnregServer failed" >&2
+    local dir
+    for dir in "${crate_server_dirs[@]}"; do
+        (cd "$dir" && wine opc_da_crate_server.exe /UnregServer) ||
+            echo "$dir/opc_da_crate_server.exe /UnregServer failed" >&2
+    done
 }
 trap unregister EXIT
 
 (cd "$example" && wine opccomn_example_server.exe /RegServer)
 (cd "$bin" && wine opc_da_test_server.exe /RegServer)
+for dir in "${crate_server_dirs[@]}"; do (cd "$dir" && wine opc_da_crate_server.exe /RegServer); done
+# The client runs the x86 server's checks only when it is registered.
+if [ -n "$x86_bin" ]; then export OPC_DA_CRATE_SERVER_X86=1; else export OPC_DA_CRATE_SERVER_X86=0; fi
 (cd "$bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)
 # A 32-bit client's COM loads the proxy/stub from the 32-bit view.
 [ -z "$x86_bin" ] || (cd "$x86_bin" && wine regsvr32 /s /n /i:ProxyStub opccomn.dll)

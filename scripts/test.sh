@@ -43,7 +43,7 @@ rust-windows|wine|Rust tests (Windows x64, under Wine)
 acp932|wine|MatchPatternA and the narrow compiled filter in ANSI code page 932 (double-byte), under Wine
 c-windows|wine|C tests and cross-process tests (Windows x64 DLL, under Wine) and the exported symbols
 example-x64|wine|C++ example server and client (x64, under Wine, against the installed package)
-third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub, a Data Access client of the C test DA server through the proxy/stub alone (x64 and x86 clients, under Wine)
+third-party-client|wine|public third-party OPC client (crates opc_da 0.3.1, opc_comn_bindings 0.3.0): browse through the browser service, IOPCCommon and shutdown through the proxy/stub, a Data Access client of the C test DA server and of a DA server made with opc_da'"'"'s server module, through the proxy/stub alone (x64 and x86 clients, under Wine)
 conformance-x64|wine|conformance checker: every seeded defect caught, the example server passing (x64, under Wine)
 build-x86|wine|Windows x86 build: DLL, static library, opccomn.lib, C tests, undecorated exports
 coexistence|wine|header and library beside the OPC Foundation'"'"'s headers (MIDL'"'"'s and widl'"'"'s) and *_i.c; a server DLL with its own .def; the static library linked with the documented and pkg-config'"'"'s lists (x64, x86, Linux)
@@ -209,9 +209,10 @@ example_stage() {
 # ---- The stages --------------------------------------------------------------------------------------
 stage_lint() {
     cargo fmt --all -- --check
-    # The third-party client (tests/third-party/opc-da-client) is a Cargo project of its own (rustfmt
-    # directly: cargo fmt would resolve its crates.io dependencies).
-    rustfmt --check --edition 2024 tests/third-party/opc-da-client/src/main.rs
+    # The third-party client and server (tests/third-party/opc-da-client, opc-da-server) are Cargo
+    # projects of their own (rustfmt directly: cargo fmt would resolve their crates.io dependencies).
+    rustfmt --check --edition 2024 tests/third-party/opc-da-client/src/main.rs \
+        tests/third-party/opc-da-server/src/main.rs
     cargo clippy --all-targets -- -D warnings
     if [ -z "${disabled[wine]+set}" ]; then
         cargo clippy --lib --target x86_64-pc-windows-gnu -- -D warnings

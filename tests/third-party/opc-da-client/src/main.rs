@@ -628,7 +628,14 @@ fn main() -> ExitCode {
     let mut t = Tally::default();
     browse(&mut t);
     example_server(&mut t);
-    da::da_server(&mut t);
+    da::da_server(&mut t, &da::C_TEST_SERVER);
+    da::da_server(&mut t, &da::CRATE_SERVER);
+    // The x86 build of the same server, registered by the test script when 32-bit Wine runs.
+    if std::env::var_os("OPC_DA_CRATE_SERVER_X86").is_some_and(|v| v == "1") {
+        da::da_server(&mut t, &da::CRATE_SERVER_X86);
+    } else {
+        println!("-- the x86 opc_da server is not registered (OPC_DA_CRATE_SERVER_X86 is not 1): not run");
+    }
     // SAFETY: balances the CoInitializeEx above; every interface of this thread is released.
     unsafe { CoUninitialize() };
     println!("third-party-client: {} passed, {} failed", t.passed, t.failed);
