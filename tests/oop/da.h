@@ -77,8 +77,30 @@ static int da_proxy_stub_is_opccomn(void) {
 }
 
 /* A code the server's IOPCServer::GetErrorString answers with "opccomn" when its proxy/stub for the
- * DA interfaces is opccomn.dll's, "other" otherwise. */
+ * DA interfaces is opccomn.dll's, "widl" when it is opc_classic_widl_ps.dll's, "other" otherwise. */
 #define DA_CODE_PROXY_STUB ((HRESULT)0xE0040301L)
+/* Codes answered with the server's process_cpu_time() and its process identifier, as text (for the
+ * DA benchmark, benches/da_bench.c). */
+#define DA_CODE_CPU_TIME ((HRESULT)0xE0040302L)
+#define DA_CODE_PROCESS_ID ((HRESULT)0xE0040303L)
+
+/* The server's class under other CLSIDs, served by a server started with "-set:N" (N from 1 to 9):
+ * the benchmark keeps several servers running at once. Set 0 is CLSID_DaTestServer. */
+static CLSID da_server_class(unsigned set) {
+    CLSID c = CLSID_DaTestServer;
+    c.Data4[5] = (unsigned char)set;
+    return c;
+}
+
+/* Whether COM takes this process's proxies and stubs of every Data Access interface from
+ * opc_classic_widl_ps.dll. */
+static int da_proxy_stub_is_classic(void) {
+    CLSID clsid;
+    size_t i;
+    for (i = 0; i < DA_IID_COUNT; i++)
+        if (FAILED(CoGetPSClsid(DA_IIDS[i], &clsid)) || !IsEqualCLSID(&clsid, &CLSID_ClassicWidlProxyStub)) return 0;
+    return 1;
+}
 
 /* ---- What the server serves ---- */
 
@@ -92,6 +114,10 @@ static int da_proxy_stub_is_opccomn(void) {
 #define OPC_READABLE_ 1
 #define OPC_WRITEABLE_ 2
 #define DA_ITEMS 4
+/* Items for the benchmark besides the four above: "Bench.0" to "Bench.199", VT_I4 (even numbers,
+ * the value N) and VT_R8 (odd numbers, the value N + 0.5), never in a refresh unless added. */
+#define DA_BENCH_ITEMS 200
+#define DA_ALL_ITEMS (DA_ITEMS + DA_BENCH_ITEMS)
 
 /* The items: ID, canonical type, and the client handle the test gives each. */
 static const char *const DA_ITEM_IDS[DA_ITEMS] = {"Plant.Tank1.Level (I4)", "Plant.Tank1.Temp (R8)",
