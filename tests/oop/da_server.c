@@ -773,7 +773,7 @@ static HRESULT STDMETHODCALLTYPE opc_error_string(IOPCServer *This, HRESULT code
     }
     if (code == DA_CODE_CPU_TIME || code == DA_CODE_PROCESS_ID) {
         char number[32];
-        if (code == DA_CODE_CPU_TIME) snprintf(number, sizeof number, "%llu", process_cpu_time());
+        if (code == DA_CODE_CPU_TIME) snprintf(number, sizeof number, "%llu", da_process_cpu_ns());
         else snprintf(number, sizeof number, "%lu", (unsigned long)GetCurrentProcessId());
         *text = da_task_string(number);
         return *text ? S_OK : E_OUTOFMEMORY;
