@@ -411,12 +411,19 @@ static unsigned long long thread_cpu_ns(void) {
         struct {
             long long sec, nsec;
         } t;
+        /* clock_gettime(CLOCK_THREAD_CPUTIME_ID = 3, &t): x86_64 system call 228 */
         __asm__ volatile("syscall" : "=a"(ret) : "a"(228L), "D"(3L), "S"(&t) : "rcx", "r11", "memory");
-#else
+#elif defined(__i386__)
         struct {
             long sec, nsec;
         } t;
+        /* clock_gettime(CLOCK_THREAD_CPUTIME_ID = 3, &t): i386 system call 265 */
         __asm__ volatile("int $0x80" : "=a"(ret) : "a"(265L), "b"(3L), "c"(&t) : "memory");
+#else
+        struct {
+            long sec, nsec;
+        } t = {0, 0};
+        ret = -1;
 #endif
         if (ret == 0) return (unsigned long long)t.sec * 1000000000ULL + (unsigned long long)t.nsec;
     }
