@@ -8,9 +8,11 @@
 #            docs/dev/figures/bench-<linux|windows-x64|windows-x86>.txt (with NAMEs given,
 #            bench-<...>-<NAME>[-<NAME>...].txt), the figures the docs show
 #            (docs/dev/benchmarks.md): commit it; figures are never copied into the docs by hand
-#   NAME     match-pattern, error-string, server-list, browser (default: match-pattern and
-#            error-string on Linux; all four under Wine, as server-list and browser need the Windows
-#            registry, browser also the browser service and COM)
+#   NAME     match-pattern, error-string, server-list, browser, da (default: match-pattern and
+#            error-string on Linux; all five under Wine, as server-list and browser need the Windows
+#            registry, browser also the browser service and COM, da (the Data Access round trips
+#            through opccomn.dll's proxy/stub against the widl stand-in's, benches/da_bench.c) COM
+#            across processes)
 #   WORD     passed to the benchmarks: `scripts/bench.sh match-pattern typical Device` runs only the
 #            typical set of match-pattern, and of it only the filters containing "Device"
 #   --wine   the Windows DLL (x86_64, mingw-w64) under Wine instead of the Linux library
@@ -36,16 +38,16 @@ for arg in "$@"; do
         --record) record=1 ;;
         --wine) wine=1 ;;
         --wine32) wine=1; arch=x86 ;;
-        match-pattern | error-string | server-list | browser) names+=("$arg"); named="$named-$arg" ;;
-        -*) echo "usage: scripts/bench.sh [--wine|--wine32] [match-pattern|error-string|server-list|browser]... [word...]" >&2; exit 2 ;;
+        match-pattern | error-string | server-list | browser | da) names+=("$arg"); named="$named-$arg" ;;
+        -*) echo "usage: scripts/bench.sh [--wine|--wine32] [match-pattern|error-string|server-list|browser|da]... [word...]" >&2; exit 2 ;;
         *) words+=("$arg") ;;
     esac
 done
 if [ ${#names[@]} = 0 ]; then
-    # Linux: MatchPattern and GetErrorString. Under Wine all four: the server list's and the
-    # browser's goals are stated for the Windows registry.
+    # Linux: MatchPattern and GetErrorString. Under Wine all five: the server list's and the
+    # browser's goals are stated for the Windows registry, the DA round trips' for COM.
     if [ "$wine" = 1 ]; then
-        names=(match-pattern error-string server-list browser)
+        names=(match-pattern error-string server-list browser da)
     else
         names=(match-pattern error-string)
     fi
@@ -81,7 +83,24 @@ if [ "$wine" = 1 ]; then
             exit 2
         fi
     fi
-    run() { timeout -k 30 "$limit" wine "$build/bin/$1.exe" "${words[@]}"; }
+    run() {
+        if [ "$1" = da_bench ]; then
+            # Its output goes to a file, not a pipe: the DA servers COM starts inherit its standard
+            # output (it waits for them to end, but one that hangs would keep a pipe's reader
+            # waiting). It takes no words; BENCH_ROUNDS sets its rounds.
+            local out rc=0
+            out=$(mktemp)
+            (cd "$build/bin" && timeout -k 30 "$limit" wine da_bench.exe ${BENCH_ROUNDS:+--rounds "$BENCH_ROUNDS"}) \
+                >"$out" 2>&1 </dev/null || rc=$?
+            tr -d '\r' <"$out"
+            rm -f "$out"
+            if [ "$rc" = 124 ] || [ "$rc" = 137 ]; then
+                (cd "$build/bin" && wine da_bench.exe --unregister) </dev/null 2>&1 | tr -d '\r'
+            fi
+            return "$rc"
+        fi
+        timeout -k 30 "$limit" wine "$build/bin/$1.exe" "${words[@]}"
+    }
 else
     build="$root/build/bench"
     cmake -S . -B "$build" -DOPCCOMN_SANITIZE=OFF >/dev/null
@@ -90,7 +109,15 @@ fi
 limit=${BENCH_TIMEOUT_S:-1800}
 targets=()
 for name in "${names[@]}"; do
-    targets+=("bench_${name//-/_}")
+    if [ "$name" = da ]; then
+        if [ "$wine" != 1 ]; then
+            echo "scripts/bench.sh: da runs under Wine only (--wine or --wine32)" >&2
+            exit 2
+        fi
+        targets+=(da_bench)
+    else
+        targets+=("bench_${name//-/_}")
+    fi
 done
 cmake --build "$build" -j2 --target "${targets[@]}" >/dev/null
 

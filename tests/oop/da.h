@@ -77,8 +77,61 @@ static int da_proxy_stub_is_opccomn(void) {
 }
 
 /* A code the server's IOPCServer::GetErrorString answers with "opccomn" when its proxy/stub for the
- * DA interfaces is opccomn.dll's, "other" otherwise. */
+ * DA interfaces is opccomn.dll's, "widl" when it is opc_classic_widl_ps.dll's, "other" otherwise. */
 #define DA_CODE_PROXY_STUB ((HRESULT)0xE0040301L)
+/* Codes answered with the server's da_process_cpu_ns() and its process identifier, as text (for the
+ * DA benchmark, benches/da_bench.c). */
+#define DA_CODE_CPU_TIME ((HRESULT)0xE0040302L)
+#define DA_CODE_PROCESS_ID ((HRESULT)0xE0040303L)
+
+/* The CPU time in nanoseconds that this process's threads have used so far. Under Wine a Windows
+ * process is a Linux process, whose CPU time Linux keeps to the nanosecond (Wine's GetProcessTimes has
+ * the scheduler tick's 10 ms resolution): it is asked directly, clock_gettime(CLOCK_PROCESS_CPUTIME_ID);
+ * elsewhere GetProcessTimes. */
+static unsigned long long da_process_cpu_ns(void) {
+    HMODULE ntdll = GetModuleHandleA("ntdll.dll");
+    if (ntdll && GetProcAddress(ntdll, "wine_get_version")) {
+        long ret;
+#if defined(__x86_64__)
+        struct {
+            long long sec, nsec;
+        } t;
+        /* clock_gettime(CLOCK_PROCESS_CPUTIME_ID = 2, &t): x86_64 system call 228 */
+        __asm__ volatile("syscall" : "=a"(ret) : "a"(228L), "D"(2L), "S"(&t) : "rcx", "r11", "memory");
+#elif defined(__i386__)
+        struct {
+            long sec, nsec;
+        } t;
+        /* clock_gettime(CLOCK_PROCESS_CPUTIME_ID = 2, &t): i386 system call 265 */
+        __asm__ volatile("int $0x80" : "=a"(ret) : "a"(265L), "b"(2L), "c"(&t) : "memory");
+#else
+        struct {
+            long sec, nsec;
+        } t = {0, 0};
+        ret = -1;
+#endif
+        if (ret == 0) return (unsigned long long)t.sec * 1000000000ULL + (unsigned long long)t.nsec;
+    }
+    return process_cpu_time() * 100ULL;
+}
+
+/* The server's class under other CLSIDs, served by a server started with "-set:N" (N from 1 to 9):
+ * the benchmark keeps several servers running at once. Set 0 is CLSID_DaTestServer. */
+static CLSID da_server_class(unsigned set) {
+    CLSID c = CLSID_DaTestServer;
+    c.Data4[5] = (unsigned char)set;
+    return c;
+}
+
+/* Whether COM takes this process's proxies and stubs of every Data Access interface from
+ * opc_classic_widl_ps.dll. */
+static int da_proxy_stub_is_classic(void) {
+    CLSID clsid;
+    size_t i;
+    for (i = 0; i < DA_IID_COUNT; i++)
+        if (FAILED(CoGetPSClsid(DA_IIDS[i], &clsid)) || !IsEqualCLSID(&clsid, &CLSID_ClassicWidlProxyStub)) return 0;
+    return 1;
+}
 
 /* ---- What the server serves ---- */
 
@@ -92,6 +145,10 @@ static int da_proxy_stub_is_opccomn(void) {
 #define OPC_READABLE_ 1
 #define OPC_WRITEABLE_ 2
 #define DA_ITEMS 4
+/* Items for the benchmark besides the four above: "Bench.0" to "Bench.199", VT_I4 (even numbers,
+ * the value N) and VT_R8 (odd numbers, the value N + 0.5), never in a refresh unless added. */
+#define DA_BENCH_ITEMS 200
+#define DA_ALL_ITEMS (DA_ITEMS + DA_BENCH_ITEMS)
 
 /* The items: ID, canonical type, and the client handle the test gives each. */
 static const char *const DA_ITEM_IDS[DA_ITEMS] = {"Plant.Tank1.Level (I4)", "Plant.Tank1.Temp (R8)",

@@ -1,8 +1,14 @@
 /* The EXE server of the cross-process test of the Data Access proxy/stub (test_da_tables.c): a small
  * OPC DA server written in C (LocalServer32, started by COM with -Embedding, hosted by
  * OpcExeServerRun), reached through opccomn.dll's proxies and stubs, which it registers for this
- * process (da.h); GetErrorString of DA_CODE_PROXY_STUB says whether they are opccomn's. It serves the items of da.h and checks what it receives: a request that does not arrive as
- * the client sent it is answered with E_INVALIDARG or a per-item error, which the client sees.
+ * process (da.h); GetErrorString of DA_CODE_PROXY_STUB says whether they are opccomn's. It serves the
+ * items of da.h and checks what it receives: a request that does not arrive as the client sent it is
+ * answered with E_INVALIDARG or a per-item error, which the client sees.
+ *
+ * For the DA benchmark (benches/da_bench.c): "-ps:widl" on its command line makes it use the stand-in
+ * (opc_classic_widl_ps.dll) instead, "-set:N" serve its class under da_server_class(N), and it also
+ * serves the benchmark's 200 items of da.h ("Bench.N", VT_I4 and VT_R8) besides the four; its
+ * GetErrorString answers DA_CODE_CPU_TIME and DA_CODE_PROCESS_ID.
  *
  * Server object: IOPCServer (AddGroup of one group, GetErrorString, GetGroupByName, GetStatus,
  * RemoveGroup), IOPCItemProperties, IOPCBrowse (GetProperties, Browse with a continuation point),
@@ -36,9 +42,30 @@ static int item_index(const WCHAR *id) {
     return -1;
 }
 
+/* The item whose ID is `id` among the four and the benchmark's ("Bench.N", index DA_ITEMS + N), or -1. */
+static int any_item_index(const WCHAR *id) {
+    static const WCHAR prefix[] = L"Bench.";
+    unsigned n = 0, k;
+    int i = item_index(id);
+    if (i >= 0 || !id) return i;
+    for (k = 0; prefix[k]; k++)
+        if (id[k] != prefix[k]) return -1;
+    if (!id[k] || (id[k] == L'0' && id[k + 1])) return -1;
+    for (; id[k]; k++) {
+        if (id[k] < L'0' || id[k] > L'9' || n >= DA_BENCH_ITEMS) return -1;
+        n = n * 10 + (unsigned)(id[k] - L'0');
+    }
+    return n < DA_BENCH_ITEMS ? DA_ITEMS + (int)n : -1;
+}
+
+/* The canonical type of item `i` (of DA_ALL_ITEMS). */
+static VARTYPE item_type(int i) {
+    return i < DA_ITEMS ? DA_ITEM_TYPES[i] : (i - DA_ITEMS) % 2 ? VT_R8 : VT_I4;
+}
+
 /* The item whose server handle is `h`, or -1. */
 static int item_of_handle(OPCHANDLE h) {
-    return h >= DA_SERVER_ITEM(0) && h < DA_SERVER_ITEM(DA_ITEMS) ? (int)(h - DA_SERVER_ITEM(0)) : -1;
+    return h >= DA_SERVER_ITEM(0) && h < DA_SERVER_ITEM(DA_ALL_ITEMS) ? (int)(h - DA_SERVER_ITEM(0)) : -1;
 }
 
 static void *task_alloc_zero(size_t size) {
@@ -64,9 +91,9 @@ typedef struct Group {
     LONG bias;
     FLOAT deadband;
     OPCHANDLE client_group;
-    int added[DA_ITEMS];
-    OPCHANDLE client_item[DA_ITEMS];
-    VARIANT values[DA_ITEMS];
+    int added[DA_ALL_ITEMS];
+    OPCHANDLE client_item[DA_ALL_ITEMS];
+    VARIANT values[DA_ALL_ITEMS];
     IOPCDataCallback *sink; /* the advised callback, cookie 1 */
 } Group;
 
@@ -99,7 +126,7 @@ static ULONG group_release(Group *g) {
     LONG n = InterlockedDecrement(&g->refs);
     int i;
     if (n == 0) {
-        for (i = 0; i < DA_ITEMS; i++) VariantClear(&g->values[i]);
+        for (i = 0; i < DA_ALL_ITEMS; i++) VariantClear(&g->values[i]);
         if (g->sink) g->sink->lpVtbl->Release(g->sink);
         DeleteCriticalSection(&g->lock);
         free(g);
@@ -137,15 +164,18 @@ static ULONG STDMETHODCALLTYPE point_release(IConnectionPoint *This) { return gr
 /* The value an item holds at first. */
 static void initial_value(int i, VARIANT *v) {
     VariantInit(v);
-    V_VT(v) = DA_ITEM_TYPES[i];
+    V_VT(v) = item_type(i);
     switch (i) {
     case 0: V_I4(v) = DA_I4; break;
     case 1: V_R8(v) = DA_R8; break;
     case 2: V_BSTR(v) = da_bstr(DA_TEXT); break;
-    default: V_ARRAY(v) = da_doubles(DA_PROFILE, DA_PROFILE_COUNT); break;
+    case 3: V_ARRAY(v) = da_doubles(DA_PROFILE, DA_PROFILE_COUNT); break;
+    default: /* the benchmark's */
+        if (V_VT(v) == VT_I4) V_I4(v) = i - DA_ITEMS;
+        else V_R8(v) = i - DA_ITEMS + 0.5;
+        break;
     }
 }
-
 /* -- IOPCItemMgt -- */
 
 static HRESULT STDMETHODCALLTYPE items_add(IOPCItemMgt *This, DWORD count, OPCITEMDEF *defs, OPCITEMRESULT **results,
@@ -167,7 +197,7 @@ static HRESULT STDMETHODCALLTYPE items_add(IOPCItemMgt *This, DWORD count, OPCIT
     }
     EnterCriticalSection(&g->lock);
     for (k = 0; k < count; k++) {
-        int i = item_index(defs[k].szItemID);
+        int i = any_item_index(defs[k].szItemID);
         /* What the client sent: an empty access path, active, no requested type, and DA_BLOB or no
          * blob. */
         int as_sent = defs[k].szAccessPath && defs[k].szAccessPath[0] == 0 && defs[k].bActive &&
@@ -183,7 +213,7 @@ static HRESULT STDMETHODCALLTYPE items_add(IOPCItemMgt *This, DWORD count, OPCIT
             g->added[i] = 1;
             g->client_item[i] = defs[k].hClient;
             r[k].hServer = DA_SERVER_ITEM(i);
-            r[k].vtCanonicalDataType = DA_ITEM_TYPES[i];
+            r[k].vtCanonicalDataType = item_type(i);
             r[k].dwAccessRights = OPC_READABLE_ | OPC_WRITEABLE_;
             if (defs[k].dwBlobSize) { /* the server's blob for the item: the client's, reversed */
                 DWORD b;
@@ -321,7 +351,7 @@ static HRESULT STDMETHODCALLTYPE sync_write(IOPCSyncIO *This, DWORD count, OPCHA
     for (k = 0; k < count; k++) {
         int i = item_of_handle(handles[k]);
         if (i < 0 || !g->added[i]) e[k] = OPC_E_INVALIDHANDLE_;
-        else if (V_VT(&values[k]) != DA_ITEM_TYPES[i]) e[k] = OPC_E_BADTYPE_;
+        else if (V_VT(&values[k]) != item_type(i)) e[k] = OPC_E_BADTYPE_;
         else e[k] = VariantCopy(&g->values[i], &values[k]);
         if (e[k] != S_OK) hr = S_FALSE;
     }
@@ -406,11 +436,11 @@ typedef struct Refresh {
 static DWORD WINAPI refresh_thread(void *param) {
     Refresh *r = (Refresh *)param;
     Group *g = r->group;
-    OPCHANDLE handles[DA_ITEMS];
-    VARIANT values[DA_ITEMS];
-    WORD qualities[DA_ITEMS];
-    FILETIME times[DA_ITEMS];
-    HRESULT errors[DA_ITEMS];
+    OPCHANDLE handles[DA_ALL_ITEMS];
+    VARIANT values[DA_ALL_ITEMS];
+    WORD qualities[DA_ALL_ITEMS];
+    FILETIME times[DA_ALL_ITEMS];
+    HRESULT errors[DA_ALL_ITEMS];
     IOPCDataCallback *sink;
     OPCHANDLE group_handle;
     DWORD n = 0, k;
@@ -420,7 +450,7 @@ static DWORD WINAPI refresh_thread(void *param) {
     sink = g->sink;
     if (sink) sink->lpVtbl->AddRef(sink);
     group_handle = g->client_group;
-    for (k = 0; k < (r->read ? r->count : (DWORD)DA_ITEMS); k++) {
+    for (k = 0; k < (r->read ? r->count : (DWORD)DA_ALL_ITEMS); k++) {
         i = r->read ? r->items[k] : (int)k;
         if (!g->added[i]) continue;
         handles[n] = g->client_item[i];
@@ -721,7 +751,7 @@ static HRESULT STDMETHODCALLTYPE opc_add_group(IOPCServer *This, LPCWSTR name, B
     g->bias = bias ? *bias : 0;
     g->deadband = deadband ? *deadband : 0.0f;
     g->lcid = lcid;
-    for (i = 0; i < DA_ITEMS; i++) initial_value(i, &g->values[i]);
+    for (i = 0; i < DA_ALL_ITEMS; i++) initial_value(i, &g->values[i]);
     hr = group_qi(g, riid, (void **)unk);
     if (FAILED(hr)) {
         group_release(g);
@@ -738,7 +768,14 @@ static HRESULT STDMETHODCALLTYPE opc_error_string(IOPCServer *This, HRESULT code
     if (!text) return E_POINTER;
     *text = NULL;
     if (code == DA_CODE_PROXY_STUB) {
-        *text = da_task_string(da_proxy_stub_is_opccomn() ? "opccomn" : "other");
+        *text = da_task_string(da_proxy_stub_is_opccomn() ? "opccomn" : da_proxy_stub_is_classic() ? "widl" : "other");
+        return *text ? S_OK : E_OUTOFMEMORY;
+    }
+    if (code == DA_CODE_CPU_TIME || code == DA_CODE_PROCESS_ID) {
+        char number[32];
+        if (code == DA_CODE_CPU_TIME) snprintf(number, sizeof number, "%llu", da_process_cpu_ns());
+        else snprintf(number, sizeof number, "%lu", (unsigned long)GetCurrentProcessId());
+        *text = da_task_string(number);
         return *text ? S_OK : E_OUTOFMEMORY;
     }
     if (code != DA_ERROR_CODE || locale != 0x0409) return E_INVALIDARG;
@@ -1049,6 +1086,9 @@ static DWORD WINAPI watchdog(void *unused) {
 }
 
 int main(void) {
+    const WCHAR *set_flag = wcsstr(GetCommandLineW(), L" -set:");
+    unsigned set = set_flag ? (unsigned)(set_flag[6] - L'0') % 10 : 0;
+    CLSID clsid = da_server_class(set);
     OpcServerRegistration reg;
     OpcServerClass cls;
     OpcExeServerOptions options;
@@ -1058,12 +1098,12 @@ int main(void) {
     memset(&reg, 0, sizeof reg);
     reg.struct_size = sizeof reg;
     reg.server_type = OPC_SERVER_TYPE_LOCAL;
-    reg.clsid = CLSID_DaTestServer;
+    reg.clsid = clsid;
     reg.prog_id = L"Oop.DaServer.1";
     reg.user_type = L"opccomn DA tables test server";
     memset(&cls, 0, sizeof cls);
     cls.struct_size = sizeof cls;
-    cls.clsid = &CLSID_DaTestServer;
+    cls.clsid = &clsid;
     cls.create = create_server;
     cls.registration = &reg;
     memset(&options, 0, sizeof options);
@@ -1074,7 +1114,8 @@ int main(void) {
     options.release_timeout_ms = 30000;
     options.idle_linger_ms = 100;
     hr = CoInitializeEx(NULL, COINIT_MULTITHREADED);
-    if (SUCCEEDED(hr)) hr = use_opccomn_proxy_stub();
+    if (SUCCEEDED(hr))
+        hr = wcsstr(GetCommandLineW(), L" -ps:widl") ? use_classic_proxy_stub() : use_opccomn_proxy_stub();
     timer = CreateThread(NULL, 0, watchdog, NULL, 0, NULL);
     if (timer) CloseHandle(timer);
     if (SUCCEEDED(hr)) hr = OpcExeServerRun(&options, NULL);

@@ -1,0 +1,709 @@
+/* Benchmark: round trips of the Data Access interfaces across processes through opccomn.dll's
+ * proxy/stub against the widl-generated one (opc_classic_widl_ps.dll, the stand-in for the
+ * Foundation's DA proxy/stub, made from the same IDL), in the same run, under the same COM runtime.
+ *
+ *   Read(100)            IOPCSyncIO::Read from the cache of 100 items (VT_I4 and VT_R8 alternating)
+ *   Write(4)             IOPCSyncIO::Write of 4 items (VT_I4, VT_R8, VT_I4, VT_R8)
+ *   AddItems+Remove(100) IOPCItemMgt::AddItems of 100 items, then RemoveItems of them
+ *   OnDataChange(100)    IOPCAsyncIO2::Refresh2, and the server's IOPCDataCallback::OnDataChange of the
+ *                        group's 100 items into this process's sink (from a thread the server starts
+ *                        for it, as tests/oop/da_server.c delivers every callback), waited for
+ *   Unadvise+Advise      IConnectionPoint::Unadvise and Advise of the sink: the server lets go of its
+ *                        callback proxy and makes a new one
+ *
+ * Three DA test servers (tests/oop/da_server.c, each serving its own CLSID, "-set:N") run at once:
+ * one with opccomn.dll's proxy/stub, two with the stand-in's ("-ps:widl"). The second stand-in is the
+ * control: the same proxy/stub measured against itself shows how far this run's machine lets two equal
+ * contenders differ. This client uses the same proxy/stub as the contender's server, on both sides of
+ * every call and callback: before a contender's objects are made, and before each of its batches
+ * (Advise makes new stubs), it registers that proxy/stub for the DA interfaces in this process
+ * (CoRegisterPSClsid; both class objects are registered here, so that neither pays a registry lookup
+ * the other does not). Each server's proxy/stub, and this process's proxies and the sink's stub of
+ * each contender, are checked to be the ones they should be before anything is timed. The machine's
+ * registration of the DA interfaces is not changed; what the benchmark registers is its three
+ * servers' classes, removed at its end, after a failure and after a stall (and by `--unregister`).
+ *
+ * The contenders run in interleaved rounds (--rounds, 51 by default, the order rotating), a batch of
+ * calls of each operation a round (60 Read, 60 Write, 30 AddItems+Remove, 30 OnDataChange and 12
+ * Unadvise+Advise; --scale S makes them S/3 times as many, 3 the default). Measured per batch: the CPU
+ * time of this process and the contender's server (under Wine Linux's CLOCK_PROCESS_CPUTIME_ID of each,
+ * to the nanosecond: the other processes of a shared machine do not count against either side; the
+ * server reads its own and answers it), the CPU time of the calling thread (the proxy's side of the
+ * calls), and the wall clock. Printed per operation and measure: the median per call of each
+ * contender, the median of the rounds' ratios opccomn/widl with their spread (lowest-highest), and the
+ * control's ratio; then a GOAL line per operation (median ratio of the CPU time of both processes
+ * <= 1.1x) with met or NOT MET, as the other benchmarks do, and a closing line
+ * "da_bench: 5 goals, N met, ...".
+ *
+ * Bounded in time as cross_process_bench is: a watchdog thread ends the run (exit code 3, the figures
+ * of the rounds complete so far marked partial) when a batch does not end within --stall-s seconds
+ * (60 by default), or a server's start or end within twice that (120 s at least); rounds stop after
+ * --budget-s seconds (600 by default: the test server ends itself 20 minutes after its start). At its
+ * end the benchmark waits for its servers to exit and prints "servers ended: N of M" (M the servers started).
+ *
+ * Exit code: 0 when every goal is met, 1 when one is missed or a call failed (the failing call and its
+ * HRESULT are printed), 3 after a stall, 2 for a usage error.
+ *
+ *   da_bench [--rounds R] [--scale S] [--budget-s S] [--stall-s S] [--sets F]
+ *   da_bench [--sets F] --unregister   removes the classes a run killed from outside left
+ *
+ * --sets F gives the contenders the DA server's classes of sets F, F+1 and F+2 (da.h; default 1). */
+#include "da.h"
+
+#include <olectl.h>
+#include <stdarg.h>
+
+#define MAX_ROUNDS 101
+#define CONTENDERS 3
+#define OPS 5
+#define READ_ITEMS 100 /* Bench.0 to Bench.99: read, written (the first 4), refreshed */
+#define WRITE_ITEMS 4
+#define CHURN_ITEMS 100 /* Bench.100 to Bench.199: added and removed */
+#define GROUP_HANDLE 42
+static WCHAR server_path[MAX_PATH];
+static const char *const OPERATIONS[OPS] = {"Read(100)", "Write(4)", "AddItems+Remove(100)", "OnDataChange(100)",
+                                            "Unadvise+Advise"};
+static const int WEIGHTS[OPS] = {20, 20, 10, 10, 4}; /* calls a round at --scale 1 */
+
+/* The sink of a contender: counts the OnDataChange calls of 100 good items. */
+typedef struct Sink {
+    IOPCDataCallback iface;
+    LONG refs;
+    HANDLE changed;         /* set by OnDataChange */
+    volatile LONG good, bad; /* OnDataChange calls with the 100 items as served, and others */
+} Sink;
+
+typedef struct {
+    const char *name;
+    int widl;     /* the stand-in's proxy/stub on both sides (else opccomn.dll's) */
+    unsigned set; /* the server's CLSID: da_server_class(set) */
+    IOPCServer *server;
+    IOPCItemMgt *items;
+    IOPCSyncIO *sync;
+    IOPCAsyncIO2 *async;
+    IConnectionPoint *point;
+    DWORD cookie;
+    OPCHANDLE read_handles[READ_ITEMS];
+    Sink sink;
+    DWORD server_pid;
+    double wall[OPS][MAX_ROUNDS]; /* per operation and round: wall-clock seconds per call */
+    double cpu[OPS][MAX_ROUNDS];  /* per operation and round: CPU seconds of both processes per call */
+    double thread[OPS][MAX_ROUNDS]; /* per operation and round: CPU seconds of the calling thread per call */
+} Contender;
+
+static Contender contenders[CONTENDERS] = {
+    {.name = "opccomn", .widl = 0, .set = 1}, {.name = "widl", .widl = 1, .set = 2}, {.name = "widl (control)", .widl = 1, .set = 3}};
+
+static int rounds = 51, scale = 3;
+static double budget_s = 600, stall_s = 60;
+static OPCITEMDEF read_defs[READ_ITEMS], churn_defs[CHURN_ITEMS];
+static WCHAR item_ids[READ_ITEMS + CHURN_ITEMS][16];
+
+/* ---- The sink ---- */
+
+static HRESULT STDMETHODCALLTYPE sink_qi(IOPCDataCallback *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCDataCallback)) {
+        *ppv = This;
+        This->lpVtbl->AddRef(This);
+        return S_OK;
+    }
+    *ppv = NULL;
+    return E_NOINTERFACE;
+}
+static ULONG STDMETHODCALLTYPE sink_add_ref(IOPCDataCallback *This) { return (ULONG)InterlockedIncrement(&((Sink *)This)->refs); }
+static ULONG STDMETHODCALLTYPE sink_release(IOPCDataCallback *This) {
+    return (ULONG)InterlockedDecrement(&((Sink *)This)->refs); /* static: nothing to free */
+}
+static HRESULT STDMETHODCALLTYPE sink_data_change(IOPCDataCallback *This, DWORD transaction, OPCHANDLE group,
+                                                  HRESULT quality, HRESULT error, DWORD count, OPCHANDLE *handles,
+                                                  VARIANT *values, WORD *qualities, FILETIME *times, HRESULT *errors) {
+    Sink *s = (Sink *)This;
+    int good = group == GROUP_HANDLE && quality == S_OK && error == S_OK && count == READ_ITEMS && handles &&
+               values && qualities && times && errors;
+    DWORD k;
+    (void)transaction;
+    for (k = 0; good && k < count; k++)
+        good = handles[k] == (OPCHANDLE)k && errors[k] == S_OK &&
+               (k % 2 ? V_VT(&values[k]) == VT_R8 : V_VT(&values[k]) == VT_I4);
+    InterlockedIncrement(good ? &s->good : &s->bad);
+    SetEvent(s->changed);
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE sink_read_complete(IOPCDataCallback *This, DWORD transaction, OPCHANDLE group,
+                                                    HRESULT quality, HRESULT error, DWORD count, OPCHANDLE *handles,
+                                                    VARIANT *values, WORD *qualities, FILETIME *times, HRESULT *errors) {
+    (void)This, (void)transaction, (void)group, (void)quality, (void)error, (void)count, (void)handles;
+    (void)values, (void)qualities, (void)times, (void)errors;
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE sink_write_complete(IOPCDataCallback *This, DWORD transaction, OPCHANDLE group,
+                                                     HRESULT error, DWORD count, OPCHANDLE *handles, HRESULT *errors) {
+    (void)This, (void)transaction, (void)group, (void)error, (void)count, (void)handles, (void)errors;
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE sink_cancel_complete(IOPCDataCallback *This, DWORD transaction, OPCHANDLE group) {
+    (void)This, (void)transaction, (void)group;
+    return S_OK;
+}
+static IOPCDataCallbackVtbl sink_vtbl = {sink_qi,            sink_add_ref,        sink_release,        sink_data_change,
+                                         sink_read_complete, sink_write_complete, sink_cancel_complete};
+
+/* ---- The watchdog: every step of the run is named and timed; one that ends too late is a stall ---- */
+
+static CRITICAL_SECTION step_lock;
+static char step_name[160];
+static ULONGLONG step_started, step_limit_ms;
+static volatile LONG rounds_done;
+static CRITICAL_SECTION output_lock;
+static int figures_printed;
+static HANDLE run_finished;
+
+static void step(double limit_s, const char *format, ...) {
+    va_list ap;
+    EnterCriticalSection(&step_lock);
+    va_start(ap, format);
+    vsnprintf(step_name, sizeof step_name, format, ap);
+    va_end(ap);
+    step_started = GetTickCount64();
+    step_limit_ms = (ULONGLONG)(limit_s * 1000);
+    LeaveCriticalSection(&step_lock);
+}
+static double setup_limit_s(void) { return stall_s * 2 > 120 ? stall_s * 2 : 120; }
+
+static double now(void) {
+    LARGE_INTEGER f, c;
+    QueryPerformanceFrequency(&f);
+    QueryPerformanceCounter(&c);
+    return (double)c.QuadPart / (double)f.QuadPart;
+}
+
+static int failed(const Contender *k, const char *what, HRESULT hr) {
+    fprintf(stderr, "da_bench: %s (%s): 0x%08lX\n", what, k->name, (unsigned long)hr);
+    return 1;
+}
+
+/* The factory references of opc_classic_widl_ps.dll (each live proxy and stub holds one). */
+static LONG classic_refs(void) {
+    HMODULE dll = GetModuleHandleW(L"opc_classic_widl_ps.dll");
+    LONG(WINAPI * refs)(void);
+    if (!dll) return -1;
+    refs = (LONG(WINAPI *)(void))(void (*)(void))GetProcAddress(dll, "ClassicProxyStubRefs");
+    return refs ? refs() : -1;
+}
+
+/* Makes the contender's proxy/stub the one this process uses for the DA interfaces. */
+static HRESULT select_proxy_stub(const Contender *k) {
+    HRESULT hr = S_OK;
+    size_t i;
+    for (i = 0; SUCCEEDED(hr) && i < DA_IID_COUNT; i++)
+        hr = CoRegisterPSClsid(DA_IIDS[i], k->widl ? &CLSID_ClassicWidlProxyStub : &CLSID_OpcComnProxyStub);
+    return hr;
+}
+
+static OpcServerRegistration registration(const CLSID *clsid, const WCHAR *prog_id) {
+    OpcServerRegistration r;
+    memset(&r, 0, sizeof r);
+    r.struct_size = sizeof r;
+    r.server_type = OPC_SERVER_TYPE_LOCAL;
+    r.clsid = *clsid;
+    r.prog_id = prog_id;
+    r.user_type = L"opccomn DA benchmark server";
+    r.module_path = server_path;
+    return r;
+}
+
+static void prog_id(const Contender *k, WCHAR *out) { swprintf(out, 40, L"Oop.DaBench%u.1", k->set); }
+
+/* The contender's class, whose server's command line names its proxy/stub and its CLSID. */
+static HRESULT register_class(const Contender *k) {
+    WCHAR command[MAX_PATH + 40], key[80], guid[40], name[40];
+    CLSID clsid = da_server_class(k->set);
+    OpcServerRegistration r;
+    HRESULT hr;
+    HKEY h;
+    prog_id(k, name);
+    r = registration(&clsid, name);
+    if (FAILED(hr = OpcRegisterServer(&r, NULL))) return hr;
+    StringFromGUID2(&clsid, guid, 40);
+    swprintf(key, 80, L"CLSID\\%ls\\LocalServer32", guid);
+    swprintf(command, MAX_PATH + 40, L"\"%ls\"%ls -set:%u", server_path, k->widl ? L" -ps:widl" : L"", k->set);
+    if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_WRITE, &h) != ERROR_SUCCESS) return E_FAIL;
+    if (RegSetValueExW(h, NULL, 0, REG_SZ, (const BYTE *)command, (DWORD)((wcslen(command) + 1) * sizeof(WCHAR))))
+        hr = E_FAIL;
+    RegCloseKey(h);
+    return hr;
+}
+
+static void unregister_all(void) {
+    WCHAR name[40];
+    int i;
+    for (i = 0; i < CONTENDERS; i++) {
+        CLSID clsid = da_server_class(contenders[i].set);
+        OpcServerRegistration r;
+        prog_id(&contenders[i], name);
+        r = registration(&clsid, name);
+        OpcUnregisterServer(&r, NULL);
+    }
+}
+
+/* The server's answer to a vendor code, as text (0 when it gave none). */
+static int ask_server(Contender *k, HRESULT code, char *out, size_t size) {
+    LPWSTR text = NULL;
+    HRESULT hr = k->server->lpVtbl->GetErrorString(k->server, code, 0x0409, &text);
+    if (FAILED(hr) || !text) return failed(k, "asking the server", hr), 0;
+    snprintf(out, size, "%ls", text);
+    CoTaskMemFree(text);
+    return 1;
+}
+
+static HRESULT read_items(Contender *k) {
+    OPCITEMSTATE *states = NULL;
+    HRESULT *errors = NULL;
+    HRESULT hr = k->sync->lpVtbl->Read(k->sync, OPC_DS_CACHE, READ_ITEMS, k->read_handles, &states, &errors);
+    if (hr == S_OK && (!states || !errors || V_VT(&states[READ_ITEMS - 1].vDataValue) != VT_R8)) hr = E_FAIL;
+    CoTaskMemFree(states); /* VT_I4 and VT_R8: nothing else to free */
+    CoTaskMemFree(errors);
+    return hr;
+}
+
+static HRESULT write_items(Contender *k) {
+    VARIANT values[WRITE_ITEMS];
+    HRESULT *errors = NULL, hr;
+    int i;
+    for (i = 0; i < WRITE_ITEMS; i++) {
+        VariantInit(&values[i]);
+        V_VT(&values[i]) = i % 2 ? VT_R8 : VT_I4;
+        if (i % 2) V_R8(&values[i]) = i + 0.5;
+        else V_I4(&values[i]) = i;
+    }
+    hr = k->sync->lpVtbl->Write(k->sync, WRITE_ITEMS, k->read_handles, values, &errors);
+    if (hr == S_OK && !errors) hr = E_FAIL;
+    CoTaskMemFree(errors);
+    return hr;
+}
+
+/* AddItems of `count` definitions; their server handles into `handles` (when given). */
+static HRESULT add_items(Contender *k, OPCITEMDEF *defs, DWORD count, OPCHANDLE *handles) {
+    OPCITEMRESULT *results = NULL;
+    HRESULT *errors = NULL;
+    HRESULT hr = k->items->lpVtbl->AddItems(k->items, count, defs, &results, &errors);
+    DWORD i;
+    if (hr == S_OK && (!results || !errors)) hr = E_FAIL;
+    for (i = 0; hr == S_OK && i < count; i++) {
+        if (handles) handles[i] = results[i].hServer;
+        CoTaskMemFree(results[i].pBlob);
+    }
+    CoTaskMemFree(results);
+    CoTaskMemFree(errors);
+    return hr;
+}
+
+static HRESULT churn_items(Contender *k) {
+    OPCHANDLE handles[CHURN_ITEMS];
+    HRESULT *errors = NULL;
+    HRESULT hr = add_items(k, churn_defs, CHURN_ITEMS, handles);
+    if (FAILED(hr)) return hr;
+    hr = k->items->lpVtbl->RemoveItems(k->items, CHURN_ITEMS, handles, &errors);
+    if (hr == S_OK && !errors) hr = E_FAIL;
+    CoTaskMemFree(errors);
+    return hr;
+}
+
+/* Refresh2 and its OnDataChange, waited for (a lost one ends the run as a stall). */
+static HRESULT data_change(Contender *k) {
+    DWORD cancel = 0;
+    LONG good = k->sink.good;
+    HRESULT hr = k->async->lpVtbl->Refresh2(k->async, OPC_DS_CACHE, 1, &cancel);
+    if (FAILED(hr)) return hr;
+    WaitForSingleObject(k->sink.changed, INFINITE);
+    return k->sink.good == good + 1 && k->sink.bad == 0 ? S_OK : E_FAIL;
+}
+
+static HRESULT readvise(Contender *k) {
+    HRESULT hr = k->point->lpVtbl->Unadvise(k->point, k->cookie);
+    if (FAILED(hr)) return hr;
+    k->cookie = 0;
+    return k->point->lpVtbl->Advise(k->point, (IUnknown *)&k->sink.iface, &k->cookie);
+}
+
+static HRESULT operation(Contender *k, int op) {
+    switch (op) {
+    case 0: return read_items(k);
+    case 1: return write_items(k);
+    case 2: return churn_items(k);
+    case 3: return data_change(k);
+    default: return readvise(k);
+    }
+}
+
+/* The contender's server, group and sink, made with its proxy/stub and checked to be what they should
+ * be. */
+static int connect_contender(Contender *k) {
+    CLSID clsid = da_server_class(k->set);
+    IConnectionPointContainer *container = NULL;
+    LONG before = classic_refs(), after_proxies, after_advise;
+    OPCHANDLE server_group = 0;
+    DWORD revised = 0;
+    IUnknown *group = NULL;
+    char text[32];
+    HRESULT hr = select_proxy_stub(k);
+    if (FAILED(hr)) return failed(k, "CoRegisterPSClsid", hr);
+    step(setup_limit_s(), "starting the %s server (CoCreateInstance)", k->name);
+    hr = CoCreateInstance(&clsid, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServer, (void **)&k->server);
+    if (FAILED(hr)) return failed(k, "creating the server", hr);
+    step(setup_limit_s(), "checking the %s server", k->name);
+    if (!ask_server(k, DA_CODE_PROCESS_ID, text, sizeof text)) return 1;
+    k->server_pid = (DWORD)strtoul(text, NULL, 10);
+    if (!ask_server(k, DA_CODE_PROXY_STUB, text, sizeof text)) return 1;
+    if (strcmp(text, k->widl ? "widl" : "opccomn") != 0) {
+        fprintf(stderr, "da_bench: the %s server's stubs come from %s\n", k->name, text);
+        return 1;
+    }
+    hr = k->server->lpVtbl->AddGroup(k->server, L"bench", TRUE, 1000, GROUP_HANDLE, NULL, NULL, 0x0409, &server_group,
+                                     &revised, &IID_IOPCItemMgt, &group);
+    if (FAILED(hr)) return failed(k, "AddGroup", hr);
+    k->items = (IOPCItemMgt *)group;
+    if (FAILED(hr = group->lpVtbl->QueryInterface(group, &IID_IOPCSyncIO, (void **)&k->sync)) ||
+        FAILED(hr = group->lpVtbl->QueryInterface(group, &IID_IOPCAsyncIO2, (void **)&k->async)) ||
+        FAILED(hr = group->lpVtbl->QueryInterface(group, &IID_IConnectionPointContainer, (void **)&container)))
+        return failed(k, "QueryInterface of the group", hr);
+    after_proxies = classic_refs();
+    if ((after_proxies > before) != k->widl) {
+        fprintf(stderr, "da_bench: the %s proxies came from the other proxy/stub\n", k->name);
+        container->lpVtbl->Release(container);
+        return 1;
+    }
+    hr = add_items(k, read_defs, READ_ITEMS, k->read_handles);
+    if (FAILED(hr) || hr != S_OK) return failed(k, "AddItems", hr == S_OK ? E_FAIL : hr);
+    k->sink.iface.lpVtbl = &sink_vtbl;
+    k->sink.refs = 1;
+    k->sink.changed = CreateEventW(NULL, FALSE, FALSE, NULL);
+    hr = container->lpVtbl->FindConnectionPoint(container, &IID_IOPCDataCallback, &k->point);
+    container->lpVtbl->Release(container);
+    if (FAILED(hr)) return failed(k, "FindConnectionPoint", hr);
+    hr = k->point->lpVtbl->Advise(k->point, (IUnknown *)&k->sink.iface, &k->cookie);
+    if (FAILED(hr)) return failed(k, "Advise", hr);
+    after_advise = classic_refs(); /* the sink's stub */
+    if ((after_advise > after_proxies) != k->widl) {
+        fprintf(stderr, "da_bench: the %s sink's stub came from the other proxy/stub\n", k->name);
+        return 1;
+    }
+    return 0;
+}
+
+/* The CPU time (ns) this process and the contender's server have used so far. */
+static HRESULT cpu_time(Contender *k, unsigned long long *total) {
+    char text[32];
+    if (!ask_server(k, DA_CODE_CPU_TIME, text, sizeof text)) return E_FAIL;
+    *total = (unsigned long long)_strtoui64(text, NULL, 10) + da_process_cpu_ns();
+    return S_OK;
+}
+
+/* The CPU time (ns) of the calling thread: under Wine Linux's CLOCK_THREAD_CPUTIME_ID (Wine's
+ * GetThreadTimes has a 10 ms resolution), elsewhere GetThreadTimes. */
+static unsigned long long thread_cpu_ns(void) {
+    FILETIME created, exited, kernel, user;
+    HMODULE ntdll = GetModuleHandleA("ntdll.dll");
+    if (ntdll && GetProcAddress(ntdll, "wine_get_version")) {
+        long ret;
+#if defined(__x86_64__)
+        struct {
+            long long sec, nsec;
+        } t;
+        /* clock_gettime(CLOCK_THREAD_CPUTIME_ID = 3, &t): x86_64 system call 228 */
+        __asm__ volatile("syscall" : "=a"(ret) : "a"(228L), "D"(3L), "S"(&t) : "rcx", "r11", "memory");
+#elif defined(__i386__)
+        struct {
+            long sec, nsec;
+        } t;
+        /* clock_gettime(CLOCK_THREAD_CPUTIME_ID = 3, &t): i386 system call 265 */
+        __asm__ volatile("int $0x80" : "=a"(ret) : "a"(265L), "b"(3L), "c"(&t) : "memory");
+#else
+        struct {
+            long sec, nsec;
+        } t = {0, 0};
+        ret = -1;
+#endif
+        if (ret == 0) return (unsigned long long)t.sec * 1000000000ULL + (unsigned long long)t.nsec;
+    }
+    if (!GetThreadTimes(GetCurrentThread(), &created, &exited, &kernel, &user)) return 0;
+    return ((((unsigned long long)kernel.dwHighDateTime << 32) | kernel.dwLowDateTime) +
+            (((unsigned long long)user.dwHighDateTime << 32) | user.dwLowDateTime)) * 100ULL;
+}
+
+/* One round's batch of one operation (round -1: a warm-up, not recorded). */
+static int batch(Contender *k, int op, int round) {
+    unsigned long long cpu_before = 0, cpu_after = 0;
+    int calls = WEIGHTS[op] * scale, i;
+    double t0, t1;
+    unsigned long long thread0, thread1;
+    HRESULT hr;
+    if (round < 0) step(stall_s, "the warm-up's %s batch of the %s contender", OPERATIONS[op], k->name);
+    else step(stall_s, "round %d: the %s batch of the %s contender", round + 1, OPERATIONS[op], k->name);
+    if (FAILED(hr = select_proxy_stub(k))) return failed(k, "CoRegisterPSClsid", hr);
+    if (FAILED(hr = cpu_time(k, &cpu_before))) return failed(k, "reading CPU times", hr);
+    thread0 = thread_cpu_ns();
+    t0 = now();
+    for (i = 0; i < calls; i++)
+        if ((hr = operation(k, op)) != S_OK) return failed(k, OPERATIONS[op], hr == S_OK ? E_FAIL : hr);
+    t1 = now();
+    thread1 = thread_cpu_ns();
+    if (FAILED(hr = cpu_time(k, &cpu_after))) return failed(k, "reading CPU times", hr);
+    if (round >= 0) {
+        k->wall[op][round] = (t1 - t0) / calls;
+        k->cpu[op][round] = (double)(cpu_after - cpu_before) * 1e-9 / calls;
+        k->thread[op][round] = (double)(thread1 - thread0) * 1e-9 / calls;
+    }
+    return 0;
+}
+
+static int compare(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+static double median(const double *v, int n) {
+    double s[MAX_ROUNDS];
+    memcpy(s, v, (size_t)n * sizeof s[0]);
+    qsort(s, (size_t)n, sizeof s[0], compare);
+    return n % 2 ? s[n / 2] : (s[n / 2 - 1] + s[n / 2]) / 2;
+}
+static double paired_ratio(const double *a, const double *b, int n, double *lo, double *hi) {
+    double r[MAX_ROUNDS];
+    int i;
+    *lo = 1e9;
+    *hi = 0;
+    for (i = 0; i < n; i++) {
+        r[i] = a[i] / b[i];
+        if (r[i] < *lo) *lo = r[i];
+        if (r[i] > *hi) *hi = r[i];
+    }
+    return median(r, n);
+}
+
+static int goals_met = -1; /* of OPS, once the figures are printed */
+
+static int print_figures(int n, const char *why) {
+    int op, missed = 0;
+    EnterCriticalSection(&output_lock);
+    figures_printed = 1;
+    if (n == 0) {
+        printf("no round was complete: no figures (%s)\n", why ? why : "");
+        LeaveCriticalSection(&output_lock);
+        return 1;
+    }
+    if (why) printf("PARTIAL: the figures of %d of the %d rounds (%s)\n", n, rounds, why);
+    printf("%-20s | %-45s | %-45s\n", "", "CPU time of both processes: us per call, ratio",
+           "wall clock: us per call, ratio");
+    printf("%-20s | %7s %7s %6s %11s %7s | %7s %7s %6s %11s %7s\n", "call", "opccomn", "widl", "ratio", "spread",
+           "control", "opccomn", "widl", "ratio", "spread", "control");
+    for (op = 0; op < OPS; op++) {
+        double lo, hi, clo, chi, ratio, control, wlo, whi, wall, wall_control;
+        ratio = paired_ratio(contenders[0].cpu[op], contenders[1].cpu[op], n, &lo, &hi);
+        control = paired_ratio(contenders[2].cpu[op], contenders[1].cpu[op], n, &clo, &chi);
+        wall = paired_ratio(contenders[0].wall[op], contenders[1].wall[op], n, &wlo, &whi);
+        wall_control = paired_ratio(contenders[2].wall[op], contenders[1].wall[op], n, &clo, &chi);
+        printf("%-20s | %7.1f %7.1f %5.2fx %4.2f-%4.2fx %6.2fx | %7.1f %7.1f %5.2fx %4.2f-%4.2fx %6.2fx\n",
+               OPERATIONS[op], median(contenders[0].cpu[op], n) * 1e6, median(contenders[1].cpu[op], n) * 1e6, ratio,
+               lo, hi, control, median(contenders[0].wall[op], n) * 1e6, median(contenders[1].wall[op], n) * 1e6, wall,
+               wlo, whi, wall_control);
+    }
+    printf("%-20s | %-45s\n", "", "CPU time of the calling thread (the proxy's side)");
+    for (op = 0; op < OPS; op++) {
+        double lo, hi, clo, chi, ratio, control;
+        ratio = paired_ratio(contenders[0].thread[op], contenders[1].thread[op], n, &lo, &hi);
+        control = paired_ratio(contenders[2].thread[op], contenders[1].thread[op], n, &clo, &chi);
+        printf("%-20s | %7.1f %7.1f %5.2fx %4.2f-%4.2fx %6.2fx\n", OPERATIONS[op],
+               median(contenders[0].thread[op], n) * 1e6, median(contenders[1].thread[op], n) * 1e6, ratio, lo, hi,
+               control);
+    }
+    printf("(medians over the rounds; ratio: the median of the rounds' ratios opccomn/widl, spread their lowest and\n"
+           " highest; control: the stand-in against itself, what this run's machine makes of equal contenders)\n");
+    for (op = 0; op < OPS; op++) {
+        double lo, hi, ratio = paired_ratio(contenders[0].cpu[op], contenders[1].cpu[op], n, &lo, &hi);
+        int met = ratio <= 1.1;
+        printf("GOAL DA %-37s %7.2fx  goal <= 1.10x  %s%s\n", OPERATIONS[op], ratio, met ? "met" : "NOT MET",
+               n < rounds ? " (partial)" : "");
+        missed |= !met;
+        goals_met += met;
+    }
+    goals_met++;
+    fflush(stdout);
+    LeaveCriticalSection(&output_lock);
+    return missed;
+}
+
+static void end_stalled(const char *what, ULONGLONG waited_ms) {
+    char why[300];
+    int i;
+    EnterCriticalSection(&output_lock);
+    printf("STALLED: %s did not end within %.0f s (waited %.1f s)\n", what, (double)step_limit_ms / 1000,
+           (double)waited_ms / 1000);
+    snprintf(why, sizeof why, "stalled in %s", what);
+    if (!figures_printed) print_figures((int)rounds_done, why);
+    else printf("(the figures above are complete: the stall came after the last round)\n");
+    LeaveCriticalSection(&output_lock);
+    unregister_all();
+    for (i = 0; i < CONTENDERS; i++) {
+        HANDLE process = contenders[i].server_pid ? OpenProcess(PROCESS_TERMINATE, FALSE, contenders[i].server_pid) : NULL;
+        if (process) {
+            TerminateProcess(process, 3);
+            CloseHandle(process);
+        }
+    }
+    printf("da_bench: stopped after a stall; its classes removed, its servers ended\n");
+    fflush(stdout);
+    fflush(stderr);
+    TerminateProcess(GetCurrentProcess(), 3);
+}
+
+static DWORD WINAPI watchdog(void *unused) {
+    (void)unused;
+    while (WaitForSingleObject(run_finished, 250) == WAIT_TIMEOUT) {
+        char what[sizeof step_name];
+        ULONGLONG waited;
+        int late;
+        EnterCriticalSection(&step_lock);
+        waited = GetTickCount64() - step_started;
+        late = waited > step_limit_ms;
+        memcpy(what, step_name, sizeof what);
+        LeaveCriticalSection(&step_lock);
+        if (late) end_stalled(what, waited);
+    }
+    return 0;
+}
+
+/* Lets go of the contender's objects; its server then exits. */
+static void disconnect(Contender *k) {
+    step(setup_limit_s(), "releasing the %s server's objects", k->name);
+    if (k->point && k->cookie) k->point->lpVtbl->Unadvise(k->point, k->cookie);
+    if (k->point) k->point->lpVtbl->Release(k->point);
+    if (k->async) k->async->lpVtbl->Release(k->async);
+    if (k->sync) k->sync->lpVtbl->Release(k->sync);
+    if (k->items) k->items->lpVtbl->Release(k->items);
+    if (k->server) {
+        k->server->lpVtbl->RemoveGroup(k->server, 7, FALSE);
+        k->server->lpVtbl->Release(k->server);
+    }
+}
+
+/* How many of the servers started have exited (each waited for up to 30 s); *started: how many were. */
+static int servers_ended(int *started) {
+    int i, ended = 0;
+    *started = 0;
+    step(setup_limit_s(), "waiting for the servers to exit");
+    for (i = 0; i < CONTENDERS; i++) {
+        HANDLE process;
+        if (!contenders[i].server_pid) continue;
+        ++*started;
+        process = OpenProcess(SYNCHRONIZE, FALSE, contenders[i].server_pid);
+        if (!process) { /* gone already */
+            ended++;
+            continue;
+        }
+        ended += WaitForSingleObject(process, 30000) == WAIT_OBJECT_0;
+        CloseHandle(process);
+    }
+    return ended;
+}
+
+static int usage(void) {
+    fprintf(stderr, "usage: da_bench [--rounds R] [--scale S] [--budget-s S] [--stall-s S] [--sets F]\n"
+                    "       da_bench [--sets F] --unregister\n");
+    return 2;
+}
+
+int main(int argc, char **argv) {
+    int round, op, i, a, failure = 0, missed = 0, cut = 0, ended, started_servers;
+    double started;
+    char why[120] = "";
+    WCHAR *slash;
+    HANDLE thread;
+    setvbuf(stdout, NULL, _IONBF, 0);
+    GetModuleFileNameW(NULL, server_path, MAX_PATH);
+    slash = wcsrchr(server_path, L'\\');
+    wcscpy(slash ? slash + 1 : server_path, L"opc_da_test_server.exe");
+    for (a = 1; a < argc; a++) {
+        const char *value = a + 1 < argc ? argv[a + 1] : NULL;
+        if (!strcmp(argv[a], "--sets") && value && atoi(value) >= 1 && atoi(value) + CONTENDERS - 1 <= 9) {
+            for (i = 0; i < CONTENDERS; i++) contenders[i].set = (unsigned)(atoi(value) + i);
+            a++;
+        } else if (!strcmp(argv[a], "--unregister")) {
+            unregister_all();
+            printf("da_bench: the benchmark's classes removed\n");
+            return 0;
+        } else if (!strcmp(argv[a], "--rounds") && value) {
+            rounds = atoi(value), a++;
+        } else if (!strcmp(argv[a], "--scale") && value) {
+            scale = atoi(value), a++;
+        } else if (!strcmp(argv[a], "--budget-s") && value) {
+            budget_s = atof(value), a++;
+        } else if (!strcmp(argv[a], "--stall-s") && value) {
+            stall_s = atof(value), a++;
+        } else {
+            return usage();
+        }
+    }
+    if (rounds < 1 || rounds > MAX_ROUNDS || scale < 1 || scale > 1000 || budget_s <= 0 || stall_s <= 0) return usage();
+    for (i = 0; i < READ_ITEMS + CHURN_ITEMS; i++) {
+        OPCITEMDEF *d = i < READ_ITEMS ? &read_defs[i] : &churn_defs[i - READ_ITEMS];
+        swprintf(item_ids[i], 16, L"Bench.%d", i);
+        memset(d, 0, sizeof *d);
+        d->szAccessPath = (LPWSTR)L"";
+        d->szItemID = item_ids[i];
+        d->bActive = TRUE;
+        d->hClient = (OPCHANDLE)i;
+        d->vtRequestedDataType = VT_EMPTY;
+    }
+    printf("%d rounds of each contender, interleaved; a round: %d Read(100), %d Write(4), %d AddItems+Remove(100), "
+           "%d OnDataChange(100), %d Unadvise+Advise (limits: %.0f s for the rounds, %.0f s for a batch)\n",
+           rounds, WEIGHTS[0] * scale, WEIGHTS[1] * scale, WEIGHTS[2] * scale, WEIGHTS[3] * scale,
+           WEIGHTS[4] * scale, budget_s, stall_s);
+    InitializeCriticalSection(&step_lock);
+    InitializeCriticalSection(&output_lock);
+    run_finished = CreateEventW(NULL, TRUE, FALSE, NULL);
+    step(setup_limit_s(), "the start (COM, the proxy/stubs' class objects)");
+    thread = run_finished ? CreateThread(NULL, 0, watchdog, NULL, 0, NULL) : NULL;
+    if (!thread) return failed(&contenders[0], "starting the watchdog", HRESULT_FROM_WIN32(GetLastError()));
+    /* Both class objects registered here (the last one's IIDs are overridden per batch). */
+    if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_classic_proxy_stub()) ||
+        FAILED(use_opccomn_proxy_stub()))
+        return 1;
+    for (i = 0; i < CONTENDERS && !failure; i++) {
+        HRESULT hr = register_class(&contenders[i]);
+        if (FAILED(hr)) failure = failed(&contenders[i], "registering the DA test server", hr);
+    }
+    for (i = 0; i < CONTENDERS && !failure; i++) failure = connect_contender(&contenders[i]);
+    for (op = 0; op < OPS && !failure; op++)
+        for (i = 0; i < CONTENDERS && !failure; i++) failure = batch(&contenders[i], op, -1);
+    started = now();
+    for (round = 0; round < rounds && !failure; round++) {
+        if (round > 0 && now() - started > budget_s) {
+            cut = 1;
+            snprintf(why, sizeof why, "the rounds' time limit of %.0f s (--budget-s) was reached", budget_s);
+            break;
+        }
+        for (op = 0; op < OPS && !failure; op++)
+            for (i = 0; i < CONTENDERS && !failure; i++)
+                failure = batch(&contenders[(round + i) % CONTENDERS], op, round);
+        if (!failure) InterlockedIncrement(&rounds_done);
+    }
+    if (!failure) missed = print_figures((int)rounds_done, cut ? why : NULL);
+    for (i = 0; i < CONTENDERS; i++) disconnect(&contenders[i]);
+    unregister_all();
+    ended = servers_ended(&started_servers);
+    printf("servers ended: %d of %d; classes removed\n", ended, started_servers);
+    if (goals_met >= 0)
+        printf("\nda_bench: %d goals, %d met, %d NOT MET (%d interleaved rounds; CPU time of client and server, Linux's "
+               "CLOCK_PROCESS_CPUTIME_ID under Wine; the wall clock for information)\n",
+               OPS, goals_met, OPS - goals_met, (int)rounds_done);
+    step(setup_limit_s(), "CoUninitialize");
+    CoUninitialize();
+    SetEvent(run_finished);
+    WaitForSingleObject(thread, INFINITE);
+    if (failure) {
+        fprintf(stderr, "da_bench: stopped, no figures\n");
+        return 1;
+    }
+    return ended == started_servers ? missed : 1;
+}
