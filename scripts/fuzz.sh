@@ -4,7 +4,7 @@
 # version strings (OpcVersionParse/Format), the SDDL of AppID permissions (registry::sddl), the
 # proxy/stub's checks of NDR requests and replies (proxy::wire, against the hand-written checks they
 # replaced), the interpreter of NDR layouts over a test IDL that uses every construct (proxy::ndr) and
-# over the layouts of every interface the proxy/stub serves, Data Access's included (layouts).
+# over the layouts of every interface the proxy/stub serves, DA's, A&E's and HDA's included (layouts).
 # The targets are in fuzz/fuzz_targets/, their committed seed corpus in fuzz/seeds/<target>/. Built
 # with nightly Rust, libFuzzer (crate libfuzzer-sys) and AddressSanitizer; a crash, a failed assertion, a leak or a
 # timeout is a finding and fails the run (the input is kept in build/fuzz/artifacts/).
