@@ -52,7 +52,9 @@ expect '^mc -u -U -r \. -h \. opccomn_messages\.mc$'
 expect '^rc /nologo /fo opccomn\.res opccomn\.rc$'
 expect '^cl /nologo /c /O2 /W3 /WX /Fo[^ ]*/opccomn_ps\.obj [^ ]*/src/proxy/opccomn_ps\.c$'
 expect '^cl /nologo /c /O2 /W3 /WX /Fo[^ ]*/opcda_ps\.obj [^ ]*/src/proxy/opcda_ps\.c$'
-expect '^lib /nologo /OUT:[^ ]*/opccomn_ps\.lib [^ ]*/opccomn_ps\.obj [^ ]*/opcda_ps\.obj$'
+expect '^cl /nologo /c /O2 /W3 /WX /Fo[^ ]*/opc_ae_ps\.obj [^ ]*/src/proxy/opc_ae_ps\.c$'
+expect '^cl /nologo /c /O2 /W3 /WX /Fo[^ ]*/opchda_ps\.obj [^ ]*/src/proxy/opchda_ps\.c$'
+expect '^lib /nologo /OUT:[^ ]*/opccomn_ps\.lib [^ ]*/opccomn_ps\.obj [^ ]*/opcda_ps\.obj [^ ]*/opc_ae_ps\.obj [^ ]*/opchda_ps\.obj$'
 output=$(ls -t "$CARGO_TARGET_DIR/$target"/debug/build/opccomn-*/output | head -1)
 for want in 'cargo:rustc-link-arg-cdylib=.*/opccomn\.res$' 'cargo:rustc-link-lib=static=opccomn_ps$' \
     'cargo:rustc-link-lib=dylib=rpcrt4$' 'cargo:rustc-cfg=opccomn_proxy_stub$'; do
