@@ -294,10 +294,11 @@ static IOPCHDA_SyncReadVtbl sync_vtbl = {sync_qi,      sync_add_ref,  sync_relea
                                          sync_processed, sync_at_time, sync_modified, sync_attribute};
 
 /* What a thread of the server calls back. */
-enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE };
+enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE, CALL_PLAYBACK };
 
-/* An asynchronous read (its OnReadComplete), an advise's data (OnDataChange) or a cancel's
- * completion (OnCancelComplete of the cancel ID `transaction`), from a thread of the server. */
+/* An asynchronous read (its OnReadComplete), an advise's data (OnDataChange), a raw playback's data
+ * (OnPlayback) or a cancel's completion (OnCancelComplete of the cancel ID `transaction`), from a
+ * thread of the server. */
 typedef struct AsyncRead {
     Server *server; /* a reference */
     int call;
@@ -320,7 +321,10 @@ static DWORD WINAPI read_thread(void *param) {
     } else if (read_items(r->server, r->count, r->handles, r->processed ? r->aggregates : NULL, &items, &errors) ==
                    S_OK &&
                sink) {
+        OPCHDA_ITEM *each[HDA_ITEMS]; /* OnPlayback's array of pointers */
+        for (k = 0; k < r->count; k++) each[k] = &items[k];
         if (r->call == CALL_DATA_CHANGE) sink->lpVtbl->OnDataChange(sink, r->transaction, S_OK, r->count, items, errors);
+        else if (r->call == CALL_PLAYBACK) sink->lpVtbl->OnPlayback(sink, r->transaction, S_OK, r->count, each, errors);
         else sink->lpVtbl->OnReadComplete(sink, r->transaction, S_OK, r->count, items, errors);
     }
     if (sink) sink->lpVtbl->Release(sink);
@@ -569,7 +573,8 @@ static IOPCHDA_SyncUpdateVtbl upd_vtbl = {upd_qi,      upd_add_ref,        upd_r
                                           upd_insert,  upd_replace,        upd_insert_replace, upd_delete_raw,
                                           upd_delete_at_time};
 
-/* -- IOPCHDA_Playback: the request checked and a cancel ID given (no OnPlayback follows) -- */
+/* -- IOPCHDA_Playback: the request checked and a cancel ID given; a raw playback's history comes
+ * in one OnPlayback from a thread of the server (when a callback is advised) -- */
 
 /* Starts playback `which` (0 raw, 1 processed) of `count` valid items; its cancel ID transaction + 1. */
 static HRESULT start_playback(Server *s, int which, DWORD transaction, DWORD count, const OPCHANDLE *handles,
@@ -590,13 +595,28 @@ static HRESULT start_playback(Server *s, int which, DWORD transaction, DWORD cou
 static HRESULT STDMETHODCALLTYPE play_raw(IOPCHDA_Playback *This, DWORD transaction, OPCHDA_TIME *start,
                                           OPCHDA_TIME *end, DWORD num_values, FILETIME duration, FILETIME interval,
                                           DWORD count, OPCHANDLE *handles, DWORD *cancel, HRESULT **errors) {
+    Server *s = CONTAINER(Server, playback, This);
+    IUnknown *sink;
+    AsyncRead *r;
+    HRESULT hr;
     if (!cancel || !errors) return E_POINTER;
     *cancel = 0;
     *errors = NULL;
     if (num_values != HDA_RAW_VALUES || !same_filetime(duration, hda_duration()) ||
         !same_filetime(interval, hda_update_interval()) || !take_range(start, end))
         return E_INVALIDARG;
-    return start_playback(CONTAINER(Server, playback, This), 0, transaction, count, handles, cancel, errors);
+    hr = start_playback(s, 0, transaction, count, handles, cancel, errors);
+    sink = sink_point_sink(&s->cp);
+    if (FAILED(hr) || !sink) return hr;
+    sink->lpVtbl->Release(sink);
+    r = (AsyncRead *)calloc(1, sizeof *r);
+    if (!r) return hr; /* a test server: the playback goes on without data */
+    r->call = CALL_PLAYBACK;
+    r->transaction = transaction;
+    r->count = count;
+    memcpy(r->handles, handles, count * sizeof *handles);
+    start_call(s, r);
+    return hr;
 }
 
 static HRESULT STDMETHODCALLTYPE play_processed(IOPCHDA_Playback *This, DWORD transaction, OPCHDA_TIME *start,

@@ -15,8 +15,9 @@
  * through the server's connection point, AdviseRaw (a FILETIME by value) answered by OnDataChange,
  * and Cancel answered by OnCancelComplete; IOPCHDA_SyncUpdate's six methods (VARIANT values of
  * VT_R8, VT_BSTR and VT_I4, FILETIMEs, qualities, per-element results with success codes among
- * them); IOPCHDA_Playback::ReadRawWithUpdate and ReadProcessedWithUpdate (two FILETIMEs by value
- * each, which take four stack slots on x86, checked by the server) and Cancel. */
+ * them); IOPCHDA_Playback::ReadRawWithUpdate (answered by OnPlayback: an array of pointers to
+ * items) and ReadProcessedWithUpdate (two FILETIMEs by value each, which take four stack slots on
+ * x86, checked by the server) and Cancel. */
 #include "hda.h"
 
 #include <olectl.h> /* CONNECT_E_* */
@@ -36,7 +37,7 @@ typedef struct Callback {
     DWORD transaction, count, aggregate;
 } Callback;
 
-enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE };
+enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE, CALL_PLAYBACK };
 
 /* Checks the items of an OnReadComplete or OnDataChange against what `c` expects. */
 static void check_items(Callback *c, int call, DWORD transaction, HRESULT status, DWORD count, OPCHDA_ITEM *items,
@@ -105,10 +106,21 @@ static HRESULT STDMETHODCALLTYPE cb_insert_annotations(IOPCHDA_DataCallback *Thi
     CHECK(0);
     return S_OK;
 }
+/* A raw playback's history: an array of pointers to items ([in, size_is(n)] OPCHDA_ITEM **). */
 static HRESULT STDMETHODCALLTYPE cb_playback(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                              DWORD count, OPCHDA_ITEM **items, HRESULT *errors) {
-    (void)This, (void)transaction, (void)status, (void)count, (void)items, (void)errors;
-    CHECK(0);
+    Callback *c = (Callback *)This;
+    DWORD k;
+    c->calls++;
+    CHECK(c->expected == CALL_PLAYBACK);
+    CHECK(transaction == c->transaction);
+    CHECK_HR(status, S_OK);
+    CHECK(count == c->count && items && errors);
+    for (k = 0; items && errors && k < count && k < c->count; k++) {
+        CHECK(items[k] && hda_is_item(items[k], (int)k, 0));
+        CHECK_HR(errors[k], S_OK);
+    }
+    SetEvent(c->called);
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_update_complete(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
@@ -391,9 +403,10 @@ static void check_update(IOPCHDA_Server *server) {
     upd->lpVtbl->Release(upd);
 }
 
-/* IOPCHDA_Playback: ReadRawWithUpdate (two FILETIMEs by value after a DWORD) and
- * ReadProcessedWithUpdate (two FILETIMEs by value with a DWORD between them), each checked by the
- * server and given a cancel ID; the same with the two FILETIMEs swapped is refused; Cancel of each. */
+/* IOPCHDA_Playback: ReadRawWithUpdate (two FILETIMEs by value after a DWORD), its history through
+ * OnPlayback, and ReadProcessedWithUpdate (two FILETIMEs by value with a DWORD between them), each
+ * checked by the server and given a cancel ID; the same with the two FILETIMEs swapped is refused;
+ * Cancel of each. The callback is advised. */
 static void check_playback(IOPCHDA_Server *server) {
     IOPCHDA_Playback *play = NULL;
     OPCHANDLE handles[2] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1)};
@@ -410,6 +423,10 @@ static void check_playback(IOPCHDA_Server *server) {
              E_INVALIDARG);
     CHECK(cancel == 0 && errors == NULL);
     range_resolved(&start, &end); /* frees */
+    cb.expected = CALL_PLAYBACK;
+    cb.transaction = 51;
+    cb.count = 2;
+    cb.aggregate = 0;
     make_range(&start, &end);
     CHECK_HR(play->lpVtbl->ReadRawWithUpdate(play, 51, &start, &end, HDA_RAW_VALUES, hda_duration(),
                                              hda_update_interval(), 2, handles, &cancel, &errors),
@@ -422,6 +439,8 @@ static void check_playback(IOPCHDA_Server *server) {
     } else {
         CHECK(0);
     }
+    CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
+    CHECK(cb.calls == 5);
     make_range(&start, &end);
     cancel = GARBAGE_U32;
     errors = (HRESULT *)GARBAGE_PTR;
@@ -599,6 +618,7 @@ static void check_async(IOPCHDA_Server *server) {
         CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
         CHECK(cb.calls == 2);
         check_advise(async);
+        check_playback(server);
         CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), S_OK);
         CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), CONNECT_E_NOCONNECTION);
         cp->lpVtbl->Release(cp);
@@ -640,7 +660,6 @@ int main(void) {
         }
         check_annotations(server);
         check_update(server);
-        check_playback(server);
         check_async(server);
         server->lpVtbl->Release(server);
     }
