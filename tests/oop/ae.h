@@ -182,4 +182,46 @@ static const DWORD AE_FILTER_CATEGORY_IDS[AE_FILTER_CATEGORIES] = {1001, 0x7FFFF
 #define AE_FILTER_AREAS 2 /* AE_AREA_NAMES[1] and [2] */
 #define AE_FILTER_SOURCES 1 /* AE_SOURCE_NAMES[0] */
 
+/* The keep-alive time of a subscription (IOPCEventSubscriptionMgt2): asked, revised by the server,
+ * which answers OPC_S_INVALIDKEEPALIVETIME then. */
+#define AE_KEEP_ALIVE 2345u
+#define AE_REVISED_KEEP_ALIVE 2500u
+#define OPC_S_INVALIDKEEPALIVETIME_AE ((HRESULT)0x00040203L)
+
+/* AckCondition: who acknowledges, the comment, and the conditions acknowledged: the condition of
+ * event 0 (acknowledged), the same again with its time's halves apart (already acknowledged), a
+ * wrong active time, a source the server does not know. */
+#define AE_ACKNOWLEDGER "operator \xc3\xa4\xc3\xb6\xc3\xbc"
+#define AE_ACK_COMMENT "Checked on site \xe2\x82\xac \xf0\x9f\x98\x80"
+#define AE_ACKS 4
+#define AE_S_ALREADYACKED ((HRESULT)0x00040200L)
+#define AE_E_INVALIDTIME ((HRESULT)0xC0040204L)
+typedef struct AeAck {
+    const char *source, *condition;
+    FILETIME active_time;
+    DWORD cookie;
+    HRESULT result; /* the server's answer for it */
+} AeAck;
+
+static AeAck ae_ack(DWORD k) {
+    AeAck a;
+    a.source = k == 3 ? "Plant.Nowhere.Level" : AE_SOURCE_NAMES[k == 1 ? 2 : 0];
+    a.condition = AE_CONDITION;
+    a.active_time = test_time(4);
+    a.cookie = AE_EVENT_COOKIE + k;
+    a.result = S_OK;
+    if (k == 1) {
+        a.active_time.dwLowDateTime = 0xFFFFFFFFu;
+        a.active_time.dwHighDateTime = 0x01020304u;
+        a.cookie = 0x80000001u;
+        a.result = AE_S_ALREADYACKED;
+    } else if (k == 2) {
+        a.active_time = test_time(3);
+        a.result = AE_E_INVALIDTIME;
+    } else if (k == 3) {
+        a.result = AE_E_UNKNOWN_NAME;
+    }
+    return a;
+}
+
 #endif

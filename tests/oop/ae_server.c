@@ -7,10 +7,10 @@
  *
  * Server object: IOPCEventServer2 (GetStatus, CreateEventSubscription, QueryEventCategories,
  * GetConditionState, the Enable/Disable methods of both versions, GetEnableStateByArea/BySource,
- * CreateAreaBrowser). Area browser object: IOPCEventAreaBrowser over the areas and sources of ae.h
+ * AckCondition, CreateAreaBrowser). Area browser object: IOPCEventAreaBrowser over the areas and sources of ae.h
  * (BrowseOPCAreas with MatchPatternW's filters: an IEnumString of the names).
- * Subscription object: IOPCEventSubscriptionMgt (SetFilter, GetFilter, GetState, SetState, Refresh:
- * an OnEvent of the two events of ae.h from a thread of the server) and IConnectionPointContainer
+ * Subscription object: IOPCEventSubscriptionMgt2 (SetFilter, GetFilter, GetState, SetState, Refresh:
+ * an OnEvent of the two events of ae.h from a thread of the server; SetKeepAlive, GetKeepAlive) and IConnectionPointContainer
  * with the IOPCEventSink connection point. What the test does not call answers E_NOTIMPL. */
 #include "ae.h"
 
@@ -29,33 +29,36 @@ static int name_index(int by_area, const WCHAR *name) {
 /* ---- The subscription ---- */
 
 typedef struct Subscription {
-    IOPCEventSubscriptionMgt mgt; /* the identity */
+    IOPCEventSubscriptionMgt2 mgt; /* the identity (IOPCEventSubscriptionMgt too) */
     SinkPoint cp;                 /* IOPCEventSink */
     LONG refs;
     CRITICAL_SECTION lock;
     BOOL active;
     DWORD buffer_time, max_size;
     OPCHANDLE client;
+    DWORD keep_alive; /* SetKeepAlive's revised time */
     int filtered; /* SetFilter received the client's filter */
 } Subscription;
 
 static HRESULT sub_query(Subscription *s, REFIID riid, void **ppv) {
     if (!ppv) return E_POINTER;
     *ppv = NULL;
-    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCEventSubscriptionMgt)) *ppv = &s->mgt;
+    if (IsEqualIID(riid, &IID_IUnknown) || IsEqualIID(riid, &IID_IOPCEventSubscriptionMgt) ||
+        IsEqualIID(riid, &IID_IOPCEventSubscriptionMgt2))
+        *ppv = &s->mgt;
     else if (IsEqualIID(riid, &IID_IConnectionPointContainer)) *ppv = &s->cp.container;
     else return E_NOINTERFACE;
     InterlockedIncrement(&s->refs);
     return S_OK;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_qi(IOPCEventSubscriptionMgt *This, REFIID riid, void **ppv) {
+static HRESULT STDMETHODCALLTYPE sub_qi(IOPCEventSubscriptionMgt2 *This, REFIID riid, void **ppv) {
     return sub_query(CONTAINER(Subscription, mgt, This), riid, ppv);
 }
-static ULONG STDMETHODCALLTYPE sub_add_ref(IOPCEventSubscriptionMgt *This) {
+static ULONG STDMETHODCALLTYPE sub_add_ref(IOPCEventSubscriptionMgt2 *This) {
     return (ULONG)InterlockedIncrement(&CONTAINER(Subscription, mgt, This)->refs);
 }
-static ULONG STDMETHODCALLTYPE sub_release(IOPCEventSubscriptionMgt *This) {
+static ULONG STDMETHODCALLTYPE sub_release(IOPCEventSubscriptionMgt2 *This) {
     Subscription *s = CONTAINER(Subscription, mgt, This);
     LONG n = InterlockedDecrement(&s->refs);
     if (n == 0) {
@@ -76,7 +79,7 @@ static int names_are(const LPWSTR *names, DWORD count, const char *const *want) 
     return 1;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_set_filter(IOPCEventSubscriptionMgt *This, DWORD type, DWORD ncat, DWORD *cats,
+static HRESULT STDMETHODCALLTYPE sub_set_filter(IOPCEventSubscriptionMgt2 *This, DWORD type, DWORD ncat, DWORD *cats,
                                                 DWORD low, DWORD high, DWORD nareas, LPWSTR *areas, DWORD nsources,
                                                 LPWSTR *sources) {
     Subscription *s = CONTAINER(Subscription, mgt, This);
@@ -100,7 +103,7 @@ static LPWSTR *task_names(const char *const *names, DWORD count) {
     return copy;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_get_filter(IOPCEventSubscriptionMgt *This, DWORD *type, DWORD *ncat, DWORD **cats,
+static HRESULT STDMETHODCALLTYPE sub_get_filter(IOPCEventSubscriptionMgt2 *This, DWORD *type, DWORD *ncat, DWORD **cats,
                                                 DWORD *low, DWORD *high, DWORD *nareas, LPWSTR **areas,
                                                 DWORD *nsources, LPWSTR **sources) {
     Subscription *s = CONTAINER(Subscription, mgt, This);
@@ -127,13 +130,13 @@ static HRESULT STDMETHODCALLTYPE sub_get_filter(IOPCEventSubscriptionMgt *This, 
     return *cats && *areas && *sources ? S_OK : E_OUTOFMEMORY;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_select_attrs(IOPCEventSubscriptionMgt *This, DWORD category, DWORD count,
+static HRESULT STDMETHODCALLTYPE sub_select_attrs(IOPCEventSubscriptionMgt2 *This, DWORD category, DWORD count,
                                                   DWORD *ids) {
     (void)This, (void)category, (void)count, (void)ids;
     return E_NOTIMPL;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_returned_attrs(IOPCEventSubscriptionMgt *This, DWORD category, DWORD *count,
+static HRESULT STDMETHODCALLTYPE sub_returned_attrs(IOPCEventSubscriptionMgt2 *This, DWORD category, DWORD *count,
                                                     DWORD **ids) {
     (void)This, (void)category;
     if (count) *count = 0;
@@ -165,7 +168,7 @@ static DWORD WINAPI refresh_thread(void *param) {
     return 0;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_refresh(IOPCEventSubscriptionMgt *This, DWORD connection) {
+static HRESULT STDMETHODCALLTYPE sub_refresh(IOPCEventSubscriptionMgt2 *This, DWORD connection) {
     Subscription *s = CONTAINER(Subscription, mgt, This);
     IUnknown *sink = sink_point_sink(&s->cp);
     HANDLE thread;
@@ -182,12 +185,12 @@ static HRESULT STDMETHODCALLTYPE sub_refresh(IOPCEventSubscriptionMgt *This, DWO
     return S_OK;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_cancel_refresh(IOPCEventSubscriptionMgt *This, DWORD connection) {
+static HRESULT STDMETHODCALLTYPE sub_cancel_refresh(IOPCEventSubscriptionMgt2 *This, DWORD connection) {
     (void)This, (void)connection;
     return E_NOTIMPL;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_get_state(IOPCEventSubscriptionMgt *This, BOOL *active, DWORD *buffer_time,
+static HRESULT STDMETHODCALLTYPE sub_get_state(IOPCEventSubscriptionMgt2 *This, BOOL *active, DWORD *buffer_time,
                                                DWORD *max_size, OPCHANDLE *client) {
     Subscription *s = CONTAINER(Subscription, mgt, This);
     if (!active || !buffer_time || !max_size || !client) return E_POINTER;
@@ -200,7 +203,7 @@ static HRESULT STDMETHODCALLTYPE sub_get_state(IOPCEventSubscriptionMgt *This, B
     return S_OK;
 }
 
-static HRESULT STDMETHODCALLTYPE sub_set_state(IOPCEventSubscriptionMgt *This, BOOL *active, DWORD *buffer_time,
+static HRESULT STDMETHODCALLTYPE sub_set_state(IOPCEventSubscriptionMgt2 *This, BOOL *active, DWORD *buffer_time,
                                                DWORD *max_size, OPCHANDLE client, DWORD *revised_buffer_time,
                                                DWORD *revised_max_size) {
     Subscription *s = CONTAINER(Subscription, mgt, This);
@@ -216,9 +219,33 @@ static HRESULT STDMETHODCALLTYPE sub_set_state(IOPCEventSubscriptionMgt *This, B
     return S_OK;
 }
 
-static IOPCEventSubscriptionMgtVtbl sub_vtbl = {
+/* The keep-alive time: the one the client asks (AE_KEEP_ALIVE) revised to AE_REVISED_KEEP_ALIVE, or 0
+ * (none); another is not as the client sent it. */
+static HRESULT STDMETHODCALLTYPE sub_set_keep_alive(IOPCEventSubscriptionMgt2 *This, DWORD time, DWORD *revised) {
+    Subscription *s = CONTAINER(Subscription, mgt, This);
+    if (!revised) return E_POINTER;
+    *revised = 0;
+    if (time != AE_KEEP_ALIVE && time != 0) return E_INVALIDARG;
+    EnterCriticalSection(&s->lock);
+    s->keep_alive = time ? AE_REVISED_KEEP_ALIVE : 0;
+    *revised = s->keep_alive;
+    LeaveCriticalSection(&s->lock);
+    return time ? OPC_S_INVALIDKEEPALIVETIME_AE : S_OK;
+}
+
+static HRESULT STDMETHODCALLTYPE sub_get_keep_alive(IOPCEventSubscriptionMgt2 *This, DWORD *time) {
+    Subscription *s = CONTAINER(Subscription, mgt, This);
+    if (!time) return E_POINTER;
+    EnterCriticalSection(&s->lock);
+    *time = s->keep_alive;
+    LeaveCriticalSection(&s->lock);
+    return S_OK;
+}
+
+static IOPCEventSubscriptionMgt2Vtbl sub_vtbl = {
     sub_qi,      sub_add_ref,        sub_release,   sub_set_filter, sub_get_filter, sub_select_attrs,
-    sub_returned_attrs, sub_refresh, sub_cancel_refresh, sub_get_state, sub_set_state};
+    sub_returned_attrs, sub_refresh, sub_cancel_refresh, sub_get_state, sub_set_state, sub_set_keep_alive,
+    sub_get_keep_alive};
 
 /* ---- The server ---- */
 
@@ -457,13 +484,31 @@ static HRESULT STDMETHODCALLTYPE srv_disable_source(IOPCEventServer2 *This, DWOR
     return set_enabled(SERVER(This), 0, FALSE, n, names, NULL);
 }
 
+/* Acknowledges conditions: each element as ae.h's AE_ACKS says (the acknowledger and the comment as
+ * the client sent them, or the call is refused). */
 static HRESULT STDMETHODCALLTYPE srv_ack(IOPCEventServer2 *This, DWORD count, LPWSTR acknowledger, LPWSTR comment,
                                          LPWSTR *sources, LPWSTR *conditions, FILETIME *active_times,
                                          DWORD *cookies, HRESULT **errors) {
-    (void)This, (void)count, (void)acknowledger, (void)comment, (void)sources, (void)conditions;
-    (void)active_times, (void)cookies;
-    if (errors) *errors = NULL;
-    return E_NOTIMPL;
+    HRESULT hr = S_OK;
+    DWORD k;
+    (void)This;
+    if (!errors) return E_POINTER;
+    *errors = NULL;
+    if (count != AE_ACKS || !sources || !conditions || !active_times || !cookies ||
+        !is_utf8(acknowledger, AE_ACKNOWLEDGER) || !is_utf8(comment, AE_ACK_COMMENT))
+        return E_INVALIDARG;
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*errors) return E_OUTOFMEMORY;
+    for (k = 0; k < count; k++) {
+        AeAck want = ae_ack(k);
+        if (!is_utf8(sources[k], want.source) || !is_utf8(conditions[k], want.condition) ||
+            !same_filetime(active_times[k], want.active_time) || cookies[k] != want.cookie)
+            (*errors)[k] = E_INVALIDARG; /* not as the client sent it */
+        else
+            (*errors)[k] = want.result;
+        if ((*errors)[k] != S_OK) hr = S_FALSE;
+    }
+    return hr;
 }
 
 /* ---- The area browser: the areas of ae.h as a tree, their sources as leaves ---- */

@@ -115,6 +115,7 @@ static void hda_free_item(OPCHDA_ITEM *it) {
 static int hda_same_variant(const VARIANT *a, const VARIANT *b) {
     if (V_VT(a) != V_VT(b)) return 0;
     switch (V_VT(a)) {
+    case VT_I4: return V_I4(a) == V_I4(b);
     case VT_R8: return V_R8(a) == V_R8(b);
     case VT_BSTR:
         return V_BSTR(a) && V_BSTR(b) && SysStringLen(V_BSTR(a)) == SysStringLen(V_BSTR(b)) &&
@@ -144,5 +145,61 @@ static int hda_is_item(const OPCHDA_ITEM *got, int i, DWORD aggregate) {
 static const char *const HDA_ANNOTATION_TEXTS[HDA_ANNOTATIONS] = {"Calibrated \xc3\xa4\xc3\xb6\xc3\xbc",
                                                                   "Checked \xe2\x82\xac"};
 static const char *const HDA_ANNOTATION_USERS[HDA_ANNOTATIONS] = {"operator", "maintenance \xf0\x9f\x98\x80"};
+
+/* IOPCHDA_SyncUpdate: the capabilities, and the values of Insert (method 0), Replace (1) and
+ * InsertReplace (2) and the times of DeleteAtTime (3): HDA_UPDATES elements, item 0's VT_R8, item
+ * 1's VT_BSTR and a VT_I4 of an invalid handle, each method's values its own (a request delivered
+ * to another method shows), each element's answer the server's for it. */
+#define HDA_UPDATE_CAPS \
+    (OPCHDA_INSERTCAP | OPCHDA_REPLACECAP | OPCHDA_INSERTREPLACECAP | OPCHDA_DELETERAWCAP | OPCHDA_DELETEATTIMECAP)
+#define HDA_UPDATES 3
+#define HDA_INVALID_HANDLE ((OPCHANDLE)0x999)
+#define HDA_S_INSERTED ((HRESULT)0x4004100EL)
+#define HDA_S_REPLACED ((HRESULT)0x4004100FL)
+typedef struct HdaUpdate {
+    OPCHANDLE handle;
+    FILETIME time;
+    VARIANT value; /* a BSTR in it the caller's to clear */
+    DWORD quality;
+    HRESULT result;
+} HdaUpdate;
+
+static HdaUpdate hda_update(int method, DWORD k) {
+    HdaUpdate u;
+    char text[64];
+    memset(&u, 0, sizeof u);
+    VariantInit(&u.value);
+    u.handle = k < 2 ? HDA_SERVER_HANDLE(k) : HDA_INVALID_HANDLE;
+    u.time = test_time(20 + 10 * (unsigned)method + k);
+    u.quality = (k == 1 ? 0x40u : 0xC0u) | (DWORD)method << 24;
+    u.result = k == 2 ? HDA_E_INVALIDHANDLE : method == 2 ? (k == 0 ? HDA_S_INSERTED : HDA_S_REPLACED) : S_OK;
+    if (k == 0) {
+        V_VT(&u.value) = VT_R8;
+        V_R8(&u.value) = -2.5e-300 * (method + 1);
+    } else if (k == 1) {
+        snprintf(text, sizeof text, "Neu %d \xc3\xa4\xc3\xb6\xc3\xbc \xe2\x82\xac", method);
+        V_VT(&u.value) = VT_BSTR;
+        V_BSTR(&u.value) = bstr_utf8(text);
+    } else {
+        V_VT(&u.value) = VT_I4;
+        V_I4(&u.value) = -7 - method;
+    }
+    return u;
+}
+
+/* The FILETIMEs by value of IOPCHDA_Playback and IOPCHDA_AsyncRead::AdviseRaw: the update duration
+ * and the update interval, each with halves of their own. */
+static FILETIME hda_duration(void) {
+    FILETIME f;
+    f.dwLowDateTime = 0x89ABCDEFu;
+    f.dwHighDateTime = 0x00000002u;
+    return f;
+}
+static FILETIME hda_update_interval(void) {
+    FILETIME f;
+    f.dwLowDateTime = 0x01234567u;
+    f.dwHighDateTime = 0x00000003u;
+    return f;
+}
 
 #endif

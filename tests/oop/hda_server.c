@@ -7,8 +7,11 @@
  *
  * One object: IOPCHDA_Server (GetItemAttributes, GetHistorianStatus, GetItemHandles),
  * IOPCHDA_SyncRead (ReadRaw, ReadProcessed), IOPCHDA_AsyncRead (ReadRaw, ReadProcessed: an
- * OnReadComplete from a thread of the server), IOPCHDA_SyncAnnotations (QueryCapabilities, Read) and
- * IConnectionPointContainer with the IOPCHDA_DataCallback connection point. What the test does not
+ * OnReadComplete from a thread of the server; AdviseRaw: an OnDataChange, then Cancel: an
+ * OnCancelComplete), IOPCHDA_SyncAnnotations (QueryCapabilities, Read), IOPCHDA_SyncUpdate (all six
+ * methods), IOPCHDA_Playback (ReadRawWithUpdate, ReadProcessedWithUpdate: the request checked, a
+ * cancel ID given, no OnPlayback; Cancel) and IConnectionPointContainer with the IOPCHDA_DataCallback
+ * connection point. What the test does not
  * call answers E_NOTIMPL. */
 #include "hda.h"
 
@@ -21,10 +24,14 @@ typedef struct Server {
     IOPCHDA_SyncRead sync;
     IOPCHDA_AsyncRead async;
     IOPCHDA_SyncAnnotations annotations;
+    IOPCHDA_SyncUpdate update;
+    IOPCHDA_Playback playback;
     SinkPoint cp; /* IOPCHDA_DataCallback */
     LONG refs;
     CRITICAL_SECTION lock;
     int handed_out[HDA_ITEMS]; /* GetItemHandles gave the item's handle */
+    DWORD advise_cancel;       /* the cancel ID of AdviseRaw's advise, or 0 */
+    DWORD playback_cancel[2];  /* the cancel IDs of the playbacks going on, or 0 */
 } Server;
 
 static HRESULT server_qi(Server *s, REFIID riid, void **ppv) {
@@ -34,6 +41,8 @@ static HRESULT server_qi(Server *s, REFIID riid, void **ppv) {
     else if (IsEqualIID(riid, &IID_IOPCHDA_SyncRead)) *ppv = &s->sync;
     else if (IsEqualIID(riid, &IID_IOPCHDA_AsyncRead)) *ppv = &s->async;
     else if (IsEqualIID(riid, &IID_IOPCHDA_SyncAnnotations)) *ppv = &s->annotations;
+    else if (IsEqualIID(riid, &IID_IOPCHDA_SyncUpdate)) *ppv = &s->update;
+    else if (IsEqualIID(riid, &IID_IOPCHDA_Playback)) *ppv = &s->playback;
     else if (IsEqualIID(riid, &IID_IConnectionPointContainer)) *ppv = &s->cp.container;
     else return E_NOINTERFACE;
     InterlockedIncrement(&s->refs);
@@ -64,6 +73,8 @@ SERVER_UNKNOWN(srv, IOPCHDA_Server, server)
 SERVER_UNKNOWN(sync, IOPCHDA_SyncRead, sync)
 SERVER_UNKNOWN(async, IOPCHDA_AsyncRead, async)
 SERVER_UNKNOWN(ann, IOPCHDA_SyncAnnotations, annotations)
+SERVER_UNKNOWN(upd, IOPCHDA_SyncUpdate, update)
+SERVER_UNKNOWN(play, IOPCHDA_Playback, playback)
 
 /* A copy in task memory of the UTF-8 texts `names[0..count)`, or NULL. */
 static LPWSTR *task_names(const char *const *names, DWORD count) {
@@ -282,9 +293,15 @@ static HRESULT STDMETHODCALLTYPE sync_attribute(IOPCHDA_SyncRead *This, OPCHDA_T
 static IOPCHDA_SyncReadVtbl sync_vtbl = {sync_qi,      sync_add_ref,  sync_release,  sync_raw,
                                          sync_processed, sync_at_time, sync_modified, sync_attribute};
 
-/* An asynchronous read: its OnReadComplete from a thread of the server. */
+/* What a thread of the server calls back. */
+enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE, CALL_PLAYBACK };
+
+/* An asynchronous read (its OnReadComplete), an advise's data (OnDataChange), a raw playback's data
+ * (OnPlayback) or a cancel's completion (OnCancelComplete of the cancel ID `transaction`), from a
+ * thread of the server. */
 typedef struct AsyncRead {
     Server *server; /* a reference */
+    int call;
     DWORD transaction, count;
     OPCHANDLE handles[HDA_ITEMS];
     DWORD aggregates[HDA_ITEMS];
@@ -299,9 +316,17 @@ static DWORD WINAPI read_thread(void *param) {
     DWORD k;
     CoInitializeEx(NULL, COINIT_MULTITHREADED);
     sink = (IOPCHDA_DataCallback *)sink_point_sink(&r->server->cp);
-    if (read_items(r->server, r->count, r->handles, r->processed ? r->aggregates : NULL, &items, &errors) == S_OK &&
-        sink)
-        sink->lpVtbl->OnReadComplete(sink, r->transaction, S_OK, r->count, items, errors);
+    if (r->call == CALL_CANCEL_COMPLETE) {
+        if (sink) sink->lpVtbl->OnCancelComplete(sink, r->transaction);
+    } else if (read_items(r->server, r->count, r->handles, r->processed ? r->aggregates : NULL, &items, &errors) ==
+                   S_OK &&
+               sink) {
+        OPCHDA_ITEM *each[HDA_ITEMS]; /* OnPlayback's array of pointers */
+        for (k = 0; k < r->count; k++) each[k] = &items[k];
+        if (r->call == CALL_DATA_CHANGE) sink->lpVtbl->OnDataChange(sink, r->transaction, S_OK, r->count, items, errors);
+        else if (r->call == CALL_PLAYBACK) sink->lpVtbl->OnPlayback(sink, r->transaction, S_OK, r->count, each, errors);
+        else sink->lpVtbl->OnReadComplete(sink, r->transaction, S_OK, r->count, items, errors);
+    }
     if (sink) sink->lpVtbl->Release(sink);
     for (k = 0; items && k < r->count; k++) hda_free_item(&items[k]);
     CoTaskMemFree(items);
@@ -312,12 +337,27 @@ static DWORD WINAPI read_thread(void *param) {
     return 0;
 }
 
-/* Starts the read of `count` items (at most HDA_ITEMS, each valid) with `aggregates` or raw. */
-static HRESULT start_read(Server *s, DWORD transaction, DWORD count, const OPCHANDLE *handles, const DWORD *aggregates,
-                          DWORD *cancel, HRESULT **errors) {
+/* Starts a thread calling back `r` (calloc'ed, taken). */
+static HRESULT start_call(Server *s, AsyncRead *r) {
+    HANDLE thread;
+    r->server = s;
+    InterlockedIncrement(&s->refs);
+    thread = CreateThread(NULL, 0, read_thread, r, 0, NULL);
+    if (!thread) {
+        server_release(s);
+        free(r);
+        return E_OUTOFMEMORY;
+    }
+    CloseHandle(thread);
+    return S_OK;
+}
+
+/* Starts the read (or, `call` CALL_DATA_CHANGE, the advise) of `count` items (at most HDA_ITEMS, each
+ * valid) with `aggregates` or raw. */
+static HRESULT start_read(Server *s, int call, DWORD transaction, DWORD count, const OPCHANDLE *handles,
+                          const DWORD *aggregates, DWORD *cancel, HRESULT **errors) {
     IUnknown *sink = sink_point_sink(&s->cp);
     AsyncRead *r;
-    HANDLE thread;
     DWORD k;
     if (!sink) return CONNECT_E_NOCONNECTION;
     sink->lpVtbl->Release(sink);
@@ -332,22 +372,17 @@ static HRESULT start_read(Server *s, DWORD transaction, DWORD count, const OPCHA
         *errors = NULL;
         return E_OUTOFMEMORY;
     }
-    r->server = s;
+    r->call = call;
     r->transaction = transaction;
     r->count = count;
     memcpy(r->handles, handles, count * sizeof *handles);
     if (aggregates) memcpy(r->aggregates, aggregates, count * sizeof *aggregates);
     r->processed = aggregates != NULL;
-    InterlockedIncrement(&s->refs);
-    thread = CreateThread(NULL, 0, read_thread, r, 0, NULL);
-    if (!thread) {
-        server_release(s);
-        free(r);
+    if (FAILED(start_call(s, r))) {
         CoTaskMemFree(*errors);
         *errors = NULL;
         return E_OUTOFMEMORY;
     }
-    CloseHandle(thread);
     *cancel = transaction + 1;
     return S_OK;
 }
@@ -359,16 +394,35 @@ static HRESULT STDMETHODCALLTYPE async_raw(IOPCHDA_AsyncRead *This, DWORD transa
     *cancel = 0;
     *errors = NULL;
     if (num_values != HDA_RAW_VALUES || bounds || !take_range(start, end)) return E_INVALIDARG;
-    return start_read(CONTAINER(Server, async, This), transaction, count, handles, NULL, cancel, errors);
+    return start_read(CONTAINER(Server, async, This), CALL_READ_COMPLETE, transaction, count, handles, NULL, cancel,
+                      errors);
 }
 
+/* An advise of raw data from "NOW-1H" (resolved as take_range resolves it) every hda_update_interval():
+ * one OnDataChange of the items' history from a thread of the server, until Cancel. */
 static HRESULT STDMETHODCALLTYPE async_advise_raw(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
                                                   FILETIME interval, DWORD count, OPCHANDLE *handles, DWORD *cancel,
                                                   HRESULT **errors) {
-    (void)This, (void)transaction, (void)start, (void)interval, (void)count, (void)handles;
-    if (cancel) *cancel = 0;
-    if (errors) *errors = NULL;
-    return E_NOTIMPL;
+    Server *s = CONTAINER(Server, async, This);
+    HRESULT hr;
+    if (!cancel || !errors) return E_POINTER;
+    *cancel = 0;
+    *errors = NULL;
+    if (!start || !start->bString || !is_utf8(start->szTime, HDA_START_TEXT) ||
+        !same_filetime(interval, hda_update_interval()))
+        return E_INVALIDARG;
+    EnterCriticalSection(&s->lock);
+    hr = s->advise_cancel ? E_FAIL : S_OK; /* one advise at a time */
+    LeaveCriticalSection(&s->lock);
+    if (FAILED(hr)) return hr;
+    start->ftTime = test_time(HDA_START_RESOLVED);
+    hr = start_read(s, CALL_DATA_CHANGE, transaction, count, handles, NULL, cancel, errors);
+    if (SUCCEEDED(hr)) {
+        EnterCriticalSection(&s->lock);
+        s->advise_cancel = *cancel;
+        LeaveCriticalSection(&s->lock);
+    }
+    return hr;
 }
 
 static HRESULT STDMETHODCALLTYPE async_processed(IOPCHDA_AsyncRead *This, DWORD transaction, OPCHDA_TIME *start,
@@ -378,7 +432,8 @@ static HRESULT STDMETHODCALLTYPE async_processed(IOPCHDA_AsyncRead *This, DWORD 
     *cancel = 0;
     *errors = NULL;
     if (!aggregates || !same_filetime(interval, hda_interval()) || !take_range(start, end)) return E_INVALIDARG;
-    return start_read(CONTAINER(Server, async, This), transaction, count, handles, aggregates, cancel, errors);
+    return start_read(CONTAINER(Server, async, This), CALL_READ_COMPLETE, transaction, count, handles, aggregates,
+                      cancel, errors);
 }
 
 static HRESULT STDMETHODCALLTYPE async_advise_processed(IOPCHDA_AsyncRead *This, DWORD transaction,
@@ -419,14 +474,182 @@ static HRESULT STDMETHODCALLTYPE async_attribute(IOPCHDA_AsyncRead *This, DWORD 
     return E_NOTIMPL;
 }
 
+/* Cancels the advise (its cancel ID as AdviseRaw gave it): OnCancelComplete from a thread of the
+ * server. */
 static HRESULT STDMETHODCALLTYPE async_cancel(IOPCHDA_AsyncRead *This, DWORD cancel) {
-    (void)This, (void)cancel;
-    return E_NOTIMPL;
+    Server *s = CONTAINER(Server, async, This);
+    AsyncRead *r;
+    int known;
+    EnterCriticalSection(&s->lock);
+    known = cancel != 0 && cancel == s->advise_cancel;
+    if (known) s->advise_cancel = 0;
+    LeaveCriticalSection(&s->lock);
+    if (!known) return E_INVALIDARG;
+    r = (AsyncRead *)calloc(1, sizeof *r);
+    if (!r) return E_OUTOFMEMORY;
+    r->call = CALL_CANCEL_COMPLETE;
+    r->transaction = cancel;
+    return start_call(s, r);
 }
 
 static IOPCHDA_AsyncReadVtbl async_vtbl = {
     async_qi,          async_add_ref,   async_release,          async_raw,     async_advise_raw,
     async_processed,   async_advise_processed, async_at_time,   async_modified, async_attribute, async_cancel};
+
+/* -- IOPCHDA_SyncUpdate -- */
+
+static HRESULT STDMETHODCALLTYPE upd_capabilities(IOPCHDA_SyncUpdate *This, OPCHDA_UPDATECAPABILITIES *capabilities) {
+    (void)This;
+    if (!capabilities) return E_POINTER;
+    *capabilities = (OPCHDA_UPDATECAPABILITIES)HDA_UPDATE_CAPS;
+    return S_OK;
+}
+
+/* The answer to `count` updates of `method` (hda.h), or to DeleteAtTime's times (method 3, `values`
+ * and `qualities` NULL): each element as hda_update() says when it arrived as sent, else
+ * E_INVALIDARG. */
+static HRESULT update(int method, DWORD count, const OPCHANDLE *handles, const FILETIME *times, const VARIANT *values,
+                      const DWORD *qualities, HRESULT **errors) {
+    HRESULT hr = S_OK;
+    DWORD k;
+    if (!errors) return E_POINTER;
+    *errors = NULL;
+    if (count != HDA_UPDATES || !handles || !times || (method < 3 && (!values || !qualities))) return E_INVALIDARG;
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*errors) return E_OUTOFMEMORY;
+    for (k = 0; k < count; k++) {
+        HdaUpdate want = hda_update(method, k);
+        int as_sent = handles[k] == want.handle && same_filetime(times[k], want.time) &&
+                      (method == 3 || (hda_same_variant(&values[k], &want.value) && qualities[k] == want.quality));
+        (*errors)[k] = as_sent ? want.result : E_INVALIDARG;
+        if ((*errors)[k] != S_OK) hr = S_FALSE;
+        VariantClear(&want.value);
+    }
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE upd_insert(IOPCHDA_SyncUpdate *This, DWORD count, OPCHANDLE *handles,
+                                            FILETIME *times, VARIANT *values, DWORD *qualities, HRESULT **errors) {
+    (void)This;
+    return update(0, count, handles, times, values, qualities, errors);
+}
+static HRESULT STDMETHODCALLTYPE upd_replace(IOPCHDA_SyncUpdate *This, DWORD count, OPCHANDLE *handles,
+                                             FILETIME *times, VARIANT *values, DWORD *qualities, HRESULT **errors) {
+    (void)This;
+    return update(1, count, handles, times, values, qualities, errors);
+}
+static HRESULT STDMETHODCALLTYPE upd_insert_replace(IOPCHDA_SyncUpdate *This, DWORD count, OPCHANDLE *handles,
+                                                    FILETIME *times, VARIANT *values, DWORD *qualities,
+                                                    HRESULT **errors) {
+    (void)This;
+    return update(2, count, handles, times, values, qualities, errors);
+}
+static HRESULT STDMETHODCALLTYPE upd_delete_at_time(IOPCHDA_SyncUpdate *This, DWORD count, OPCHANDLE *handles,
+                                                    FILETIME *times, HRESULT **errors) {
+    (void)This;
+    return update(3, count, handles, times, NULL, NULL, errors);
+}
+
+/* Deletes the history of the range (take_range): the items handed out, an invalid handle an error. */
+static HRESULT STDMETHODCALLTYPE upd_delete_raw(IOPCHDA_SyncUpdate *This, OPCHDA_TIME *start, OPCHDA_TIME *end,
+                                                DWORD count, OPCHANDLE *handles, HRESULT **errors) {
+    Server *s = CONTAINER(Server, update, This);
+    HRESULT hr = S_OK;
+    DWORD k;
+    if (!errors) return E_POINTER;
+    *errors = NULL;
+    if (count == 0 || !handles || !take_range(start, end)) return E_INVALIDARG;
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*errors) return E_OUTOFMEMORY;
+    for (k = 0; k < count; k++)
+        if (item_of_handle(s, handles[k]) < 0) {
+            (*errors)[k] = HDA_E_INVALIDHANDLE;
+            hr = S_FALSE;
+        }
+    return hr;
+}
+
+static IOPCHDA_SyncUpdateVtbl upd_vtbl = {upd_qi,      upd_add_ref,        upd_release,    upd_capabilities,
+                                          upd_insert,  upd_replace,        upd_insert_replace, upd_delete_raw,
+                                          upd_delete_at_time};
+
+/* -- IOPCHDA_Playback: the request checked and a cancel ID given; a raw playback's history comes
+ * in one OnPlayback from a thread of the server (when a callback is advised) -- */
+
+/* Starts playback `which` (0 raw, 1 processed) of `count` valid items; its cancel ID transaction + 1. */
+static HRESULT start_playback(Server *s, int which, DWORD transaction, DWORD count, const OPCHANDLE *handles,
+                              DWORD *cancel, HRESULT **errors) {
+    DWORD k;
+    if (count == 0 || count > HDA_ITEMS || !handles) return E_INVALIDARG;
+    for (k = 0; k < count; k++)
+        if (item_of_handle(s, handles[k]) < 0) return E_INVALIDARG;
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!*errors) return E_OUTOFMEMORY;
+    EnterCriticalSection(&s->lock);
+    s->playback_cancel[which] = transaction + 1;
+    LeaveCriticalSection(&s->lock);
+    *cancel = transaction + 1;
+    return S_OK;
+}
+
+static HRESULT STDMETHODCALLTYPE play_raw(IOPCHDA_Playback *This, DWORD transaction, OPCHDA_TIME *start,
+                                          OPCHDA_TIME *end, DWORD num_values, FILETIME duration, FILETIME interval,
+                                          DWORD count, OPCHANDLE *handles, DWORD *cancel, HRESULT **errors) {
+    Server *s = CONTAINER(Server, playback, This);
+    IUnknown *sink;
+    AsyncRead *r;
+    HRESULT hr;
+    if (!cancel || !errors) return E_POINTER;
+    *cancel = 0;
+    *errors = NULL;
+    if (num_values != HDA_RAW_VALUES || !same_filetime(duration, hda_duration()) ||
+        !same_filetime(interval, hda_update_interval()) || !take_range(start, end))
+        return E_INVALIDARG;
+    hr = start_playback(s, 0, transaction, count, handles, cancel, errors);
+    sink = sink_point_sink(&s->cp);
+    if (FAILED(hr) || !sink) return hr;
+    sink->lpVtbl->Release(sink);
+    r = (AsyncRead *)calloc(1, sizeof *r);
+    if (!r) return hr; /* a test server: the playback goes on without data */
+    r->call = CALL_PLAYBACK;
+    r->transaction = transaction;
+    r->count = count;
+    memcpy(r->handles, handles, count * sizeof *handles);
+    start_call(s, r);
+    return hr;
+}
+
+static HRESULT STDMETHODCALLTYPE play_processed(IOPCHDA_Playback *This, DWORD transaction, OPCHDA_TIME *start,
+                                                OPCHDA_TIME *end, FILETIME resample, DWORD intervals,
+                                                FILETIME interval, DWORD count, OPCHANDLE *handles, DWORD *aggregates,
+                                                DWORD *cancel, HRESULT **errors) {
+    DWORD k;
+    if (!cancel || !errors) return E_POINTER;
+    *cancel = 0;
+    *errors = NULL;
+    if (!same_filetime(resample, hda_interval()) || intervals != HDA_INTERVALS ||
+        !same_filetime(interval, hda_update_interval()) || !aggregates || !take_range(start, end))
+        return E_INVALIDARG;
+    for (k = 0; k < count && k < HDA_ITEMS; k++)
+        if (aggregates[k] != OPCHDA_AVERAGE && aggregates[k] != OPCHDA_MAXIMUM) return E_INVALIDARG;
+    return start_playback(CONTAINER(Server, playback, This), 1, transaction, count, handles, cancel, errors);
+}
+
+static HRESULT STDMETHODCALLTYPE play_cancel(IOPCHDA_Playback *This, DWORD cancel) {
+    Server *s = CONTAINER(Server, playback, This);
+    HRESULT hr = E_INVALIDARG;
+    int i;
+    EnterCriticalSection(&s->lock);
+    for (i = 0; i < 2; i++)
+        if (cancel != 0 && s->playback_cancel[i] == cancel) {
+            s->playback_cancel[i] = 0;
+            hr = S_OK;
+        }
+    LeaveCriticalSection(&s->lock);
+    return hr;
+}
+
+static IOPCHDA_PlaybackVtbl play_vtbl = {play_qi, play_add_ref, play_release, play_raw, play_processed, play_cancel};
 
 /* -- IOPCHDA_SyncAnnotations -- */
 
@@ -496,6 +719,8 @@ static HRESULT OPCCOMN_CDECL create_server(void *context, IUnknown *outer, REFII
     s->sync.lpVtbl = &sync_vtbl;
     s->async.lpVtbl = &async_vtbl;
     s->annotations.lpVtbl = &ann_vtbl;
+    s->update.lpVtbl = &upd_vtbl;
+    s->playback.lpVtbl = &play_vtbl;
     s->refs = 1;
     InitializeCriticalSection(&s->lock);
     sink_point_init(&s->cp, (IUnknown *)&s->server, &IID_IOPCHDA_DataCallback);

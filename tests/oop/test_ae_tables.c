@@ -14,7 +14,10 @@
  * IOPCEventSink::OnEvent with two ONEVENTSTRUCTs (strings, NULL strings, FILETIMEs, VT_BSTR and VT_I4
  * attributes) through the subscription's connection point; IOPCEventServer::CreateAreaBrowser and
  * IOPCEventAreaBrowser (ChangeBrowsePosition, BrowseOPCAreas: an IEnumString out,
- * GetQualifiedAreaName, GetQualifiedSourceName). */
+ * GetQualifiedAreaName, GetQualifiedSourceName); IOPCEventServer::AckCondition (two strings, arrays of
+ * strings, FILETIMEs and cookies, per-element results, a success code among them);
+ * IOPCEventSubscriptionMgt2::SetKeepAlive (a revised time with OPC_S_INVALIDKEEPALIVETIME) and
+ * GetKeepAlive. */
 #include "ae.h"
 
 #include <olectl.h> /* CONNECT_E_* */
@@ -246,6 +249,85 @@ static void check_enable(IOPCEventServer2 *server) {
     check_enable_state(server, 1, 2, areas, all, all, ok, S_OK);
 }
 
+static void check_keep_alive(IOPCEventSubscriptionMgt *sub) {
+    IOPCEventSubscriptionMgt2 *sub2 = NULL;
+    DWORD revised = GARBAGE_U32, time = GARBAGE_U32;
+    CHECK_HR(sub->lpVtbl->QueryInterface(sub, &IID_IOPCEventSubscriptionMgt2, (void **)&sub2), S_OK);
+    if (!sub2) return;
+    CHECK_HR(sub2->lpVtbl->GetKeepAlive(sub2, &time), S_OK);
+    CHECK(time == 0);
+    CHECK_HR(sub2->lpVtbl->SetKeepAlive(sub2, AE_KEEP_ALIVE, &revised), OPC_S_INVALIDKEEPALIVETIME_AE);
+    CHECK(revised == AE_REVISED_KEEP_ALIVE);
+    time = GARBAGE_U32;
+    CHECK_HR(sub2->lpVtbl->GetKeepAlive(sub2, &time), S_OK);
+    CHECK(time == AE_REVISED_KEEP_ALIVE);
+    revised = GARBAGE_U32;
+    CHECK_HR(sub2->lpVtbl->SetKeepAlive(sub2, AE_KEEP_ALIVE + 1, &revised), E_INVALIDARG);
+    CHECK(revised == 0);
+    time = GARBAGE_U32;
+    CHECK_HR(sub2->lpVtbl->GetKeepAlive(sub2, &time), S_OK);
+    CHECK(time == AE_REVISED_KEEP_ALIVE);
+    revised = GARBAGE_U32;
+    CHECK_HR(sub2->lpVtbl->SetKeepAlive(sub2, 0, &revised), S_OK);
+    CHECK(revised == 0);
+    sub2->lpVtbl->Release(sub2);
+}
+
+/* AckCondition: strings, arrays of strings, FILETIMEs and cookies, each element answered by the
+ * server as it arrived (ae.h); an acknowledger or comment not as expected refuses the call. */
+static void check_ack(IOPCEventServer2 *server) {
+    LPWSTR sources[AE_ACKS], conditions[AE_ACKS];
+    FILETIME times[AE_ACKS];
+    DWORD cookies[AE_ACKS], k;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    LPWSTR acknowledger = task_utf8(AE_ACKNOWLEDGER), comment = task_utf8(AE_ACK_COMMENT);
+    for (k = 0; k < AE_ACKS; k++) {
+        AeAck a = ae_ack(k);
+        sources[k] = task_utf8(a.source);
+        conditions[k] = task_utf8(a.condition);
+        times[k] = a.active_time;
+        cookies[k] = a.cookie;
+    }
+    CHECK_HR(server->lpVtbl->AckCondition(server, AE_ACKS, acknowledger, comment, sources, conditions, times, cookies,
+                                          &errors),
+             S_FALSE);
+    CHECK(errors && errors != GARBAGE_PTR);
+    if (errors && errors != GARBAGE_PTR) {
+        for (k = 0; k < AE_ACKS; k++) CHECK_HR(errors[k], ae_ack(k).result);
+        CoTaskMemFree(errors);
+    }
+    /* The first element alone: not the count the server expects, refused, nothing comes back. */
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->AckCondition(server, 1, acknowledger, comment, sources, conditions, times, cookies, &errors),
+             E_INVALIDARG);
+    CHECK(errors == NULL);
+    /* Another comment (an empty string): refused, nothing comes back. */
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->AckCondition(server, AE_ACKS, acknowledger, (LPWSTR)W(""), sources, conditions, times,
+                                          cookies, &errors),
+             E_INVALIDARG);
+    CHECK(errors == NULL);
+    /* One element's active time a second later: the server sees it. */
+    times[0] = test_time(5);
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->AckCondition(server, AE_ACKS, acknowledger, comment, sources, conditions, times, cookies,
+                                          &errors),
+             S_FALSE);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], E_INVALIDARG);
+        for (k = 1; k < AE_ACKS; k++) CHECK_HR(errors[k], ae_ack(k).result);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    for (k = 0; k < AE_ACKS; k++) {
+        CoTaskMemFree(sources[k]);
+        CoTaskMemFree(conditions[k]);
+    }
+    CoTaskMemFree(acknowledger);
+    CoTaskMemFree(comment);
+}
+
 static void check_subscription(IOPCEventServer2 *server) {
     IOPCEventSubscriptionMgt *sub = NULL;
     IConnectionPointContainer *cpc = NULL;
@@ -333,6 +415,10 @@ static void check_subscription(IOPCEventServer2 *server) {
         cp->lpVtbl->Release(cp);
     }
     if (cpc) cpc->lpVtbl->Release(cpc);
+
+    /* IOPCEventSubscriptionMgt2: the keep-alive time asked, revised (a success code other than S_OK),
+     * read back; another time is not what the server expects. */
+    check_keep_alive(sub);
 
     /* SetState: NULL for what stays (unique in-pointers), two changes and a new client handle. */
     revised_buffer = revised_max = GARBAGE_U32;
@@ -435,6 +521,7 @@ int main(void) {
         check_categories(server);
         check_condition_state(server);
         check_enable(server);
+        check_ack(server);
         check_subscription(server);
         check_area_browser(server);
         server->lpVtbl->Release(server);

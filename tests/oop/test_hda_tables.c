@@ -12,7 +12,12 @@
  * (a FILETIME by value, whose two halves the server checks), ReadAttribute (the bound);
  * IOPCHDA_SyncAnnotations::QueryCapabilities, Read (OPCHDA_ANNOTATION, one with no values);
  * IOPCHDA_AsyncRead::ReadRaw and ReadProcessed, each answered by IOPCHDA_DataCallback::OnReadComplete
- * through the server's connection point. */
+ * through the server's connection point, AdviseRaw (a FILETIME by value) answered by OnDataChange,
+ * and Cancel answered by OnCancelComplete; IOPCHDA_SyncUpdate's six methods (VARIANT values of
+ * VT_R8, VT_BSTR and VT_I4, FILETIMEs, qualities, per-element results with success codes among
+ * them); IOPCHDA_Playback::ReadRawWithUpdate (answered by OnPlayback: an array of pointers to
+ * items) and ReadProcessedWithUpdate (two FILETIMEs by value each, which take four stack slots on
+ * x86, checked by the server) and Cancel. */
 #include "hda.h"
 
 #include <olectl.h> /* CONNECT_E_* */
@@ -24,11 +29,31 @@ static WCHAR server_path[MAX_PATH];
 typedef struct Callback {
     IOPCHDA_DataCallback iface;
     LONG refs;
-    HANDLE called; /* set by OnReadComplete */
+    HANDLE called; /* set by OnReadComplete, OnDataChange, OnCancelComplete */
     int calls;
-    /* What the next OnReadComplete must bring: the transaction, the items, raw or by `aggregate`. */
+    /* What the next call must be (CALL_*) and bring: the transaction (the cancel ID of
+     * OnCancelComplete), the items, raw or by `aggregate`. */
+    int expected;
     DWORD transaction, count, aggregate;
 } Callback;
+
+enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE, CALL_PLAYBACK };
+
+/* Checks the items of an OnReadComplete or OnDataChange against what `c` expects. */
+static void check_items(Callback *c, int call, DWORD transaction, HRESULT status, DWORD count, OPCHDA_ITEM *items,
+                        HRESULT *errors) {
+    DWORD k;
+    c->calls++;
+    CHECK(c->expected == call);
+    CHECK(transaction == c->transaction);
+    CHECK_HR(status, S_OK);
+    CHECK(count == c->count && items && errors);
+    for (k = 0; items && errors && k < count && k < c->count; k++) {
+        CHECK(hda_is_item(&items[k], c->aggregate ? 0 : (int)k, c->aggregate));
+        CHECK_HR(errors[k], S_OK);
+    }
+    SetEvent(c->called);
+}
 
 static HRESULT STDMETHODCALLTYPE cb_qi(IOPCHDA_DataCallback *This, REFIID riid, void **ppv) {
     if (!ppv) return E_POINTER;
@@ -48,23 +73,12 @@ static ULONG STDMETHODCALLTYPE cb_release(IOPCHDA_DataCallback *This) {
 }
 static HRESULT STDMETHODCALLTYPE cb_data_change(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                                 DWORD count, OPCHDA_ITEM *items, HRESULT *errors) {
-    (void)This, (void)transaction, (void)status, (void)count, (void)items, (void)errors;
-    CHECK(0); /* not asked for */
+    check_items((Callback *)This, CALL_DATA_CHANGE, transaction, status, count, items, errors);
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_read_complete(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                                   DWORD count, OPCHDA_ITEM *items, HRESULT *errors) {
-    Callback *c = (Callback *)This;
-    DWORD k;
-    c->calls++;
-    CHECK(transaction == c->transaction);
-    CHECK_HR(status, S_OK);
-    CHECK(count == c->count && items && errors);
-    for (k = 0; items && errors && k < count && k < c->count; k++) {
-        CHECK(hda_is_item(&items[k], c->aggregate ? 0 : (int)k, c->aggregate));
-        CHECK_HR(errors[k], S_OK);
-    }
-    SetEvent(c->called);
+    check_items((Callback *)This, CALL_READ_COMPLETE, transaction, status, count, items, errors);
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_read_modified(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
@@ -92,10 +106,21 @@ static HRESULT STDMETHODCALLTYPE cb_insert_annotations(IOPCHDA_DataCallback *Thi
     CHECK(0);
     return S_OK;
 }
+/* A raw playback's history: an array of pointers to items ([in, size_is(n)] OPCHDA_ITEM **). */
 static HRESULT STDMETHODCALLTYPE cb_playback(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                              DWORD count, OPCHDA_ITEM **items, HRESULT *errors) {
-    (void)This, (void)transaction, (void)status, (void)count, (void)items, (void)errors;
-    CHECK(0);
+    Callback *c = (Callback *)This;
+    DWORD k;
+    c->calls++;
+    CHECK(c->expected == CALL_PLAYBACK);
+    CHECK(transaction == c->transaction);
+    CHECK_HR(status, S_OK);
+    CHECK(count == c->count && items && errors);
+    for (k = 0; items && errors && k < count && k < c->count; k++) {
+        CHECK(items[k] && hda_is_item(items[k], (int)k, 0));
+        CHECK_HR(errors[k], S_OK);
+    }
+    SetEvent(c->called);
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_update_complete(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
@@ -105,8 +130,10 @@ static HRESULT STDMETHODCALLTYPE cb_update_complete(IOPCHDA_DataCallback *This, 
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_cancel_complete(IOPCHDA_DataCallback *This, DWORD cancel) {
-    (void)This, (void)cancel;
-    CHECK(0);
+    Callback *c = (Callback *)This;
+    c->calls++;
+    CHECK(c->expected == CALL_CANCEL_COMPLETE && cancel == c->transaction);
+    SetEvent(c->called);
     return S_OK;
 }
 static IOPCHDA_DataCallbackVtbl cb_vtbl = {cb_qi,          cb_add_ref,          cb_release,
@@ -300,6 +327,146 @@ static void check_bound(IOPCHDA_SyncRead *sync) {
     free(ids);
 }
 
+/* IOPCHDA_SyncUpdate: the capabilities; Insert, Replace and InsertReplace of HDA_UPDATES values
+ * (VARIANTs, FILETIMEs, qualities), each element answered by the server as it arrived; DeleteRaw
+ * (the time range [in, out]) and DeleteAtTime (FILETIMEs). */
+static void check_update(IOPCHDA_Server *server) {
+    IOPCHDA_SyncUpdate *upd = NULL;
+    OPCHDA_UPDATECAPABILITIES caps = (OPCHDA_UPDATECAPABILITIES)0;
+    OPCHANDLE handles[HDA_UPDATES];
+    FILETIME times[HDA_UPDATES];
+    VARIANT values[HDA_UPDATES];
+    DWORD qualities[HDA_UPDATES], k;
+    HRESULT *errors, hr;
+    OPCHDA_TIME start, end;
+    int method;
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_SyncUpdate, (void **)&upd), S_OK);
+    if (!upd) return;
+    CHECK_HR(upd->lpVtbl->QueryCapabilities(upd, &caps), S_OK);
+    CHECK(caps == HDA_UPDATE_CAPS);
+    for (method = 0; method < 4; method++) {
+        for (k = 0; k < HDA_UPDATES; k++) {
+            HdaUpdate u = hda_update(method, k);
+            handles[k] = u.handle;
+            times[k] = u.time;
+            values[k] = u.value; /* cleared below */
+            qualities[k] = u.quality;
+        }
+        errors = (HRESULT *)GARBAGE_PTR;
+        if (method == 0) hr = upd->lpVtbl->Insert(upd, HDA_UPDATES, handles, times, values, qualities, &errors);
+        else if (method == 1) hr = upd->lpVtbl->Replace(upd, HDA_UPDATES, handles, times, values, qualities, &errors);
+        else if (method == 2)
+            hr = upd->lpVtbl->InsertReplace(upd, HDA_UPDATES, handles, times, values, qualities, &errors);
+        else hr = upd->lpVtbl->DeleteAtTime(upd, HDA_UPDATES, handles, times, &errors);
+        CHECK_HR(hr, S_FALSE);
+        if (errors && errors != GARBAGE_PTR) {
+            for (k = 0; k < HDA_UPDATES; k++) CHECK_HR(errors[k], hda_update(method, k).result);
+            CoTaskMemFree(errors);
+        } else {
+            CHECK(0);
+        }
+        for (k = 0; k < HDA_UPDATES; k++) VariantClear(&values[k]);
+    }
+    /* Replace with Insert's values: each element not as the server expects. */
+    for (k = 0; k < HDA_UPDATES; k++) {
+        HdaUpdate u = hda_update(0, k);
+        handles[k] = u.handle;
+        times[k] = u.time;
+        values[k] = u.value;
+        qualities[k] = u.quality;
+    }
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(upd->lpVtbl->Replace(upd, HDA_UPDATES, handles, times, values, qualities, &errors), S_FALSE);
+    if (errors && errors != GARBAGE_PTR) {
+        for (k = 0; k < HDA_UPDATES; k++) CHECK_HR(errors[k], E_INVALIDARG);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    for (k = 0; k < HDA_UPDATES; k++) VariantClear(&values[k]);
+    /* DeleteRaw over the range: both items, an invalid handle. */
+    handles[0] = HDA_SERVER_HANDLE(0);
+    handles[1] = HDA_SERVER_HANDLE(1);
+    handles[2] = HDA_INVALID_HANDLE;
+    make_range(&start, &end);
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(upd->lpVtbl->DeleteRaw(upd, &start, &end, 3, handles, &errors), S_FALSE);
+    CHECK(range_resolved(&start, &end));
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    upd->lpVtbl->Release(upd);
+}
+
+/* IOPCHDA_Playback: ReadRawWithUpdate (two FILETIMEs by value after a DWORD), its history through
+ * OnPlayback, and ReadProcessedWithUpdate (two FILETIMEs by value with a DWORD between them), each
+ * checked by the server and given a cancel ID; the same with the two FILETIMEs swapped is refused;
+ * Cancel of each. The callback is advised. */
+static void check_playback(IOPCHDA_Server *server) {
+    IOPCHDA_Playback *play = NULL;
+    OPCHANDLE handles[2] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1)};
+    DWORD aggregates[2] = {OPCHDA_AVERAGE, OPCHDA_MAXIMUM}, cancel;
+    OPCHDA_TIME start, end;
+    HRESULT *errors;
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_Playback, (void **)&play), S_OK);
+    if (!play) return;
+    make_range(&start, &end);
+    cancel = GARBAGE_U32;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(play->lpVtbl->ReadRawWithUpdate(play, 51, &start, &end, HDA_RAW_VALUES, hda_update_interval(),
+                                             hda_duration(), 2, handles, &cancel, &errors),
+             E_INVALIDARG);
+    CHECK(cancel == 0 && errors == NULL);
+    range_resolved(&start, &end); /* frees */
+    cb.expected = CALL_PLAYBACK;
+    cb.transaction = 51;
+    cb.count = 2;
+    cb.aggregate = 0;
+    make_range(&start, &end);
+    CHECK_HR(play->lpVtbl->ReadRawWithUpdate(play, 51, &start, &end, HDA_RAW_VALUES, hda_duration(),
+                                             hda_update_interval(), 2, handles, &cancel, &errors),
+             S_OK);
+    CHECK(cancel == 52 && range_resolved(&start, &end));
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
+    CHECK(cb.calls == 5);
+    make_range(&start, &end);
+    cancel = GARBAGE_U32;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(play->lpVtbl->ReadProcessedWithUpdate(play, 61, &start, &end, hda_update_interval(), HDA_INTERVALS,
+                                                   hda_interval(), 2, handles, aggregates, &cancel, &errors),
+             E_INVALIDARG);
+    CHECK(cancel == 0 && errors == NULL);
+    range_resolved(&start, &end); /* frees */
+    make_range(&start, &end);
+    CHECK_HR(play->lpVtbl->ReadProcessedWithUpdate(play, 61, &start, &end, hda_interval(), HDA_INTERVALS,
+                                                   hda_update_interval(), 2, handles, aggregates, &cancel, &errors),
+             S_OK);
+    CHECK(cancel == 62 && range_resolved(&start, &end));
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    CHECK_HR(play->lpVtbl->Cancel(play, 52), S_OK);
+    CHECK_HR(play->lpVtbl->Cancel(play, 52), E_INVALIDARG);
+    CHECK_HR(play->lpVtbl->Cancel(play, 62), S_OK);
+    play->lpVtbl->Release(play);
+}
+
 static void check_annotations(IOPCHDA_Server *server) {
     IOPCHDA_SyncAnnotations *ann = NULL;
     OPCHDA_ANNOTATIONCAPABILITIES caps = (OPCHDA_ANNOTATIONCAPABILITIES)0;
@@ -344,6 +511,48 @@ static void check_annotations(IOPCHDA_Server *server) {
     ann->lpVtbl->Release(ann);
 }
 
+/* AdviseRaw: its start time [in, out] (resolved by the server), the update interval a FILETIME by
+ * value; the server's OnDataChange brings the items' history; Cancel with the advise's cancel ID,
+ * answered by OnCancelComplete. Another interval, or another cancel ID, is refused. */
+static void check_advise(IOPCHDA_AsyncRead *async) {
+    OPCHANDLE handles[2] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1)};
+    OPCHDA_TIME start, end;
+    FILETIME other = hda_update_interval();
+    DWORD cancel = GARBAGE_U32;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    other.dwLowDateTime ^= 1;
+    make_range(&start, &end);
+    CHECK_HR(async->lpVtbl->AdviseRaw(async, 71, &start, other, 2, handles, &cancel, &errors), E_INVALIDARG);
+    CHECK(cancel == 0 && errors == NULL);
+    cb.expected = CALL_DATA_CHANGE;
+    cb.transaction = 71;
+    cb.count = 2;
+    cb.aggregate = 0;
+    errors = (HRESULT *)GARBAGE_PTR;
+    cancel = GARBAGE_U32;
+    CHECK_HR(async->lpVtbl->AdviseRaw(async, 71, &start, hda_update_interval(), 2, handles, &cancel, &errors), S_OK);
+    CHECK(cancel == 72);
+    CHECK(start.bString && is_utf8(start.szTime, HDA_START_TEXT) &&
+          same_filetime(start.ftTime, test_time(HDA_START_RESOLVED)));
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    range_resolved(&start, &end); /* frees */
+    CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
+    CHECK(cb.calls == 3);
+    cb.expected = CALL_CANCEL_COMPLETE;
+    cb.transaction = 72;
+    CHECK_HR(async->lpVtbl->Cancel(async, 71), E_INVALIDARG);
+    CHECK_HR(async->lpVtbl->Cancel(async, 72), S_OK);
+    CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
+    CHECK(cb.calls == 4);
+    CHECK_HR(async->lpVtbl->Cancel(async, 72), E_INVALIDARG); /* cancelled already */
+}
+
 static void check_async(IOPCHDA_Server *server) {
     IConnectionPointContainer *cpc = NULL;
     IConnectionPoint *cp = NULL;
@@ -370,6 +579,7 @@ static void check_async(IOPCHDA_Server *server) {
         CHECK_HR(cp->lpVtbl->Advise(cp, (IUnknown *)&cb.iface, &cookie), S_OK);
         CHECK(cookie == 1);
         /* A raw read of both items. */
+        cb.expected = CALL_READ_COMPLETE;
         cb.transaction = 31;
         cb.count = 2;
         cb.aggregate = 0;
@@ -389,6 +599,7 @@ static void check_async(IOPCHDA_Server *server) {
         CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
         CHECK(cb.calls == 1);
         /* A processed read of the first item (the interval by value again). */
+        cb.expected = CALL_READ_COMPLETE;
         cb.transaction = 41;
         cb.count = 1;
         cb.aggregate = OPCHDA_MAXIMUM;
@@ -406,6 +617,8 @@ static void check_async(IOPCHDA_Server *server) {
         }
         CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
         CHECK(cb.calls == 2);
+        check_advise(async);
+        check_playback(server);
         CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), S_OK);
         CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), CONNECT_E_NOCONNECTION);
         cp->lpVtbl->Release(cp);
@@ -446,6 +659,7 @@ int main(void) {
             sync->lpVtbl->Release(sync);
         }
         check_annotations(server);
+        check_update(server);
         check_async(server);
         server->lpVtbl->Release(server);
     }
