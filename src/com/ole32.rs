@@ -38,8 +38,8 @@ extern "system" {
 /// cbindgen:ignore
 pub const GMEM_MOVEABLE: u32 = 0x0002;
 
-// (kernel32's, for the memory of CreateStreamOnHGlobal's streams.)
-#[link(name = "kernel32")]
+// (kernel32's, for the memory of CreateStreamOnHGlobal's streams; kernel32 is linked already, by the
+// standard library: a link attribute here would name it twice in the static library's list.)
 extern "system" {
     /// Allocates `bytes` of global memory with `flags`; NULL when out of memory.
     pub fn GlobalAlloc(flags: u32, bytes: usize) -> *mut c_void;
