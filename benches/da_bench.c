@@ -484,7 +484,7 @@ static double paired_ratio(const double *a, const double *b, int n, double *lo, 
 static int goals_met = -1; /* of OPS, once the figures are printed */
 
 static int print_figures(int n, const char *why) {
-    int op, missed = 0;
+    int op, missed = 0, met_count;
     EnterCriticalSection(&output_lock);
     figures_printed = 1;
     if (n == 0) {
@@ -519,15 +519,16 @@ static int print_figures(int n, const char *why) {
     }
     printf("(medians over the rounds; ratio: the median of the rounds' ratios opccomn/widl, spread their lowest and\n"
            " highest; control: the stand-in against itself, what this run's machine makes of equal contenders)\n");
+    met_count = 0;
     for (op = 0; op < OPS; op++) {
         double lo, hi, ratio = paired_ratio(contenders[0].cpu[op], contenders[1].cpu[op], n, &lo, &hi);
         int met = ratio <= 1.1;
         printf("GOAL DA %-37s %7.2fx  goal <= 1.10x  %s%s\n", OPERATIONS[op], ratio, met ? "met" : "NOT MET",
                n < rounds ? " (partial)" : "");
         missed |= !met;
-        goals_met += met;
+        met_count += met;
     }
-    goals_met++;
+    goals_met = met_count;
     fflush(stdout);
     LeaveCriticalSection(&output_lock);
     return missed;
