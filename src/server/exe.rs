@@ -134,21 +134,20 @@ impl HostCount {
 
     /// A count for something new a client asked for; false (nothing counted) when ending.
     pub(crate) fn enter(&self) -> bool {
-        self.0
-            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
-                if n & CLOSING != 0 {
-                    None
-                } else {
-                    (n + 1 < CLOSING).then_some(n + 1)
-                }
-            })
-            .is_ok()
+        super::update_u32(&self.0, Ordering::SeqCst, Ordering::SeqCst, |n| {
+            if n & CLOSING != 0 {
+                None
+            } else {
+                (n + 1 < CLOSING).then_some(n + 1)
+            }
+        })
+        .is_ok()
     }
 
     /// A count that is not refused, even when ending (an object made by an object still alive).
     /// Saturates rather than reaching the closing bit.
     pub(crate) fn lock(&self) {
-        let _ = self.0.fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
+        let _ = super::update_u32(&self.0, Ordering::SeqCst, Ordering::SeqCst, |n| {
             (n & !CLOSING < CLOSING - 1).then_some(n + 1)
         });
     }
@@ -156,12 +155,11 @@ impl HostCount {
     /// Gives back one count: the count left, or `None` when none was held (an unlock too many,
     /// ignored).
     pub(crate) fn unlock(&self) -> Option<u32> {
-        self.0
-            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
-                (n & !CLOSING != 0).then(|| n - 1)
-            })
-            .ok()
-            .map(|n| (n & !CLOSING) - 1)
+        super::update_u32(&self.0, Ordering::SeqCst, Ordering::SeqCst, |n| {
+            (n & !CLOSING != 0).then(|| n - 1)
+        })
+        .ok()
+        .map(|n| (n & !CLOSING) - 1)
     }
 
     /// How much is held.

@@ -167,6 +167,26 @@ static SERVER_LOCKS: AtomicU32 = AtomicU32::new(0);
 /// The server count is shared by every kind (objects of the library, LockServer, OpcServerLock); an
 /// unlock without its lock (a LockServer(FALSE) from any client, through the wire form too) must not
 /// take a count that an object holds, or the server would end or unload under that object.
+/// Replaces the value of `atomic` with `f(value)` unless `f` says `None`: the value before on
+/// success, the value seen on refusal. What `AtomicU32::fetch_update` does; written out because
+/// newer toolchains deprecate that name for one older toolchains lack, and the library builds with
+/// both (the Windows 7 targets use a pinned nightly).
+pub(crate) fn update_u32(
+    atomic: &AtomicU32,
+    set_order: Ordering,
+    fetch_order: Ordering,
+    mut f: impl FnMut(u32) -> Option<u32>,
+) -> Result<u32, u32> {
+    let mut seen = atomic.load(fetch_order);
+    while let Some(next) = f(seen) {
+        match atomic.compare_exchange_weak(seen, next, set_order, fetch_order) {
+            Ok(before) => return Ok(before),
+            Err(now) => seen = now,
+        }
+    }
+    Err(seen)
+}
+
 pub(crate) struct Taken(AtomicU32);
 
 impl Taken {
@@ -176,16 +196,12 @@ impl Taken {
 
     /// Records one lock taken; false (nothing recorded) when the count is saturated.
     fn take(&self) -> bool {
-        self.0
-            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_add(1))
-            .is_ok()
+        update_u32(&self.0, Ordering::AcqRel, Ordering::Acquire, |n| n.checked_add(1)).is_ok()
     }
 
     /// Gives back one recorded lock: false when none is left to give back (an unlock too many).
     fn give_back(&self) -> bool {
-        self.0
-            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1))
-            .is_ok()
+        update_u32(&self.0, Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1)).is_ok()
     }
 
     /// Forgets every lock (the count they were taken on is gone: a host starts or ends).
@@ -234,7 +250,7 @@ pub(crate) fn server_lock() {
         Some(count) => (count.lock)(),
         None => {
             // Saturates rather than wraps: a server that never unlocks stays loaded.
-            let _ = SERVER_LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_add(1));
+            let _ = update_u32(&SERVER_LOCKS, Ordering::AcqRel, Ordering::Acquire, |n| n.checked_add(1));
         }
     }
 }
@@ -259,7 +275,7 @@ pub(crate) fn server_unlock() {
         Some(count) => (count.unlock)(),
         None => {
             // An unlock without a lock is ignored rather than wrapping around.
-            let _ = SERVER_LOCKS.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+            let _ = update_u32(&SERVER_LOCKS, Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
         }
     }
 }

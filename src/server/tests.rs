@@ -552,3 +552,31 @@ fn an_ending_host_refuses_instances_and_lock_server() {
         IClassFactory::Release(f);
     }
 }
+
+#[test]
+fn update_u32_changes_the_value_only_when_the_function_allows_it() {
+    use std::sync::atomic::{AtomicU32, Ordering::SeqCst};
+    let n = AtomicU32::new(u32::MAX - 1);
+    assert_eq!(
+        super::update_u32(&n, SeqCst, SeqCst, |v| v.checked_add(1)),
+        Ok(u32::MAX - 1)
+    );
+    assert_eq!(
+        super::update_u32(&n, SeqCst, SeqCst, |v| v.checked_add(1)),
+        Err(u32::MAX)
+    );
+    assert_eq!(n.load(SeqCst), u32::MAX);
+    // Under contention every change is counted once.
+    let rounds = if cfg!(miri) { 50 } else { 10_000 };
+    let counter = AtomicU32::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..4 {
+            s.spawn(|| {
+                for _ in 0..rounds {
+                    super::update_u32(&counter, SeqCst, SeqCst, |v| v.checked_add(1)).unwrap();
+                }
+            });
+        }
+    });
+    assert_eq!(counter.load(SeqCst), 4 * rounds);
+}
