@@ -457,11 +457,12 @@ stage_win7_build() {
 
 # The Windows 7 builds differ from the others in the system functions they import, not in the host's
 # lifetime or the benchmarks: the reconnect tests (a minute of gaps; its burst under the rpc trace),
-# the benchmark's registration test and the DA benchmark's short run run in c-windows and c-x86 only.
+# the benchmark's registration test and the DA and browser benchmarks' short runs run in c-windows and
+# c-x86 only.
 # (The registration test ends the servers of a stalled run, and Wine keeps an ended server's class
 # registration for the rest of the session: a second run of it in the same session, here with the
 # same CLSIDs, would meet those.)
-win7_excluded='^(oop\.(reconnect|interfaces_kept|bench_registration)|bench\.da_figures)$'
+win7_excluded='^(oop\.(reconnect|interfaces_kept|bench_registration)|bench\.(da|browser)_figures)$'
 stage_c_win7_x64() {
     build_win7 x64
     ctest --test-dir "$build/windows7-x64" --output-on-failure --timeout 300 -E "$win7_excluded"
@@ -628,6 +629,16 @@ passed=()
 failed=()
 skipped=()
 mkdir -p "$build"
+# Free space where the builds go: a full run writes about 8 GB there (the builds of every stage, Wine
+# prefixes, Miri's and the fuzzers' targets). Said at the start and after a failed stage, so that a
+# stage stopped by a full disk ("No space left on device") is told apart from a defect.
+free_space() {
+    df -Pk "$build" | awk 'NR == 2 { printf "%.1f GB free in %s\n", $4 / 1048576, $6 }'
+}
+echo "disk: $(free_space)"
+if [ "$(df -Pk "$build" | awk 'NR == 2 { print int($4 / 1048576) }')" -lt 10 ]; then
+    echo "!!!! disk: less than 10 GB free; a full run writes about 8 GB: stages may fail for want of space"
+fi
 rm -f "$build"/test-skipped-parts.*
 # Miri interprets the tests on one core per model, for minutes, while the other stages (Wine's in
 # particular, which wait on processes and timeouts) leave the machine idle for long stretches: when it
@@ -667,7 +678,7 @@ for name in "${stage_names[@]}"; do
         printf '==== passed: %s (%ds)\n' "$name" $((SECONDS - started))
     else
         failed+=("$name")
-        printf '==== FAILED: %s (exit %d, %ds)\n' "$name" "$rc" $((SECONDS - started))
+        printf '==== FAILED: %s (exit %d, %ds; disk: %s)\n' "$name" "$rc" $((SECONDS - started)) "$(free_space)"
     fi
 done
 
