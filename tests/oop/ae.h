@@ -82,6 +82,64 @@ static HRESULT ae_attribute(DWORD id, VARIANT *v) {
     return AE_E_INVALID_ATTR;
 }
 
+/* The filters the server supports (QueryAvailableFilters): by event, category, severity, area and
+ * source, and a vendor bit. */
+#define AE_FILTER_MASK 0x8000001Fu
+
+/* The event attributes of each category (QueryEventAttributes) and the items behind them
+ * (TranslateToItemIDs); the third category has none. An empty node name is the server's own. */
+#define AE_EVENT_ATTRS 4
+typedef struct AeEventAttr {
+    DWORD category, id;
+    const char *desc;
+    VARTYPE type;
+    const char *item_id, *node;
+    CLSID clsid;
+} AeEventAttr;
+static const AeEventAttr AE_EVENT_ATTR_TABLE[AE_EVENT_ATTRS] = {
+    {1001, 1, "Tank text \xc3\xa4\xc3\xb6\xc3\xbc", VT_BSTR, "Plant.Tank1.Level.Text \xe2\x82\xac", "",
+     {0xC3000001, 0x5EED, 0x4001, {0x80, 1, 2, 3, 4, 5, 6, 7}}},
+    {1001, 2, "Count", VT_I4, "Plant.Tank1.Level.Count", "host-\xc3\xa4",
+     {0x01020304, 0x0506, 0x0708, {0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10}}},
+    {1001, 0x80000003u, "Rates \xf0\x9f\x98\x80", VT_ARRAY | VT_R8, "Plant.Tank1.Level.Rates", "\\\\plant-server",
+     {0xFFFFFFFF, 0xFFFF, 0x0000, {0xFF, 0, 0xFF, 0, 0xFF, 0, 0xFF, 0}}},
+    {2001, 2, "Setpoint", VT_UI2, "Plant.Tank2.Setpoint", "", {0}}};
+
+/* The rows of AE_EVENT_ATTR_TABLE of category `category` in `rows` (AE_EVENT_ATTRS at most); their
+ * count, or -1 for a category the server does not have. */
+static int ae_category_attrs(DWORD category, int *rows) {
+    int i, n = 0, known = 0;
+    for (i = 0; i < AE_CATEGORIES; i++) known |= AE_CATEGORY_IDS[i] == category;
+    if (!known) return -1;
+    for (i = 0; i < AE_EVENT_ATTRS; i++)
+        if (AE_EVENT_ATTR_TABLE[i].category == category) rows[n++] = i;
+    return n;
+}
+
+/* The row of attribute `id` of category `category`, or -1. */
+static int ae_event_attr(DWORD category, DWORD id) {
+    int i;
+    for (i = 0; i < AE_EVENT_ATTRS; i++)
+        if (AE_EVENT_ATTR_TABLE[i].category == category && AE_EVENT_ATTR_TABLE[i].id == id) return i;
+    return -1;
+}
+
+/* TranslateToItemIDs: the attributes asked (of AE_SOURCE_NAMES[0]'s AE_CONDITION, sub-condition
+ * AE_SC_NAMES[1], category 1001), in another order than the server's. */
+#define AE_TRANSLATED 3
+static const DWORD AE_TRANSLATE_IDS[AE_TRANSLATED] = {0x80000003u, 1, 2};
+
+/* The conditions (QueryConditionNames of category 1001; the others have none) and the condition of
+ * each source (QuerySourceConditions); AE_CONDITION's sub-conditions are AE_SC_NAMES. */
+#define AE_CONDITIONS 2
+static const char *const AE_CONDITION_NAMES[AE_CONDITIONS] = {AE_CONDITION, "Temperature \xc2\xb0" "C"};
+static const int AE_SOURCE_CONDITION[AE_SOURCES] = {0, 1, 0};
+
+/* The attributes a subscription returns for category 1001 (SelectReturnedAttributes), in the
+ * client's order. */
+#define AE_SELECTED 2
+static const DWORD AE_SELECTED_IDS[AE_SELECTED] = {0x80000003u, 2};
+
 /* The events the server sends on a Refresh: a condition event with both attributes and no actor, a
  * tracking event with one attribute, no condition and an actor. */
 #define AE_EVENTS 2

@@ -5,12 +5,15 @@
  * does not arrive as the client sent it is answered with E_INVALIDARG (or a per-element error),
  * which the client sees.
  *
- * Server object: IOPCEventServer2 (GetStatus, CreateEventSubscription, QueryEventCategories,
- * GetConditionState, the Enable/Disable methods of both versions, GetEnableStateByArea/BySource,
- * AckCondition, CreateAreaBrowser). Area browser object: IOPCEventAreaBrowser over the areas and sources of ae.h
- * (BrowseOPCAreas with MatchPatternW's filters: an IEnumString of the names).
- * Subscription object: IOPCEventSubscriptionMgt2 (SetFilter, GetFilter, GetState, SetState, Refresh:
- * an OnEvent of the two events of ae.h from a thread of the server; SetKeepAlive, GetKeepAlive) and IConnectionPointContainer
+ * Server object: IOPCEventServer2 (GetStatus, CreateEventSubscription, QueryAvailableFilters,
+ * QueryEventCategories, QueryConditionNames, QuerySubConditionNames, QuerySourceConditions,
+ * QueryEventAttributes, TranslateToItemIDs, GetConditionState, the Enable/Disable methods of both
+ * versions, GetEnableStateByArea/BySource, AckCondition, CreateAreaBrowser). Area browser object:
+ * IOPCEventAreaBrowser over the areas and sources of ae.h (BrowseOPCAreas with MatchPatternW's
+ * filters: an IEnumString of the names).
+ * Subscription object: IOPCEventSubscriptionMgt2 (SetFilter, GetFilter, SelectReturnedAttributes,
+ * GetReturnedAttributes, GetState, SetState, Refresh: an OnEvent of the two events of ae.h from a
+ * thread of the server; CancelRefresh; SetKeepAlive, GetKeepAlive) and IConnectionPointContainer
  * with the IOPCEventSink connection point. What the test does not call answers E_NOTIMPL. */
 #include "ae.h"
 
@@ -38,6 +41,8 @@ typedef struct Subscription {
     OPCHANDLE client;
     DWORD keep_alive; /* SetKeepAlive's revised time */
     int filtered; /* SetFilter received the client's filter */
+    DWORD selected[AE_CATEGORIES][AE_EVENT_ATTRS]; /* SelectReturnedAttributes' IDs per category */
+    DWORD nselected[AE_CATEGORIES];
 } Subscription;
 
 static HRESULT sub_query(Subscription *s, REFIID riid, void **ppv) {
@@ -130,18 +135,48 @@ static HRESULT STDMETHODCALLTYPE sub_get_filter(IOPCEventSubscriptionMgt2 *This,
     return *cats && *areas && *sources ? S_OK : E_OUTOFMEMORY;
 }
 
+/* The index of category `category` in AE_CATEGORY_IDS, or -1. */
+static int category_index(DWORD category) {
+    int i;
+    for (i = 0; i < AE_CATEGORIES; i++)
+        if (AE_CATEGORY_IDS[i] == category) return i;
+    return -1;
+}
+
+/* The attributes returned for a category: each an attribute of it, none twice, or the call is refused. */
 static HRESULT STDMETHODCALLTYPE sub_select_attrs(IOPCEventSubscriptionMgt2 *This, DWORD category, DWORD count,
                                                   DWORD *ids) {
-    (void)This, (void)category, (void)count, (void)ids;
-    return E_NOTIMPL;
+    Subscription *s = CONTAINER(Subscription, mgt, This);
+    int c = category_index(category);
+    DWORD k, j;
+    if (c < 0 || count > AE_EVENT_ATTRS || (count && !ids)) return E_INVALIDARG;
+    for (k = 0; k < count; k++) {
+        if (ae_event_attr(category, ids[k]) < 0) return E_INVALIDARG;
+        for (j = 0; j < k; j++)
+            if (ids[j] == ids[k]) return E_INVALIDARG;
+    }
+    EnterCriticalSection(&s->lock);
+    memcpy(s->selected[c], ids, count * sizeof *ids);
+    s->nselected[c] = count;
+    LeaveCriticalSection(&s->lock);
+    return S_OK;
 }
 
 static HRESULT STDMETHODCALLTYPE sub_returned_attrs(IOPCEventSubscriptionMgt2 *This, DWORD category, DWORD *count,
                                                     DWORD **ids) {
-    (void)This, (void)category;
-    if (count) *count = 0;
-    if (ids) *ids = NULL;
-    return E_NOTIMPL;
+    Subscription *s = CONTAINER(Subscription, mgt, This);
+    int c = category_index(category);
+    if (!count || !ids) return E_POINTER;
+    *count = 0;
+    *ids = NULL;
+    if (c < 0) return E_INVALIDARG;
+    EnterCriticalSection(&s->lock);
+    if (s->nselected[c] && (*ids = (DWORD *)task_zero(s->nselected[c] * sizeof(DWORD))) != NULL) {
+        memcpy(*ids, s->selected[c], s->nselected[c] * sizeof(DWORD));
+        *count = s->nselected[c];
+    }
+    LeaveCriticalSection(&s->lock);
+    return *count || !s->nselected[c] ? S_OK : E_OUTOFMEMORY;
 }
 
 /* The OnEvent of a refresh, from a thread of the server. */
@@ -185,9 +220,14 @@ static HRESULT STDMETHODCALLTYPE sub_refresh(IOPCEventSubscriptionMgt2 *This, DW
     return S_OK;
 }
 
+/* No refresh is under way when the client cancels one (the test cancels before it refreshes): E_FAIL
+ * for the client's connection, E_INVALIDARG for another. */
 static HRESULT STDMETHODCALLTYPE sub_cancel_refresh(IOPCEventSubscriptionMgt2 *This, DWORD connection) {
-    (void)This, (void)connection;
-    return E_NOTIMPL;
+    Subscription *s = CONTAINER(Subscription, mgt, This);
+    IUnknown *sink = sink_point_sink(&s->cp);
+    if (!sink) return CONNECT_E_NOCONNECTION;
+    sink->lpVtbl->Release(sink);
+    return connection == 1 ? E_FAIL : E_INVALIDARG;
 }
 
 static HRESULT STDMETHODCALLTYPE sub_get_state(IOPCEventSubscriptionMgt2 *This, BOOL *active, DWORD *buffer_time,
@@ -338,8 +378,9 @@ static HRESULT STDMETHODCALLTYPE srv_create_subscription(IOPCEventServer2 *This,
 
 static HRESULT STDMETHODCALLTYPE srv_filters(IOPCEventServer2 *This, DWORD *mask) {
     (void)This;
-    if (mask) *mask = 0;
-    return E_NOTIMPL;
+    if (!mask) return E_POINTER;
+    *mask = AE_FILTER_MASK;
+    return S_OK;
 }
 
 static HRESULT STDMETHODCALLTYPE srv_categories(IOPCEventServer2 *This, DWORD type, DWORD *count, DWORD **ids,
@@ -358,48 +399,96 @@ static HRESULT STDMETHODCALLTYPE srv_categories(IOPCEventServer2 *This, DWORD ty
     return S_OK;
 }
 
-static HRESULT STDMETHODCALLTYPE srv_condition_names(IOPCEventServer2 *This, DWORD category, DWORD *count,
-                                                     LPWSTR **names) {
-    (void)This, (void)category;
-    if (count) *count = 0;
-    if (names) *names = NULL;
-    return E_NOTIMPL;
+/* A names reply: the UTF-8 texts `want[0..n)` (n may be 0: NULL), or the error `refused`. */
+static HRESULT names_reply(const char *const *want, DWORD n, HRESULT refused, DWORD *count, LPWSTR **names) {
+    if (!count || !names) return E_POINTER;
+    *count = 0;
+    *names = NULL;
+    if (FAILED(refused)) return refused;
+    if (!n) return S_OK;
+    *names = task_names(want, n);
+    if (!*names) return E_OUTOFMEMORY;
+    *count = n;
+    return S_OK;
 }
 
+/* Category 1001's conditions; the other categories have none. */
+static HRESULT STDMETHODCALLTYPE srv_condition_names(IOPCEventServer2 *This, DWORD category, DWORD *count,
+                                                     LPWSTR **names) {
+    (void)This;
+    return names_reply(AE_CONDITION_NAMES, category == AE_CATEGORY_IDS[0] ? AE_CONDITIONS : 0,
+                       category_index(category) < 0 ? E_INVALIDARG : S_OK, count, names);
+}
+
+/* AE_CONDITION's sub-conditions; the other condition has none. */
 static HRESULT STDMETHODCALLTYPE srv_subcondition_names(IOPCEventServer2 *This, LPWSTR condition, DWORD *count,
                                                         LPWSTR **names) {
-    (void)This, (void)condition;
-    if (count) *count = 0;
-    if (names) *names = NULL;
-    return E_NOTIMPL;
+    int level = is_utf8(condition, AE_CONDITION_NAMES[0]);
+    (void)This;
+    return names_reply(AE_SC_NAMES, level ? AE_SUBCONDITIONS : 0,
+                       level || is_utf8(condition, AE_CONDITION_NAMES[1]) ? S_OK : E_INVALIDARG, count, names);
 }
 
 static HRESULT STDMETHODCALLTYPE srv_source_conditions(IOPCEventServer2 *This, LPWSTR source, DWORD *count,
                                                        LPWSTR **names) {
-    (void)This, (void)source;
-    if (count) *count = 0;
-    if (names) *names = NULL;
-    return E_NOTIMPL;
+    int i = name_index(0, source);
+    (void)This;
+    return names_reply(i < 0 ? NULL : AE_CONDITION_NAMES + AE_SOURCE_CONDITION[i], i < 0 ? 0 : 1,
+                       i < 0 ? E_INVALIDARG : S_OK, count, names);
 }
 
 static HRESULT STDMETHODCALLTYPE srv_event_attributes(IOPCEventServer2 *This, DWORD category, DWORD *count,
                                                       DWORD **ids, LPWSTR **texts, VARTYPE **types) {
-    (void)This, (void)category;
-    if (count) *count = 0;
-    if (ids) *ids = NULL;
-    if (texts) *texts = NULL;
-    if (types) *types = NULL;
-    return E_NOTIMPL;
+    int rows[AE_EVENT_ATTRS], n, k;
+    (void)This;
+    if (!count || !ids || !texts || !types) return E_POINTER;
+    *count = 0;
+    *ids = NULL;
+    *texts = NULL;
+    *types = NULL;
+    n = ae_category_attrs(category, rows);
+    if (n < 0) return E_INVALIDARG;
+    if (n == 0) return S_OK;
+    *ids = (DWORD *)task_zero(n * sizeof(DWORD));
+    *texts = (LPWSTR *)task_zero(n * sizeof(LPWSTR));
+    *types = (VARTYPE *)task_zero(n * sizeof(VARTYPE));
+    if (!*ids || !*texts || !*types) return E_OUTOFMEMORY; /* a test server: what it allocated stays */
+    for (k = 0; k < n; k++) {
+        (*ids)[k] = AE_EVENT_ATTR_TABLE[rows[k]].id;
+        (*texts)[k] = task_utf8(AE_EVENT_ATTR_TABLE[rows[k]].desc);
+        (*types)[k] = AE_EVENT_ATTR_TABLE[rows[k]].type;
+    }
+    *count = (DWORD)n;
+    return S_OK;
 }
 
+/* The items of the attributes asked: only AE_SOURCE_NAMES[0]'s AE_CONDITION, sub-condition
+ * AE_SC_NAMES[1], category 1001 and attributes of it, as the client sent them. */
 static HRESULT STDMETHODCALLTYPE srv_translate(IOPCEventServer2 *This, LPWSTR source, DWORD category,
                                                LPWSTR condition, LPWSTR subcondition, DWORD count, DWORD *ids,
                                                LPWSTR **item_ids, LPWSTR **nodes, CLSID **clsids) {
-    (void)This, (void)source, (void)category, (void)condition, (void)subcondition, (void)count, (void)ids;
-    if (item_ids) *item_ids = NULL;
-    if (nodes) *nodes = NULL;
-    if (clsids) *clsids = NULL;
-    return E_NOTIMPL;
+    DWORD k;
+    (void)This;
+    if (!item_ids || !nodes || !clsids) return E_POINTER;
+    *item_ids = NULL;
+    *nodes = NULL;
+    *clsids = NULL;
+    if (!is_utf8(source, AE_SOURCE_NAMES[0]) || category != AE_CATEGORY_IDS[0] || !is_utf8(condition, AE_CONDITION) ||
+        !is_utf8(subcondition, AE_SC_NAMES[1]) || count != AE_TRANSLATED || !ids)
+        return E_INVALIDARG;
+    for (k = 0; k < count; k++)
+        if (ae_event_attr(category, ids[k]) < 0) return E_INVALIDARG;
+    *item_ids = (LPWSTR *)task_zero(count * sizeof(LPWSTR));
+    *nodes = (LPWSTR *)task_zero(count * sizeof(LPWSTR));
+    *clsids = (CLSID *)task_zero(count * sizeof(CLSID));
+    if (!*item_ids || !*nodes || !*clsids) return E_OUTOFMEMORY; /* a test server: what it allocated stays */
+    for (k = 0; k < count; k++) {
+        const AeEventAttr *a = &AE_EVENT_ATTR_TABLE[ae_event_attr(category, ids[k])];
+        (*item_ids)[k] = task_utf8(a->item_id);
+        (*nodes)[k] = task_utf8(a->node);
+        (*clsids)[k] = a->clsid;
+    }
+    return S_OK;
 }
 
 static HRESULT STDMETHODCALLTYPE srv_condition_state(IOPCEventServer2 *This, LPWSTR source, LPWSTR condition,

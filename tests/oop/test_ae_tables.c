@@ -5,12 +5,17 @@
  * crosses the wire and is checked on the other side: the server answers a request it did not receive
  * as sent with an error. A count beyond its bound never leaves the client.
  *
- * Covered: IOPCEventServer::GetStatus (OPCEVENTSERVERSTATUS and its string), QueryEventCategories
- * ([out, size_is(,*n)] DWORD ** and LPWSTR **), CreateEventSubscription (iid_is), GetConditionState
- * (OPCCONDITIONSTATE with its arrays, VARIANTs and a NULL string), DisableConditionBySource;
+ * Covered: IOPCEventServer::GetStatus (OPCEVENTSERVERSTATUS and its string), QueryAvailableFilters,
+ * QueryEventCategories ([out, size_is(,*n)] DWORD ** and LPWSTR **), QueryConditionNames,
+ * QuerySubConditionNames, QuerySourceConditions (names, none: NULL arrays), QueryEventAttributes per
+ * category (IDs, descriptions, VARTYPE **), TranslateToItemIDs ([out, size_is(,n)] item IDs, node
+ * names and CLSIDs per attribute), CreateEventSubscription (iid_is), GetConditionState
+ * (OPCCONDITIONSTATE with its arrays, VARIANTs and a NULL string), DisableConditionBySource,
+ * EnableConditionBySource, EnableConditionByArea, DisableConditionByArea;
  * IOPCEventServer2::DisableConditionByArea2, EnableConditionByArea2, GetEnableStateBySource,
  * GetEnableStateByArea ([in, string, size_is(n)] LPWSTR * with per-element results);
- * IOPCEventSubscriptionMgt::GetState, SetState (unique in-pointers), SetFilter, GetFilter, Refresh;
+ * IOPCEventSubscriptionMgt::GetState, SetState (unique in-pointers), SetFilter, GetFilter,
+ * SelectReturnedAttributes, GetReturnedAttributes (per category), Refresh, CancelRefresh;
  * IOPCEventSink::OnEvent with two ONEVENTSTRUCTs (strings, NULL strings, FILETIMEs, VT_BSTR and VT_I4
  * attributes) through the subscription's connection point; IOPCEventServer::CreateAreaBrowser and
  * IOPCEventAreaBrowser (ChangeBrowsePosition, BrowseOPCAreas: an IEnumString out,
@@ -212,7 +217,7 @@ static void check_enable(IOPCEventServer2 *server) {
     static const BOOL en1[3] = {TRUE, TRUE, FALSE}, eff1[3] = {TRUE, FALSE, FALSE};
     static const HRESULT err1[3] = {S_OK, S_OK, E_INVALIDARG};
     static const BOOL en2[2] = {FALSE, TRUE};
-    static const BOOL all[2] = {TRUE, TRUE};
+    static const BOOL all[2] = {TRUE, TRUE}, none[2] = {FALSE, FALSE}, off_area[2] = {TRUE, FALSE};
     static const HRESULT ok[3] = {S_OK, S_OK, S_OK};
     /* Tank 2's area off (and an area the server does not know). */
     areas[0] = (LPWSTR)W(AE_AREA_NAMES[2]);
@@ -247,6 +252,21 @@ static void check_enable(IOPCEventServer2 *server) {
     }
     areas[1] = (LPWSTR)W(AE_AREA_NAMES[0]);
     check_enable_state(server, 1, 2, areas, all, all, ok, S_OK);
+    /* Version 1 by area: Tank 1's area off, its sources not effectively enabled, on again; the source
+     * turned off above on by source; an unknown area refuses the call. */
+    areas[0] = (LPWSTR)W(AE_AREA_NAMES[1]);
+    CHECK_HR(server->lpVtbl->DisableConditionByArea(server, 1, areas), S_OK);
+    check_enable_state(server, 1, 1, areas, en2, en2, ok, S_OK);
+    sources[0] = (LPWSTR)W(AE_SOURCE_NAMES[0]);
+    sources[1] = (LPWSTR)W(AE_SOURCE_NAMES[1]);
+    check_enable_state(server, 0, 2, sources, off_area, none, ok, S_OK);
+    CHECK_HR(server->lpVtbl->EnableConditionByArea(server, 1, areas), S_OK);
+    CHECK_HR(server->lpVtbl->EnableConditionBySource(server, 1, sources + 1), S_OK);
+    check_enable_state(server, 0, 2, sources, all, all, ok, S_OK);
+    check_enable_state(server, 1, 1, areas, all, all, ok, S_OK);
+    areas[1] = (LPWSTR)W("Plant.Nowhere");
+    CHECK_HR(server->lpVtbl->EnableConditionByArea(server, 1, areas + 1), E_INVALIDARG);
+    CHECK_HR(server->lpVtbl->DisableConditionByArea(server, 1, areas + 1), E_INVALIDARG);
 }
 
 static void check_keep_alive(IOPCEventSubscriptionMgt *sub) {
@@ -328,6 +348,175 @@ static void check_ack(IOPCEventServer2 *server) {
     CoTaskMemFree(comment);
 }
 
+/* A names reply (QueryConditionNames, QuerySubConditionNames, QuerySourceConditions): `hr` is
+ * `expected` and the names the call left in `*pcount` and `*pnames` (read after it) are the UTF-8
+ * texts `want[0..n)` (none: a NULL array); frees them. */
+static void check_names(HRESULT hr, HRESULT expected, const DWORD *pcount, LPWSTR *const *pnames,
+                        const char *const *want, DWORD n) {
+    DWORD k, count = *pcount;
+    LPWSTR *names = *pnames;
+    CHECK_HR(hr, expected);
+    CHECK(count == n && names != GARBAGE_PTR && (n ? names != NULL : names == NULL));
+    if (count != n || !names || names == GARBAGE_PTR) return;
+    for (k = 0; k < n; k++) {
+        CHECK(is_utf8(names[k], want[k]));
+        CoTaskMemFree(names[k]);
+    }
+    CoTaskMemFree(names);
+}
+
+/* QueryAvailableFilters and the condition queries: per category, per condition, per source; a name
+ * or category the server does not have is refused and nothing comes back. */
+static void check_condition_queries(IOPCEventServer2 *server) {
+    DWORD mask = GARBAGE_U32, count;
+    LPWSTR *names;
+    int i;
+    CHECK_HR(server->lpVtbl->QueryAvailableFilters(server, &mask), S_OK);
+    CHECK(mask == AE_FILTER_MASK);
+    for (i = 0; i < AE_CATEGORIES; i++) {
+        count = GARBAGE_U32;
+        names = (LPWSTR *)GARBAGE_PTR;
+        check_names(server->lpVtbl->QueryConditionNames(server, AE_CATEGORY_IDS[i], &count, &names),
+                    S_OK, &count, &names, AE_CONDITION_NAMES, i == 0 ? AE_CONDITIONS : 0);
+    }
+    count = GARBAGE_U32;
+    names = (LPWSTR *)GARBAGE_PTR;
+    check_names(server->lpVtbl->QueryConditionNames(server, 1002, &count, &names), E_INVALIDARG, &count, &names, NULL,
+                0);
+    count = GARBAGE_U32;
+    names = (LPWSTR *)GARBAGE_PTR;
+    check_names(server->lpVtbl->QuerySubConditionNames(server, (LPWSTR)W(AE_CONDITION_NAMES[0]), &count, &names),
+                S_OK, &count, &names, AE_SC_NAMES, AE_SUBCONDITIONS);
+    count = GARBAGE_U32;
+    names = (LPWSTR *)GARBAGE_PTR;
+    check_names(server->lpVtbl->QuerySubConditionNames(server, (LPWSTR)W(AE_CONDITION_NAMES[1]), &count, &names),
+                S_OK, &count, &names, NULL, 0);
+    count = GARBAGE_U32;
+    names = (LPWSTR *)GARBAGE_PTR;
+    check_names(server->lpVtbl->QuerySubConditionNames(server, (LPWSTR)W("Temperature"), &count, &names),
+                E_INVALIDARG, &count, &names, NULL, 0);
+    for (i = 0; i < AE_SOURCES; i++) {
+        count = GARBAGE_U32;
+        names = (LPWSTR *)GARBAGE_PTR;
+        check_names(server->lpVtbl->QuerySourceConditions(server, (LPWSTR)W(AE_SOURCE_NAMES[i]), &count, &names),
+                    S_OK, &count, &names, AE_CONDITION_NAMES + AE_SOURCE_CONDITION[i], 1);
+    }
+    count = GARBAGE_U32;
+    names = (LPWSTR *)GARBAGE_PTR;
+    check_names(server->lpVtbl->QuerySourceConditions(server, (LPWSTR)W("Plant.Tank1"), &count, &names),
+                E_INVALIDARG, &count, &names, NULL, 0);
+}
+
+/* QueryEventAttributes of each category (the IDs, descriptions and VARTYPEs of AE_EVENT_ATTR_TABLE,
+ * none for the third) and of a category the server does not have (refused, nothing comes back). */
+static void check_event_attributes(IOPCEventServer2 *server) {
+    DWORD count, *ids;
+    LPWSTR *texts;
+    VARTYPE *types;
+    int rows[AE_EVENT_ATTRS], n, i, k;
+    for (i = 0; i <= AE_CATEGORIES; i++) {
+        DWORD category = i < AE_CATEGORIES ? AE_CATEGORY_IDS[i] : 1002;
+        n = ae_category_attrs(category, rows);
+        count = GARBAGE_U32;
+        ids = (DWORD *)GARBAGE_PTR;
+        texts = (LPWSTR *)GARBAGE_PTR;
+        types = (VARTYPE *)GARBAGE_PTR;
+        CHECK_HR(server->lpVtbl->QueryEventAttributes(server, category, &count, &ids, &texts, &types),
+                 n < 0 ? E_INVALIDARG : S_OK);
+        if (n <= 0) {
+            CHECK(count == 0 && ids == NULL && texts == NULL && types == NULL);
+            continue;
+        }
+        CHECK(count == (DWORD)n && ids && ids != GARBAGE_PTR && texts && texts != GARBAGE_PTR && types &&
+              types != GARBAGE_PTR);
+        if (count != (DWORD)n || !ids || ids == GARBAGE_PTR || !texts || texts == GARBAGE_PTR || !types ||
+            types == GARBAGE_PTR)
+            continue;
+        for (k = 0; k < n; k++) {
+            CHECK(ids[k] == AE_EVENT_ATTR_TABLE[rows[k]].id);
+            CHECK(is_utf8(texts[k], AE_EVENT_ATTR_TABLE[rows[k]].desc));
+            CHECK(types[k] == AE_EVENT_ATTR_TABLE[rows[k]].type);
+            CoTaskMemFree(texts[k]);
+        }
+        CoTaskMemFree(ids);
+        CoTaskMemFree(texts);
+        CoTaskMemFree(types);
+    }
+}
+
+/* TranslateToItemIDs: per attribute asked, its item ID, node name (an empty one among them) and
+ * CLSID; another sub-condition is refused and nothing comes back. */
+static void check_translate(IOPCEventServer2 *server) {
+    LPWSTR *items = (LPWSTR *)GARBAGE_PTR, *nodes = (LPWSTR *)GARBAGE_PTR;
+    CLSID *clsids = (CLSID *)GARBAGE_PTR;
+    LPWSTR source = task_utf8(AE_SOURCE_NAMES[0]), condition = task_utf8(AE_CONDITION);
+    LPWSTR sub = task_utf8(AE_SC_NAMES[1]), other = task_utf8(AE_SC_NAMES[0]);
+    DWORD k;
+    CHECK_HR(server->lpVtbl->TranslateToItemIDs(server, source, AE_CATEGORY_IDS[0], condition, sub, AE_TRANSLATED,
+                                                (DWORD *)AE_TRANSLATE_IDS, &items, &nodes, &clsids),
+             S_OK);
+    CHECK(items && items != GARBAGE_PTR && nodes && nodes != GARBAGE_PTR && clsids && clsids != GARBAGE_PTR);
+    if (items && items != GARBAGE_PTR && nodes && nodes != GARBAGE_PTR && clsids && clsids != GARBAGE_PTR) {
+        for (k = 0; k < AE_TRANSLATED; k++) {
+            const AeEventAttr *a = &AE_EVENT_ATTR_TABLE[ae_event_attr(AE_CATEGORY_IDS[0], AE_TRANSLATE_IDS[k])];
+            CHECK(is_utf8(items[k], a->item_id));
+            CHECK(is_utf8(nodes[k], a->node));
+            CHECK(IsEqualCLSID(&clsids[k], &a->clsid));
+            CoTaskMemFree(items[k]);
+            CoTaskMemFree(nodes[k]);
+        }
+        CoTaskMemFree(items);
+        CoTaskMemFree(nodes);
+        CoTaskMemFree(clsids);
+    }
+    items = nodes = (LPWSTR *)GARBAGE_PTR;
+    clsids = (CLSID *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->TranslateToItemIDs(server, source, AE_CATEGORY_IDS[0], condition, other, AE_TRANSLATED,
+                                                (DWORD *)AE_TRANSLATE_IDS, &items, &nodes, &clsids),
+             E_INVALIDARG);
+    CHECK(items == NULL && nodes == NULL && clsids == NULL);
+    /* Attribute 1 is not one of the tracking category's: refused. */
+    items = nodes = (LPWSTR *)GARBAGE_PTR;
+    clsids = (CLSID *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->TranslateToItemIDs(server, source, AE_CATEGORY_IDS[1], condition, sub, AE_TRANSLATED,
+                                                (DWORD *)AE_TRANSLATE_IDS, &items, &nodes, &clsids),
+             E_INVALIDARG);
+    CHECK(items == NULL && nodes == NULL && clsids == NULL);
+    CoTaskMemFree(source);
+    CoTaskMemFree(condition);
+    CoTaskMemFree(sub);
+    CoTaskMemFree(other);
+}
+
+/* The attributes category `category` returns (GetReturnedAttributes) are `want[0..n)`. */
+static void check_returned(IOPCEventSubscriptionMgt *sub, DWORD category, HRESULT expected, const DWORD *want,
+                           DWORD n) {
+    DWORD count = GARBAGE_U32, *ids = (DWORD *)GARBAGE_PTR, k;
+    CHECK_HR(sub->lpVtbl->GetReturnedAttributes(sub, category, &count, &ids), expected);
+    CHECK(count == n && ids != GARBAGE_PTR && (n ? ids != NULL : ids == NULL));
+    if (count != n || !ids || ids == GARBAGE_PTR) return;
+    for (k = 0; k < n; k++) CHECK(ids[k] == want[k]);
+    CoTaskMemFree(ids);
+}
+
+/* SelectReturnedAttributes and GetReturnedAttributes: none selected at first, a selection in the
+ * client's order read back, a selection the server refuses leaves it as it was. */
+static void check_returned_attributes(IOPCEventSubscriptionMgt *sub) {
+    static const DWORD bad[2] = {2, 1}; /* 1 is not an attribute of the tracking category */
+    static const DWORD one[1] = {2};
+    check_returned(sub, AE_CATEGORY_IDS[0], S_OK, NULL, 0);
+    CHECK_HR(sub->lpVtbl->SelectReturnedAttributes(sub, AE_CATEGORY_IDS[0], AE_SELECTED, (DWORD *)AE_SELECTED_IDS),
+             S_OK);
+    check_returned(sub, AE_CATEGORY_IDS[0], S_OK, AE_SELECTED_IDS, AE_SELECTED);
+    check_returned(sub, AE_CATEGORY_IDS[1], S_OK, NULL, 0);
+    CHECK_HR(sub->lpVtbl->SelectReturnedAttributes(sub, AE_CATEGORY_IDS[1], 2, (DWORD *)bad), E_INVALIDARG);
+    CHECK_HR(sub->lpVtbl->SelectReturnedAttributes(sub, AE_CATEGORY_IDS[1], 1, (DWORD *)one), S_OK);
+    check_returned(sub, AE_CATEGORY_IDS[1], S_OK, one, 1);
+    check_returned(sub, AE_CATEGORY_IDS[0], S_OK, AE_SELECTED_IDS, AE_SELECTED);
+    CHECK_HR(sub->lpVtbl->SelectReturnedAttributes(sub, 1002, 1, (DWORD *)one), E_INVALIDARG);
+    check_returned(sub, 1002, E_INVALIDARG, NULL, 0);
+}
+
 static void check_subscription(IOPCEventServer2 *server) {
     IOPCEventSubscriptionMgt *sub = NULL;
     IConnectionPointContainer *cpc = NULL;
@@ -394,17 +583,23 @@ static void check_subscription(IOPCEventServer2 *server) {
         CHECK(0);
     }
 
+    check_returned_attributes(sub);
+
     /* The sink through the subscription's connection point, and the events of a refresh. */
     memset(&sink, 0, sizeof sink);
     sink.iface.lpVtbl = &sink_vtbl;
     sink.refs = 1;
     sink.called = CreateEventW(NULL, FALSE, FALSE, NULL);
     CHECK_HR(sub->lpVtbl->Refresh(sub, 1), CONNECT_E_NOCONNECTION);
+    CHECK_HR(sub->lpVtbl->CancelRefresh(sub, 1), CONNECT_E_NOCONNECTION);
     CHECK_HR(sub->lpVtbl->QueryInterface(sub, &IID_IConnectionPointContainer, (void **)&cpc), S_OK);
     if (cpc) CHECK_HR(cpc->lpVtbl->FindConnectionPoint(cpc, &IID_IOPCEventSink, &cp), S_OK);
     if (cp) {
         CHECK_HR(cp->lpVtbl->Advise(cp, (IUnknown *)&sink.iface, &cookie), S_OK);
         CHECK(cookie == 1);
+        /* No refresh under way: nothing to cancel on this connection, and no other connection. */
+        CHECK_HR(sub->lpVtbl->CancelRefresh(sub, cookie), E_FAIL);
+        CHECK_HR(sub->lpVtbl->CancelRefresh(sub, cookie + 1), E_INVALIDARG);
         CHECK_HR(sub->lpVtbl->Refresh(sub, 2), E_INVALIDARG);
         CHECK_HR(sub->lpVtbl->Refresh(sub, cookie), S_OK);
         /* The server's thread calls back; 60 s only bound a broken run. */
@@ -519,6 +714,9 @@ int main(void) {
         check_status(server);
         check_bound(server);
         check_categories(server);
+        check_condition_queries(server);
+        check_event_attributes(server);
+        check_translate(server);
         check_condition_state(server);
         check_enable(server);
         check_ack(server);
