@@ -115,6 +115,7 @@ static void hda_free_item(OPCHDA_ITEM *it) {
 static int hda_same_variant(const VARIANT *a, const VARIANT *b) {
     if (V_VT(a) != V_VT(b)) return 0;
     switch (V_VT(a)) {
+    case VT_I2: return V_I2(a) == V_I2(b);
     case VT_I4: return V_I4(a) == V_I4(b);
     case VT_R8: return V_R8(a) == V_R8(b);
     case VT_BSTR:
@@ -385,9 +386,42 @@ static int hda_is_insert_annotation(const OPCHDA_ANNOTATION *got, DWORD k) {
     for (n = 0; same && n < want.dwNumValues; n++)
         same = same_filetime(got->ftTimeStamps[n], want.ftTimeStamps[n]) &&
                same_filetime(got->ftAnnotationTime[n], want.ftAnnotationTime[n]) &&
-               hda_same_wstr(got->szAnnotation[n], want.szAnnotation[n]) && hda_same_wstr(got->szUser[n], want.szUser[n]);
+               hda_same_wstr(got->szAnnotation[n], want.szAnnotation[n]) &&
+               hda_same_wstr(got->szUser[n], want.szUser[n]);
     hda_free_annotation(&want);
     return same;
+}
+
+/* IOPCHDA_Server::CreateBrowse and IOPCHDA_Browser: the items of hda.h as a tree, "Plant" and
+ * "Plant.Tank1" its branches, the items its leaves there. The client's filters: the data type equal
+ * to VT_BSTR (so only item 1 is found), the description not equal to a text, and an attribute the
+ * server does not know. */
+#define HDA_E_UNKNOWNATTRID ((HRESULT)0xC0041008L) /* OPC_E_UNKNOWNATTRID */
+#define HDA_FILTERS 3
+#define HDA_UNKNOWN_ATTR 0x7777u
+#define HDA_FILTER_TEXT "No description \xe2\x82\xac \xf0\x9f\x98\x80"
+static const DWORD HDA_FILTER_IDS[HDA_FILTERS] = {1, 2, HDA_UNKNOWN_ATTR};
+static const OPCHDA_OPERATORCODES HDA_FILTER_OPS[HDA_FILTERS] = {OPCHDA_EQUAL, OPCHDA_NOTEQUAL, OPCHDA_GREATER};
+static const char *const HDA_LEAVES[HDA_ITEMS] = {"Level", "Name \xe2\x82\xac"};
+#define HDA_TOP_BRANCH "Plant"
+#define HDA_BRANCH "Tank1"
+#define HDA_BRANCH_POSITION "Plant.Tank1"
+
+/* The filter value `k` (its BSTR the caller's to clear). */
+static VARIANT hda_filter(DWORD k) {
+    VARIANT v;
+    VariantInit(&v);
+    if (k == 0) {
+        V_VT(&v) = VT_I2;
+        V_I2(&v) = VT_BSTR;
+    } else if (k == 1) {
+        V_VT(&v) = VT_BSTR;
+        V_BSTR(&v) = bstr_utf8(HDA_FILTER_TEXT);
+    } else {
+        V_VT(&v) = VT_R8;
+        V_R8(&v) = 2.5;
+    }
+    return v;
 }
 
 #endif

@@ -5,14 +5,16 @@
  * receives: a request that does not arrive as the client sent it is answered with E_INVALIDARG (or a
  * per-item error), which the client sees.
  *
- * One object: IOPCHDA_Server (GetItemAttributes, GetHistorianStatus, GetItemHandles),
- * IOPCHDA_SyncRead (ReadRaw, ReadProcessed), IOPCHDA_AsyncRead (ReadRaw, ReadProcessed: an
- * OnReadComplete from a thread of the server; AdviseRaw: an OnDataChange, then Cancel: an
- * OnCancelComplete), IOPCHDA_SyncAnnotations (QueryCapabilities, Read), IOPCHDA_SyncUpdate (all six
- * methods), IOPCHDA_Playback (ReadRawWithUpdate, ReadProcessedWithUpdate: the request checked, a
- * cancel ID given, no OnPlayback; Cancel) and IConnectionPointContainer with the IOPCHDA_DataCallback
- * connection point. What the test does not
- * call answers E_NOTIMPL. */
+ * One object: IOPCHDA_Server (GetItemAttributes, GetHistorianStatus, GetItemHandles, CreateBrowse:
+ * an IOPCHDA_Browser with its IEnumStrings), IOPCHDA_SyncRead (ReadRaw, ReadProcessed, ReadAtTime,
+ * ReadModified), IOPCHDA_AsyncRead (ReadRaw, ReadProcessed: an OnReadComplete from a thread of the
+ * server; AdviseRaw: an OnDataChange, then Cancel: an OnCancelComplete), IOPCHDA_SyncAnnotations
+ * (QueryCapabilities, Read, Insert), IOPCHDA_SyncUpdate (all six methods), IOPCHDA_AsyncUpdate
+ * (QueryCapabilities, Insert, Replace, InsertReplace, DeleteRaw, DeleteAtTime: an OnUpdateComplete),
+ * IOPCHDA_AsyncAnnotations (QueryCapabilities, Read: an OnReadAnnotations; Insert: an
+ * OnInsertAnnotations), IOPCHDA_Playback (ReadRawWithUpdate: an OnPlayback, ReadProcessedWithUpdate:
+ * the request checked, a cancel ID given; Cancel) and IConnectionPointContainer with the
+ * IOPCHDA_DataCallback connection point. What the test does not call answers E_NOTIMPL. */
 #include "hda.h"
 
 #include "sink_point.h"
@@ -199,13 +201,242 @@ static HRESULT STDMETHODCALLTYPE srv_validate(IOPCHDA_Server *This, DWORD count,
     return E_NOTIMPL;
 }
 
+/* -- IOPCHDA_Browser: the tree of hda.h ("Plant", "Plant.Tank1" with the items as leaves), the
+ * items found those whose data type the filters let through -- */
+
+/* An IEnumString of copies of texts (UTF-8 given). */
+typedef struct Strings {
+    IEnumString iface;
+    LONG refs;
+    ULONG count, next;
+    LPWSTR texts[HDA_ITEMS];
+} Strings;
+
+static HRESULT STDMETHODCALLTYPE str_qi(IEnumString *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (!IsEqualIID(riid, &IID_IUnknown) && !IsEqualIID(riid, &IID_IEnumString)) return E_NOINTERFACE;
+    *ppv = This;
+    InterlockedIncrement(&((Strings *)This)->refs);
+    return S_OK;
+}
+static ULONG STDMETHODCALLTYPE str_add_ref(IEnumString *This) {
+    return (ULONG)InterlockedIncrement(&((Strings *)This)->refs);
+}
+static ULONG STDMETHODCALLTYPE str_release(IEnumString *This) {
+    Strings *e = (Strings *)This;
+    LONG n = InterlockedDecrement(&e->refs);
+    ULONG k;
+    if (n == 0) {
+        for (k = 0; k < e->count; k++) CoTaskMemFree(e->texts[k]);
+        free(e);
+        OpcServerUnlock(); /* an enumerator counts on the process while it lives */
+    }
+    return (ULONG)n;
+}
+static HRESULT STDMETHODCALLTYPE str_next(IEnumString *This, ULONG celt, LPOLESTR *out, ULONG *fetched) {
+    Strings *e = (Strings *)This;
+    ULONG n = 0;
+    if (!out || (celt > 1 && !fetched)) return E_POINTER;
+    while (n < celt && e->next < e->count) {
+        out[n] = (LPOLESTR)CoTaskMemAlloc((wcslen(e->texts[e->next]) + 1) * sizeof(WCHAR));
+        if (!out[n]) break;
+        wcscpy(out[n], e->texts[e->next]);
+        n++;
+        e->next++;
+    }
+    if (fetched) *fetched = n;
+    return n == celt ? S_OK : S_FALSE;
+}
+static HRESULT STDMETHODCALLTYPE str_skip(IEnumString *This, ULONG celt) {
+    Strings *e = (Strings *)This;
+    ULONG left = e->count - e->next;
+    e->next += celt < left ? celt : left;
+    return celt <= left ? S_OK : S_FALSE;
+}
+static HRESULT STDMETHODCALLTYPE str_reset(IEnumString *This) {
+    ((Strings *)This)->next = 0;
+    return S_OK;
+}
+static HRESULT STDMETHODCALLTYPE str_clone(IEnumString *This, IEnumString **out) {
+    (void)This;
+    if (out) *out = NULL;
+    return E_NOTIMPL;
+}
+static IEnumStringVtbl str_vtbl = {str_qi, str_add_ref, str_release, str_next, str_skip, str_reset, str_clone};
+
+/* An enumerator of the UTF-8 texts `texts[0..count)` (count at most HDA_ITEMS), or NULL. */
+static IEnumString *new_strings(const char *const *texts, ULONG count) {
+    Strings *e = (Strings *)calloc(1, sizeof *e);
+    ULONG k;
+    if (!e) return NULL;
+    e->iface.lpVtbl = &str_vtbl;
+    e->refs = 1;
+    OpcServerLock();
+    for (k = 0; k < count; k++) {
+        e->texts[k] = task_utf8(texts[k]);
+        if (!e->texts[k]) {
+            str_release(&e->iface);
+            return NULL;
+        }
+        e->count = k + 1;
+    }
+    return &e->iface;
+}
+
+typedef struct Browser {
+    IOPCHDA_Browser iface;
+    LONG refs;
+    CRITICAL_SECTION lock;
+    int depth;           /* the position: 0 the root, 1 "Plant", 2 "Plant.Tank1" */
+    int found[HDA_ITEMS]; /* the items the filters let through */
+} Browser;
+
+static HRESULT STDMETHODCALLTYPE br_qi(IOPCHDA_Browser *This, REFIID riid, void **ppv) {
+    if (!ppv) return E_POINTER;
+    *ppv = NULL;
+    if (!IsEqualIID(riid, &IID_IUnknown) && !IsEqualIID(riid, &IID_IOPCHDA_Browser)) return E_NOINTERFACE;
+    *ppv = This;
+    InterlockedIncrement(&((Browser *)This)->refs);
+    return S_OK;
+}
+static ULONG STDMETHODCALLTYPE br_add_ref(IOPCHDA_Browser *This) {
+    return (ULONG)InterlockedIncrement(&((Browser *)This)->refs);
+}
+static ULONG STDMETHODCALLTYPE br_release(IOPCHDA_Browser *This) {
+    Browser *b = (Browser *)This;
+    LONG n = InterlockedDecrement(&b->refs);
+    if (n == 0) {
+        DeleteCriticalSection(&b->lock);
+        free(b);
+        OpcServerUnlock(); /* a browser counts on the process while it lives */
+    }
+    return (ULONG)n;
+}
+
+/* The branches below the position, the leaves at it (the items found), or every item found by its
+ * ID (OPCHDA_FLAT, and OPCHDA_ITEMS below the position). */
+static HRESULT STDMETHODCALLTYPE br_get_enum(IOPCHDA_Browser *This, OPCHDA_BROWSETYPE type, LPENUMSTRING *out) {
+    Browser *b = (Browser *)This;
+    static const char *const top[1] = {HDA_TOP_BRANCH};
+    static const char *const branch[1] = {HDA_BRANCH};
+    const char *texts[HDA_ITEMS];
+    ULONG count = 0;
+    int depth, i;
+    if (!out) return E_POINTER;
+    *out = NULL;
+    EnterCriticalSection(&b->lock);
+    depth = b->depth;
+    LeaveCriticalSection(&b->lock);
+    switch (type) {
+    case OPCHDA_BRANCH:
+        if (depth < 2) {
+            *out = new_strings(depth == 0 ? top : branch, 1);
+            return *out ? S_OK : E_OUTOFMEMORY;
+        }
+        break;
+    case OPCHDA_LEAF:
+        for (i = 0; depth == 2 && i < HDA_ITEMS; i++)
+            if (b->found[i]) texts[count++] = HDA_LEAVES[i];
+        break;
+    case OPCHDA_FLAT:
+    case OPCHDA_ITEMS:
+        for (i = 0; i < HDA_ITEMS; i++)
+            if (b->found[i]) texts[count++] = HDA_ITEM_IDS[i];
+        break;
+    default: return E_INVALIDARG;
+    }
+    *out = new_strings(texts, count);
+    return !*out ? E_OUTOFMEMORY : count ? S_OK : S_FALSE;
+}
+
+static HRESULT STDMETHODCALLTYPE br_change(IOPCHDA_Browser *This, OPCHDA_BROWSEDIRECTION direction,
+                                           LPCWSTR name) {
+    Browser *b = (Browser *)This;
+    HRESULT hr = S_OK;
+    if (!name) return E_INVALIDARG;
+    EnterCriticalSection(&b->lock);
+    if (direction == OPCHDA_BROWSE_UP && b->depth > 0 && name[0] == 0) b->depth--;
+    else if (direction == OPCHDA_BROWSE_DOWN && b->depth == 0 && is_utf8(name, HDA_TOP_BRANCH)) b->depth = 1;
+    else if (direction == OPCHDA_BROWSE_DOWN && b->depth == 1 && is_utf8(name, HDA_BRANCH)) b->depth = 2;
+    else if (direction == OPCHDA_BROWSE_DIRECT && name[0] == 0) b->depth = 0;
+    else if (direction == OPCHDA_BROWSE_DIRECT && is_utf8(name, HDA_TOP_BRANCH)) b->depth = 1;
+    else if (direction == OPCHDA_BROWSE_DIRECT && is_utf8(name, HDA_BRANCH_POSITION)) b->depth = 2;
+    else hr = E_INVALIDARG;
+    LeaveCriticalSection(&b->lock);
+    return hr;
+}
+
+/* The ID of the leaf `node` at the position (an item found). */
+static HRESULT STDMETHODCALLTYPE br_item_id(IOPCHDA_Browser *This, LPCWSTR node, LPWSTR *id) {
+    Browser *b = (Browser *)This;
+    int i, depth;
+    if (!id) return E_POINTER;
+    *id = NULL;
+    EnterCriticalSection(&b->lock);
+    depth = b->depth;
+    LeaveCriticalSection(&b->lock);
+    for (i = 0; node && depth == 2 && i < HDA_ITEMS; i++)
+        if (b->found[i] && is_utf8(node, HDA_LEAVES[i])) {
+            *id = task_utf8(HDA_ITEM_IDS[i]);
+            return *id ? S_OK : E_OUTOFMEMORY;
+        }
+    return E_INVALIDARG;
+}
+
+static HRESULT STDMETHODCALLTYPE br_position(IOPCHDA_Browser *This, LPWSTR *position) {
+    Browser *b = (Browser *)This;
+    int depth;
+    if (!position) return E_POINTER;
+    EnterCriticalSection(&b->lock);
+    depth = b->depth;
+    LeaveCriticalSection(&b->lock);
+    *position = task_utf8(depth == 0 ? "" : depth == 1 ? HDA_TOP_BRANCH : HDA_BRANCH_POSITION);
+    return *position ? S_OK : E_OUTOFMEMORY;
+}
+
+static IOPCHDA_BrowserVtbl br_vtbl = {br_qi,     br_add_ref, br_release, br_get_enum,
+                                      br_change, br_item_id, br_position};
+
+/* A browser with the client's filters (hda.h), each element answered as it arrived: the data type
+ * equal to VT_BSTR finds item 1 alone, the description filter finds both, an unknown attribute is
+ * HDA_E_UNKNOWNATTRID; a filter not as sent E_INVALIDARG (and it filters nothing). */
 static HRESULT STDMETHODCALLTYPE srv_browse(IOPCHDA_Server *This, DWORD count, DWORD *ids,
                                             OPCHDA_OPERATORCODES *operators, VARIANT *filters,
                                             IOPCHDA_Browser **browser, HRESULT **errors) {
-    (void)This, (void)count, (void)ids, (void)operators, (void)filters;
-    if (browser) *browser = NULL;
-    if (errors) *errors = NULL;
-    return E_NOTIMPL;
+    Browser *b;
+    HRESULT hr = S_OK;
+    DWORD k;
+    (void)This;
+    if (!browser || !errors) return E_POINTER;
+    *browser = NULL;
+    *errors = NULL;
+    if (count != HDA_FILTERS || !ids || !operators || !filters) return E_INVALIDARG;
+    b = (Browser *)calloc(1, sizeof *b);
+    *errors = (HRESULT *)task_zero(count * sizeof(HRESULT));
+    if (!b || !*errors) {
+        free(b);
+        CoTaskMemFree(*errors);
+        *errors = NULL;
+        return E_OUTOFMEMORY;
+    }
+    b->iface.lpVtbl = &br_vtbl;
+    b->refs = 1;
+    InitializeCriticalSection(&b->lock);
+    b->found[0] = b->found[1] = 1;
+    for (k = 0; k < count; k++) {
+        VARIANT want = hda_filter(k);
+        int as_sent = ids[k] == HDA_FILTER_IDS[k] && operators[k] == HDA_FILTER_OPS[k] &&
+                      hda_same_variant(&filters[k], &want);
+        VariantClear(&want);
+        if (!as_sent) (*errors)[k] = E_INVALIDARG;
+        else if (ids[k] == HDA_UNKNOWN_ATTR) (*errors)[k] = HDA_E_UNKNOWNATTRID;
+        else if (k == 0) b->found[0] = 0; /* item 0's data type is VT_R8 */
+        if ((*errors)[k] != S_OK) hr = S_FALSE;
+    }
+    OpcServerLock();
+    *browser = &b->iface;
+    return hr;
 }
 
 static IOPCHDA_ServerVtbl srv_vtbl = {srv_qi,      srv_add_ref,         srv_release,  srv_attributes,
@@ -916,9 +1147,9 @@ static HRESULT STDMETHODCALLTYPE aupd_cancel(IOPCHDA_AsyncUpdate *This, DWORD ca
     return E_NOTIMPL;
 }
 
-static IOPCHDA_AsyncUpdateVtbl aupd_vtbl = {aupd_qi,         aupd_add_ref,        aupd_release,
-                                            aupd_capabilities, aupd_insert,       aupd_replace,
-                                            aupd_insert_replace, aupd_delete_raw, aupd_delete_at_time,
+static IOPCHDA_AsyncUpdateVtbl aupd_vtbl = {aupd_qi,          aupd_add_ref,        aupd_release,
+                                            aupd_capabilities, aupd_insert,         aupd_replace,
+                                            aupd_insert_replace, aupd_delete_raw,   aupd_delete_at_time,
                                             aupd_cancel};
 
 static HRESULT STDMETHODCALLTYPE aann_capabilities(IOPCHDA_AsyncAnnotations *This,

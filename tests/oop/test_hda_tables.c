@@ -6,11 +6,18 @@
  * request it did not receive as sent with an error. A count beyond its bound never leaves the client.
  *
  * Covered: IOPCHDA_Server::GetHistorianStatus (FILETIME ** and two strings), GetItemAttributes
- * ([out, size_is(,*n), string] LPWSTR ** beside DWORD ** and VARTYPE **), GetItemHandles;
- * IOPCHDA_SyncRead::ReadRaw ([in, out] OPCHDA_TIME with a string and without, OPCHDA_ITEM arrays of
- * VT_R8 and VT_BSTR values, FILETIMEs and qualities, an invalid handle's empty item), ReadProcessed
- * (a FILETIME by value, whose two halves the server checks), ReadAttribute (the bound);
- * IOPCHDA_SyncAnnotations::QueryCapabilities, Read (OPCHDA_ANNOTATION, one with no values);
+ * ([out, size_is(,*n), string] LPWSTR ** beside DWORD ** and VARTYPE **), GetItemHandles,
+ * CreateBrowse (filters: attribute IDs, operator codes, VARIANTs; per-element results) and
+ * IOPCHDA_Browser (GetEnum: an IEnumString out; ChangeBrowsePosition, GetItemID,
+ * GetBranchPosition); IOPCHDA_SyncRead::ReadRaw ([in, out] OPCHDA_TIME with a string and without,
+ * OPCHDA_ITEM arrays of VT_R8 and VT_BSTR values, FILETIMEs and qualities, an invalid handle's empty
+ * item), ReadProcessed (a FILETIME by value, whose two halves the server checks), ReadAtTime (an
+ * array of FILETIMEs in, each checked by the server), ReadModified (OPCHDA_MODIFIEDITEM: values,
+ * qualities, timestamps, modification times, edit types, user names), ReadAttribute (the bound);
+ * IOPCHDA_SyncAnnotations::QueryCapabilities, Read (OPCHDA_ANNOTATION, one with no values), Insert
+ * (OPCHDA_ANNOTATION in, checked element by element); IOPCHDA_AsyncUpdate's Insert, Replace,
+ * InsertReplace, DeleteAtTime and DeleteRaw, answered by OnUpdateComplete; IOPCHDA_AsyncAnnotations
+ * Read and Insert, answered by OnReadAnnotations and OnInsertAnnotations;
  * IOPCHDA_AsyncRead::ReadRaw and ReadProcessed, each answered by IOPCHDA_DataCallback::OnReadComplete
  * through the server's connection point, AdviseRaw (a FILETIME by value) answered by OnDataChange,
  * and Cancel answered by OnCancelComplete; IOPCHDA_SyncUpdate's six methods (VARIANT values of
@@ -752,9 +759,11 @@ static void check_async_update(IOPCHDA_Server *server) {
         cancel = GARBAGE_U32;
         errors = (HRESULT *)GARBAGE_PTR;
         if (method == 0)
-            hr = upd->lpVtbl->Insert(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel, &errors);
+            hr = upd->lpVtbl->Insert(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel,
+                                     &errors);
         else if (method == 1 || method == 4)
-            hr = upd->lpVtbl->Replace(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel, &errors);
+            hr = upd->lpVtbl->Replace(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel,
+                                      &errors);
         else if (method == 2)
             hr = upd->lpVtbl->InsertReplace(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel,
                                             &errors);
@@ -940,6 +949,122 @@ static void check_async(IOPCHDA_Server *server) {
     cpc->lpVtbl->Release(cpc);
 }
 
+/* Whether `e` enumerates exactly the UTF-8 texts `want[0..count)` (count at most 2) and then ends;
+ * releases it. */
+static int enumerates(IEnumString *e, const char *const *want, ULONG count) {
+    LPOLESTR got[3];
+    ULONG fetched = GARBAGE_U32, k;
+    HRESULT hr;
+    int same;
+    if (!e || e == GARBAGE_PTR) return 0;
+    memset(got, 0, sizeof got);
+    hr = e->lpVtbl->Next(e, 3, got, &fetched);
+    same = hr == S_FALSE && fetched == count;
+    for (k = 0; k < fetched && k < 3; k++) {
+        same &= k < count && is_utf8(got[k], want[k]);
+        CoTaskMemFree(got[k]);
+    }
+    e->lpVtbl->Release(e);
+    return same;
+}
+
+/* Whether the browser's position is `want` (UTF-8). */
+static int positioned(IOPCHDA_Browser *b, const char *want) {
+    LPWSTR position = (LPWSTR)GARBAGE_PTR;
+    int same = b->lpVtbl->GetBranchPosition(b, &position) == S_OK && position != GARBAGE_PTR &&
+               is_utf8(position, want);
+    if (position != GARBAGE_PTR) CoTaskMemFree(position);
+    return same;
+}
+
+/* IOPCHDA_Server::CreateBrowse with filters (attribute IDs, operator codes, VARIANTs: hda.h), each
+ * answered by the server as it arrived, an unknown attribute among them; IOPCHDA_Browser: GetEnum
+ * (an IEnumString of branches, leaves and item IDs, as the filters let them through),
+ * ChangeBrowsePosition down, up and direct, GetItemID, GetBranchPosition, and what the server
+ * refuses. A filter not as the server expects is refused for that element alone. */
+static void check_browser(IOPCHDA_Server *server) {
+    static const char *const top[1] = {HDA_TOP_BRANCH};
+    static const char *const branch[1] = {HDA_BRANCH};
+    DWORD ids[HDA_FILTERS], k;
+    OPCHDA_OPERATORCODES ops[HDA_FILTERS];
+    VARIANT filters[HDA_FILTERS];
+    IOPCHDA_Browser *b = (IOPCHDA_Browser *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    IEnumString *e;
+    LPWSTR id;
+    for (k = 0; k < HDA_FILTERS; k++) {
+        ids[k] = HDA_FILTER_IDS[k];
+        ops[k] = HDA_FILTER_OPS[k];
+        filters[k] = hda_filter(k);
+    }
+    /* The description's operator another: that element refused, the others as before. */
+    ops[1] = OPCHDA_EQUAL;
+    CHECK_HR(server->lpVtbl->CreateBrowse(server, HDA_FILTERS, ids, ops, filters, &b, &errors), S_FALSE);
+    CHECK(b && b != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], E_INVALIDARG);
+        CHECK_HR(errors[2], HDA_E_UNKNOWNATTRID);
+        CoTaskMemFree(errors);
+    }
+    if (b && b != GARBAGE_PTR) b->lpVtbl->Release(b);
+    ops[1] = HDA_FILTER_OPS[1];
+    b = (IOPCHDA_Browser *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->CreateBrowse(server, HDA_FILTERS, ids, ops, filters, &b, &errors), S_FALSE);
+    for (k = 0; k < HDA_FILTERS; k++) VariantClear(&filters[k]);
+    CHECK(b && b != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_UNKNOWNATTRID);
+        CoTaskMemFree(errors);
+    }
+    if (!b || b == GARBAGE_PTR) return;
+    /* The root: one branch, no leaves; the filters let item 1 alone through. */
+    CHECK(positioned(b, ""));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_BRANCH, &e), S_OK);
+    CHECK(enumerates(e, top, 1));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_LEAF, &e), S_FALSE);
+    CHECK(enumerates(e, NULL, 0));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_FLAT, &e), S_OK);
+    CHECK(enumerates(e, &HDA_ITEM_IDS[1], 1));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, (OPCHDA_BROWSETYPE)9, &e), E_INVALIDARG);
+    CHECK(e == NULL);
+    /* Down twice: the leaf found and its ID; a leaf filtered out and a branch not there are refused. */
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DOWN, W("Nowhere")), E_INVALIDARG);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DOWN, W(HDA_TOP_BRANCH)), S_OK);
+    CHECK(positioned(b, HDA_TOP_BRANCH));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_BRANCH, &e), S_OK);
+    CHECK(enumerates(e, branch, 1));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DOWN, W(HDA_BRANCH)), S_OK);
+    CHECK(positioned(b, HDA_BRANCH_POSITION));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_LEAF, &e), S_OK);
+    CHECK(enumerates(e, &HDA_LEAVES[1], 1));
+    id = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetItemID(b, W(HDA_LEAVES[1]), &id), S_OK);
+    CHECK(id != GARBAGE_PTR && is_utf8(id, HDA_ITEM_IDS[1]));
+    if (id != GARBAGE_PTR) CoTaskMemFree(id);
+    id = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetItemID(b, W(HDA_LEAVES[0]), &id), E_INVALIDARG);
+    CHECK(id == NULL);
+    /* Up, then directly to the branch, then to the root. */
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_UP, W("")), S_OK);
+    CHECK(positioned(b, HDA_TOP_BRANCH));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DIRECT, W(HDA_BRANCH_POSITION)), S_OK);
+    CHECK(positioned(b, HDA_BRANCH_POSITION));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DIRECT, W("")), S_OK);
+    CHECK(positioned(b, ""));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_UP, W("")), E_INVALIDARG);
+    b->lpVtbl->Release(b);
+}
+
 int main(void) {
     OpcServerRegistration reg;
     IOPCHDA_Server *server = NULL;
@@ -964,6 +1089,7 @@ int main(void) {
         check_status(server);
         check_attributes(server);
         check_handles(server);
+        check_browser(server);
         CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_SyncRead, (void **)&sync), S_OK);
         if (sync) {
             check_read_raw(sync);
