@@ -115,6 +115,7 @@ static void hda_free_item(OPCHDA_ITEM *it) {
 static int hda_same_variant(const VARIANT *a, const VARIANT *b) {
     if (V_VT(a) != V_VT(b)) return 0;
     switch (V_VT(a)) {
+    case VT_I2: return V_I2(a) == V_I2(b);
     case VT_I4: return V_I4(a) == V_I4(b);
     case VT_R8: return V_R8(a) == V_R8(b);
     case VT_BSTR:
@@ -200,6 +201,227 @@ static FILETIME hda_update_interval(void) {
     f.dwLowDateTime = 0x01234567u;
     f.dwHighDateTime = 0x00000003u;
     return f;
+}
+
+/* IOPCHDA_SyncRead::ReadAtTime: the client asks for the values at HDA_AT_TIMES times of its own;
+ * the server answers each item with a value at each (item 0 VT_R8, item 1 VT_BSTR), interpolated. */
+#define HDA_AT_TIMES 3
+#define HDA_QUALITY_INTERPOLATED 0x00020000u /* OPCHDA_INTERPOLATED */
+
+static FILETIME hda_at_time(DWORD n) {
+    return test_time(200 + 7 * n);
+}
+
+/* Fills `it` with item `i`'s values at the times hda_at_time() gives (task memory). */
+static void hda_fill_at_time(int i, OPCHDA_ITEM *it) {
+    DWORD k;
+    memset(it, 0, sizeof *it);
+    it->hClient = HDA_CLIENT_HANDLE(i);
+    it->pftTimeStamps = (FILETIME *)task_zero(HDA_AT_TIMES * sizeof(FILETIME));
+    it->pdwQualities = (DWORD *)task_zero(HDA_AT_TIMES * sizeof(DWORD));
+    it->pvDataValues = (VARIANT *)task_zero(HDA_AT_TIMES * sizeof(VARIANT));
+    if (!it->pftTimeStamps || !it->pdwQualities || !it->pvDataValues) return; /* dwCount 0 */
+    it->dwCount = HDA_AT_TIMES;
+    for (k = 0; k < HDA_AT_TIMES; k++) {
+        VARIANT *v = &it->pvDataValues[k];
+        char text[64];
+        VariantInit(v);
+        it->pftTimeStamps[k] = hda_at_time(k);
+        it->pdwQualities[k] = HDA_QUALITY_INTERPOLATED | (k == 2 ? 0x50u : 0xC0u);
+        if (i == 0) {
+            V_VT(v) = VT_R8;
+            V_R8(v) = -3.75 - k * 1e-200;
+        } else {
+            snprintf(text, sizeof text, "Zeit %lu \xf0\x9f\x98\x80", (unsigned long)k);
+            V_VT(v) = VT_BSTR;
+            V_BSTR(v) = bstr_utf8(text);
+        }
+    }
+}
+
+/* Whether `got` has `want`'s values (hClient, haAggregate, each timestamp, quality and value). */
+static int hda_same_item(const OPCHDA_ITEM *got, const OPCHDA_ITEM *want) {
+    DWORD k;
+    int same = got->hClient == want->hClient && got->haAggregate == want->haAggregate &&
+               got->dwCount == want->dwCount && got->pftTimeStamps && got->pdwQualities && got->pvDataValues;
+    for (k = 0; same && k < want->dwCount; k++)
+        same = same_filetime(got->pftTimeStamps[k], want->pftTimeStamps[k]) &&
+               got->pdwQualities[k] == want->pdwQualities[k] &&
+               hda_same_variant(&got->pvDataValues[k], &want->pvDataValues[k]);
+    return same;
+}
+
+static int hda_is_at_time(const OPCHDA_ITEM *got, int i) {
+    OPCHDA_ITEM want;
+    int same;
+    hda_fill_at_time(i, &want);
+    same = hda_same_item(got, &want);
+    hda_free_item(&want);
+    return same;
+}
+
+/* IOPCHDA_SyncRead::ReadModified: HDA_MODIFIED_VALUES modified values of each item, with the time,
+ * the kind of each edit (OPCHDA_EDITTYPE) and who made it. */
+#define HDA_MODIFIED_VALUES 2
+static const char *const HDA_MODIFIED_USERS[HDA_ITEMS][HDA_MODIFIED_VALUES] = {
+    {"engineer \xc3\xa4\xc3\xb6\xc3\xbc", "operator"}, {"", "maintenance \xf0\x9f\x98\x80 \xe2\x82\xac"}};
+
+/* Fills `m` with item `i`'s modified values (task memory). */
+static void hda_fill_modified(int i, OPCHDA_MODIFIEDITEM *m) {
+    DWORD k;
+    memset(m, 0, sizeof *m);
+    m->hClient = HDA_CLIENT_HANDLE(i);
+    m->pftTimeStamps = (FILETIME *)task_zero(HDA_MODIFIED_VALUES * sizeof(FILETIME));
+    m->pdwQualities = (DWORD *)task_zero(HDA_MODIFIED_VALUES * sizeof(DWORD));
+    m->pvDataValues = (VARIANT *)task_zero(HDA_MODIFIED_VALUES * sizeof(VARIANT));
+    m->pftModificationTime = (FILETIME *)task_zero(HDA_MODIFIED_VALUES * sizeof(FILETIME));
+    m->pEditType = (OPCHDA_EDITTYPE *)task_zero(HDA_MODIFIED_VALUES * sizeof(OPCHDA_EDITTYPE));
+    m->szUser = (LPWSTR *)task_zero(HDA_MODIFIED_VALUES * sizeof(LPWSTR));
+    if (!m->pftTimeStamps || !m->pdwQualities || !m->pvDataValues || !m->pftModificationTime || !m->pEditType ||
+        !m->szUser)
+        return; /* dwCount 0 */
+    m->dwCount = HDA_MODIFIED_VALUES;
+    for (k = 0; k < HDA_MODIFIED_VALUES; k++) {
+        VARIANT *v = &m->pvDataValues[k];
+        char text[64];
+        VariantInit(v);
+        m->pftTimeStamps[k] = test_time(HDA_START_RESOLVED + k);
+        m->pdwQualities[k] = HDA_QUALITY_RAW | (k == 0 ? 0xC0u : 0x18u);
+        m->pftModificationTime[k] = test_time(300 + 10 * (unsigned)i + k);
+        m->pEditType[k] = (OPCHDA_EDITTYPE)(OPCHDA_INSERT + 2 * i + (int)k); /* all four among the items */
+        m->szUser[k] = task_utf8(HDA_MODIFIED_USERS[i][k]);
+        if (i == 0) {
+            V_VT(v) = VT_R8;
+            V_R8(v) = 7.125e10 + k;
+        } else {
+            snprintf(text, sizeof text, "Alt %lu \xc3\xa4\xc3\xb6\xc3\xbc", (unsigned long)k);
+            V_VT(v) = VT_BSTR;
+            V_BSTR(v) = bstr_utf8(text);
+        }
+    }
+}
+
+static void hda_free_modified(OPCHDA_MODIFIEDITEM *m) {
+    DWORD k;
+    for (k = 0; k < m->dwCount; k++) {
+        if (m->pvDataValues) VariantClear(&m->pvDataValues[k]);
+        if (m->szUser) CoTaskMemFree(m->szUser[k]);
+    }
+    CoTaskMemFree(m->pftTimeStamps);
+    CoTaskMemFree(m->pdwQualities);
+    CoTaskMemFree(m->pvDataValues);
+    CoTaskMemFree(m->pftModificationTime);
+    CoTaskMemFree(m->pEditType);
+    CoTaskMemFree(m->szUser);
+    memset(m, 0, sizeof *m);
+}
+
+/* Whether `got` is what hda_fill_modified(i) gives, value for value. */
+static int hda_is_modified(const OPCHDA_MODIFIEDITEM *got, int i) {
+    OPCHDA_MODIFIEDITEM want;
+    DWORD k;
+    int same;
+    hda_fill_modified(i, &want);
+    same = got->hClient == want.hClient && got->dwCount == want.dwCount && got->pftTimeStamps && got->pdwQualities &&
+           got->pvDataValues && got->pftModificationTime && got->pEditType && got->szUser;
+    for (k = 0; same && k < want.dwCount; k++)
+        same = same_filetime(got->pftTimeStamps[k], want.pftTimeStamps[k]) &&
+               got->pdwQualities[k] == want.pdwQualities[k] &&
+               hda_same_variant(&got->pvDataValues[k], &want.pvDataValues[k]) &&
+               same_filetime(got->pftModificationTime[k], want.pftModificationTime[k]) &&
+               got->pEditType[k] == want.pEditType[k] && is_utf8(got->szUser[k], HDA_MODIFIED_USERS[i][k]);
+    hda_free_modified(&want);
+    return same;
+}
+
+/* IOPCHDA_SyncAnnotations::Insert: HDA_UPDATES elements (item 0 with two annotations, item 1 with
+ * one, an invalid handle with one), each with a timestamp; each element answered as it arrived. */
+static FILETIME hda_insert_time(DWORD k) { return test_time(400 + 3 * k); }
+
+/* Fills `a` with element `k` of the annotations inserted (task memory). */
+static void hda_fill_insert_annotation(DWORD k, OPCHDA_ANNOTATION *a) {
+    DWORD n, count = k == 0 ? 2 : 1;
+    memset(a, 0, sizeof *a);
+    a->hClient = k < 2 ? HDA_CLIENT_HANDLE(k) : 0;
+    a->ftTimeStamps = (FILETIME *)task_zero(count * sizeof(FILETIME));
+    a->ftAnnotationTime = (FILETIME *)task_zero(count * sizeof(FILETIME));
+    a->szAnnotation = (LPWSTR *)task_zero(count * sizeof(LPWSTR));
+    a->szUser = (LPWSTR *)task_zero(count * sizeof(LPWSTR));
+    if (!a->ftTimeStamps || !a->ftAnnotationTime || !a->szAnnotation || !a->szUser) return; /* dwNumValues 0 */
+    a->dwNumValues = count;
+    for (n = 0; n < count; n++) {
+        char text[64];
+        a->ftTimeStamps[n] = hda_insert_time(k);
+        a->ftAnnotationTime[n] = test_time(500 + 10 * k + n);
+        snprintf(text, sizeof text, "Note %lu.%lu \xe2\x82\xac \xf0\x9f\x98\x80", (unsigned long)k, (unsigned long)n);
+        a->szAnnotation[n] = task_utf8(text);
+        snprintf(text, sizeof text, "user%lu \xc3\xa4", (unsigned long)(k + n));
+        a->szUser[n] = task_utf8(text);
+    }
+}
+
+static void hda_free_annotation(OPCHDA_ANNOTATION *a) {
+    DWORD n;
+    for (n = 0; n < a->dwNumValues; n++) {
+        if (a->szAnnotation) CoTaskMemFree(a->szAnnotation[n]);
+        if (a->szUser) CoTaskMemFree(a->szUser[n]);
+    }
+    CoTaskMemFree(a->ftTimeStamps);
+    CoTaskMemFree(a->ftAnnotationTime);
+    CoTaskMemFree(a->szAnnotation);
+    CoTaskMemFree(a->szUser);
+    memset(a, 0, sizeof *a);
+}
+
+static int hda_same_wstr(const WCHAR *a, const WCHAR *b) { return a && b && lstrcmpW(a, b) == 0; }
+
+/* Whether `got` is element `k` of the annotations inserted, value for value. */
+static int hda_is_insert_annotation(const OPCHDA_ANNOTATION *got, DWORD k) {
+    OPCHDA_ANNOTATION want;
+    DWORD n;
+    int same;
+    hda_fill_insert_annotation(k, &want);
+    same = got->hClient == want.hClient && got->dwNumValues == want.dwNumValues && got->ftTimeStamps &&
+           got->ftAnnotationTime && got->szAnnotation && got->szUser;
+    for (n = 0; same && n < want.dwNumValues; n++)
+        same = same_filetime(got->ftTimeStamps[n], want.ftTimeStamps[n]) &&
+               same_filetime(got->ftAnnotationTime[n], want.ftAnnotationTime[n]) &&
+               hda_same_wstr(got->szAnnotation[n], want.szAnnotation[n]) &&
+               hda_same_wstr(got->szUser[n], want.szUser[n]);
+    hda_free_annotation(&want);
+    return same;
+}
+
+/* IOPCHDA_Server::CreateBrowse and IOPCHDA_Browser: the items of hda.h as a tree, "Plant" and
+ * "Plant.Tank1" its branches, the items its leaves there. The client's filters: the data type equal
+ * to VT_BSTR (so only item 1 is found), the description not equal to a text, and an attribute the
+ * server does not know. */
+#define HDA_E_UNKNOWNATTRID ((HRESULT)0xC0041008L) /* OPC_E_UNKNOWNATTRID */
+#define HDA_FILTERS 3
+#define HDA_UNKNOWN_ATTR 0x7777u
+#define HDA_FILTER_TEXT "No description \xe2\x82\xac \xf0\x9f\x98\x80"
+static const DWORD HDA_FILTER_IDS[HDA_FILTERS] = {1, 2, HDA_UNKNOWN_ATTR};
+static const OPCHDA_OPERATORCODES HDA_FILTER_OPS[HDA_FILTERS] = {OPCHDA_EQUAL, OPCHDA_NOTEQUAL, OPCHDA_GREATER};
+static const char *const HDA_LEAVES[HDA_ITEMS] = {"Level", "Name \xe2\x82\xac"};
+#define HDA_TOP_BRANCH "Plant"
+#define HDA_BRANCH "Tank1"
+#define HDA_BRANCH_POSITION "Plant.Tank1"
+
+/* The filter value `k` (its BSTR the caller's to clear). */
+static VARIANT hda_filter(DWORD k) {
+    VARIANT v;
+    VariantInit(&v);
+    if (k == 0) {
+        V_VT(&v) = VT_I2;
+        V_I2(&v) = VT_BSTR;
+    } else if (k == 1) {
+        V_VT(&v) = VT_BSTR;
+        V_BSTR(&v) = bstr_utf8(HDA_FILTER_TEXT);
+    } else {
+        V_VT(&v) = VT_R8;
+        V_R8(&v) = 2.5;
+    }
+    return v;
 }
 
 #endif

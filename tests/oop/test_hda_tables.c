@@ -6,11 +6,18 @@
  * request it did not receive as sent with an error. A count beyond its bound never leaves the client.
  *
  * Covered: IOPCHDA_Server::GetHistorianStatus (FILETIME ** and two strings), GetItemAttributes
- * ([out, size_is(,*n), string] LPWSTR ** beside DWORD ** and VARTYPE **), GetItemHandles;
- * IOPCHDA_SyncRead::ReadRaw ([in, out] OPCHDA_TIME with a string and without, OPCHDA_ITEM arrays of
- * VT_R8 and VT_BSTR values, FILETIMEs and qualities, an invalid handle's empty item), ReadProcessed
- * (a FILETIME by value, whose two halves the server checks), ReadAttribute (the bound);
- * IOPCHDA_SyncAnnotations::QueryCapabilities, Read (OPCHDA_ANNOTATION, one with no values);
+ * ([out, size_is(,*n), string] LPWSTR ** beside DWORD ** and VARTYPE **), GetItemHandles,
+ * CreateBrowse (filters: attribute IDs, operator codes, VARIANTs; per-element results) and
+ * IOPCHDA_Browser (GetEnum: an IEnumString out; ChangeBrowsePosition, GetItemID,
+ * GetBranchPosition); IOPCHDA_SyncRead::ReadRaw ([in, out] OPCHDA_TIME with a string and without,
+ * OPCHDA_ITEM arrays of VT_R8 and VT_BSTR values, FILETIMEs and qualities, an invalid handle's empty
+ * item), ReadProcessed (a FILETIME by value, whose two halves the server checks), ReadAtTime (an
+ * array of FILETIMEs in, each checked by the server), ReadModified (OPCHDA_MODIFIEDITEM: values,
+ * qualities, timestamps, modification times, edit types, user names), ReadAttribute (the bound);
+ * IOPCHDA_SyncAnnotations::QueryCapabilities, Read (OPCHDA_ANNOTATION, one with no values), Insert
+ * (OPCHDA_ANNOTATION in, checked element by element); IOPCHDA_AsyncUpdate's Insert, Replace,
+ * InsertReplace, DeleteAtTime and DeleteRaw, answered by OnUpdateComplete; IOPCHDA_AsyncAnnotations
+ * Read and Insert, answered by OnReadAnnotations and OnInsertAnnotations;
  * IOPCHDA_AsyncRead::ReadRaw and ReadProcessed, each answered by IOPCHDA_DataCallback::OnReadComplete
  * through the server's connection point, AdviseRaw (a FILETIME by value) answered by OnDataChange,
  * and Cancel answered by OnCancelComplete; IOPCHDA_SyncUpdate's six methods (VARIANT values of
@@ -35,9 +42,54 @@ typedef struct Callback {
      * OnCancelComplete), the items, raw or by `aggregate`. */
     int expected;
     DWORD transaction, count, aggregate;
+    /* What OnUpdateComplete and OnInsertAnnotations must bring: `count` client handles and results. */
+    OPCHANDLE clients[HDA_UPDATES];
+    HRESULT results[HDA_UPDATES];
 } Callback;
 
-enum { CALL_READ_COMPLETE, CALL_DATA_CHANGE, CALL_CANCEL_COMPLETE, CALL_PLAYBACK };
+enum {
+    CALL_READ_COMPLETE,
+    CALL_DATA_CHANGE,
+    CALL_CANCEL_COMPLETE,
+    CALL_PLAYBACK,
+    CALL_UPDATE_COMPLETE,
+    CALL_READ_ANNOTATIONS,
+    CALL_INSERT_ANNOTATIONS
+};
+
+/* Whether `a` holds item 0's annotations as the server reads them (hda.h). */
+static int is_read_annotation(const OPCHDA_ANNOTATION *a) {
+    DWORD n;
+    int same = a->hClient == HDA_CLIENT_HANDLE(0) && a->dwNumValues == HDA_ANNOTATIONS && a->ftTimeStamps &&
+               a->szAnnotation && a->ftAnnotationTime && a->szUser;
+    for (n = 0; same && n < HDA_ANNOTATIONS; n++)
+        same = same_filetime(a->ftTimeStamps[n], test_time(HDA_START_RESOLVED + n)) &&
+               same_filetime(a->ftAnnotationTime[n], test_time(100 + n)) &&
+               is_utf8(a->szAnnotation[n], HDA_ANNOTATION_TEXTS[n]) && is_utf8(a->szUser[n], HDA_ANNOTATION_USERS[n]);
+    return same;
+}
+
+/* Whether `a` is item 1's (no annotations). */
+static int is_no_annotation(const OPCHDA_ANNOTATION *a) {
+    return a->hClient == HDA_CLIENT_HANDLE(1) && a->dwNumValues == 0 && !a->ftTimeStamps && !a->szAnnotation &&
+           !a->ftAnnotationTime && !a->szUser;
+}
+
+/* Checks what OnUpdateComplete or OnInsertAnnotations brings against what `c` expects. */
+static void check_results(Callback *c, int call, DWORD transaction, HRESULT status, DWORD count,
+                          const OPCHANDLE *clients, const HRESULT *errors) {
+    DWORD k;
+    c->calls++;
+    CHECK(c->expected == call);
+    CHECK(transaction == c->transaction);
+    CHECK_HR(status, S_OK);
+    CHECK(count == c->count && clients && errors);
+    for (k = 0; clients && errors && k < count && k < c->count; k++) {
+        CHECK(clients[k] == c->clients[k]);
+        CHECK_HR(errors[k], c->results[k]);
+    }
+    SetEvent(c->called);
+}
 
 /* Checks the items of an OnReadComplete or OnDataChange against what `c` expects. */
 static void check_items(Callback *c, int call, DWORD transaction, HRESULT status, DWORD count, OPCHDA_ITEM *items,
@@ -94,16 +146,27 @@ static HRESULT STDMETHODCALLTYPE cb_read_attribute(IOPCHDA_DataCallback *This, D
     CHECK(0);
     return S_OK;
 }
+/* An asynchronous read of both items' annotations (item 0's, and none of item 1's). */
 static HRESULT STDMETHODCALLTYPE cb_read_annotations(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                                      DWORD count, OPCHDA_ANNOTATION *values, HRESULT *errors) {
-    (void)This, (void)transaction, (void)status, (void)count, (void)values, (void)errors;
-    CHECK(0);
+    Callback *c = (Callback *)This;
+    c->calls++;
+    CHECK(c->expected == CALL_READ_ANNOTATIONS);
+    CHECK(transaction == c->transaction);
+    CHECK_HR(status, S_OK);
+    CHECK(count == 2 && values && errors);
+    if (count == 2 && values && errors) {
+        CHECK(is_read_annotation(&values[0]));
+        CHECK(is_no_annotation(&values[1]));
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+    }
+    SetEvent(c->called);
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_insert_annotations(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                                        DWORD count, OPCHANDLE *clients, HRESULT *errors) {
-    (void)This, (void)transaction, (void)status, (void)count, (void)clients, (void)errors;
-    CHECK(0);
+    check_results((Callback *)This, CALL_INSERT_ANNOTATIONS, transaction, status, count, clients, errors);
     return S_OK;
 }
 /* A raw playback's history: an array of pointers to items ([in, size_is(n)] OPCHDA_ITEM **). */
@@ -125,8 +188,7 @@ static HRESULT STDMETHODCALLTYPE cb_playback(IOPCHDA_DataCallback *This, DWORD t
 }
 static HRESULT STDMETHODCALLTYPE cb_update_complete(IOPCHDA_DataCallback *This, DWORD transaction, HRESULT status,
                                                     DWORD count, OPCHANDLE *clients, HRESULT *errors) {
-    (void)This, (void)transaction, (void)status, (void)count, (void)clients, (void)errors;
-    CHECK(0);
+    check_results((Callback *)This, CALL_UPDATE_COMPLETE, transaction, status, count, clients, errors);
     return S_OK;
 }
 static HRESULT STDMETHODCALLTYPE cb_cancel_complete(IOPCHDA_DataCallback *This, DWORD cancel) {
@@ -301,6 +363,71 @@ static void check_read_processed(IOPCHDA_SyncRead *sync) {
     range_resolved(&start, &end); /* frees */
 }
 
+/* ReadAtTime: the client's times (an array of FILETIMEs, each checked by the server), both items and
+ * an invalid handle's empty item; one time not as the server expects is refused. */
+static void check_read_at_time(IOPCHDA_SyncRead *sync) {
+    OPCHANDLE handles[3] = {HDA_SERVER_HANDLE(1), HDA_INVALID_HANDLE, HDA_SERVER_HANDLE(0)};
+    FILETIME times[HDA_AT_TIMES];
+    OPCHDA_ITEM *items = (OPCHDA_ITEM *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    DWORD k;
+    for (k = 0; k < HDA_AT_TIMES; k++) times[k] = hda_at_time(k);
+    CHECK_HR(sync->lpVtbl->ReadAtTime(sync, HDA_AT_TIMES, times, 3, handles, &items, &errors), S_FALSE);
+    CHECK(items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR) {
+        CHECK(hda_is_at_time(&items[0], 1));
+        CHECK(items[1].hClient == 0 && items[1].dwCount == 0 && !items[1].pftTimeStamps && !items[1].pdwQualities &&
+              !items[1].pvDataValues);
+        CHECK(hda_is_at_time(&items[2], 0));
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], HDA_E_INVALIDHANDLE);
+        CHECK_HR(errors[2], S_OK);
+        free_items(items, 3);
+        CoTaskMemFree(errors);
+    }
+    /* The last time's low half one more: refused, nothing comes back. */
+    times[HDA_AT_TIMES - 1].dwLowDateTime++;
+    items = (OPCHDA_ITEM *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(sync->lpVtbl->ReadAtTime(sync, HDA_AT_TIMES, times, 2, handles, &items, &errors), E_INVALIDARG);
+    CHECK(items == NULL && errors == NULL);
+}
+
+/* ReadModified: the time range [in, out], OPCHDA_MODIFIEDITEM arrays (values, qualities, timestamps,
+ * modification times, edit types, user names, an empty one among them) of both items, an invalid
+ * handle's empty item; another number of values is refused. */
+static void check_read_modified(IOPCHDA_SyncRead *sync) {
+    OPCHANDLE handles[3] = {HDA_SERVER_HANDLE(0), HDA_SERVER_HANDLE(1), HDA_INVALID_HANDLE};
+    OPCHDA_TIME start, end;
+    OPCHDA_MODIFIEDITEM *items = (OPCHDA_MODIFIEDITEM *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    DWORD k;
+    make_range(&start, &end);
+    CHECK_HR(sync->lpVtbl->ReadModified(sync, &start, &end, HDA_MODIFIED_VALUES, 3, handles, &items, &errors),
+             S_FALSE);
+    CHECK(range_resolved(&start, &end));
+    CHECK(items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (items && items != GARBAGE_PTR && errors && errors != GARBAGE_PTR) {
+        CHECK(hda_is_modified(&items[0], 0));
+        CHECK(hda_is_modified(&items[1], 1));
+        CHECK(items[2].hClient == 0 && items[2].dwCount == 0 && !items[2].pftTimeStamps && !items[2].pdwQualities &&
+              !items[2].pvDataValues && !items[2].pftModificationTime && !items[2].pEditType && !items[2].szUser);
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+        for (k = 0; k < 3; k++) hda_free_modified(&items[k]);
+        CoTaskMemFree(items);
+        CoTaskMemFree(errors);
+    }
+    make_range(&start, &end);
+    items = (OPCHDA_MODIFIEDITEM *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(sync->lpVtbl->ReadModified(sync, &start, &end, HDA_MODIFIED_VALUES + 1, 2, handles, &items, &errors),
+             E_INVALIDARG);
+    CHECK(items == NULL && errors == NULL);
+    range_resolved(&start, &end); /* frees */
+}
+
 /* A count beyond its bound (65,537 attribute IDs, idl/ndr-bounds.txt) is refused by this client's
  * proxy before it is sent, with the code MIDL's [range] gives; at the bound the request leaves (the
  * server does not implement ReadAttribute). */
@@ -467,6 +594,44 @@ static void check_playback(IOPCHDA_Server *server) {
     play->lpVtbl->Release(play);
 }
 
+/* IOPCHDA_SyncAnnotations::Insert: HDA_UPDATES elements of OPCHDA_ANNOTATION (hda.h: two annotations,
+ * one, one of an invalid handle) with a timestamp each, each element answered by the server as it
+ * arrived; then the same with one annotation's text changed, refused for that element alone. */
+static void check_insert_annotations(IOPCHDA_SyncAnnotations *ann) {
+    OPCHANDLE handles[HDA_UPDATES];
+    FILETIME times[HDA_UPDATES];
+    OPCHDA_ANNOTATION values[HDA_UPDATES];
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    DWORD k;
+    for (k = 0; k < HDA_UPDATES; k++) {
+        handles[k] = k < 2 ? HDA_SERVER_HANDLE(k) : HDA_INVALID_HANDLE;
+        times[k] = hda_insert_time(k);
+        hda_fill_insert_annotation(k, &values[k]);
+    }
+    CHECK_HR(ann->lpVtbl->Insert(ann, HDA_UPDATES, handles, times, values, &errors), S_FALSE);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    /* The second annotation of the first element one letter different: that element is refused. */
+    if (values[0].dwNumValues == 2 && values[0].szAnnotation[1]) values[0].szAnnotation[1][0]++;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(ann->lpVtbl->Insert(ann, HDA_UPDATES, handles, times, values, &errors), S_FALSE);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], E_INVALIDARG);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    for (k = 0; k < HDA_UPDATES; k++) hda_free_annotation(&values[k]);
+}
+
 static void check_annotations(IOPCHDA_Server *server) {
     IOPCHDA_SyncAnnotations *ann = NULL;
     OPCHDA_ANNOTATIONCAPABILITIES caps = (OPCHDA_ANNOTATIONCAPABILITIES)0;
@@ -474,40 +639,25 @@ static void check_annotations(IOPCHDA_Server *server) {
     OPCHDA_TIME start, end;
     OPCHDA_ANNOTATION *values = (OPCHDA_ANNOTATION *)GARBAGE_PTR;
     HRESULT *errors = (HRESULT *)GARBAGE_PTR;
-    DWORD n;
     CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_SyncAnnotations, (void **)&ann), S_OK);
     if (!ann) return;
     CHECK_HR(ann->lpVtbl->QueryCapabilities(ann, &caps), S_OK);
-    CHECK(caps == OPCHDA_READANNOTATIONCAP);
+    CHECK(caps == (OPCHDA_READANNOTATIONCAP | OPCHDA_INSERTANNOTATIONCAP));
     make_range(&start, &end);
     CHECK_HR(ann->lpVtbl->Read(ann, &start, &end, 2, handles, &values, &errors), S_OK);
     CHECK(range_resolved(&start, &end));
     CHECK(values && values != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
     if (values && values != GARBAGE_PTR && errors && errors != GARBAGE_PTR) {
-        OPCHDA_ANNOTATION *a = &values[0];
         CHECK_HR(errors[0], S_OK);
         CHECK_HR(errors[1], S_OK);
-        CHECK(a->hClient == HDA_CLIENT_HANDLE(0) && a->dwNumValues == HDA_ANNOTATIONS && a->ftTimeStamps &&
-              a->szAnnotation && a->ftAnnotationTime && a->szUser);
-        if (a->dwNumValues == HDA_ANNOTATIONS && a->ftTimeStamps && a->szAnnotation && a->ftAnnotationTime && a->szUser)
-            for (n = 0; n < HDA_ANNOTATIONS; n++) {
-                CHECK(same_filetime(a->ftTimeStamps[n], test_time(HDA_START_RESOLVED + n)));
-                CHECK(same_filetime(a->ftAnnotationTime[n], test_time(100 + n)));
-                CHECK(is_utf8(a->szAnnotation[n], HDA_ANNOTATION_TEXTS[n]));
-                CHECK(is_utf8(a->szUser[n], HDA_ANNOTATION_USERS[n]));
-                CoTaskMemFree(a->szAnnotation[n]);
-                CoTaskMemFree(a->szUser[n]);
-            }
-        CoTaskMemFree(a->ftTimeStamps);
-        CoTaskMemFree(a->szAnnotation);
-        CoTaskMemFree(a->ftAnnotationTime);
-        CoTaskMemFree(a->szUser);
-        a = &values[1];
-        CHECK(a->hClient == HDA_CLIENT_HANDLE(1) && a->dwNumValues == 0 && !a->ftTimeStamps && !a->szAnnotation &&
-              !a->ftAnnotationTime && !a->szUser);
+        CHECK(is_read_annotation(&values[0]));
+        CHECK(is_no_annotation(&values[1]));
+        hda_free_annotation(&values[0]);
+        hda_free_annotation(&values[1]);
         CoTaskMemFree(values);
         CoTaskMemFree(errors);
     }
+    check_insert_annotations(ann);
     ann->lpVtbl->Release(ann);
 }
 
@@ -551,6 +701,176 @@ static void check_advise(IOPCHDA_AsyncRead *async) {
     CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
     CHECK(cb.calls == 4);
     CHECK_HR(async->lpVtbl->Cancel(async, 72), E_INVALIDARG); /* cancelled already */
+}
+
+/* Waits for the callback expected, the calls' count then one more than `calls` (the count before the
+ * request). */
+static void wait_callback(int calls) {
+    CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0); /* 60 s only bound a broken run */
+    CHECK(cb.calls == calls + 1);
+}
+
+/* What OnUpdateComplete or OnInsertAnnotations must bring next: the two items' client handles in the
+ * order given and their results. */
+static void expect_results(int call, DWORD transaction, OPCHANDLE first, HRESULT r0, OPCHANDLE second, HRESULT r1) {
+    cb.expected = call;
+    cb.transaction = transaction;
+    cb.count = 2;
+    cb.clients[0] = first;
+    cb.results[0] = r0;
+    cb.clients[1] = second;
+    cb.results[1] = r1;
+}
+
+/* IOPCHDA_AsyncUpdate: Insert, Replace, InsertReplace and DeleteAtTime with the values of the
+ * synchronous ones (hda.h), the invalid handle's error in the reply and the two items' results
+ * (S_INSERTED, S_REPLACED among them) in OnUpdateComplete; Replace with Insert's values is refused
+ * by the server; DeleteRaw (the time range [in, out]) of the items and an invalid handle between
+ * them. The callback is advised. */
+static void check_async_update(IOPCHDA_Server *server) {
+    IOPCHDA_AsyncUpdate *upd = NULL;
+    OPCHDA_UPDATECAPABILITIES caps = (OPCHDA_UPDATECAPABILITIES)0;
+    OPCHANDLE handles[HDA_UPDATES];
+    FILETIME times[HDA_UPDATES];
+    VARIANT values[HDA_UPDATES];
+    DWORD qualities[HDA_UPDATES], k, cancel, transaction;
+    HRESULT *errors, hr, results[HDA_UPDATES];
+    int calls;
+    OPCHDA_TIME start, end;
+    int method;
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_AsyncUpdate, (void **)&upd), S_OK);
+    if (!upd) return;
+    CHECK_HR(upd->lpVtbl->QueryCapabilities(upd, &caps), S_OK);
+    CHECK(caps == HDA_UPDATE_CAPS);
+    for (method = 0; method < 5; method++) {
+        int values_of = method == 4 ? 0 : method; /* 4: Replace with Insert's values */
+        for (k = 0; k < HDA_UPDATES; k++) {
+            HdaUpdate u = hda_update(values_of, k);
+            handles[k] = u.handle;
+            times[k] = u.time;
+            values[k] = u.value; /* cleared below */
+            qualities[k] = u.quality;
+            results[k] = u.result;
+        }
+        transaction = 80 + 10 * (DWORD)method;
+        expect_results(CALL_UPDATE_COMPLETE, transaction, HDA_CLIENT_HANDLE(0), results[0], HDA_CLIENT_HANDLE(1),
+                       results[1]);
+        calls = cb.calls;
+        cancel = GARBAGE_U32;
+        errors = (HRESULT *)GARBAGE_PTR;
+        if (method == 0)
+            hr = upd->lpVtbl->Insert(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel,
+                                     &errors);
+        else if (method == 1 || method == 4)
+            hr = upd->lpVtbl->Replace(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel,
+                                      &errors);
+        else if (method == 2)
+            hr = upd->lpVtbl->InsertReplace(upd, transaction, HDA_UPDATES, handles, times, values, qualities, &cancel,
+                                            &errors);
+        else hr = upd->lpVtbl->DeleteAtTime(upd, transaction, HDA_UPDATES, handles, times, &cancel, &errors);
+        for (k = 0; k < HDA_UPDATES; k++) VariantClear(&values[k]);
+        if (method == 4) {
+            CHECK_HR(hr, E_INVALIDARG);
+            CHECK(cancel == 0 && errors == NULL);
+            continue;
+        }
+        CHECK_HR(hr, S_FALSE);
+        CHECK(cancel == transaction + 1);
+        if (errors && errors != GARBAGE_PTR) {
+            CHECK_HR(errors[0], S_OK);
+            CHECK_HR(errors[1], S_OK);
+            CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+            CoTaskMemFree(errors);
+        } else {
+            CHECK(0);
+        }
+        wait_callback(calls);
+    }
+    /* DeleteRaw: item 1, an invalid handle, item 0; OnUpdateComplete brings the items in that order. */
+    handles[0] = HDA_SERVER_HANDLE(1);
+    handles[1] = HDA_INVALID_HANDLE;
+    handles[2] = HDA_SERVER_HANDLE(0);
+    expect_results(CALL_UPDATE_COMPLETE, 131, HDA_CLIENT_HANDLE(1), S_OK, HDA_CLIENT_HANDLE(0), S_OK);
+    make_range(&start, &end);
+    calls = cb.calls;
+    cancel = GARBAGE_U32;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(upd->lpVtbl->DeleteRaw(upd, 131, &start, &end, 3, handles, &cancel, &errors), S_FALSE);
+    CHECK(cancel == 132 && range_resolved(&start, &end));
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], HDA_E_INVALIDHANDLE);
+        CHECK_HR(errors[2], S_OK);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    wait_callback(calls);
+    upd->lpVtbl->Release(upd);
+}
+
+/* IOPCHDA_AsyncAnnotations: Read (the time range [in, out]) answered by OnReadAnnotations with the
+ * annotations the synchronous Read gives; Insert of hda.h's annotations (OPCHDA_ANNOTATION in), the
+ * invalid handle's error in the reply and the two items' results in OnInsertAnnotations; the same
+ * with one text changed is refused by the server. The callback is advised. */
+static void check_async_annotations(IOPCHDA_Server *server) {
+    IOPCHDA_AsyncAnnotations *ann = NULL;
+    OPCHDA_ANNOTATIONCAPABILITIES caps = (OPCHDA_ANNOTATIONCAPABILITIES)0;
+    OPCHANDLE handles[HDA_UPDATES];
+    FILETIME times[HDA_UPDATES];
+    OPCHDA_ANNOTATION values[HDA_UPDATES];
+    OPCHDA_TIME start, end;
+    DWORD cancel = GARBAGE_U32, k;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    int calls;
+    CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_AsyncAnnotations, (void **)&ann), S_OK);
+    if (!ann) return;
+    CHECK_HR(ann->lpVtbl->QueryCapabilities(ann, &caps), S_OK);
+    CHECK(caps == (OPCHDA_READANNOTATIONCAP | OPCHDA_INSERTANNOTATIONCAP));
+    handles[0] = HDA_SERVER_HANDLE(0);
+    handles[1] = HDA_SERVER_HANDLE(1);
+    cb.expected = CALL_READ_ANNOTATIONS;
+    cb.transaction = 141;
+    make_range(&start, &end);
+    calls = cb.calls;
+    CHECK_HR(ann->lpVtbl->Read(ann, 141, &start, &end, 2, handles, &cancel, &errors), S_OK);
+    CHECK(cancel == 142 && range_resolved(&start, &end));
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    wait_callback(calls);
+    for (k = 0; k < HDA_UPDATES; k++) {
+        handles[k] = k < 2 ? HDA_SERVER_HANDLE(k) : HDA_INVALID_HANDLE;
+        times[k] = hda_insert_time(k);
+        hda_fill_insert_annotation(k, &values[k]);
+    }
+    expect_results(CALL_INSERT_ANNOTATIONS, 151, HDA_CLIENT_HANDLE(0), S_OK, HDA_CLIENT_HANDLE(1), S_OK);
+    calls = cb.calls;
+    cancel = GARBAGE_U32;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(ann->lpVtbl->Insert(ann, 151, HDA_UPDATES, handles, times, values, &cancel, &errors), S_FALSE);
+    CHECK(cancel == 152);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
+        CoTaskMemFree(errors);
+    } else {
+        CHECK(0);
+    }
+    wait_callback(calls);
+    /* The user of the second element one letter different: refused, nothing comes back. */
+    if (values[1].dwNumValues == 1 && values[1].szUser[0]) values[1].szUser[0][0]++;
+    cancel = GARBAGE_U32;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(ann->lpVtbl->Insert(ann, 161, HDA_UPDATES, handles, times, values, &cancel, &errors), E_INVALIDARG);
+    CHECK(cancel == 0 && errors == NULL);
+    for (k = 0; k < HDA_UPDATES; k++) hda_free_annotation(&values[k]);
+    ann->lpVtbl->Release(ann);
 }
 
 static void check_async(IOPCHDA_Server *server) {
@@ -619,12 +939,130 @@ static void check_async(IOPCHDA_Server *server) {
         CHECK(cb.calls == 2);
         check_advise(async);
         check_playback(server);
+        check_async_update(server);
+        check_async_annotations(server);
         CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), S_OK);
         CHECK_HR(cp->lpVtbl->Unadvise(cp, cookie), CONNECT_E_NOCONNECTION);
         cp->lpVtbl->Release(cp);
     }
     async->lpVtbl->Release(async);
     cpc->lpVtbl->Release(cpc);
+}
+
+/* Whether `e` enumerates exactly the UTF-8 texts `want[0..count)` (count at most 2) and then ends;
+ * releases it. */
+static int enumerates(IEnumString *e, const char *const *want, ULONG count) {
+    LPOLESTR got[3];
+    ULONG fetched = GARBAGE_U32, k;
+    HRESULT hr;
+    int same;
+    if (!e || e == GARBAGE_PTR) return 0;
+    memset(got, 0, sizeof got);
+    hr = e->lpVtbl->Next(e, 3, got, &fetched);
+    same = hr == S_FALSE && fetched == count;
+    for (k = 0; k < fetched && k < 3; k++) {
+        same &= k < count && is_utf8(got[k], want[k]);
+        CoTaskMemFree(got[k]);
+    }
+    e->lpVtbl->Release(e);
+    return same;
+}
+
+/* Whether the browser's position is `want` (UTF-8). */
+static int positioned(IOPCHDA_Browser *b, const char *want) {
+    LPWSTR position = (LPWSTR)GARBAGE_PTR;
+    int same = b->lpVtbl->GetBranchPosition(b, &position) == S_OK && position != GARBAGE_PTR &&
+               is_utf8(position, want);
+    if (position != GARBAGE_PTR) CoTaskMemFree(position);
+    return same;
+}
+
+/* IOPCHDA_Server::CreateBrowse with filters (attribute IDs, operator codes, VARIANTs: hda.h), each
+ * answered by the server as it arrived, an unknown attribute among them; IOPCHDA_Browser: GetEnum
+ * (an IEnumString of branches, leaves and item IDs, as the filters let them through),
+ * ChangeBrowsePosition down, up and direct, GetItemID, GetBranchPosition, and what the server
+ * refuses. A filter not as the server expects is refused for that element alone. */
+static void check_browser(IOPCHDA_Server *server) {
+    static const char *const top[1] = {HDA_TOP_BRANCH};
+    static const char *const branch[1] = {HDA_BRANCH};
+    DWORD ids[HDA_FILTERS], k;
+    OPCHDA_OPERATORCODES ops[HDA_FILTERS];
+    VARIANT filters[HDA_FILTERS];
+    IOPCHDA_Browser *b = (IOPCHDA_Browser *)GARBAGE_PTR;
+    HRESULT *errors = (HRESULT *)GARBAGE_PTR;
+    IEnumString *e;
+    LPWSTR id;
+    for (k = 0; k < HDA_FILTERS; k++) {
+        ids[k] = HDA_FILTER_IDS[k];
+        ops[k] = HDA_FILTER_OPS[k];
+        filters[k] = hda_filter(k);
+    }
+    /* The description's operator another: that element refused, the others as before. */
+    ops[1] = OPCHDA_EQUAL;
+    CHECK_HR(server->lpVtbl->CreateBrowse(server, HDA_FILTERS, ids, ops, filters, &b, &errors), S_FALSE);
+    CHECK(b && b != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], E_INVALIDARG);
+        CHECK_HR(errors[2], HDA_E_UNKNOWNATTRID);
+        CoTaskMemFree(errors);
+    }
+    if (b && b != GARBAGE_PTR) b->lpVtbl->Release(b);
+    ops[1] = HDA_FILTER_OPS[1];
+    b = (IOPCHDA_Browser *)GARBAGE_PTR;
+    errors = (HRESULT *)GARBAGE_PTR;
+    CHECK_HR(server->lpVtbl->CreateBrowse(server, HDA_FILTERS, ids, ops, filters, &b, &errors), S_FALSE);
+    for (k = 0; k < HDA_FILTERS; k++) VariantClear(&filters[k]);
+    CHECK(b && b != GARBAGE_PTR && errors && errors != GARBAGE_PTR);
+    if (errors && errors != GARBAGE_PTR) {
+        CHECK_HR(errors[0], S_OK);
+        CHECK_HR(errors[1], S_OK);
+        CHECK_HR(errors[2], HDA_E_UNKNOWNATTRID);
+        CoTaskMemFree(errors);
+    }
+    if (!b || b == GARBAGE_PTR) return;
+    /* The root: one branch, no leaves; the filters let item 1 alone through. */
+    CHECK(positioned(b, ""));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_BRANCH, &e), S_OK);
+    CHECK(enumerates(e, top, 1));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_LEAF, &e), S_FALSE);
+    CHECK(enumerates(e, NULL, 0));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_FLAT, &e), S_OK);
+    CHECK(enumerates(e, &HDA_ITEM_IDS[1], 1));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, (OPCHDA_BROWSETYPE)9, &e), E_INVALIDARG);
+    CHECK(e == NULL);
+    /* Down twice: the leaf found and its ID; a leaf filtered out and a branch not there are refused. */
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DOWN, W("Nowhere")), E_INVALIDARG);
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DOWN, W(HDA_TOP_BRANCH)), S_OK);
+    CHECK(positioned(b, HDA_TOP_BRANCH));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_BRANCH, &e), S_OK);
+    CHECK(enumerates(e, branch, 1));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DOWN, W(HDA_BRANCH)), S_OK);
+    CHECK(positioned(b, HDA_BRANCH_POSITION));
+    e = (IEnumString *)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetEnum(b, OPCHDA_LEAF, &e), S_OK);
+    CHECK(enumerates(e, &HDA_LEAVES[1], 1));
+    id = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetItemID(b, W(HDA_LEAVES[1]), &id), S_OK);
+    CHECK(id != GARBAGE_PTR && is_utf8(id, HDA_ITEM_IDS[1]));
+    if (id != GARBAGE_PTR) CoTaskMemFree(id);
+    id = (LPWSTR)GARBAGE_PTR;
+    CHECK_HR(b->lpVtbl->GetItemID(b, W(HDA_LEAVES[0]), &id), E_INVALIDARG);
+    CHECK(id == NULL);
+    /* Up, then directly to the branch, then to the root. */
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_UP, W("")), S_OK);
+    CHECK(positioned(b, HDA_TOP_BRANCH));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DIRECT, W(HDA_BRANCH_POSITION)), S_OK);
+    CHECK(positioned(b, HDA_BRANCH_POSITION));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_DIRECT, W("")), S_OK);
+    CHECK(positioned(b, ""));
+    CHECK_HR(b->lpVtbl->ChangeBrowsePosition(b, OPCHDA_BROWSE_UP, W("")), E_INVALIDARG);
+    b->lpVtbl->Release(b);
 }
 
 int main(void) {
@@ -651,10 +1089,13 @@ int main(void) {
         check_status(server);
         check_attributes(server);
         check_handles(server);
+        check_browser(server);
         CHECK_HR(server->lpVtbl->QueryInterface(server, &IID_IOPCHDA_SyncRead, (void **)&sync), S_OK);
         if (sync) {
             check_read_raw(sync);
             check_read_processed(sync);
+            check_read_at_time(sync);
+            check_read_modified(sync);
             check_bound(sync);
             sync->lpVtbl->Release(sync);
         }
