@@ -17,6 +17,7 @@
  * with the IOPCEventSink connection point. What the test does not call answers E_NOTIMPL. */
 #include "ae.h"
 
+#include "enum_strings.h"
 #include "sink_point.h"
 
 #define CONTAINER(type, field, p) ((type *)((char *)(p) - offsetof(type, field)))
@@ -602,67 +603,6 @@ static HRESULT STDMETHODCALLTYPE srv_ack(IOPCEventServer2 *This, DWORD count, LP
 
 /* ---- The area browser: the areas of ae.h as a tree, their sources as leaves ---- */
 
-/* An IEnumString of copies of texts. */
-typedef struct Strings {
-    IEnumString iface;
-    LONG refs;
-    ULONG count, next;
-    LPWSTR texts[AE_AREAS + AE_SOURCES];
-} Strings;
-
-static HRESULT STDMETHODCALLTYPE str_qi(IEnumString *This, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (!IsEqualIID(riid, &IID_IUnknown) && !IsEqualIID(riid, &IID_IEnumString)) return E_NOINTERFACE;
-    *ppv = This;
-    InterlockedIncrement(&((Strings *)This)->refs);
-    return S_OK;
-}
-static ULONG STDMETHODCALLTYPE str_add_ref(IEnumString *This) {
-    return (ULONG)InterlockedIncrement(&((Strings *)This)->refs);
-}
-static ULONG STDMETHODCALLTYPE str_release(IEnumString *This) {
-    Strings *e = (Strings *)This;
-    LONG n = InterlockedDecrement(&e->refs);
-    ULONG k;
-    if (n == 0) {
-        for (k = 0; k < e->count; k++) CoTaskMemFree(e->texts[k]);
-        free(e);
-        OpcServerUnlock(); /* an enumerator counts on the process while it lives */
-    }
-    return (ULONG)n;
-}
-static HRESULT STDMETHODCALLTYPE str_next(IEnumString *This, ULONG celt, LPOLESTR *out, ULONG *fetched) {
-    Strings *e = (Strings *)This;
-    ULONG n = 0;
-    if (!out || (celt > 1 && !fetched)) return E_POINTER;
-    while (n < celt && e->next < e->count) {
-        out[n] = (LPOLESTR)CoTaskMemAlloc((wcslen(e->texts[e->next]) + 1) * sizeof(WCHAR));
-        if (!out[n]) break;
-        wcscpy(out[n], e->texts[e->next]);
-        n++;
-        e->next++;
-    }
-    if (fetched) *fetched = n;
-    return n == celt ? S_OK : S_FALSE;
-}
-static HRESULT STDMETHODCALLTYPE str_skip(IEnumString *This, ULONG celt) {
-    Strings *e = (Strings *)This;
-    ULONG left = e->count - e->next;
-    e->next += celt < left ? celt : left;
-    return celt <= left ? S_OK : S_FALSE;
-}
-static HRESULT STDMETHODCALLTYPE str_reset(IEnumString *This) {
-    ((Strings *)This)->next = 0;
-    return S_OK;
-}
-static HRESULT STDMETHODCALLTYPE str_clone(IEnumString *This, IEnumString **out) {
-    (void)This;
-    if (out) *out = NULL;
-    return E_NOTIMPL;
-}
-static IEnumStringVtbl str_vtbl = {str_qi, str_add_ref, str_release, str_next, str_skip, str_reset, str_clone};
-
 typedef struct Browser {
     IOPCEventAreaBrowser iface;
     LONG refs;
@@ -740,16 +680,13 @@ static HRESULT STDMETHODCALLTYPE br_browse(IOPCEventAreaBrowser *This, OPCAEBROW
     if (!out) return E_POINTER;
     *out = NULL;
     if ((type != OPC_AREA && type != OPC_SOURCE) || !filter) return E_INVALIDARG;
-    e = (Strings *)calloc(1, sizeof *e);
+    e = strings_new(AE_AREAS + AE_SOURCES);
     if (!e) return E_OUTOFMEMORY;
-    e->iface.lpVtbl = &str_vtbl;
-    e->refs = 1;
-    OpcServerLock();
     EnterCriticalSection(&b->lock);
     for (i = 0; i < (by_area ? AE_AREAS : AE_SOURCES); i++) {
         const char *part = child_part(b->area, by_area ? AE_AREA_NAMES[i] : AE_SOURCE_NAMES[i]);
         LPWSTR text = part ? task_utf8(part) : NULL;
-        if (text && (!filter[0] || MatchPatternW(text, filter, FALSE))) e->texts[e->count++] = text;
+        if (text && (!filter[0] || MatchPatternW(text, filter, FALSE))) strings_add(e, text);
         else CoTaskMemFree(text);
     }
     LeaveCriticalSection(&b->lock);

@@ -17,6 +17,7 @@
  * IOPCHDA_DataCallback connection point. What the test does not call answers E_NOTIMPL. */
 #include "hda.h"
 
+#include "enum_strings.h"
 #include "sink_point.h"
 
 #define CONTAINER(type, field, p) ((type *)((char *)(p) - offsetof(type, field)))
@@ -204,82 +205,17 @@ static HRESULT STDMETHODCALLTYPE srv_validate(IOPCHDA_Server *This, DWORD count,
 /* -- IOPCHDA_Browser: the tree of hda.h ("Plant", "Plant.Tank1" with the items as leaves), the
  * items found those whose data type the filters let through -- */
 
-/* An IEnumString of copies of texts (UTF-8 given). */
-typedef struct Strings {
-    IEnumString iface;
-    LONG refs;
-    ULONG count, next;
-    LPWSTR texts[HDA_ITEMS];
-} Strings;
-
-static HRESULT STDMETHODCALLTYPE str_qi(IEnumString *This, REFIID riid, void **ppv) {
-    if (!ppv) return E_POINTER;
-    *ppv = NULL;
-    if (!IsEqualIID(riid, &IID_IUnknown) && !IsEqualIID(riid, &IID_IEnumString)) return E_NOINTERFACE;
-    *ppv = This;
-    InterlockedIncrement(&((Strings *)This)->refs);
-    return S_OK;
-}
-static ULONG STDMETHODCALLTYPE str_add_ref(IEnumString *This) {
-    return (ULONG)InterlockedIncrement(&((Strings *)This)->refs);
-}
-static ULONG STDMETHODCALLTYPE str_release(IEnumString *This) {
-    Strings *e = (Strings *)This;
-    LONG n = InterlockedDecrement(&e->refs);
-    ULONG k;
-    if (n == 0) {
-        for (k = 0; k < e->count; k++) CoTaskMemFree(e->texts[k]);
-        free(e);
-        OpcServerUnlock(); /* an enumerator counts on the process while it lives */
-    }
-    return (ULONG)n;
-}
-static HRESULT STDMETHODCALLTYPE str_next(IEnumString *This, ULONG celt, LPOLESTR *out, ULONG *fetched) {
-    Strings *e = (Strings *)This;
-    ULONG n = 0;
-    if (!out || (celt > 1 && !fetched)) return E_POINTER;
-    while (n < celt && e->next < e->count) {
-        out[n] = (LPOLESTR)CoTaskMemAlloc((wcslen(e->texts[e->next]) + 1) * sizeof(WCHAR));
-        if (!out[n]) break;
-        wcscpy(out[n], e->texts[e->next]);
-        n++;
-        e->next++;
-    }
-    if (fetched) *fetched = n;
-    return n == celt ? S_OK : S_FALSE;
-}
-static HRESULT STDMETHODCALLTYPE str_skip(IEnumString *This, ULONG celt) {
-    Strings *e = (Strings *)This;
-    ULONG left = e->count - e->next;
-    e->next += celt < left ? celt : left;
-    return celt <= left ? S_OK : S_FALSE;
-}
-static HRESULT STDMETHODCALLTYPE str_reset(IEnumString *This) {
-    ((Strings *)This)->next = 0;
-    return S_OK;
-}
-static HRESULT STDMETHODCALLTYPE str_clone(IEnumString *This, IEnumString **out) {
-    (void)This;
-    if (out) *out = NULL;
-    return E_NOTIMPL;
-}
-static IEnumStringVtbl str_vtbl = {str_qi, str_add_ref, str_release, str_next, str_skip, str_reset, str_clone};
-
-/* An enumerator of the UTF-8 texts `texts[0..count)` (count at most HDA_ITEMS), or NULL. */
+/* An enumerator of the UTF-8 texts `texts[0..count)`, or NULL. */
 static IEnumString *new_strings(const char *const *texts, ULONG count) {
-    Strings *e = (Strings *)calloc(1, sizeof *e);
+    Strings *e = strings_new(count);
     ULONG k;
     if (!e) return NULL;
-    e->iface.lpVtbl = &str_vtbl;
-    e->refs = 1;
-    OpcServerLock();
     for (k = 0; k < count; k++) {
-        e->texts[k] = task_utf8(texts[k]);
-        if (!e->texts[k]) {
+        LPWSTR text = task_utf8(texts[k]);
+        if (!text || !strings_add(e, text)) {
             str_release(&e->iface);
             return NULL;
         }
-        e->count = k + 1;
     }
     return &e->iface;
 }
