@@ -89,6 +89,31 @@ static void *task_zero(size_t size) {
     return p;
 }
 
+/* Checks a call's per-element results (CoTaskMemAlloc'd; freed here): element k must be the k-th
+ * HRESULT listed. None (NULL, or still the garbage the pointer was pre-filled with) is a failure. */
+#define CHECK_RESULTS(results, ...)                                                          \
+    check_results_at(__FILE__, __LINE__, (results), (const HRESULT[]){__VA_ARGS__},          \
+                     sizeof((const HRESULT[]){__VA_ARGS__}) / sizeof(HRESULT))
+
+static inline void check_results_at(const char *file, int line, HRESULT *results, const HRESULT *want, size_t n) {
+    size_t k;
+    if (!results || results == (HRESULT *)GARBAGE_PTR) {
+        test_failed++;
+        fprintf(stderr, "%s:%d: no per-element results\n", file, line);
+        return;
+    }
+    for (k = 0; k < n; k++) {
+        if (results[k] == want[k]) {
+            test_passed++;
+        } else {
+            test_failed++;
+            fprintf(stderr, "%s:%d: element %u's result is 0x%08lX, expected 0x%08lX\n", file, line, (unsigned)k,
+                    (unsigned long)(unsigned int)results[k], (unsigned long)(unsigned int)want[k]);
+        }
+    }
+    CoTaskMemFree(results);
+}
+
 /* The path of a program beside this one (a server beside its client). */
 static void beside_this_program(WCHAR *path, const WCHAR *name) {
     WCHAR *slash;

@@ -244,12 +244,7 @@ static void check_enable(IOPCEventServer2 *server) {
     /* Tank 2's area on again. */
     errors = (HRESULT *)GARBAGE_PTR;
     CHECK_HR(server->lpVtbl->EnableConditionByArea2(server, 1, areas, &errors), S_OK);
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK);
     areas[1] = (LPWSTR)W(AE_AREA_NAMES[0]);
     check_enable_state(server, 1, 2, areas, all, all, ok, S_OK);
     /* Version 1 by area: Tank 1's area off, its sources not effectively enabled, on again; the source

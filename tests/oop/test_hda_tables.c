@@ -519,14 +519,7 @@ static void check_update(IOPCHDA_Server *server) {
     errors = (HRESULT *)GARBAGE_PTR;
     CHECK_HR(upd->lpVtbl->DeleteRaw(upd, &start, &end, 3, handles, &errors), S_FALSE);
     CHECK(range_resolved(&start, &end));
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK, HDA_E_INVALIDHANDLE);
     upd->lpVtbl->Release(upd);
 }
 
@@ -559,13 +552,7 @@ static void check_playback(IOPCHDA_Server *server) {
                                              hda_update_interval(), 2, handles, &cancel, &errors),
              S_OK);
     CHECK(cancel == 52 && range_resolved(&start, &end));
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK);
     CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
     CHECK(cb.calls == 5);
     make_range(&start, &end);
@@ -581,13 +568,7 @@ static void check_playback(IOPCHDA_Server *server) {
                                                    hda_update_interval(), 2, handles, aggregates, &cancel, &errors),
              S_OK);
     CHECK(cancel == 62 && range_resolved(&start, &end));
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK);
     CHECK_HR(play->lpVtbl->Cancel(play, 52), S_OK);
     CHECK_HR(play->lpVtbl->Cancel(play, 52), E_INVALIDARG);
     CHECK_HR(play->lpVtbl->Cancel(play, 62), S_OK);
@@ -609,26 +590,12 @@ static void check_insert_annotations(IOPCHDA_SyncAnnotations *ann) {
         hda_fill_insert_annotation(k, &values[k]);
     }
     CHECK_HR(ann->lpVtbl->Insert(ann, HDA_UPDATES, handles, times, values, &errors), S_FALSE);
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK, HDA_E_INVALIDHANDLE);
     /* The second annotation of the first element one letter different: that element is refused. */
     if (values[0].dwNumValues == 2 && values[0].szAnnotation[1]) values[0].szAnnotation[1][0]++;
     errors = (HRESULT *)GARBAGE_PTR;
     CHECK_HR(ann->lpVtbl->Insert(ann, HDA_UPDATES, handles, times, values, &errors), S_FALSE);
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], E_INVALIDARG);
-        CHECK_HR(errors[1], S_OK);
-        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, E_INVALIDARG, S_OK, HDA_E_INVALIDHANDLE);
     for (k = 0; k < HDA_UPDATES; k++) hda_free_annotation(&values[k]);
 }
 
@@ -684,13 +651,7 @@ static void check_advise(IOPCHDA_AsyncRead *async) {
     CHECK(cancel == 72);
     CHECK(start.bString && is_utf8(start.szTime, HDA_START_TEXT) &&
           same_filetime(start.ftTime, test_time(HDA_START_RESOLVED)));
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK);
     range_resolved(&start, &end); /* frees */
     CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
     CHECK(cb.calls == 3);
@@ -776,14 +737,7 @@ static void check_async_update(IOPCHDA_Server *server) {
         }
         CHECK_HR(hr, S_FALSE);
         CHECK(cancel == transaction + 1);
-        if (errors && errors != GARBAGE_PTR) {
-            CHECK_HR(errors[0], S_OK);
-            CHECK_HR(errors[1], S_OK);
-            CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
-            CoTaskMemFree(errors);
-        } else {
-            CHECK(0);
-        }
+        CHECK_RESULTS(errors, S_OK, S_OK, HDA_E_INVALIDHANDLE);
         wait_callback(calls);
     }
     /* DeleteRaw: item 1, an invalid handle, item 0; OnUpdateComplete brings the items in that order. */
@@ -797,14 +751,7 @@ static void check_async_update(IOPCHDA_Server *server) {
     errors = (HRESULT *)GARBAGE_PTR;
     CHECK_HR(upd->lpVtbl->DeleteRaw(upd, 131, &start, &end, 3, handles, &cancel, &errors), S_FALSE);
     CHECK(cancel == 132 && range_resolved(&start, &end));
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], HDA_E_INVALIDHANDLE);
-        CHECK_HR(errors[2], S_OK);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, HDA_E_INVALIDHANDLE, S_OK);
     wait_callback(calls);
     upd->lpVtbl->Release(upd);
 }
@@ -835,13 +782,7 @@ static void check_async_annotations(IOPCHDA_Server *server) {
     calls = cb.calls;
     CHECK_HR(ann->lpVtbl->Read(ann, 141, &start, &end, 2, handles, &cancel, &errors), S_OK);
     CHECK(cancel == 142 && range_resolved(&start, &end));
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK);
     wait_callback(calls);
     for (k = 0; k < HDA_UPDATES; k++) {
         handles[k] = k < 2 ? HDA_SERVER_HANDLE(k) : HDA_INVALID_HANDLE;
@@ -854,14 +795,7 @@ static void check_async_annotations(IOPCHDA_Server *server) {
     errors = (HRESULT *)GARBAGE_PTR;
     CHECK_HR(ann->lpVtbl->Insert(ann, 151, HDA_UPDATES, handles, times, values, &cancel, &errors), S_FALSE);
     CHECK(cancel == 152);
-    if (errors && errors != GARBAGE_PTR) {
-        CHECK_HR(errors[0], S_OK);
-        CHECK_HR(errors[1], S_OK);
-        CHECK_HR(errors[2], HDA_E_INVALIDHANDLE);
-        CoTaskMemFree(errors);
-    } else {
-        CHECK(0);
-    }
+    CHECK_RESULTS(errors, S_OK, S_OK, HDA_E_INVALIDHANDLE);
     wait_callback(calls);
     /* The user of the second element one letter different: refused, nothing comes back. */
     if (values[1].dwNumValues == 1 && values[1].szUser[0]) values[1].szUser[0][0]++;
@@ -908,13 +842,7 @@ static void check_async(IOPCHDA_Server *server) {
         CHECK_HR(async->lpVtbl->ReadRaw(async, 31, &start, &end, HDA_RAW_VALUES, FALSE, 2, handles, &cancel, &errors),
                  S_OK);
         CHECK(cancel == 32 && range_resolved(&start, &end));
-        if (errors && errors != GARBAGE_PTR) {
-            CHECK_HR(errors[0], S_OK);
-            CHECK_HR(errors[1], S_OK);
-            CoTaskMemFree(errors);
-        } else {
-            CHECK(0);
-        }
+        CHECK_RESULTS(errors, S_OK, S_OK);
         /* The server's thread calls back; 60 s only bound a broken run. */
         CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
         CHECK(cb.calls == 1);
@@ -929,12 +857,7 @@ static void check_async(IOPCHDA_Server *server) {
                                               &errors),
                  S_OK);
         CHECK(cancel == 42 && range_resolved(&start, &end));
-        if (errors && errors != GARBAGE_PTR) {
-            CHECK_HR(errors[0], S_OK);
-            CoTaskMemFree(errors);
-        } else {
-            CHECK(0);
-        }
+        CHECK_RESULTS(errors, S_OK);
         CHECK(WaitForSingleObject(cb.called, 60000) == WAIT_OBJECT_0);
         CHECK(cb.calls == 2);
         check_advise(async);
