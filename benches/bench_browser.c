@@ -468,6 +468,10 @@ static void clients_case(int cached)
     }
     /* This process holds the browser for the whole case (COM starts it for the first client). */
     IOPCServerList2 *holder = NULL;
+    /* One that a client before this run left may still be ending (an EXE server ends after its last
+       client's release): it gets 30 s. */
+    for (int waited = 0; browser_pid() && waited < 300; waited++)
+        Sleep(100);
     if (browser_pid()) {
         fprintf(stderr, "a browser runs already: this case needs one of its own\n");
         exit(2);
