@@ -49,12 +49,11 @@
  * does (tests/oop/test_bench_registration.c uses it). */
 #include "oop.h"
 
-#include <stdarg.h>
+#define OOP_BENCH_PROGRAM "cross_process_bench"
+#define OOP_BENCH_USER_TYPE L"opccomn cross-process benchmark server"
+#include "oop_bench.h"
 
-#define MAX_ROUNDS 101
-#define CONTENDERS 3
 static const CATID CATID_DA2 = {0x63D5F432, 0xCFE4, 0x11D1, {0xB2, 0xC8, 0x00, 0x60, 0x08, 0x3B, 0xA1, 0xFB}};
-static WCHAR server_path[MAX_PATH];
 static const char *const OPERATIONS[2] = {"GetErrorString", "Enum+Next(100)"};
 
 typedef struct {
@@ -72,47 +71,10 @@ typedef struct {
 static Contender contenders[CONTENDERS] = {
     {.name = "opccomn", .widl = 0, .set = 1}, {.name = "widl", .widl = 1, .set = 2}, {.name = "widl (control)", .widl = 1, .set = 3}};
 
-/* The run's settings (command line). */
-static int rounds = 51;
-static double budget_s = 1200, stall_s = 60;
+/* The run's settings (command line), beside rounds and stall_s (oop_bench.h). */
+static double budget_s = 1200;
 static int simulate_stall_round = -2; /* (-1 is the warm-up) */
-
-/* ---- The watchdog: every step of the run is named and timed; one that ends too late is a stall ---- */
-
-static CRITICAL_SECTION step_lock;   /* the step's name, start and limit */
-static char step_name[160];
-static ULONGLONG step_started;       /* GetTickCount64 */
-static ULONGLONG step_limit_ms;
-static volatile LONG rounds_done;    /* complete rounds: each contender's batch of both operations */
-static CRITICAL_SECTION output_lock; /* the figures, printed once, by the run or by the watchdog */
-static int figures_printed;
-static HANDLE run_finished;
-
-/* A new step (what it is, for the report) with its time limit. */
-static void step(double limit_s, const char *format, ...) {
-    va_list ap;
-    EnterCriticalSection(&step_lock);
-    va_start(ap, format);
-    vsnprintf(step_name, sizeof step_name, format, ap);
-    va_end(ap);
-    step_started = GetTickCount64();
-    step_limit_ms = (ULONGLONG)(limit_s * 1000);
-    LeaveCriticalSection(&step_lock);
-}
-/* A server's start or end: under Wine on a loaded machine it takes seconds, at times tens of them. */
-static double setup_limit_s(void) { return stall_s * 2 > 120 ? stall_s * 2 : 120; }
-
-static double now(void) {
-    LARGE_INTEGER f, c;
-    QueryPerformanceFrequency(&f);
-    QueryPerformanceCounter(&c);
-    return (double)c.QuadPart / (double)f.QuadPart;
-}
-
-static int failed(const Contender *k, const char *what, HRESULT hr) {
-    fprintf(stderr, "cross_process_bench: %s (%s): 0x%08lX\n", what, k->name, (unsigned long)hr);
-    return 1;
-}
+static int batch_calls[2];            /* per operation: round trips a batch */
 
 /* Makes the contender's proxy/stub the one this process uses for the five interfaces. */
 static HRESULT select_proxy_stub(const Contender *k) {
@@ -123,71 +85,43 @@ static HRESULT select_proxy_stub(const Contender *k) {
     return hr;
 }
 
-static OpcServerRegistration registration(const CLSID *clsid, const WCHAR *prog_id) {
-    OpcServerRegistration r;
-    memset(&r, 0, sizeof r);
-    r.struct_size = sizeof r;
-    r.server_type = OPC_SERVER_TYPE_LOCAL;
-    r.clsid = *clsid;
-    r.prog_id = prog_id;
-    r.user_type = L"opccomn cross-process benchmark server";
-    r.module_path = server_path;
-    return r;
-}
-
 static void prog_id(const Contender *k, int list, WCHAR *out) {
     swprintf(out, 40, L"Oop.Bench%u.%ls.1", k->set, list ? L"ServerList" : L"Server");
 }
 
 /* The contender's two classes, whose server's command line names its proxy/stub and its CLSIDs. */
 static HRESULT register_classes(const Contender *k) {
-    WCHAR command[MAX_PATH + 40], key[80], guid[40], name[40];
+    WCHAR arguments[40], name[40];
     HRESULT hr = S_OK;
     int list;
+    swprintf(arguments, 40, L" %ls -set:%u", k->widl ? L"-ps:widl" : L"-ps:opccomn-direct", k->set);
     for (list = 0; SUCCEEDED(hr) && list < 2; list++) {
         CLSID clsid = oop_class(k->set, list);
-        OpcServerRegistration r;
-        HKEY h;
         prog_id(k, list, name);
-        r = registration(&clsid, name);
-        if (FAILED(hr = OpcRegisterServer(&r, NULL))) break;
-        StringFromGUID2(&clsid, guid, 40);
-        swprintf(key, 80, L"CLSID\\%ls\\LocalServer32", guid);
-        swprintf(command, MAX_PATH + 40, L"\"%ls\" %ls -set:%u", server_path,
-                 k->widl ? L"-ps:widl" : L"-ps:opccomn-direct", k->set);
-        if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_WRITE, &h) != ERROR_SUCCESS) return E_FAIL;
-        if (RegSetValueExW(h, NULL, 0, REG_SZ, (const BYTE *)command, (DWORD)((wcslen(command) + 1) * sizeof(WCHAR))))
-            hr = E_FAIL;
-        RegCloseKey(h);
+        hr = register_class(&clsid, name, arguments);
     }
     return hr;
 }
 
-static void unregister_classes(const Contender *k) {
+static void unregister_all(void) {
     WCHAR name[40];
-    int list;
-    for (list = 0; list < 2; list++) {
-        CLSID clsid = oop_class(k->set, list);
-        OpcServerRegistration r;
-        prog_id(k, list, name);
-        r = registration(&clsid, name);
-        OpcUnregisterServer(&r, NULL);
-    }
+    int i, list;
+    for (i = 0; i < CONTENDERS; i++)
+        for (list = 0; list < 2; list++) {
+            CLSID clsid = oop_class(contenders[i].set, list);
+            prog_id(&contenders[i], list, name);
+            unregister_class(&clsid, name);
+        }
 }
 
-static void unregister_all(void) {
-    int i;
-    for (i = 0; i < CONTENDERS; i++) unregister_classes(&contenders[i]);
-}
+static DWORD server_pid(int i) { return contenders[i].server_pid; }
+static unsigned *contender_set(int i) { return &contenders[i].set; }
 
 /* A vendor code's answer from the contender's server, as text (0 when it gave none). */
 static int ask_server(Contender *k, HRESULT code, char *out, size_t size) {
     LPWSTR text = NULL;
     HRESULT hr = k->common->lpVtbl->GetErrorString(k->common, code, &text);
-    if (FAILED(hr) || !text) return failed(k, "asking the server", hr), 0;
-    snprintf(out, size, "%ls", text);
-    CoTaskMemFree(text);
-    return 1;
+    return server_answer(k->name, hr, text, out, size);
 }
 
 /* The contender's server makes its stubs with the proxy/stub it should. */
@@ -224,21 +158,21 @@ static int connect_contender(Contender *k) {
     LONG before = widl_proxy_stub_refs();
     int widl_enum = -1;
     char pid[32];
-    if (FAILED(hr)) return failed(k, "CoRegisterPSClsid", hr);
+    if (FAILED(hr)) return failed(k->name, "CoRegisterPSClsid", hr);
     step(setup_limit_s(), "starting the %s server (CoCreateInstance)", k->name);
     hr = CoCreateInstance(&server, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCCommon, (void **)&k->common);
-    if (FAILED(hr)) return failed(k, "creating the server", hr);
+    if (FAILED(hr)) return failed(k->name, "creating the server", hr);
     step(setup_limit_s(), "checking the %s server", k->name);
     if (!ask_server(k, OOP_CODE_PROCESS_ID, pid, sizeof pid)) return 1;
     k->server_pid = (DWORD)strtoul(pid, NULL, 10);
     hr = CoCreateInstance(&list, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServerList2, (void **)&k->list);
-    if (FAILED(hr)) return failed(k, "creating the server list", hr);
+    if (FAILED(hr)) return failed(k->name, "creating the server list", hr);
     if ((widl_proxy_stub_refs() > before) != k->widl) {
         fprintf(stderr, "cross_process_bench: the %s proxies came from the other proxy/stub\n", k->name);
         return 1;
     }
     if (!server_checked(k)) return 1;
-    if (FAILED(hr = enumerate(k, &widl_enum))) return failed(k, "EnumClassesOfCategories + Next", hr);
+    if (FAILED(hr = enumerate(k, &widl_enum))) return failed(k->name, "EnumClassesOfCategories + Next", hr);
     if (widl_enum != k->widl) {
         fprintf(stderr, "cross_process_bench: the %s enumerator proxy came from the other proxy/stub\n", k->name);
         return 1;
@@ -256,79 +190,44 @@ static HRESULT cpu_time(Contender *k, unsigned long long *total) {
     return S_OK;
 }
 
-/* One round's batch of one operation (round -1: a warm-up, not recorded). */
-static int batch(Contender *k, int op, int round, int calls) {
+static int contender_batch(int which, int op, int round) {
+    Contender *k = &contenders[which];
     unsigned long long cpu_before = 0, cpu_after = 0;
     double t0, t1;
     HRESULT hr = S_OK;
     int i;
     if (round < 0) step(stall_s, "the warm-up's %s batch of the %s contender", OPERATIONS[op], k->name);
     else step(stall_s, "round %d: the %s batch of the %s contender", round + 1, OPERATIONS[op], k->name);
-    if (op == 1 && FAILED(hr = select_proxy_stub(k))) return failed(k, "CoRegisterPSClsid", hr);
-    if (FAILED(hr = cpu_time(k, &cpu_before))) return failed(k, "reading CPU times", hr);
+    if (op == 1 && FAILED(hr = select_proxy_stub(k))) return failed(k->name, "CoRegisterPSClsid", hr);
+    if (FAILED(hr = cpu_time(k, &cpu_before))) return failed(k->name, "reading CPU times", hr);
     if (round == simulate_stall_round) Sleep(INFINITE); /* a round trip that never returns */
     t0 = now();
-    for (i = 0; i < calls; i++) {
+    for (i = 0; i < batch_calls[op]; i++) {
         if (op == 0) {
             LPWSTR text = NULL;
             hr = k->common->lpVtbl->GetErrorString(k->common, (HRESULT)0xC0040007L, &text);
-            if (FAILED(hr) || !text) return failed(k, "GetErrorString", FAILED(hr) ? hr : E_POINTER);
+            if (FAILED(hr) || !text) return failed(k->name, "GetErrorString", FAILED(hr) ? hr : E_POINTER);
             CoTaskMemFree(text);
         } else if (FAILED(hr = enumerate(k, NULL))) {
-            return failed(k, "EnumClassesOfCategories + Next", hr);
+            return failed(k->name, "EnumClassesOfCategories + Next", hr);
         }
     }
     t1 = now();
-    if (FAILED(hr = cpu_time(k, &cpu_after))) return failed(k, "reading CPU times", hr);
+    if (FAILED(hr = cpu_time(k, &cpu_after))) return failed(k->name, "reading CPU times", hr);
     if (round >= 0) {
-        k->wall[op][round] = (t1 - t0) / calls;
+        k->wall[op][round] = (t1 - t0) / batch_calls[op];
         k->cpu[op] += cpu_after - cpu_before;
-        k->calls[op] += calls;
+        k->calls[op] += batch_calls[op];
     }
     return 0;
-}
-
-static int compare(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-static double median(const double *v, int n) {
-    double s[MAX_ROUNDS];
-    memcpy(s, v, (size_t)n * sizeof s[0]);
-    qsort(s, (size_t)n, sizeof s[0], compare);
-    return n % 2 ? s[n / 2] : (s[n / 2 - 1] + s[n / 2]) / 2;
-}
-
-/* The median of the first n rounds' ratios a/b, and their lowest and highest. */
-static double paired_ratio(const double *a, const double *b, int n, double *lo, double *hi) {
-    double r[MAX_ROUNDS];
-    int i;
-    *lo = 1e9;
-    *hi = 0;
-    for (i = 0; i < n; i++) {
-        r[i] = a[i] / b[i];
-        if (r[i] < *lo) *lo = r[i];
-        if (r[i] > *hi) *hi = r[i];
-    }
-    return median(r, n);
 }
 
 static double cpu_per_call(const Contender *k, int op) {
     return k->calls[op] ? (double)k->cpu[op] / 10.0 / (double)k->calls[op] : 0;
 }
 
-/* The figures of the first n rounds and the GOAL lines; returns 1 when a goal is missed. `why`, when
- * given, says why there are fewer rounds than asked for. */
-static int print_figures(int n, const char *why) {
+static int print_table(int n) {
     int op, missed = 0;
-    EnterCriticalSection(&output_lock);
-    figures_printed = 1;
-    if (n == 0) {
-        printf("no round was complete: no figures (%s)\n", why ? why : "");
-        LeaveCriticalSection(&output_lock);
-        return 1;
-    }
-    if (why) printf("PARTIAL: the figures of %d of the %d rounds (%s)\n", n, rounds, why);
     printf("%-16s %-44s | %-31s\n", "", "wall clock: median per round trip (us), ratio", "CPU, both processes (us)");
     printf("%-16s %8s %8s %8s %10s %8s | %8s %8s %8s\n", "round trip", "opccomn", "widl", "ratio", "spread",
            "control", "opccomn", "widl", "ratio");
@@ -347,56 +246,9 @@ static int print_figures(int n, const char *why) {
            "the difference this run's machine makes between equal contenders");
     for (op = 0; op < 2; op++) {
         double lo, hi, ratio = paired_ratio(contenders[0].wall[op], contenders[1].wall[op], n, &lo, &hi);
-        int met = ratio <= 1.1;
-        printf("GOAL %-40s %7.2fx  goal <= 1.10x  %s%s\n", OPERATIONS[op], ratio, met ? "met" : "NOT MET",
-               n < rounds ? " (partial)" : "");
-        missed |= !met;
+        missed |= !goal_met(OPERATIONS[op], ratio, n);
     }
-    fflush(stdout);
-    LeaveCriticalSection(&output_lock);
     return missed;
-}
-
-/* After a stall: what stalled, the figures so far, then the benchmark's classes and servers go. The
- * stalled thread is never waited for: the process ends here. */
-static void end_stalled(const char *what, ULONGLONG waited_ms) {
-    char why[300];
-    int i;
-    EnterCriticalSection(&output_lock);
-    printf("STALLED: %s did not end within %.0f s (waited %.1f s)\n", what, (double)step_limit_ms / 1000,
-           (double)waited_ms / 1000);
-    snprintf(why, sizeof why, "stalled in %s", what);
-    if (!figures_printed) print_figures((int)rounds_done, why);
-    else printf("(the figures above are complete: the stall came after the last round)\n");
-    LeaveCriticalSection(&output_lock);
-    unregister_all();
-    for (i = 0; i < CONTENDERS; i++) {
-        HANDLE process = contenders[i].server_pid ? OpenProcess(PROCESS_TERMINATE, FALSE, contenders[i].server_pid) : NULL;
-        if (process) {
-            TerminateProcess(process, 3);
-            CloseHandle(process);
-        }
-    }
-    printf("cross_process_bench: stopped after a stall; its classes removed, its servers ended\n");
-    fflush(stdout);
-    fflush(stderr);
-    TerminateProcess(GetCurrentProcess(), 3);
-}
-
-static DWORD WINAPI watchdog(void *unused) {
-    (void)unused;
-    while (WaitForSingleObject(run_finished, 250) == WAIT_TIMEOUT) {
-        char what[sizeof step_name];
-        ULONGLONG waited;
-        int late;
-        EnterCriticalSection(&step_lock);
-        waited = GetTickCount64() - step_started;
-        late = waited > step_limit_ms;
-        memcpy(what, step_name, sizeof what);
-        LeaveCriticalSection(&step_lock);
-        if (late) end_stalled(what, waited);
-    }
-    return 0;
 }
 
 static int usage(void) {
@@ -406,31 +258,13 @@ static int usage(void) {
 }
 
 int main(int argc, char **argv) {
-    int total = 10200, calls[2], round, op, i, a, failure = 0, missed = 0, cut = 0;
-    double started;
-    char why[120] = "";
-    WCHAR *slash;
+    int total = 10200, i, a, failure = 0, missed = 0;
     HANDLE thread;
-    setvbuf(stdout, NULL, _IONBF, 0); /* what was printed survives a kill from outside */
-    GetModuleFileNameW(NULL, server_path, MAX_PATH);
-    slash = wcsrchr(server_path, L'\\');
-    wcscpy(slash ? slash + 1 : server_path, L"opccomn_test_server.exe");
+    begin(L"opccomn_test_server.exe");
     for (a = 1; a < argc; a++) {
         const char *value = a + 1 < argc ? argv[a + 1] : NULL;
-        if (!strcmp(argv[a], "--sets") && value && atoi(value) >= 1 && atoi(value) + CONTENDERS - 1 <= 9) {
-            for (i = 0; i < CONTENDERS; i++) contenders[i].set = (unsigned)(atoi(value) + i);
-            a++;
-        } else if (!strcmp(argv[a], "--unregister")) {
-            unregister_all();
-            printf("cross_process_bench: the benchmark's classes removed\n");
-            return 0;
-        } else if (!strcmp(argv[a], "--rounds") && value) {
-            rounds = atoi(value), a++;
-        } else if (!strcmp(argv[a], "--budget-s") && value) {
-            budget_s = atof(value), a++;
-        } else if (!strcmp(argv[a], "--stall-s") && value) {
-            stall_s = atof(value), a++;
-        } else if (!strcmp(argv[a], "--simulate-stall") && value && atoi(value) >= 1) {
+        if (common_option(argc, argv, &a, &budget_s)) continue;
+        if (!strcmp(argv[a], "--simulate-stall") && value && atoi(value) >= 1) {
             simulate_stall_round = atoi(value) - 1, a++;
         } else if (argv[a][0] != '-' && atoi(argv[a]) > 0) {
             total = atoi(argv[a]);
@@ -440,49 +274,28 @@ int main(int argc, char **argv) {
     }
     if (rounds < 1 || rounds > MAX_ROUNDS || budget_s <= 0 || stall_s <= 0) return usage();
     if (total < 5 * rounds) total = 5 * rounds;
-    calls[0] = total / rounds;
-    calls[1] = total / 5 / rounds;
+    batch_calls[0] = total / rounds;
+    batch_calls[1] = total / 5 / rounds;
     printf("%d rounds of each contender, interleaved: %d x GetErrorString and %d x Enum+Next(100) a round "
-           "(limits: %.0f s for the rounds, %.0f s for a batch)\n", rounds, calls[0], calls[1], budget_s, stall_s);
-    InitializeCriticalSection(&step_lock);
-    InitializeCriticalSection(&output_lock);
-    run_finished = CreateEventW(NULL, TRUE, FALSE, NULL);
-    step(setup_limit_s(), "the start (COM, the proxy/stubs' class objects)");
-    thread = run_finished ? CreateThread(NULL, 0, watchdog, NULL, 0, NULL) : NULL;
-    if (!thread) return failed(&contenders[0], "starting the watchdog", HRESULT_FROM_WIN32(GetLastError()));
+           "(limits: %.0f s for the rounds, %.0f s for a batch)\n", rounds, batch_calls[0], batch_calls[1], budget_s, stall_s);
+    thread = start_watchdog();
+    if (!thread) return failed(contenders[0].name, "starting the watchdog", HRESULT_FROM_WIN32(GetLastError()));
     if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_widl_proxy_stub()) ||
         FAILED(use_opccomn_proxy_stub_directly()))
         return 1;
     for (i = 0; i < CONTENDERS && !failure; i++) {
         HRESULT hr = register_classes(&contenders[i]);
-        if (FAILED(hr)) failure = failed(&contenders[i], "registering the test server", hr);
+        if (FAILED(hr)) failure = failed(contenders[i].name, "registering the test server", hr);
     }
     for (i = 0; i < CONTENDERS && !failure; i++) failure = connect_contender(&contenders[i]);
-    for (op = 0; op < 2 && !failure; op++)
-        for (i = 0; i < CONTENDERS && !failure; i++) failure = batch(&contenders[i], op, -1, calls[op]);
-    started = now();
-    for (round = 0; round < rounds && !failure; round++) {
-        if (round > 0 && now() - started > budget_s) {
-            cut = 1;
-            snprintf(why, sizeof why, "the rounds' time limit of %.0f s (--budget-s) was reached", budget_s);
-            break;
-        }
-        for (op = 0; op < 2 && !failure; op++)
-            for (i = 0; i < CONTENDERS && !failure; i++)
-                failure = batch(&contenders[(round + i) % CONTENDERS], op, round, calls[op]);
-        if (!failure) InterlockedIncrement(&rounds_done);
-    }
-    if (!failure) missed = print_figures((int)rounds_done, cut ? why : NULL);
+    if (!failure) failure = run_rounds(2, budget_s, &missed);
     for (i = 0; i < CONTENDERS; i++) {
         step(setup_limit_s(), "releasing the %s server's objects", contenders[i].name);
         if (contenders[i].list) contenders[i].list->lpVtbl->Release(contenders[i].list);
         if (contenders[i].common) contenders[i].common->lpVtbl->Release(contenders[i].common);
     }
     unregister_all();
-    step(setup_limit_s(), "CoUninitialize");
-    CoUninitialize();
-    SetEvent(run_finished);
-    WaitForSingleObject(thread, INFINITE);
+    end_run(thread);
     if (failure) {
         fprintf(stderr, "cross_process_bench: stopped, no figures\n");
         return 1;

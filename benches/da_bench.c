@@ -51,16 +51,16 @@
 #include "da.h"
 
 #include <olectl.h>
-#include <stdarg.h>
 
-#define MAX_ROUNDS 101
-#define CONTENDERS 3
+#define OOP_BENCH_PROGRAM "da_bench"
+#define OOP_BENCH_USER_TYPE L"opccomn DA benchmark server"
+#include "oop_bench.h"
+
 #define OPS 5
 #define READ_ITEMS 100 /* Bench.0 to Bench.99: read, written (the first 4), refreshed */
 #define WRITE_ITEMS 4
 #define CHURN_ITEMS 100 /* Bench.100 to Bench.199: added and removed */
 #define GROUP_HANDLE 42
-static WCHAR server_path[MAX_PATH];
 static const char *const OPERATIONS[OPS] = {"Read(100)", "Write(4)", "AddItems+Remove(100)", "OnDataChange(100)",
                                             "Unadvise+Advise"};
 static const int WEIGHTS[OPS] = {20, 20, 10, 10, 4}; /* calls a round at --scale 1 */
@@ -94,8 +94,9 @@ typedef struct {
 static Contender contenders[CONTENDERS] = {
     {.name = "opccomn", .widl = 0, .set = 1}, {.name = "widl", .widl = 1, .set = 2}, {.name = "widl (control)", .widl = 1, .set = 3}};
 
-static int rounds = 51, scale = 3;
-static double budget_s = 600, stall_s = 60;
+/* The run's settings (command line), beside rounds and stall_s (oop_bench.h). */
+static int scale = 3;
+static double budget_s = 600;
 static OPCITEMDEF read_defs[READ_ITEMS], churn_defs[CHURN_ITEMS];
 static WCHAR item_ids[READ_ITEMS + CHURN_ITEMS][16];
 
@@ -149,40 +150,6 @@ static HRESULT STDMETHODCALLTYPE sink_cancel_complete(IOPCDataCallback *This, DW
 static IOPCDataCallbackVtbl sink_vtbl = {sink_qi,            sink_add_ref,        sink_release,        sink_data_change,
                                          sink_read_complete, sink_write_complete, sink_cancel_complete};
 
-/* ---- The watchdog: every step of the run is named and timed; one that ends too late is a stall ---- */
-
-static CRITICAL_SECTION step_lock;
-static char step_name[160];
-static ULONGLONG step_started, step_limit_ms;
-static volatile LONG rounds_done;
-static CRITICAL_SECTION output_lock;
-static int figures_printed;
-static HANDLE run_finished;
-
-static void step(double limit_s, const char *format, ...) {
-    va_list ap;
-    EnterCriticalSection(&step_lock);
-    va_start(ap, format);
-    vsnprintf(step_name, sizeof step_name, format, ap);
-    va_end(ap);
-    step_started = GetTickCount64();
-    step_limit_ms = (ULONGLONG)(limit_s * 1000);
-    LeaveCriticalSection(&step_lock);
-}
-static double setup_limit_s(void) { return stall_s * 2 > 120 ? stall_s * 2 : 120; }
-
-static double now(void) {
-    LARGE_INTEGER f, c;
-    QueryPerformanceFrequency(&f);
-    QueryPerformanceCounter(&c);
-    return (double)c.QuadPart / (double)f.QuadPart;
-}
-
-static int failed(const Contender *k, const char *what, HRESULT hr) {
-    fprintf(stderr, "da_bench: %s (%s): 0x%08lX\n", what, k->name, (unsigned long)hr);
-    return 1;
-}
-
 /* The factory references of opc_classic_widl_ps.dll (each live proxy and stub holds one). */
 static LONG classic_refs(void) {
     HMODULE dll = GetModuleHandleW(L"opc_classic_widl_ps.dll");
@@ -201,38 +168,15 @@ static HRESULT select_proxy_stub(const Contender *k) {
     return hr;
 }
 
-static OpcServerRegistration registration(const CLSID *clsid, const WCHAR *prog_id) {
-    OpcServerRegistration r;
-    memset(&r, 0, sizeof r);
-    r.struct_size = sizeof r;
-    r.server_type = OPC_SERVER_TYPE_LOCAL;
-    r.clsid = *clsid;
-    r.prog_id = prog_id;
-    r.user_type = L"opccomn DA benchmark server";
-    r.module_path = server_path;
-    return r;
-}
-
 static void prog_id(const Contender *k, WCHAR *out) { swprintf(out, 40, L"Oop.DaBench%u.1", k->set); }
 
 /* The contender's class, whose server's command line names its proxy/stub and its CLSID. */
-static HRESULT register_class(const Contender *k) {
-    WCHAR command[MAX_PATH + 40], key[80], guid[40], name[40];
+static HRESULT register_contender(const Contender *k) {
+    WCHAR arguments[40], name[40];
     CLSID clsid = da_server_class(k->set);
-    OpcServerRegistration r;
-    HRESULT hr;
-    HKEY h;
     prog_id(k, name);
-    r = registration(&clsid, name);
-    if (FAILED(hr = OpcRegisterServer(&r, NULL))) return hr;
-    StringFromGUID2(&clsid, guid, 40);
-    swprintf(key, 80, L"CLSID\\%ls\\LocalServer32", guid);
-    swprintf(command, MAX_PATH + 40, L"\"%ls\"%ls -set:%u", server_path, k->widl ? L" -ps:widl" : L"", k->set);
-    if (RegOpenKeyExW(HKEY_CLASSES_ROOT, key, 0, KEY_WRITE, &h) != ERROR_SUCCESS) return E_FAIL;
-    if (RegSetValueExW(h, NULL, 0, REG_SZ, (const BYTE *)command, (DWORD)((wcslen(command) + 1) * sizeof(WCHAR))))
-        hr = E_FAIL;
-    RegCloseKey(h);
-    return hr;
+    swprintf(arguments, 40, L"%ls -set:%u", k->widl ? L" -ps:widl" : L"", k->set);
+    return register_class(&clsid, name, arguments);
 }
 
 static void unregister_all(void) {
@@ -240,21 +184,19 @@ static void unregister_all(void) {
     int i;
     for (i = 0; i < CONTENDERS; i++) {
         CLSID clsid = da_server_class(contenders[i].set);
-        OpcServerRegistration r;
         prog_id(&contenders[i], name);
-        r = registration(&clsid, name);
-        OpcUnregisterServer(&r, NULL);
+        unregister_class(&clsid, name);
     }
 }
+
+static DWORD server_pid(int i) { return contenders[i].server_pid; }
+static unsigned *contender_set(int i) { return &contenders[i].set; }
 
 /* The server's answer to a vendor code, as text (0 when it gave none). */
 static int ask_server(Contender *k, HRESULT code, char *out, size_t size) {
     LPWSTR text = NULL;
     HRESULT hr = k->server->lpVtbl->GetErrorString(k->server, code, 0x0409, &text);
-    if (FAILED(hr) || !text) return failed(k, "asking the server", hr), 0;
-    snprintf(out, size, "%ls", text);
-    CoTaskMemFree(text);
-    return 1;
+    return server_answer(k->name, hr, text, out, size);
 }
 
 static HRESULT read_items(Contender *k) {
@@ -348,10 +290,10 @@ static int connect_contender(Contender *k) {
     IUnknown *group = NULL;
     char text[32];
     HRESULT hr = select_proxy_stub(k);
-    if (FAILED(hr)) return failed(k, "CoRegisterPSClsid", hr);
+    if (FAILED(hr)) return failed(k->name, "CoRegisterPSClsid", hr);
     step(setup_limit_s(), "starting the %s server (CoCreateInstance)", k->name);
     hr = CoCreateInstance(&clsid, NULL, CLSCTX_LOCAL_SERVER, &IID_IOPCServer, (void **)&k->server);
-    if (FAILED(hr)) return failed(k, "creating the server", hr);
+    if (FAILED(hr)) return failed(k->name, "creating the server", hr);
     step(setup_limit_s(), "checking the %s server", k->name);
     if (!ask_server(k, DA_CODE_PROCESS_ID, text, sizeof text)) return 1;
     k->server_pid = (DWORD)strtoul(text, NULL, 10);
@@ -362,12 +304,12 @@ static int connect_contender(Contender *k) {
     }
     hr = k->server->lpVtbl->AddGroup(k->server, L"bench", TRUE, 1000, GROUP_HANDLE, NULL, NULL, 0x0409, &server_group,
                                      &revised, &IID_IOPCItemMgt, &group);
-    if (FAILED(hr)) return failed(k, "AddGroup", hr);
+    if (FAILED(hr)) return failed(k->name, "AddGroup", hr);
     k->items = (IOPCItemMgt *)group;
     if (FAILED(hr = group->lpVtbl->QueryInterface(group, &IID_IOPCSyncIO, (void **)&k->sync)) ||
         FAILED(hr = group->lpVtbl->QueryInterface(group, &IID_IOPCAsyncIO2, (void **)&k->async)) ||
         FAILED(hr = group->lpVtbl->QueryInterface(group, &IID_IConnectionPointContainer, (void **)&container)))
-        return failed(k, "QueryInterface of the group", hr);
+        return failed(k->name, "QueryInterface of the group", hr);
     after_proxies = classic_refs();
     if ((after_proxies > before) != k->widl) {
         fprintf(stderr, "da_bench: the %s proxies came from the other proxy/stub\n", k->name);
@@ -375,15 +317,15 @@ static int connect_contender(Contender *k) {
         return 1;
     }
     hr = add_items(k, read_defs, READ_ITEMS, k->read_handles);
-    if (FAILED(hr) || hr != S_OK) return failed(k, "AddItems", hr == S_OK ? E_FAIL : hr);
+    if (FAILED(hr) || hr != S_OK) return failed(k->name, "AddItems", hr == S_OK ? E_FAIL : hr);
     k->sink.iface.lpVtbl = &sink_vtbl;
     k->sink.refs = 1;
     k->sink.changed = CreateEventW(NULL, FALSE, FALSE, NULL);
     hr = container->lpVtbl->FindConnectionPoint(container, &IID_IOPCDataCallback, &k->point);
     container->lpVtbl->Release(container);
-    if (FAILED(hr)) return failed(k, "FindConnectionPoint", hr);
+    if (FAILED(hr)) return failed(k->name, "FindConnectionPoint", hr);
     hr = k->point->lpVtbl->Advise(k->point, (IUnknown *)&k->sink.iface, &k->cookie);
-    if (FAILED(hr)) return failed(k, "Advise", hr);
+    if (FAILED(hr)) return failed(k->name, "Advise", hr);
     after_advise = classic_refs(); /* the sink's stub */
     if ((after_advise > after_proxies) != k->widl) {
         fprintf(stderr, "da_bench: the %s sink's stub came from the other proxy/stub\n", k->name);
@@ -432,8 +374,8 @@ static unsigned long long thread_cpu_ns(void) {
             (((unsigned long long)user.dwHighDateTime << 32) | user.dwLowDateTime)) * 100ULL;
 }
 
-/* One round's batch of one operation (round -1: a warm-up, not recorded). */
-static int batch(Contender *k, int op, int round) {
+static int contender_batch(int which, int op, int round) {
+    Contender *k = &contenders[which];
     unsigned long long cpu_before = 0, cpu_after = 0;
     int calls = WEIGHTS[op] * scale, i;
     double t0, t1;
@@ -441,15 +383,15 @@ static int batch(Contender *k, int op, int round) {
     HRESULT hr;
     if (round < 0) step(stall_s, "the warm-up's %s batch of the %s contender", OPERATIONS[op], k->name);
     else step(stall_s, "round %d: the %s batch of the %s contender", round + 1, OPERATIONS[op], k->name);
-    if (FAILED(hr = select_proxy_stub(k))) return failed(k, "CoRegisterPSClsid", hr);
-    if (FAILED(hr = cpu_time(k, &cpu_before))) return failed(k, "reading CPU times", hr);
+    if (FAILED(hr = select_proxy_stub(k))) return failed(k->name, "CoRegisterPSClsid", hr);
+    if (FAILED(hr = cpu_time(k, &cpu_before))) return failed(k->name, "reading CPU times", hr);
     thread0 = thread_cpu_ns();
     t0 = now();
     for (i = 0; i < calls; i++)
-        if ((hr = operation(k, op)) != S_OK) return failed(k, OPERATIONS[op], hr == S_OK ? E_FAIL : hr);
+        if ((hr = operation(k, op)) != S_OK) return failed(k->name, OPERATIONS[op], hr == S_OK ? E_FAIL : hr);
     t1 = now();
     thread1 = thread_cpu_ns();
-    if (FAILED(hr = cpu_time(k, &cpu_after))) return failed(k, "reading CPU times", hr);
+    if (FAILED(hr = cpu_time(k, &cpu_after))) return failed(k->name, "reading CPU times", hr);
     if (round >= 0) {
         k->wall[op][round] = (t1 - t0) / calls;
         k->cpu[op][round] = (double)(cpu_after - cpu_before) * 1e-9 / calls;
@@ -458,41 +400,10 @@ static int batch(Contender *k, int op, int round) {
     return 0;
 }
 
-static int compare(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-static double median(const double *v, int n) {
-    double s[MAX_ROUNDS];
-    memcpy(s, v, (size_t)n * sizeof s[0]);
-    qsort(s, (size_t)n, sizeof s[0], compare);
-    return n % 2 ? s[n / 2] : (s[n / 2 - 1] + s[n / 2]) / 2;
-}
-static double paired_ratio(const double *a, const double *b, int n, double *lo, double *hi) {
-    double r[MAX_ROUNDS];
-    int i;
-    *lo = 1e9;
-    *hi = 0;
-    for (i = 0; i < n; i++) {
-        r[i] = a[i] / b[i];
-        if (r[i] < *lo) *lo = r[i];
-        if (r[i] > *hi) *hi = r[i];
-    }
-    return median(r, n);
-}
-
 static int goals_met = -1; /* of OPS, once the figures are printed */
 
-static int print_figures(int n, const char *why) {
+static int print_table(int n) {
     int op, missed = 0, met_count;
-    EnterCriticalSection(&output_lock);
-    figures_printed = 1;
-    if (n == 0) {
-        printf("no round was complete: no figures (%s)\n", why ? why : "");
-        LeaveCriticalSection(&output_lock);
-        return 1;
-    }
-    if (why) printf("PARTIAL: the figures of %d of the %d rounds (%s)\n", n, rounds, why);
     printf("%-20s | %-45s | %-45s\n", "", "CPU time of both processes: us per call, ratio",
            "wall clock: us per call, ratio");
     printf("%-20s | %7s %7s %6s %11s %7s | %7s %7s %6s %11s %7s\n", "call", "opccomn", "widl", "ratio", "spread",
@@ -521,57 +432,16 @@ static int print_figures(int n, const char *why) {
            " highest; control: the stand-in against itself, what this run's machine makes of equal contenders)\n");
     met_count = 0;
     for (op = 0; op < OPS; op++) {
-        double lo, hi, ratio = paired_ratio(contenders[0].cpu[op], contenders[1].cpu[op], n, &lo, &hi);
-        int met = ratio <= 1.1;
-        printf("GOAL DA %-37s %7.2fx  goal <= 1.10x  %s%s\n", OPERATIONS[op], ratio, met ? "met" : "NOT MET",
-               n < rounds ? " (partial)" : "");
+        double lo, hi;
+        char label[48];
+        int met;
+        snprintf(label, sizeof label, "DA %s", OPERATIONS[op]);
+        met = goal_met(label, paired_ratio(contenders[0].cpu[op], contenders[1].cpu[op], n, &lo, &hi), n);
         missed |= !met;
         met_count += met;
     }
     goals_met = met_count;
-    fflush(stdout);
-    LeaveCriticalSection(&output_lock);
     return missed;
-}
-
-static void end_stalled(const char *what, ULONGLONG waited_ms) {
-    char why[300];
-    int i;
-    EnterCriticalSection(&output_lock);
-    printf("STALLED: %s did not end within %.0f s (waited %.1f s)\n", what, (double)step_limit_ms / 1000,
-           (double)waited_ms / 1000);
-    snprintf(why, sizeof why, "stalled in %s", what);
-    if (!figures_printed) print_figures((int)rounds_done, why);
-    else printf("(the figures above are complete: the stall came after the last round)\n");
-    LeaveCriticalSection(&output_lock);
-    unregister_all();
-    for (i = 0; i < CONTENDERS; i++) {
-        HANDLE process = contenders[i].server_pid ? OpenProcess(PROCESS_TERMINATE, FALSE, contenders[i].server_pid) : NULL;
-        if (process) {
-            TerminateProcess(process, 3);
-            CloseHandle(process);
-        }
-    }
-    printf("da_bench: stopped after a stall; its classes removed, its servers ended\n");
-    fflush(stdout);
-    fflush(stderr);
-    TerminateProcess(GetCurrentProcess(), 3);
-}
-
-static DWORD WINAPI watchdog(void *unused) {
-    (void)unused;
-    while (WaitForSingleObject(run_finished, 250) == WAIT_TIMEOUT) {
-        char what[sizeof step_name];
-        ULONGLONG waited;
-        int late;
-        EnterCriticalSection(&step_lock);
-        waited = GetTickCount64() - step_started;
-        late = waited > step_limit_ms;
-        memcpy(what, step_name, sizeof what);
-        LeaveCriticalSection(&step_lock);
-        if (late) end_stalled(what, waited);
-    }
-    return 0;
 }
 
 /* Lets go of the contender's objects; its server then exits. */
@@ -615,35 +485,13 @@ static int usage(void) {
 }
 
 int main(int argc, char **argv) {
-    int round, op, i, a, failure = 0, missed = 0, cut = 0, ended, started_servers;
-    double started;
-    char why[120] = "";
-    WCHAR *slash;
+    int i, a, failure = 0, missed = 0, ended, started_servers;
     HANDLE thread;
-    setvbuf(stdout, NULL, _IONBF, 0);
-    GetModuleFileNameW(NULL, server_path, MAX_PATH);
-    slash = wcsrchr(server_path, L'\\');
-    wcscpy(slash ? slash + 1 : server_path, L"opc_da_test_server.exe");
+    begin(L"opc_da_test_server.exe");
     for (a = 1; a < argc; a++) {
-        const char *value = a + 1 < argc ? argv[a + 1] : NULL;
-        if (!strcmp(argv[a], "--sets") && value && atoi(value) >= 1 && atoi(value) + CONTENDERS - 1 <= 9) {
-            for (i = 0; i < CONTENDERS; i++) contenders[i].set = (unsigned)(atoi(value) + i);
-            a++;
-        } else if (!strcmp(argv[a], "--unregister")) {
-            unregister_all();
-            printf("da_bench: the benchmark's classes removed\n");
-            return 0;
-        } else if (!strcmp(argv[a], "--rounds") && value) {
-            rounds = atoi(value), a++;
-        } else if (!strcmp(argv[a], "--scale") && value) {
-            scale = atoi(value), a++;
-        } else if (!strcmp(argv[a], "--budget-s") && value) {
-            budget_s = atof(value), a++;
-        } else if (!strcmp(argv[a], "--stall-s") && value) {
-            stall_s = atof(value), a++;
-        } else {
-            return usage();
-        }
+        if (common_option(argc, argv, &a, &budget_s)) continue;
+        if (!strcmp(argv[a], "--scale") && a + 1 < argc) scale = atoi(argv[++a]);
+        else return usage();
     }
     if (rounds < 1 || rounds > MAX_ROUNDS || scale < 1 || scale > 1000 || budget_s <= 0 || stall_s <= 0) return usage();
     for (i = 0; i < READ_ITEMS + CHURN_ITEMS; i++) {
@@ -660,36 +508,18 @@ int main(int argc, char **argv) {
            "%d OnDataChange(100), %d Unadvise+Advise (limits: %.0f s for the rounds, %.0f s for a batch)\n",
            rounds, WEIGHTS[0] * scale, WEIGHTS[1] * scale, WEIGHTS[2] * scale, WEIGHTS[3] * scale,
            WEIGHTS[4] * scale, budget_s, stall_s);
-    InitializeCriticalSection(&step_lock);
-    InitializeCriticalSection(&output_lock);
-    run_finished = CreateEventW(NULL, TRUE, FALSE, NULL);
-    step(setup_limit_s(), "the start (COM, the proxy/stubs' class objects)");
-    thread = run_finished ? CreateThread(NULL, 0, watchdog, NULL, 0, NULL) : NULL;
-    if (!thread) return failed(&contenders[0], "starting the watchdog", HRESULT_FROM_WIN32(GetLastError()));
+    thread = start_watchdog();
+    if (!thread) return failed(contenders[0].name, "starting the watchdog", HRESULT_FROM_WIN32(GetLastError()));
     /* Both class objects registered here (the last one's IIDs are overridden per batch). */
     if (FAILED(CoInitializeEx(NULL, COINIT_MULTITHREADED)) || FAILED(use_classic_proxy_stub()) ||
         FAILED(use_opccomn_proxy_stub()))
         return 1;
     for (i = 0; i < CONTENDERS && !failure; i++) {
-        HRESULT hr = register_class(&contenders[i]);
-        if (FAILED(hr)) failure = failed(&contenders[i], "registering the DA test server", hr);
+        HRESULT hr = register_contender(&contenders[i]);
+        if (FAILED(hr)) failure = failed(contenders[i].name, "registering the DA test server", hr);
     }
     for (i = 0; i < CONTENDERS && !failure; i++) failure = connect_contender(&contenders[i]);
-    for (op = 0; op < OPS && !failure; op++)
-        for (i = 0; i < CONTENDERS && !failure; i++) failure = batch(&contenders[i], op, -1);
-    started = now();
-    for (round = 0; round < rounds && !failure; round++) {
-        if (round > 0 && now() - started > budget_s) {
-            cut = 1;
-            snprintf(why, sizeof why, "the rounds' time limit of %.0f s (--budget-s) was reached", budget_s);
-            break;
-        }
-        for (op = 0; op < OPS && !failure; op++)
-            for (i = 0; i < CONTENDERS && !failure; i++)
-                failure = batch(&contenders[(round + i) % CONTENDERS], op, round);
-        if (!failure) InterlockedIncrement(&rounds_done);
-    }
-    if (!failure) missed = print_figures((int)rounds_done, cut ? why : NULL);
+    if (!failure) failure = run_rounds(OPS, budget_s, &missed);
     for (i = 0; i < CONTENDERS; i++) disconnect(&contenders[i]);
     unregister_all();
     ended = servers_ended(&started_servers);
@@ -698,10 +528,7 @@ int main(int argc, char **argv) {
         printf("\nda_bench: %d goals, %d met, %d NOT MET (%d interleaved rounds; CPU time of client and server, Linux's "
                "CLOCK_PROCESS_CPUTIME_ID under Wine; the wall clock for information)\n",
                OPS, goals_met, OPS - goals_met, (int)rounds_done);
-    step(setup_limit_s(), "CoUninitialize");
-    CoUninitialize();
-    SetEvent(run_finished);
-    WaitForSingleObject(thread, INFINITE);
+    end_run(thread);
     if (failure) {
         fprintf(stderr, "da_bench: stopped, no figures\n");
         return 1;
