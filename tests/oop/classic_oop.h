@@ -1,5 +1,6 @@
-/* Shared by the cross-process tests of the Alarms & Events and Historical Data Access proxy/stubs
- * (test_ae_tables.c with ae_server.c, test_hda_tables.c with hda_server.c): opccomn.dll's
+/* Shared by the cross-process tests of the Data Access, Alarms & Events and Historical Data Access
+ * proxy/stubs (test_da_tables.c with da_server.c and da_bench.c, through da.h; test_ae_tables.c with
+ * ae_server.c, test_hda_tables.c with hda_server.c): opccomn.dll's
  * proxy/stub registered as this process's for a list of interfaces, without the registry; text in
  * UTF-8 copied to and compared with UTF-16 without W()'s shared buffers (the servers' callback
  * threads and the clients' sinks run beside the main thread); the times the servers stamp values

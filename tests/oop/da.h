@@ -6,7 +6,7 @@
 #ifndef OPCCOMN_DA_H
 #define OPCCOMN_DA_H
 
-#include "oop.h" /* test_util.h, process_running() */
+#include "classic_oop.h"
 
 #include <initguid.h>
 #include <ocidl.h>
@@ -54,27 +54,10 @@ static HRESULT use_classic_proxy_stub(void) {
 
 /* Makes COM use opccomn.dll's proxy/stub (CLSID_OpcComnProxyStub) for the Data Access interfaces in
  * this process (the multithreaded apartment), without the registry. */
-static HRESULT use_opccomn_proxy_stub(void) {
-    IUnknown *factory = NULL;
-    DWORD cookie;
-    HRESULT hr;
-    size_t i;
-    hr = OpcDllGetClassObject(&CLSID_OpcComnProxyStub, &IID_IUnknown, (void **)&factory);
-    if (FAILED(hr)) return hr;
-    hr = CoRegisterClassObject(&CLSID_OpcComnProxyStub, factory, CLSCTX_INPROC_SERVER, REGCLS_MULTIPLEUSE, &cookie);
-    factory->lpVtbl->Release(factory);
-    for (i = 0; SUCCEEDED(hr) && i < DA_IID_COUNT; i++) hr = CoRegisterPSClsid(DA_IIDS[i], &CLSID_OpcComnProxyStub);
-    return hr;
-}
+static HRESULT use_opccomn_proxy_stub(void) { return use_opccomn_proxy_stub_for(DA_IIDS, DA_IID_COUNT); }
 
 /* Whether COM takes this process's proxies and stubs of every Data Access interface from opccomn.dll. */
-static int da_proxy_stub_is_opccomn(void) {
-    CLSID clsid;
-    size_t i;
-    for (i = 0; i < DA_IID_COUNT; i++)
-        if (FAILED(CoGetPSClsid(DA_IIDS[i], &clsid)) || !IsEqualCLSID(&clsid, &CLSID_OpcComnProxyStub)) return 0;
-    return 1;
-}
+static int da_proxy_stub_is_opccomn(void) { return proxy_stub_is_opccomn_for(DA_IIDS, DA_IID_COUNT); }
 
 /* A code the server's IOPCServer::GetErrorString answers with "opccomn" when its proxy/stub for the
  * DA interfaces is opccomn.dll's, "widl" when it is opc_classic_widl_ps.dll's, "other" otherwise. */
@@ -167,20 +150,6 @@ static const double DA_PROFILE[DA_PROFILE_COUNT] = {1.5, -2.0, 1e300};
 #define DA_PROPERTY_COUNT 2
 static const DWORD DA_PROPERTY_IDS[DA_PROPERTY_COUNT] = {1, 101}; /* data type, description */
 
-/* A FILETIME the server stamps every value with: 2026-12-04 12:00:00 UTC, plus i seconds. */
-static FILETIME da_time(unsigned i) {
-    ULARGE_INTEGER t;
-    FILETIME f;
-    t.QuadPart = 134095536000000000ULL + (ULONGLONG)i * 10000000ULL;
-    f.dwLowDateTime = t.LowPart;
-    f.dwHighDateTime = t.HighPart;
-    return f;
-}
-
-static int same_time(FILETIME a, FILETIME b) {
-    return a.dwLowDateTime == b.dwLowDateTime && a.dwHighDateTime == b.dwHighDateTime;
-}
-
 /* A SAFEARRAY of doubles, or NULL. */
 static SAFEARRAY *da_doubles(const double *values, ULONG count) {
     SAFEARRAY *a = SafeArrayCreateVector(VT_R8, 0, count);
@@ -211,20 +180,6 @@ static int is_doubles(const VARIANT *v, const double *values, ULONG count) {
     for (i = 0; i < count; i++) same &= data[i] == values[i];
     SafeArrayUnaccessData(V_ARRAY(v));
     return same;
-}
-
-/* A copy of UTF-8 text as a BSTR. */
-static BSTR da_bstr(const char *utf8) {
-    return SysAllocString(W(utf8));
-}
-
-/* A copy of UTF-8 text in task memory (what the NDR engine frees on the server side). */
-static LPWSTR da_task_string(const char *utf8) {
-    const WCHAR *w = W(utf8);
-    size_t n = wlen(w);
-    LPWSTR copy = (LPWSTR)CoTaskMemAlloc((n + 1) * sizeof(WCHAR));
-    if (copy) memcpy(copy, w, (n + 1) * sizeof(WCHAR));
-    return copy;
 }
 
 #endif

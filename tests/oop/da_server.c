@@ -168,7 +168,7 @@ static void initial_value(int i, VARIANT *v) {
     switch (i) {
     case 0: V_I4(v) = DA_I4; break;
     case 1: V_R8(v) = DA_R8; break;
-    case 2: V_BSTR(v) = da_bstr(DA_TEXT); break;
+    case 2: V_BSTR(v) = bstr_utf8(DA_TEXT); break;
     case 3: V_ARRAY(v) = da_doubles(DA_PROFILE, DA_PROFILE_COUNT); break;
     default: /* the benchmark's */
         if (V_VT(v) == VT_I4) V_I4(v) = i - DA_ITEMS;
@@ -326,7 +326,7 @@ static HRESULT STDMETHODCALLTYPE sync_read(IOPCSyncIO *This, OPCDATASOURCE sourc
         }
         s[k].hClient = g->client_item[i];
         /* The device's time of the value: a second later than the cache's. */
-        s[k].ftTimeStamp = da_time((unsigned)i + (source == OPC_DS_DEVICE ? 10 : 0));
+        s[k].ftTimeStamp = test_time((unsigned)i + (source == OPC_DS_DEVICE ? 10 : 0));
         s[k].wQuality = OPC_QUALITY_GOOD_;
         e[k] = VariantCopy(&s[k].vDataValue, &g->values[i]);
         if (e[k] != S_OK) hr = S_FALSE;
@@ -457,7 +457,7 @@ static DWORD WINAPI refresh_thread(void *param) {
         VariantInit(&values[n]);
         errors[n] = VariantCopy(&values[n], &g->values[i]);
         qualities[n] = OPC_QUALITY_GOOD_;
-        times[n] = da_time((unsigned)i + (r->read ? 10 : 20));
+        times[n] = test_time((unsigned)i + (r->read ? 10 : 20));
         n++;
     }
     LeaveCriticalSection(&g->lock);
@@ -768,18 +768,18 @@ static HRESULT STDMETHODCALLTYPE opc_error_string(IOPCServer *This, HRESULT code
     if (!text) return E_POINTER;
     *text = NULL;
     if (code == DA_CODE_PROXY_STUB) {
-        *text = da_task_string(da_proxy_stub_is_opccomn() ? "opccomn" : da_proxy_stub_is_classic() ? "widl" : "other");
+        *text = task_utf8(da_proxy_stub_is_opccomn() ? "opccomn" : da_proxy_stub_is_classic() ? "widl" : "other");
         return *text ? S_OK : E_OUTOFMEMORY;
     }
     if (code == DA_CODE_CPU_TIME || code == DA_CODE_PROCESS_ID) {
         char number[32];
         if (code == DA_CODE_CPU_TIME) snprintf(number, sizeof number, "%llu", da_process_cpu_ns());
         else snprintf(number, sizeof number, "%lu", (unsigned long)GetCurrentProcessId());
-        *text = da_task_string(number);
+        *text = task_utf8(number);
         return *text ? S_OK : E_OUTOFMEMORY;
     }
     if (code != DA_ERROR_CODE || locale != 0x0409) return E_INVALIDARG;
-    *text = da_task_string(DA_ERROR_TEXT);
+    *text = task_utf8(DA_ERROR_TEXT);
     return *text ? S_OK : E_OUTOFMEMORY;
 }
 
@@ -798,16 +798,16 @@ static HRESULT STDMETHODCALLTYPE opc_status(IOPCServer *This, OPCSERVERSTATUS **
     *status = NULL;
     st = (OPCSERVERSTATUS *)task_alloc_zero(sizeof *st);
     if (!st) return E_OUTOFMEMORY;
-    st->ftStartTime = da_time(0);
-    st->ftCurrentTime = da_time(1);
-    st->ftLastUpdateTime = da_time(2);
+    st->ftStartTime = test_time(0);
+    st->ftCurrentTime = test_time(1);
+    st->ftLastUpdateTime = test_time(2);
     st->dwServerState = OPC_STATUS_RUNNING;
     st->dwGroupCount = s->group ? 1 : 0;
     st->dwBandWidth = 0xFFFFFFFF;
     st->wMajorVersion = 3;
     st->wMinorVersion = 0;
     st->wBuildNumber = 42;
-    st->szVendorInfo = da_task_string(DA_VENDOR_INFO);
+    st->szVendorInfo = task_utf8(DA_VENDOR_INFO);
     *status = st;
     return S_OK;
 }
@@ -851,7 +851,7 @@ static HRESULT property_value(int i, DWORD id, VARIANT *v) {
     if (id == 101) {
         snprintf(text, sizeof text, "Description of %s", DA_ITEM_IDS[i]);
         V_VT(v) = VT_BSTR;
-        V_BSTR(v) = da_bstr(text);
+        V_BSTR(v) = bstr_utf8(text);
         return V_BSTR(v) ? S_OK : E_OUTOFMEMORY;
     }
     return OPC_E_INVALID_PID_;
@@ -862,7 +862,7 @@ static LPWSTR property_item_id(int i, DWORD id) {
     char text[96];
     if (id != 101) return NULL;
     snprintf(text, sizeof text, "%s.Description", DA_ITEM_IDS[i]);
-    return da_task_string(text);
+    return task_utf8(text);
 }
 
 static HRESULT STDMETHODCALLTYPE props_query(IOPCItemProperties *This, LPWSTR item, DWORD *count, DWORD **ids,
@@ -889,7 +889,7 @@ static HRESULT STDMETHODCALLTYPE props_query(IOPCItemProperties *This, LPWSTR it
     }
     for (k = 0; k < DA_PROPERTY_COUNT; k++) {
         (*ids)[k] = DA_PROPERTY_IDS[k];
-        (*descriptions)[k] = da_task_string(property_description(DA_PROPERTY_IDS[k]));
+        (*descriptions)[k] = task_utf8(property_description(DA_PROPERTY_IDS[k]));
         (*types)[k] = DA_PROPERTY_IDS[k] == 1 ? VT_I2 : VT_BSTR;
     }
     *count = DA_PROPERTY_COUNT;
@@ -977,7 +977,7 @@ static HRESULT fill_properties(OPCITEMPROPERTIES *p, int i, BOOL with_values, DW
             continue;
         }
         q->vtDataType = ids[k] == 1 ? VT_I2 : VT_BSTR;
-        q->szDescription = da_task_string(description);
+        q->szDescription = task_utf8(description);
         q->szItemID = property_item_id(i, ids[k]);
         q->hrErrorID = with_values ? property_value(i, ids[k], &q->vValue) : S_OK;
     }
@@ -1034,8 +1034,8 @@ static HRESULT STDMETHODCALLTYPE browse_browse(IOPCBrowse *This, LPWSTR item, LP
     if (!e) return E_OUTOFMEMORY;
     for (i = start; i < end; i++) {
         OPCBROWSEELEMENT *x = &e[i - start];
-        x->szName = da_task_string(DA_ITEM_IDS[i]);
-        x->szItemID = da_task_string(DA_ITEM_IDS[i]);
+        x->szName = task_utf8(DA_ITEM_IDS[i]);
+        x->szItemID = task_utf8(DA_ITEM_IDS[i]);
         x->dwFlagValue = OPC_BROWSE_ISITEM_;
         if (all_properties) fill_properties(&x->ItemProperties, (int)i, with_values, 0, NULL);
     }
@@ -1045,7 +1045,7 @@ static HRESULT STDMETHODCALLTYPE browse_browse(IOPCBrowse *This, LPWSTR item, LP
     if (end < DA_ITEMS) {
         char next[8];
         snprintf(next, sizeof next, "cp:%u", end);
-        *continuation = da_task_string(next);
+        *continuation = task_utf8(next);
         *more = TRUE;
     }
     *count = end - start;

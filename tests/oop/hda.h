@@ -424,4 +424,16 @@ static VARIANT hda_filter(DWORD k) {
     return v;
 }
 
+/* The IOPCHDA_DataCallback methods a thread of the server calls back (the server says which it
+ * calls, the client which it waited for). */
+enum {
+    CALL_READ_COMPLETE,
+    CALL_DATA_CHANGE,
+    CALL_CANCEL_COMPLETE,
+    CALL_PLAYBACK,
+    CALL_UPDATE_COMPLETE,
+    CALL_READ_ANNOTATIONS,
+    CALL_INSERT_ANNOTATIONS
+};
+
 #endif

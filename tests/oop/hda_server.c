@@ -504,16 +504,6 @@ static HRESULT STDMETHODCALLTYPE sync_attribute(IOPCHDA_SyncRead *This, OPCHDA_T
 static IOPCHDA_SyncReadVtbl sync_vtbl = {sync_qi,      sync_add_ref,  sync_release,  sync_raw,
                                          sync_processed, sync_at_time, sync_modified, sync_attribute};
 
-/* What a thread of the server calls back. */
-enum {
-    CALL_READ_COMPLETE,
-    CALL_DATA_CHANGE,
-    CALL_CANCEL_COMPLETE,
-    CALL_PLAYBACK,
-    CALL_UPDATE_COMPLETE,
-    CALL_READ_ANNOTATIONS,
-    CALL_INSERT_ANNOTATIONS
-};
 
 /* An asynchronous read (its OnReadComplete), an advise's data (OnDataChange), a raw playback's data
  * (OnPlayback), a cancel's completion (OnCancelComplete of the cancel ID `transaction`), an

@@ -115,9 +115,9 @@ static void check_status(IOPCServer *server) {
     CHECK_HR(server->lpVtbl->GetStatus(server, &st), S_OK);
     CHECK(st && st != GARBAGE_PTR);
     if (!st || st == GARBAGE_PTR) return;
-    CHECK(same_time(st->ftStartTime, da_time(0)));
-    CHECK(same_time(st->ftCurrentTime, da_time(1)));
-    CHECK(same_time(st->ftLastUpdateTime, da_time(2)));
+    CHECK(same_filetime(st->ftStartTime, test_time(0)));
+    CHECK(same_filetime(st->ftCurrentTime, test_time(1)));
+    CHECK(same_filetime(st->ftLastUpdateTime, test_time(2)));
     CHECK(st->dwServerState == OPC_STATUS_RUNNING);
     CHECK(st->dwGroupCount == 0);
     CHECK(st->dwBandWidth == 0xFFFFFFFF);
@@ -261,7 +261,7 @@ static void check_read(IOPCSyncIO *sync, const OPCHANDLE *servers) {
     for (i = 0; i < DA_ITEMS; i++) {
         CHECK_HR(errors[i], S_OK);
         CHECK(states[i].hClient == DA_CLIENT_HANDLE(i));
-        CHECK(same_time(states[i].ftTimeStamp, da_time((unsigned)i + 10)));
+        CHECK(same_filetime(states[i].ftTimeStamp, test_time((unsigned)i + 10)));
         CHECK(states[i].wQuality == OPC_QUALITY_GOOD_);
         CHECK(is_initial(i, &states[i].vDataValue));
         VariantClear(&states[i].vDataValue);
@@ -285,7 +285,7 @@ static void check_write(IOPCSyncIO *sync, const OPCHANDLE *servers) {
     V_VT(&values[1]) = VT_R8;
     V_R8(&values[1]) = 1e-300;
     V_VT(&values[2]) = VT_BSTR;
-    V_BSTR(&values[2]) = da_bstr("written \xc3\x9f");
+    V_BSTR(&values[2]) = bstr_utf8("written \xc3\x9f");
     V_VT(&values[3]) = VT_ARRAY | VT_R8;
     V_ARRAY(&values[3]) = da_doubles(profile, 2);
     CHECK_HR(sync->lpVtbl->Write(sync, DA_ITEMS, (OPCHANDLE *)servers, values, &errors), S_OK);
@@ -310,7 +310,7 @@ static void check_write(IOPCSyncIO *sync, const OPCHANDLE *servers) {
         CHECK(V_VT(&states[2].vDataValue) == VT_BSTR && wsame(V_BSTR(&states[2].vDataValue), W("written \xc3\x9f")));
         CHECK(is_doubles(&states[3].vDataValue, profile, 2));
         for (i = 0; i < DA_ITEMS; i++) {
-            CHECK(same_time(states[i].ftTimeStamp, da_time((unsigned)i)));
+            CHECK(same_filetime(states[i].ftTimeStamp, test_time((unsigned)i)));
             VariantClear(&states[i].vDataValue);
         }
         CoTaskMemFree(states);
@@ -354,7 +354,7 @@ static void check_data_change(IUnknown *group) {
             CHECK(cb.handles[i] == DA_CLIENT_HANDLE(i));
             CHECK(is_initial((int)i, &cb.values[i]));
             CHECK(cb.qualities[i] == OPC_QUALITY_GOOD_);
-            CHECK(same_time(cb.times[i], da_time(i + 20)));
+            CHECK(same_filetime(cb.times[i], test_time(i + 20)));
             CHECK_HR(cb.errors[i], S_OK);
             VariantClear(&cb.values[i]);
         }

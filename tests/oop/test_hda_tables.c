@@ -47,16 +47,6 @@ typedef struct Callback {
     HRESULT results[HDA_UPDATES];
 } Callback;
 
-enum {
-    CALL_READ_COMPLETE,
-    CALL_DATA_CHANGE,
-    CALL_CANCEL_COMPLETE,
-    CALL_PLAYBACK,
-    CALL_UPDATE_COMPLETE,
-    CALL_READ_ANNOTATIONS,
-    CALL_INSERT_ANNOTATIONS
-};
-
 /* Whether `a` holds item 0's annotations as the server reads them (hda.h). */
 static int is_read_annotation(const OPCHDA_ANNOTATION *a) {
     DWORD n;
